@@ -1,0 +1,70 @@
+"""The RoboCup 2005-06 Four-Legged League field (spec section E.2), in metres.
+
+Frame: origin at the centre spot, +X towards the sky-blue goal, +Y to the left when
+looking from the yellow goal towards the sky-blue one, Z up.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+FIELD_LENGTH = 5.40  # inside the lines, along X
+FIELD_WIDTH = 3.60
+LINE_WIDTH = 0.025
+CENTRE_CIRCLE_RADIUS = 0.18
+PENALTY_BOX_WIDTH = 1.30  # along Y
+PENALTY_BOX_DEPTH = 0.65  # along X
+FRINGE_SIDE = 0.20
+FRINGE_END = 0.30
+WALL_HEIGHT = 0.30  # 2004 rules: white outer wall
+CARPET_LENGTH = FIELD_LENGTH + 2 * FRINGE_END
+CARPET_WIDTH = FIELD_WIDTH + 2 * FRINGE_SIDE
+
+GOAL_WIDTH = 0.80
+GOAL_DEPTH = 0.30
+GOAL_HEIGHT = 0.30
+
+BALL_RADIUS = 0.042
+BALL_MASS = 0.055  # not in the spec: a light plastic ball (choice)
+
+BEACON_RADIUS = 0.05
+BEACON_X = 1.35
+BEACON_Y = FIELD_WIDTH / 2 + 0.15
+BEACON_PART_HEIGHT = 0.10  # parts A (top) and B (middle) around 0.30 m; part C white below
+
+COLOURS = {
+    "carpet": (0.12, 0.45, 0.16, 1.0),
+    "line": (0.95, 0.95, 0.95, 1.0),
+    "wall": (0.92, 0.92, 0.90, 1.0),
+    "yellow": (0.95, 0.80, 0.10, 1.0),
+    "skyblue": (0.35, 0.70, 0.95, 1.0),
+    "pink": (1.0, 0.45, 0.70, 1.0),
+    "white": (0.95, 0.95, 0.95, 1.0),
+    "orange": (1.0, 0.45, 0.05, 1.0),
+}
+
+
+@dataclass(frozen=True)
+class Beacon:
+    name: str
+    x: float
+    y: float
+    top: str  # part A
+    middle: str  # part B
+
+
+def _beacons() -> tuple[Beacon, ...]:
+    beacons = []
+    for x, goal in ((BEACON_X, "skyblue"), (-BEACON_X, "yellow")):
+        # Right-hand beacons (y < 0): B in the neighbouring goal's colour, A pink;
+        # left-hand ones: B pink, A in the goal colour.
+        beacons.append(Beacon(f"beacon_{goal}_right", x, -BEACON_Y, top="pink", middle=goal))
+        beacons.append(Beacon(f"beacon_{goal}_left", x, BEACON_Y, top=goal, middle="pink"))
+    return tuple(beacons)
+
+
+BEACONS = _beacons()
+GOALS = {"skyblue": FIELD_LENGTH / 2, "yellow": -FIELD_LENGTH / 2}  # goal line X of each goal
+
+# Segmentation classes for frame dumps: geoms are tagged by name prefix.
+SEGMENTATION_CLASSES = ("background", "field", "line", "ball", "goal", "beacon", "robot", "wall")

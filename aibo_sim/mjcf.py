@@ -1,0 +1,518 @@
+"""Generates the MJCF files in ``models/`` from the tables in ``ers7.py`` and ``field.py``.
+
+The XML files are committed so that MuJoCo users can load them as they are; a test checks
+that they equal what this module generates. Regenerate with ``python -m aibo_sim.mjcf``.
+"""
+
+from __future__ import annotations
+
+import math
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import numpy as np
+
+from . import field as F
+from .ers7 import JOINT_BY_NAME, JOINTS, LEDS, LEGS, SENSORS
+from openr_bridge import FULL_HEIGHT, FULL_WIDTH, HFOV_DEG, VFOV_DEG
+
+MODELS_DIR = Path(__file__).resolve().parent.parent / "models"
+
+CAMERA_FOCAL = 0.00327  # m (Sony: f = 3.27 mm)
+PAW_RADIUS = 0.01172  # Tekkotsu BallOfFootRadius; Webots uses 0.017 (see models/README.md)
+PAW_TOUCH_RADIUS = 0.015  # Webots touch sphere
+MAX_TORQUE = 5.4542  # N m, Webots maxForce for every servo (carried over from the ERS-210)
+TIMESTEP = 0.002  # s: four physics steps per 8 ms OPEN-R joint frame
+
+# Position-servo stiffness (N m / rad) by Sony gain class, and shared servo dynamics.
+KP = {"leg_j1": 20.0, "leg_j2": 16.0, "leg_j3": 20.0, "head": 6.0, "small": 1.0}
+SERVO_DAMPING = 0.08  # N m s / rad
+SERVO_ARMATURE = 0.004  # kg m^2: reflected rotor inertia of a geared servo
+
+# Sony's stand (first keyframe of SWSDK.MTN) and sit (SITDANCE.MTN) poses, in degrees,
+# with the Webots default head. Unlisted joints take their table default.
+POSES = {
+    "stand": {
+        "neck_tilt": -30, "head_tilt": 30, "mouth": -3, "tail_tilt": 10,
+        **{f"{leg}_j{i}": v for leg in ("lf", "rf") for i, v in zip((1, 2, 3), (-10, 0, 30))},
+        **{f"{leg}_j{i}": v for leg in ("lh", "rh") for i, v in zip((1, 2, 3), (0, 0, 25))},
+    },
+    "sit": {
+        "neck_tilt": -40, "head_tilt": 5, "mouth": -5, "tail_tilt": 5,
+        **{f"{leg}_j{i}": v for leg in ("lf", "rf") for i, v in zip((1, 2, 3), (-25, -4, 20))},
+        **{f"{leg}_j{i}": v for leg in ("lh", "rh") for i, v in zip((1, 2, 3), (-78, 20, 110))},
+    },
+}
+
+
+def _fmt(value) -> str:
+    if isinstance(value, str):
+        return value
+    values = np.atleast_1d(np.asarray(value, dtype=float))
+    return " ".join(f"{v:.9g}" if abs(v) > 1e-12 else "0" for v in values)
+
+
+def E(tag: str, *children: ET.Element, **attrs) -> ET.Element:
+    """An XML element; attribute values may be numbers or sequences of numbers."""
+    element = ET.Element(tag, {k.rstrip("_"): _fmt(v) for k, v in attrs.items() if v is not None})
+    element.extend(children)
+    return element
+
+
+def box_inertia(mass: float, size: tuple[float, float, float]) -> list[float]:
+    """Diagonal inertia of a solid box of full edge lengths ``size``."""
+    x, y, z = size
+    return [mass * (y * y + z * z) / 12, mass * (x * x + z * z) / 12, mass * (x * x + y * y) / 12]
+
+
+def inertial(mass: float, pos, size) -> ET.Element:
+    return E("inertial", pos=pos, mass=mass, diaginertia=box_inertia(mass, size))
+
+
+def joint(name: str, axis) -> ET.Element:
+    j = JOINT_BY_NAME[name]
+    return E("joint", name=name, axis=axis, range=j.range)
+
+
+def visual(**attrs) -> ET.Element:
+    return E("geom", **{"class_": "visual", **attrs})
+
+
+def collision(**attrs) -> ET.Element:
+    return E("geom", **{"class_": "collision", **attrs})
+
+
+def led(name: str, **attrs) -> ET.Element:
+    return E("geom", name=name, class_="led", **attrs)
+
+
+def touch_site(name: str, pos, radius: float) -> ET.Element:
+    return E("site", name=name, class_="touch", pos=pos, size=radius)
+
+
+# ----------------------------------------------------------------------------- robot
+
+
+def _defaults() -> ET.Element:
+    servo = lambda cls: E(  # noqa: E731
+        "default", E("position", kp=KP[cls], forcerange=(-MAX_TORQUE, MAX_TORQUE)), class_=cls
+    )
+    return E(
+        "default",
+        E(
+            "default",
+            E("joint", damping=SERVO_DAMPING, armature=SERVO_ARMATURE, frictionloss=0.005),
+            E("position", inheritrange=1),
+            E("site", group=4, rgba=(0.9, 0.2, 0.2, 0.4)),
+            *(servo(cls) for cls in KP),
+            E("default", E("geom", group=2, contype=0, conaffinity=0, density=0, material="shell"), class_="visual"),
+            E(
+                "default",
+                E("geom", group=3, contype=2, conaffinity=1, density=0, friction=(0.99, 0.005, 0.0001), rgba=(0.5, 0.5, 0.9, 0.4)),
+                E("default", E("geom", type="sphere", size=PAW_RADIUS, condim=3, priority=1), class_="paw"),
+                class_="collision",
+            ),
+            E("default", E("geom", type="sphere", size=0.0025, group=2, contype=0, conaffinity=0, density=0, material="led_off"), class_="led"),
+            E("default", E("site", type="sphere", group=5), class_="touch"),
+            class_="ers7",
+        ),
+    )
+
+
+def _assets() -> ET.Element:
+    materials = {
+        "shell": dict(rgba=(0.93, 0.93, 0.91, 1), specular=0.4, shininess=0.5),
+        "visor": dict(rgba=(0.04, 0.04, 0.05, 1), specular=0.9, shininess=0.9, reflectance=0.1),
+        "dark": dict(rgba=(0.22, 0.22, 0.24, 1), specular=0.3),
+        "paw": dict(rgba=(0.35, 0.35, 0.37, 1), specular=0.2),
+        "lens": dict(rgba=(0.1, 0.1, 0.15, 1), specular=1.0, shininess=1.0),
+        "led_off": dict(rgba=(0.15, 0.15, 0.16, 1)),
+    }
+    return E("asset", *(E("material", name=n, **a) for n, a in materials.items()))
+
+
+def _camera() -> ET.Element:
+    # Both Sony fields of view hold exactly: sensor size = 2 f tan(fov / 2) on each axis.
+    sensor = [2 * CAMERA_FOCAL * math.tan(math.radians(f) / 2) for f in (HFOV_DEG, VFOV_DEG)]
+    return E(
+        "camera", name="camera", pos=(0.08106, 0, -0.0146), xyaxes=(0, -1, 0, 0, 0, 1),
+        focal=(CAMERA_FOCAL, CAMERA_FOCAL), sensorsize=sensor, resolution=(FULL_WIDTH, FULL_HEIGHT),
+    )
+
+
+def _head() -> ET.Element:
+    ears = []
+    for side, sign in (("l", 1), ("r", -1)):
+        ears.append(E(
+            "body",
+            E("inertial", pos=(0, 0, -0.015), mass=0.005, diaginertia=box_inertia(0.005, (0.012, 0.004, 0.03))),
+            joint(f"ear_{side}", (sign, 0, 0)),
+            visual(type="box", size=(0.011, 0.002, 0.017), pos=(0, 0, -0.016), material="dark"),
+            name=f"ear_{side}", pos=(-0.011, sign * 0.042, 0.0145),
+        ))
+    face_leds = [
+        led(f"led_face_{i + 1}", pos=(0.062, 0.024 * math.cos(a), 0.016 + 0.012 * math.sin(a)))
+        for i, a in enumerate(np.linspace(math.pi * 0.15, math.pi * 0.85, 14))
+    ]
+    head_leds = [
+        led("led_head_colour", pos=(0.045, 0, 0.036), size=0.004),
+        led("led_head_white", pos=(0.038, 0, 0.039), size=0.003),
+        led("led_mode_r", pos=(0.03, 0.012, 0.042)),
+        led("led_mode_g", pos=(0.03, 0.0, 0.043)),
+        led("led_mode_b", pos=(0.03, -0.012, 0.042)),
+        led("led_wireless", pos=(-0.005, 0.0, 0.043)),
+    ]
+    mouth = E(
+        "body",
+        E("inertial", pos=(0.015, 0, -0.006), mass=0.01, diaginertia=box_inertia(0.01, (0.04, 0.03, 0.015))),
+        joint("mouth", (0, -1, 0)),
+        visual(type="ellipsoid", size=(0.022, 0.019, 0.008), pos=(0.013, 0, -0.007), material="dark"),
+        collision(type="capsule", fromto=(0.0, 0, -0.007, 0.028, 0, -0.009), size=0.008),
+        touch_site("touch_chin", (0.015, 0, -0.015), 0.012),
+        name="mouth", pos=(0.04, 0, -0.0175),
+    )
+    return E(
+        "body",
+        E("inertial", pos=(0.04, 0, 0), mass=0.18, diaginertia=box_inertia(0.18, (0.1, 0.07, 0.07))),
+        joint("head_tilt", (0, -1, 0)),
+        visual(type="ellipsoid", size=(0.054, 0.036, 0.036), pos=(0.018, 0, 0.008)),
+        visual(type="ellipsoid", size=(0.03, 0.03, 0.022), pos=(0.046, 0, 0.002), material="visor"),
+        visual(type="cylinder", size=(0.0045, 0.004), pos=(0.0765, 0, -0.0146), zaxis=(1, 0, 0), material="lens"),
+        collision(type="sphere", size=0.033),
+        collision(type="capsule", fromto=(-0.0116, 0, 0.0111, 0.0516, 0, -0.0083), size=0.034),
+        _camera(),
+        E("site", name="ir_near", pos=(0.0769, -0.00325, 0), zaxis=(1, 0, 0)),
+        E("site", name="ir_far", pos=(0.0769, 0.00695, 0), zaxis=(1, 0, 0)),
+        touch_site("touch_head", (0.01, 0, 0.045), 0.02),
+        *face_leds,
+        *head_leds,
+        mouth,
+        *ears,
+        name="head", pos=(0, 0, 0),
+    )
+
+
+def _neck() -> ET.Element:
+    pan = E(
+        "body",
+        E("inertial", pos=(0, 0, 0), mass=0.010, diaginertia=box_inertia(0.010, (0.03, 0.03, 0.03))),
+        joint("head_pan", (0, 0, 1)),
+        visual(type="sphere", size=0.03, material="dark"),
+        _head(),
+        name="head_pan_link", pos=(0, 0, 0.080),
+    )
+    return E(
+        "body",
+        E("inertial", pos=(0, 0, 0.04), mass=0.015, diaginertia=box_inertia(0.015, (0.023, 0.023, 0.08))),
+        joint("neck_tilt", (0, -1, 0)),
+        visual(type="cylinder", fromto=(0, 0, 0, 0, 0, 0.08), size=0.0117, material="dark"),
+        collision(type="cylinder", fromto=(0, 0, 0, 0, 0, 0.08), size=0.0117),
+        pan,
+        name="neck", pos=(0.0675, 0, 0.0195), childclass="head",
+    )
+
+
+PAW_OFFSET = {True: (-0.0055, 0.0, -0.0658), False: (0.01409, 0.0, -0.0676)}  # from J3, at J3 = 0
+
+
+def _leg(leg: str) -> ET.Element:
+    _, side, front = LEGS[leg]
+    fb = 1 if front else -1  # front legs: + swings forward; hind legs mirrored
+    paw = np.array(PAW_OFFSET[front])
+    shin_axis = paw / np.linalg.norm(paw)
+    shin_len = 0.046 if front else 0.080
+    shin = E(
+        "body",
+        E("inertial", pos=0.6 * paw, mass=0.073, diaginertia=box_inertia(0.073, (0.035, 0.037, 0.07))),
+        joint(f"{leg}_j3", (0, -fb, 0)),
+        visual(type="capsule", fromto=(0, 0, 0, *(0.8 * paw)), size=0.0145),
+        visual(type="sphere", pos=paw, size=PAW_RADIUS, material="paw"),
+        collision(type="box", size=(0.013, 0.0165, 0.02)),
+        collision(type="box", size=(0.0175, 0.0185, shin_len / 2), pos=0.45 * paw, zaxis=shin_axis),
+        collision(name=f"{leg}_paw", class_="paw", pos=paw),
+        touch_site(f"touch_paw_{leg}", paw, PAW_TOUCH_RADIUS),
+        name=f"{leg}_j3", pos=(fb * 0.009, side * 0.0047, -0.0695), childclass="leg_j3",
+    )
+    thigh = E(
+        "body",
+        E("inertial", pos=(0, 0, -0.04), mass=0.073, diaginertia=box_inertia(0.073, (0.033, 0.028, 0.065))),
+        joint(f"{leg}_j2", (side, 0, 0)),
+        visual(type="capsule", fromto=(0, 0, 0, fb * 0.009, side * 0.0047, -0.0695), size=0.017),
+        collision(type="box", size=(0.0165, 0.014, 0.0325), pos=(0, 0, -0.021)),
+        shin,
+        name=f"{leg}_j2", pos=(0, 0, 0), childclass="leg_j2",
+    )
+    disc_y = side * (0.049 - 0.0625)
+    return E(
+        "body",
+        E("inertial", pos=(0, disc_y, 0), mass=0.05, diaginertia=box_inertia(0.05, (0.064, 0.01, 0.064))),
+        joint(f"{leg}_j1", (0, -fb, 0)),
+        visual(type="sphere", size=0.024),
+        collision(type="cylinder", fromto=(0, disc_y - 0.005, 0, 0, disc_y + 0.005, 0), size=0.032),
+        thigh,
+        name=f"{leg}_j1", pos=(fb * 0.065, side * 0.0625, 0), childclass="leg_j1",
+    )
+
+
+def _tail() -> ET.Element:
+    tail_dir = np.array([-math.cos(math.radians(20)), 0, math.sin(math.radians(20))])
+    tail = E(
+        "body",
+        E("inertial", pos=0.03 * tail_dir, mass=0.005, diaginertia=box_inertia(0.005, (0.06, 0.012, 0.012))),
+        joint("tail_pan", (1, 0, 0)),
+        visual(type="capsule", fromto=(0, 0, 0, *(0.06 * tail_dir)), size=0.006, material="dark"),
+        name="tail", pos=(0, 0, 0),
+    )
+    return E(
+        "body",
+        E("inertial", pos=(0, 0, 0), mass=0.001, diaginertia=(1e-7, 1e-7, 1e-7)),
+        joint("tail_tilt", (0, 1, 0)),
+        visual(type="sphere", size=0.008, material="dark"),
+        tail,
+        name="tail_base", pos=(-0.102, 0, 0.033), childclass="small",
+    )
+
+
+def _torso() -> ET.Element:
+    back_leds = [
+        led(name, pos=(x, dy, 0.063), size=0.005 if "colour" in name else 0.003)
+        for name, x, dy in (
+            ("led_back_front_colour", 0.03, 0.0), ("led_back_front_white", 0.03, 0.01),
+            ("led_back_middle_colour", 0.0, 0.0), ("led_back_middle_white", 0.0, 0.01),
+            ("led_back_rear_colour", -0.03, 0.0), ("led_back_rear_white", -0.03, 0.01),
+        )
+    ]
+    return E(
+        "body",
+        E("freejoint", name="root"),
+        E("inertial", pos=(0, 0, -0.02), mass=0.613, diaginertia=box_inertia(0.613, (0.2, 0.1, 0.1))),
+        visual(type="ellipsoid", size=(0.112, 0.05, 0.05), pos=(0, 0, 0.012)),
+        visual(type="ellipsoid", size=(0.05, 0.045, 0.045), pos=(0.075, 0, -0.002)),
+        visual(type="box", size=(0.05, 0.012, 0.003), pos=(0.0, 0, 0.0615), material="dark"),
+        collision(type="capsule", fromto=(-0.05, 0, 0, 0.05, 0, 0), size=0.045),
+        collision(type="sphere", size=0.064, pos=(0.058, 0, 0.005)),
+        collision(type="sphere", size=0.062, pos=(-0.061, 0, 0.002)),
+        E("site", name="imu", pos=(0, 0, 0)),
+        E("camera", name="tracking", mode="trackcom", pos=(-0.35, -0.55, 0.3), xyaxes=(0.84, -0.54, 0, 0.2, 0.31, 0.93)),
+        E("site", name="ir_chest", pos=(0.10864, 0, -0.00425), zaxis=(0.866025, 0, -0.5)),
+        touch_site("touch_back_front", (0.035, 0, 0.06), 0.03),
+        touch_site("touch_back_middle", (0.0, 0, 0.06), 0.03),
+        touch_site("touch_back_rear", (-0.035, 0, 0.06), 0.03),
+        *back_leds,
+        _neck(),
+        *(_leg(leg) for leg in LEGS),
+        _tail(),
+        name="body", pos=(0, 0, 0.16), childclass="ers7",
+    )
+
+
+def _actuators() -> ET.Element:
+    def cls(name: str) -> str:
+        if name.startswith(("lf", "lh", "rf", "rh")):
+            return "leg_" + name[-2:]
+        return "head" if name in ("neck_tilt", "head_pan", "head_tilt") else "small"
+
+    return E("actuator", *(E("position", name=j.name, joint=j.name, class_=cls(j.name)) for j in JOINTS))
+
+
+def _sensors() -> ET.Element:
+    elements = [E("jointpos", name=j.name, joint=j.name) for j in JOINTS]
+    for s in SENSORS:
+        if s.kind == "distance":
+            elements.append(E("rangefinder", name=s.name, site=s.name))
+        elif s.kind == "touch":
+            elements.append(E("touch", name=s.name, site=s.name))
+        elif s.kind == "accelerometer":
+            elements.append(E("accelerometer", name=s.name, site="imu"))
+    return E("sensor", *elements)
+
+
+def _pose_qpos(model, pose: dict[str, float]) -> np.ndarray:
+    """qpos for ``pose`` with the body pitched and lifted so all four paws touch z = 0."""
+    import mujoco
+
+    data = mujoco.MjData(model)
+    qpos = model.qpos0.copy()
+    for name, j in JOINT_BY_NAME.items():
+        qpos[model.joint(name).qposadr[0]] = math.radians(pose.get(name, j.default_deg))
+    paws = [model.geom(f"{leg}_paw").id for leg in LEGS]
+    qpos[:3], qpos[3:7] = 0, (1, 0, 0, 0)
+    data.qpos[:] = qpos
+    mujoco.mj_kinematics(model, data)
+    p = data.geom_xpos[paws]
+    front, hind = p[[0, 2]].mean(axis=0), p[[1, 3]].mean(axis=0)
+    pitch = math.atan2(hind[2] - front[2], front[0] - hind[0])  # about +Y: nose down if > 0
+    qpos[3:7] = (math.cos(pitch / 2), 0, math.sin(pitch / 2), 0)
+    data.qpos[:] = qpos
+    mujoco.mj_kinematics(model, data)
+    qpos[2] = PAW_RADIUS - data.geom_xpos[paws][:, 2].min()
+    return qpos
+
+
+def robot_xml() -> ET.Element:
+    root = E(
+        "mujoco",
+        E("compiler", angle="radian", autolimits="true"),
+        E("option", timestep=TIMESTEP, integrator="implicitfast"),
+        _defaults(),
+        _assets(),
+        E("worldbody", _torso()),
+        E("contact", *(E("exclude", body1="body", body2=f"{leg}_j2") for leg in LEGS)),
+        _actuators(),
+        _sensors(),
+        model="ers7",
+    )
+    return root
+
+
+def _with_keyframes(root: ET.Element) -> ET.Element:
+    import mujoco
+
+    model = mujoco.MjModel.from_xml_string(ET.tostring(root, encoding="unicode"))
+    keys = []
+    for name, pose in POSES.items():
+        qpos = _pose_qpos(model, pose)
+        ctrl = [qpos[model.joint(j.name).qposadr[0]] for j in JOINTS]
+        keys.append(E("key", name=name, qpos=qpos, ctrl=ctrl))
+    root.append(E("keyframe", *keys))
+    return root
+
+
+# ----------------------------------------------------------------------------- scenes
+
+
+def _field_geoms() -> list[ET.Element]:
+    half_l, half_w, lw = F.FIELD_LENGTH / 2, F.FIELD_WIDTH / 2, F.LINE_WIDTH
+    z = 0.0005
+
+    def line(name, x0, y0, x1, y1):
+        cx, cy, length = (x0 + x1) / 2, (y0 + y1) / 2, math.hypot(x1 - x0, y1 - y0) + lw
+        angle = math.atan2(y1 - y0, x1 - x0)
+        return E("geom", name=name, type="box", size=(length / 2, lw / 2, z), pos=(cx, cy, z),
+                 euler=(0, 0, angle), material="line", contype=0, conaffinity=0)
+
+    box_x = half_l - F.PENALTY_BOX_DEPTH
+    pb = F.PENALTY_BOX_WIDTH / 2
+    geoms = [
+        line("line_side_left", -half_l, half_w, half_l, half_w),
+        line("line_side_right", -half_l, -half_w, half_l, -half_w),
+        line("line_goal_skyblue", half_l, -half_w, half_l, half_w),
+        line("line_goal_yellow", -half_l, -half_w, -half_l, half_w),
+        line("line_halfway", 0, -half_w, 0, half_w),
+    ]
+    for sign, goal in ((1, "skyblue"), (-1, "yellow")):
+        geoms += [
+            line(f"line_box_{goal}_front", sign * box_x, -pb, sign * box_x, pb),
+            line(f"line_box_{goal}_left", sign * box_x, pb, sign * half_l, pb),
+            line(f"line_box_{goal}_right", sign * box_x, -pb, sign * half_l, -pb),
+        ]
+    n = 36
+    r = F.CENTRE_CIRCLE_RADIUS
+    for i in range(n):
+        a0, a1 = 2 * math.pi * i / n, 2 * math.pi * (i + 1) / n
+        geoms.append(line(f"line_circle_{i}", r * math.cos(a0), r * math.sin(a0), r * math.cos(a1), r * math.sin(a1)))
+    return geoms
+
+
+def _goal(colour: str, line_x: float) -> ET.Element:
+    sign = 1 if line_x > 0 else -1
+    d, w, h, t = F.GOAL_DEPTH, F.GOAL_WIDTH, F.GOAL_HEIGHT, 0.01
+    back = line_x + sign * (d - t / 2)
+    return E(
+        "body",
+        E("geom", name=f"goal_{colour}_back", type="box", size=(t / 2, w / 2 + t, h / 2), pos=(back, 0, h / 2), material=colour),
+        *(
+            E("geom", name=f"goal_{colour}_{side}", type="box", size=(d / 2, t / 2, h / 2),
+              pos=(line_x + sign * d / 2, s * (w / 2 + t / 2), h / 2), material=colour)
+            for side, s in (("left", 1), ("right", -1))
+        ),
+        E("geom", name=f"goal_{colour}_roof", type="box", size=(d / 2 + t / 2, w / 2 + t, t / 2),
+          pos=(line_x + sign * (d / 2 + t / 2), 0, h + t / 2), material=colour),
+        name=f"goal_{colour}",
+    )
+
+
+def _beacon(b: F.Beacon) -> ET.Element:
+    r, ph = F.BEACON_RADIUS, F.BEACON_PART_HEIGHT
+    c_top = 0.30 - ph  # bottom of the coloured part; centre of the coloured part at 0.30 m
+    return E(
+        "body",
+        E("geom", name=f"{b.name}_white", type="cylinder", size=(r, c_top / 2), pos=(0, 0, c_top / 2), material="white"),
+        E("geom", name=f"{b.name}_middle", type="cylinder", size=(r, ph / 2), pos=(0, 0, c_top + ph / 2), material=b.middle),
+        E("geom", name=f"{b.name}_top", type="cylinder", size=(r, ph / 2), pos=(0, 0, c_top + 1.5 * ph), material=b.top),
+        name=b.name, pos=(b.x, b.y, 0),
+    )
+
+
+def scene_xml() -> ET.Element:
+    cl, cw, h = F.CARPET_LENGTH / 2, F.CARPET_WIDTH / 2, F.WALL_HEIGHT
+    walls = [
+        E("geom", name=f"wall_{n}", type="box", size=size, pos=pos, material="wall")
+        for n, size, pos in (
+            ("left", (cl + 0.02, 0.01, h / 2), (0, cw + 0.01, h / 2)),
+            ("right", (cl + 0.02, 0.01, h / 2), (0, -cw - 0.01, h / 2)),
+            ("skyblue", (0.01, cw, h / 2), (cl + 0.01, 0, h / 2)),
+            ("yellow", (0.01, cw, h / 2), (-cl - 0.01, 0, h / 2)),
+        )
+    ]
+    colours = {k: v for k, v in F.COLOURS.items()}
+    return E(
+        "mujoco",
+        E("include", file="ers7.xml"),
+        E("statistic", center=(0, 0, 0.2), extent=1.5),
+        E(
+            "visual",
+            E("headlight", diffuse=(0.45, 0.45, 0.45), ambient=(0.3, 0.3, 0.3), specular=(0, 0, 0)),
+            E("quality", shadowsize=2048),
+            E("map", znear=0.002, zfar=20),
+            E("global", azimuth=150, elevation=-25, offwidth=640, offheight=480),
+        ),
+        E(
+            "asset",
+            E("texture", type="skybox", builtin="gradient", rgb1=(0.75, 0.75, 0.72), rgb2=(0.45, 0.45, 0.45), width=64, height=64),
+            *(E("material", name=n, rgba=c, specular=0.1) for n, c in colours.items()),
+        ),
+        E(
+            "worldbody",
+            E("light", name="ceiling_1", pos=(-1.2, 0, 3), dir=(0, 0, -1), directional="false", diffuse=(0.45, 0.45, 0.43), castshadow="false"),
+            E("light", name="ceiling_2", pos=(1.2, 0, 3), dir=(0, 0, -1), directional="false", diffuse=(0.45, 0.45, 0.43), castshadow="true"),
+            E("geom", name="field_carpet", type="plane", size=(cl + 0.5, cw + 0.5, 0.05), material="carpet", friction=(0.9, 0.005, 0.0001)),
+            *_field_geoms(),
+            *walls,
+            *(_goal(c, x) for c, x in F.GOALS.items()),
+            *(_beacon(b) for b in F.BEACONS),
+            E(
+                "body",
+                E("freejoint", name="ball"),
+                E("geom", name="ball", type="sphere", size=F.BALL_RADIUS, mass=F.BALL_MASS, material="orange",
+                  condim=6, friction=(0.7, 0.005, 0.002)),
+                name="ball", pos=(0.5, 0, F.BALL_RADIUS),
+            ),
+            E("camera", name="overview", pos=(-1.0, -1.4, 1.1), xyaxes=(0.8, -0.6, 0, 0.3, 0.4, 0.87)),
+        ),
+        model="ers7_robocup2005",
+    )
+
+
+def _xml_text(root: ET.Element, comment: str) -> str:
+    ET.indent(root, space="  ")
+    return f"<!-- {comment} -->\n" + ET.tostring(root, encoding="unicode") + "\n"
+
+
+def generated_files() -> dict[str, str]:
+    """File name -> XML text of every generated model file."""
+    note = "Generated by aibo_sim/mjcf.py from aibo_sim/ers7.py: edit those, then run python -m aibo_sim.mjcf."
+    return {
+        "ers7.xml": _xml_text(_with_keyframes(robot_xml()), note),
+        "scene.xml": _xml_text(scene_xml(), note.replace("ers7.py", "field.py")),
+    }
+
+
+def main() -> None:
+    for name, text in generated_files().items():
+        (MODELS_DIR / name).write_text(text)
+        print(f"wrote {MODELS_DIR / name}")
+
+
+if __name__ == "__main__":
+    main()

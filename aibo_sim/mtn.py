@@ -1,0 +1,535 @@
+"""OPEN-R motion files (``.MTN``, "OMTN" v1.2): reader, writer and playback.
+
+Format, timing and the Webots playback quirk: ``shared/specs/ers7-reference.md`` §C.3, §D.
+No MuJoCo here: playback is a pure function of time that yields joint targets.
+
+Decisions where the spec leaves room (also listed in the report that came with this file):
+
+* Version: only 1.2 is accepted (major 1, minor 2); the layout of other versions is unknown,
+  so any other version is an :class:`MtnError`.
+* Section 0 must be exactly 24 bytes (Sony: "fixed length"; OPEN-R's struct and Webots'
+  reader both hard-code it). Sections 1 and 2 are jumped by ``sectionSize``: slack after the
+  parsed strings is skipped (its bytes, normally zero padding, are not kept; the writer emits
+  zeros). Section 3's size must equal ``12 + N*4*(3+J) + 4*(N-1)`` exactly, and no bytes may
+  follow it. A motion needs at least one keyframe, one joint, distinct locators, a frame time
+  > 0 and non-negative interpolation counts.
+* Strings are latin-1 (a pstring is a u8 length, so at most 255 bytes).
+* A missing file is an ``OSError`` from :func:`read_mtn` (it is not a malformed file);
+  :func:`mtn_new` turns it into Webots' "File not found: <path>" :class:`MtnError`.
+* OPEN-R playback (``MTN.cc``) hard-codes 16 ms frames: ``2n+2`` sub-frames of 8 ms per
+  segment. Here a segment has ``(n+1)*frame_time_ms/8`` sub-frames, which is the same for
+  16 ms and scales otherwise; a frame time that is not a multiple of 8 ms cannot be played in
+  this mode (``ValueError``). ``MTN.cc`` never sends the final keyframe itself (it stops once
+  the last segment is done); this player appends it as one last sub-frame, so a motion ends
+  exactly on its final pose at ``t = length_ms``.
+* Joint values are held in int64; OPEN-R's 32-bit ``value1 - value0`` could overflow for
+  values more than 2^31 apart, which no real file has; this code does not reproduce that.
+"""
+
+from __future__ import annotations
+
+import os
+import secrets
+import struct
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Iterable, Iterator, Sequence
+
+import numpy as np
+
+MAGIC = b"OMTN"
+VERSION = (1, 2)
+NUM_SECTIONS = 4
+SECTION0_SIZE = 24
+DEFAULT_FRAME_TIME_MS = 16
+SUBFRAME_MS = 8  # OPEN-R command vectors carry one joint value per 8 ms
+_S32_MIN, _S32_MAX = -(2**31), 2**31 - 1
+
+
+class MtnError(ValueError):
+    """A malformed or unusable motion. ``str()`` names the file and, for parse errors, the byte
+    offset; ``message`` is the bare text. With neither source nor offset, ``str()`` is the bare
+    text (used for Webots' own messages, e.g. "Missing device in model: <locator>")."""
+
+    def __init__(self, source: str | None, offset: int | None, message: str):
+        self.source, self.offset, self.message = source, offset, message
+        where = [] if source is None else [str(source)]
+        if offset is not None:
+            where.append(f"byte {offset} (0x{offset:x})")
+        super().__init__(": ".join(where + [message]))
+
+
+@dataclass(eq=False)
+class Motion:
+    """One motion. Angles are integer micro-radians, as stored in the file.
+
+    ``keyframes`` (N, J) joint values; ``attitudes`` (N, 3) body roll/pitch/yaw (editor data,
+    ignored by playback); ``interpolate`` (N-1,) numInterpolate of each segment k -> k+1.
+    """
+
+    name: str
+    creator: str
+    design: str
+    frame_time_ms: int
+    locators: tuple[str, ...]
+    keyframes: np.ndarray
+    attitudes: np.ndarray
+    interpolate: np.ndarray
+    option: int = 0
+
+    def __post_init__(self) -> None:
+        self.locators = tuple(self.locators)
+        self.keyframes = np.asarray(self.keyframes, dtype=np.int64)
+        self.attitudes = np.asarray(self.attitudes, dtype=np.int64)
+        self.interpolate = np.asarray(self.interpolate, dtype=np.int64).reshape(-1)
+        n, j = len(self.keyframes), len(self.locators)
+        problems = [
+            (n < 1, "a motion needs at least one keyframe"),
+            (j < 1, "a motion needs at least one joint"),
+            (len(set(self.locators)) != j, "duplicate locator"),
+            (self.keyframes.shape != (n, j), f"keyframes shape {self.keyframes.shape} is not ({n}, {j})"),
+            (self.attitudes.shape != (n, 3), f"attitudes shape {self.attitudes.shape} is not ({n}, 3)"),
+            (self.interpolate.shape != (max(n - 1, 0),), f"interpolate has {self.interpolate.size} counts, want {n - 1}"),
+            (bool((self.interpolate < 0).any()), "negative interpolation count"),
+            (int(self.frame_time_ms) <= 0, f"frame time {self.frame_time_ms} ms is not positive"),
+        ]
+        for bad, text in problems:
+            if bad:
+                raise MtnError(self.name, None, text)
+        self.frame_time_ms = int(self.frame_time_ms)
+        self.option = int(self.option)
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, Motion):
+            return NotImplemented
+        return (
+            (self.name, self.creator, self.design, self.frame_time_ms, self.locators, self.option)
+            == (other.name, other.creator, other.design, other.frame_time_ms, other.locators, other.option)
+            and np.array_equal(self.keyframes, other.keyframes)
+            and np.array_equal(self.attitudes, other.attitudes)
+            and np.array_equal(self.interpolate, other.interpolate)
+        )
+
+    @property
+    def num_keyframes(self) -> int:
+        return len(self.keyframes)
+
+    @property
+    def segment_ms(self) -> np.ndarray:
+        """Duration of each segment k -> k+1: (numInterpolate + 1) * frame time."""
+        return (self.interpolate + 1) * self.frame_time_ms
+
+    @property
+    def length_ms(self) -> int:
+        """Total length; the last keyframe lasts 0 ms."""
+        return int(self.segment_ms.sum())
+
+    def positions_rad(self) -> np.ndarray:
+        """Keyframe joint values in radians, (N, J) float64."""
+        return self.keyframes / 1e6
+
+    @classmethod
+    def from_poses(
+        cls,
+        name: str,
+        locators: Sequence[str] | None,
+        poses_rad,
+        segment_ms: int | Sequence[int],
+        creator: str = "aibo-sim",
+        design: str = "DRX-1000",
+        frame_time_ms: int = DEFAULT_FRAME_TIME_MS,
+    ) -> "Motion":
+        """Author a motion from poses in radians (N, J). ``locators=None`` means every ERS-7
+        joint in ``ers7.JOINTS`` order. ``segment_ms`` (one value, or one per segment) must be
+        positive multiples of ``frame_time_ms``. Values are rounded to the nearest µrad (ties to
+        even); attitudes are zero."""
+        if locators is None:
+            from aibo_sim import ers7
+
+            locators = [j.locator for j in ers7.JOINTS]
+        poses = np.asarray(poses_rad, dtype=np.float64)
+        if poses.ndim != 2 or not np.isfinite(poses).all():
+            raise MtnError(name, None, "poses must be a finite (N, J) array")
+        n = len(poses)
+        seg = np.asarray(segment_ms)
+        if seg.ndim == 0:
+            seg = np.full(max(n - 1, 0), seg)
+        if seg.shape != (max(n - 1, 0),):
+            raise MtnError(name, None, f"{seg.size} segment durations for {n} poses (want {n - 1})")
+        if frame_time_ms <= 0 or any(int(s) != s or s <= 0 or int(s) % frame_time_ms for s in seg.tolist()):
+            raise MtnError(name, None, f"segment durations {seg.tolist()} must be positive multiples of {frame_time_ms} ms")
+        micro = np.rint(poses * 1e6)
+        if (micro < _S32_MIN).any() or (micro > _S32_MAX).any():
+            raise MtnError(name, None, "pose out of the s32 micro-radian range")
+        return cls(
+            name=name,
+            creator=creator,
+            design=design,
+            frame_time_ms=frame_time_ms,
+            locators=tuple(locators),
+            keyframes=micro.astype(np.int64),
+            attitudes=np.zeros((n, 3), dtype=np.int64),
+            interpolate=seg.astype(np.int64) // frame_time_ms - 1,
+        )
+
+
+# ----------------------------------------------------------------------------- reading
+
+
+class _Reader:
+    """Bounds-checked little-endian reads; every failure is an MtnError at an offset."""
+
+    def __init__(self, data: bytes, source: str):
+        self.data, self.source = data, source
+
+    def fail(self, offset: int, message: str) -> MtnError:
+        return MtnError(self.source, offset, message)
+
+    def need(self, offset: int, size: int, what: str, end: int | None = None) -> None:
+        limit = len(self.data) if end is None else end
+        if offset + size > limit:
+            where = "file" if limit == len(self.data) else "section"
+            raise self.fail(offset, f"truncated: {what} needs {size} bytes, the {where} ends at byte {limit}")
+
+    def unpack(self, fmt: str, offset: int, what: str, end: int | None = None) -> tuple:
+        self.need(offset, struct.calcsize(fmt), what, end)
+        return struct.unpack_from(fmt, self.data, offset)
+
+    def pstring(self, offset: int, what: str, end: int) -> tuple[str, int]:
+        (length,) = self.unpack("<B", offset, f"{what} length", end)
+        self.need(offset + 1, length, what, end)
+        return self.data[offset + 1 : offset + 1 + length].decode("latin-1"), offset + 1 + length
+
+    def section_header(self, offset: int, number: int) -> int:
+        """Check section ``number``'s header at ``offset``; return the section's end."""
+        num, size = self.unpack("<II", offset, f"section {number} header")
+        if num != number:
+            raise self.fail(offset, f"section number {num}, expected {number}")
+        if size < 8 or offset + size > len(self.data):
+            raise self.fail(offset + 4, f"section {number} size {size} overruns the file ({len(self.data)} bytes)")
+        return offset + size
+
+
+def parse_mtn(data: bytes, source: str = "<bytes>") -> Motion:
+    """Parse the bytes of an MTN file. ``source`` names it in error messages."""
+    r = _Reader(bytes(data), source)
+    r.need(0, 4, "magic")
+    if r.data[:4] != MAGIC:
+        raise r.fail(0, f"wrong magic {r.data[:4]!r} (should be {MAGIC!r})")
+
+    end0 = r.section_header(4, 0)
+    if end0 - 4 != SECTION0_SIZE:
+        raise r.fail(8, f"section 0 size {end0 - 4}, expected {SECTION0_SIZE}")
+    nsec, major, minor, nkey, frame_time, option = r.unpack("<IHHHHI", 12, "section 0")
+    if nsec != NUM_SECTIONS:
+        raise r.fail(12, f"{nsec} sections, expected {NUM_SECTIONS}")
+    if (major, minor) != VERSION:
+        raise r.fail(16, f"version {major}.{minor} not supported (only {VERSION[0]}.{VERSION[1]})")
+    if nkey == 0:
+        raise r.fail(20, "zero keyframes")
+    if frame_time == 0:
+        raise r.fail(22, "frame rate 0 ms")
+
+    end1 = r.section_header(end0, 1)
+    name, p = r.pstring(end0 + 8, "motion name", end1)
+    creator, p = r.pstring(p, "creator", end1)
+    design, p = r.pstring(p, "robot design", end1)
+
+    end2 = r.section_header(end1, 2)
+    (njoint,) = r.unpack("<H", end1 + 8, "joint count", end2)
+    if njoint == 0:
+        raise r.fail(end1 + 8, "zero joints")
+    locators, p = [], end1 + 10
+    for i in range(njoint):
+        at = p
+        loc, p = r.pstring(p, f"locator {i}", end2)
+        if loc in locators:
+            raise r.fail(at, f"duplicate locator {loc!r}")
+        locators.append(loc)
+
+    num, size, dtype = r.unpack("<III", end2, "section 3 header")
+    if num != 3:
+        raise r.fail(end2, f"section number {num}, expected 3")
+    kf_words = 3 + njoint
+    want = 12 + nkey * 4 * kf_words + 4 * (nkey - 1)
+    if size != want:
+        raise r.fail(end2 + 4, f"section 3 size {size}, expected {want} for {nkey} keyframes of {njoint} joints")
+    if dtype != 0:
+        raise r.fail(end2 + 8, f"data type {dtype}, expected 0")
+    r.need(end2, size, "section 3")
+    if end2 + size != len(r.data):
+        raise r.fail(end2 + size, f"{len(r.data) - end2 - size} trailing bytes after section 3")
+
+    # Keyframe 0, then (numInterpolate, keyframe) pairs: view as rows of 1 + kf_words s32,
+    # with a dummy interpolation word in front of keyframe 0.
+    body = end2 + 12
+    words = np.frombuffer(b"\0\0\0\0" + r.data[body:], dtype="<i4").astype(np.int64).reshape(nkey, 1 + kf_words)
+    interpolate = words[1:, 0]
+    if (interpolate < 0).any():
+        k = int(np.argmax(interpolate < 0)) + 1
+        offset = body + k * 4 * (1 + kf_words) - 4
+        raise r.fail(offset, f"negative interpolation count {int(interpolate[k - 1])} before keyframe {k}")
+    return Motion(
+        name=name,
+        creator=creator,
+        design=design,
+        frame_time_ms=frame_time,
+        locators=tuple(locators),
+        keyframes=words[:, 4:].copy(),
+        attitudes=words[:, 1:4].copy(),
+        interpolate=interpolate.copy(),
+        option=option,
+    )
+
+
+def read_mtn(path: str | os.PathLike) -> Motion:
+    """Read an MTN file. Malformed content raises :class:`MtnError`; I/O errors are ``OSError``."""
+    return parse_mtn(Path(path).read_bytes(), os.fspath(path))
+
+
+# ----------------------------------------------------------------------------- writing
+
+
+def _pstring(text: str, what: str, source: str) -> bytes:
+    try:
+        raw = text.encode("latin-1")
+    except UnicodeEncodeError as exc:
+        raise MtnError(source, None, f"{what} {text!r} is not latin-1") from exc
+    if len(raw) > 255:
+        raise MtnError(source, None, f"{what} is {len(raw)} bytes, a pstring holds at most 255")
+    return bytes([len(raw)]) + raw
+
+
+def _section(number: int, body: bytes) -> bytes:
+    body += b"\0" * (-(8 + len(body)) % 4)
+    return struct.pack("<II", number, 8 + len(body)) + body
+
+
+def serialize_mtn(motion: Motion) -> bytes:
+    """The bytes of ``motion`` as an MTN v1.2 file (zero padding, minimal section sizes)."""
+    m, src = motion, motion.name
+    n, j = m.keyframes.shape
+    checks = [
+        (n > 0xFFFF, f"{n} keyframes, at most 65535"),
+        (j > 0xFFFF, f"{j} joints, at most 65535"),
+        (not 0 < m.frame_time_ms <= 0xFFFF, f"frame time {m.frame_time_ms} ms not in 1..65535"),
+        (not 0 <= m.option <= 0xFFFFFFFF, f"option {m.option} is not a u32"),
+        (m.interpolate.size > 0 and not 0 <= int(m.interpolate.min()) <= int(m.interpolate.max()) <= _S32_MAX,
+         "interpolation count out of 0..2^31-1"),
+    ]
+    for arr, what in ((m.keyframes, "joint value"), (m.attitudes, "attitude")):
+        checks.append((bool(((arr < _S32_MIN) | (arr > _S32_MAX)).any()), f"{what} out of the s32 range"))
+    for bad, text in checks:
+        if bad:
+            raise MtnError(src, None, text)
+
+    sec0 = struct.pack("<IIIHHHHI", 0, SECTION0_SIZE, NUM_SECTIONS, *VERSION, n, m.frame_time_ms, m.option)
+    sec1 = _section(1, b"".join(_pstring(s, w, src) for s, w in ((m.name, "name"), (m.creator, "creator"), (m.design, "design"))))
+    sec2 = _section(2, struct.pack("<H", j) + b"".join(_pstring(loc, "locator", src) for loc in m.locators))
+    rows = np.empty((n, 4 + j), dtype="<i4")
+    rows[:, 0] = 0
+    rows[1:, 0] = m.interpolate
+    rows[:, 1:4] = m.attitudes
+    rows[:, 4:] = m.keyframes
+    body = rows.tobytes()[4:]  # keyframe 0 has no interpolation word
+    sec3 = struct.pack("<III", 3, 12 + len(body), 0) + body
+    return MAGIC + sec0 + sec1 + sec2 + sec3
+
+
+def write_mtn(motion: Motion, path: str | os.PathLike) -> None:
+    """Write ``motion`` to ``path`` atomically: the bytes are built first, written to a temporary
+    file in the same directory, then renamed over ``path``; on failure nothing is left behind."""
+    data = serialize_mtn(motion)
+    path = Path(path)
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.{secrets.token_hex(4)}.tmp")
+    fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_BINARY", 0), 0o666)
+    try:
+        with os.fdopen(fd, "wb") as f:
+            f.write(data)
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        try:
+            os.unlink(tmp)
+        except FileNotFoundError:
+            pass
+        raise
+
+
+# ----------------------------------------------------------------------------- playback
+
+
+def _trunc_div(a: np.ndarray, b: int) -> np.ndarray:
+    """C integer division (truncates toward zero), unlike Python's floor division."""
+    return np.sign(a) * (np.abs(a) // b)
+
+
+class MotionPlayer:
+    """Joint targets of a motion as a function of time, in one of two modes.
+
+    ``mode="openr"`` (Sony ``MTN.cc``): 8 ms sub-frames. Segment k -> k+1 with numInterpolate n
+    has s = (n+1)*frame_time/8 sub-frames (2n+2 at 16 ms); sub-frame i (0..s-1) commands
+    ``v0 + i*delta`` with ``delta = (v1-v0)/s`` truncated toward zero. One more frame, the last
+    keyframe exactly, ends the motion at ``t = length_ms``. Random access: :meth:`frame`,
+    :meth:`targets_rad_at`, iteration.
+
+    ``mode="webots"`` (WB-MTN ``mtn_step``): call :meth:`step` once per control step. Playing
+    starts at construction (as after ``mtn_play``).
+    """
+
+    def __init__(self, motion: Motion, mode: str = "openr"):
+        if mode not in ("openr", "webots"):
+            raise ValueError(f"mode must be 'openr' or 'webots', not {mode!r}")
+        self.motion, self.mode = motion, mode
+        if mode == "openr":
+            if motion.frame_time_ms % SUBFRAME_MS:
+                raise ValueError(f"{motion.name}: frame time {motion.frame_time_ms} ms is not a multiple of {SUBFRAME_MS} ms")
+            self._subframes = (motion.interpolate + 1) * (motion.frame_time_ms // SUBFRAME_MS)
+            self._start = np.concatenate(([0], np.cumsum(self._subframes)))  # segment k starts at _start[k]
+            kf = motion.keyframes
+            self._delta = _trunc_div(kf[1:] - kf[:-1], self._subframes[:, None]) if len(kf) > 1 else kf[:0]
+        self._key = 0  # webots state
+        self._key_time = 0
+        self._time = 0
+        self._over = False
+
+    # -- OPEN-R mode
+    @property
+    def num_frames(self) -> int:
+        """Number of 8 ms frames, the final keyframe included (= length_ms/8 + 1)."""
+        self._need("openr")
+        return int(self._start[-1]) + 1
+
+    def frame(self, i: int) -> np.ndarray:
+        """Target of 8 ms frame ``i`` (time ``8*i`` ms), (J,) int64 micro-radians."""
+        self._need("openr")
+        if not 0 <= i < self.num_frames:
+            raise IndexError(f"frame {i} out of 0..{self.num_frames - 1}")
+        k = int(np.searchsorted(self._start, i, side="right")) - 1
+        if k >= self.motion.num_keyframes - 1:
+            return self.motion.keyframes[-1].copy()
+        return self.motion.keyframes[k] + (i - int(self._start[k])) * self._delta[k]
+
+    def __iter__(self) -> Iterator[np.ndarray]:
+        self._need("openr")
+        return (self.frame(i) for i in range(self.num_frames))
+
+    def targets_rad_at(self, t_ms: float) -> np.ndarray:
+        """Target in radians at time ``t_ms``: the 8 ms frame in force then (held before 0 and
+        after the end)."""
+        i = min(max(int(t_ms // SUBFRAME_MS), 0), self.num_frames - 1)
+        return self.frame(i) / 1e6
+
+    # -- Webots mode
+    def step(self, ms: int) -> dict[str, float] | None:
+        """One ``mtn_step(ms)``: the commands issued (locator -> rad) or None."""
+        self._need("webots")
+        if ms < 0:
+            raise ValueError("ms must be >= 0")
+        if self._over:
+            return None
+        m = self.motion
+        commands = None
+        if self._key_time == 0:
+            commands = dict(zip(m.locators, (m.keyframes[self._key] / 1e6).tolist()))
+        self._key_time += ms
+        self._time += ms
+        length = int(m.segment_ms[self._key]) if self._key < m.num_keyframes - 1 else 0
+        if self._key_time >= length:
+            self._key += 1
+            self._key_time = 0
+            if self._key >= m.num_keyframes:
+                self._key, self._time, self._over = 0, 0, True
+        return commands
+
+    def play(self) -> None:
+        """Start again after the motion is over (Webots ``mtn_play`` on a finished MTN)."""
+        self._need("webots")
+        if self._over:
+            self._over = False
+
+    @property
+    def is_over(self) -> bool:
+        self._need("webots")
+        return self._over
+
+    @property
+    def time_ms(self) -> int:
+        """``mtn_get_time``: ms passed to :meth:`step` since the start; 0 again once over."""
+        self._need("webots")
+        return self._time
+
+    @property
+    def length_ms(self) -> int:
+        return self.motion.length_ms
+
+    def _need(self, mode: str) -> None:
+        if self.mode != mode:
+            raise AttributeError(f"not available in {self.mode!r} mode (needs {mode!r})")
+
+
+# ----------------------------------------------------------------------------- Webots-style API
+
+_last_error = ""
+
+
+def mtn_new(path: str | os.PathLike, available_locators: Iterable[str] | None = None) -> Motion:
+    """Webots ``mtn_new``: read ``path`` and check every locator names a device of the robot
+    (default: ``ers7.all_locators()``). Failures raise :class:`MtnError` and are remembered for
+    :func:`mtn_get_error`; Webots' own texts are used ("File not found: <path>",
+    "Missing device in model: <locator>", without Webots' trailing newline)."""
+    global _last_error
+    try:
+        try:
+            motion = read_mtn(path)
+        except OSError as exc:
+            raise MtnError(None, None, f"File not found: {os.fspath(path)}") from exc
+        if available_locators is None:
+            from aibo_sim import ers7
+
+            available_locators = ers7.all_locators()
+        available = set(available_locators)
+        for loc in motion.locators:
+            if loc not in available:
+                raise MtnError(None, None, f"Missing device in model: {loc}")
+    except MtnError as exc:
+        _last_error = str(exc)
+        raise
+    return motion
+
+
+def mtn_get_error() -> str:
+    """Text of the last :func:`mtn_new` error ("" if none yet)."""
+    return _last_error
+
+
+# ----------------------------------------------------------------------------- info
+
+
+def motion_info(motion: Motion) -> dict:
+    """Summary for ``aibo-sim mtn info`` (JSON-serialisable)."""
+    return {
+        "name": motion.name,
+        "creator": motion.creator,
+        "design": motion.design,
+        "frame_time_ms": motion.frame_time_ms,
+        "num_keyframes": motion.num_keyframes,
+        "length_ms": motion.length_ms,
+        "locators": list(motion.locators),
+    }
+
+
+def format_motion_info(info: dict) -> str:
+    """Human-readable form of :func:`motion_info`."""
+    lines = [
+        f"name:        {info['name']}",
+        f"creator:     {info['creator']}",
+        f"design:      {info['design']}",
+        f"frame time:  {info['frame_time_ms']} ms",
+        f"keyframes:   {info['num_keyframes']}",
+        f"length:      {info['length_ms']} ms ({info['length_ms'] / 1000:.3f} s)",
+        f"joints:      {len(info['locators'])}",
+    ]
+    lines += [f"  {i:2d} {loc}" for i, loc in enumerate(info["locators"])]
+    return "\n".join(lines)

@@ -1,0 +1,140 @@
+"""Headless offscreen rendering: OpenGL backend choice and a small camera renderer.
+
+Backend: ``MUJOCO_GL`` when it is set (egl, osmesa or glfw); otherwise EGL, then OSMesa,
+each probed once in a subprocess (a failed GL library load cannot be undone in-process).
+The choice is written back to ``MUJOCO_GL`` so worker processes inherit it.
+
+Quality: software OpenGL (Mesa llvmpipe) pays ~20x per frame for MuJoCo's default
+4096^2 shadow map, so the head camera renders without shadows, reflections or
+multisampling by default (``quality="fast"``); ``quality="high"`` turns them on for
+pictures (README renders, third-person views).
+"""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+
+import mujoco
+import numpy as np
+
+_BACKENDS = ("egl", "osmesa")
+_PROBE = "from mujoco.{0} import GLContext; c = GLContext(8, 8); c.make_current(); c.free()"
+SYSTEM_PACKAGES = (
+    "EGL: Debian/Ubuntu 'libegl1 libgl1-mesa-dri' (Mesa's software renderer works); "
+    "OSMesa: 'libosmesa6'"
+)
+
+
+class RenderingUnavailable(RuntimeError):
+    """No headless OpenGL backend works on this machine."""
+
+
+def gl_backend() -> str:
+    """The OpenGL backend to render with (see the module docstring)."""
+    chosen = os.environ.get("MUJOCO_GL", "").strip().lower()
+    if chosen:
+        return chosen
+    errors = []
+    for backend in _BACKENDS:
+        env = dict(os.environ, MUJOCO_GL=backend, PYOPENGL_PLATFORM=backend)
+        probe = subprocess.run(
+            [sys.executable, "-c", _PROBE.format(backend)], env=env, capture_output=True, text=True
+        )
+        if probe.returncode == 0:
+            os.environ["MUJOCO_GL"] = backend
+            return backend
+        errors.append(f"{backend}: {(probe.stderr.strip().splitlines() or ['failed'])[-1]}")
+    raise RenderingUnavailable(
+        "no headless OpenGL backend works (" + "; ".join(errors) + "). Install " + SYSTEM_PACKAGES
+        + ", or set MUJOCO_GL."
+    )
+
+
+def _context_class(backend: str):
+    os.environ.setdefault("PYOPENGL_PLATFORM", backend if backend in _BACKENDS else "")
+    try:
+        if backend == "egl":
+            from mujoco.egl import GLContext
+        elif backend == "osmesa":
+            from mujoco.osmesa import GLContext
+        elif backend == "glfw":
+            from mujoco.glfw import GLContext
+        else:
+            raise RenderingUnavailable(f"MUJOCO_GL={backend!r} is not one of egl, osmesa, glfw")
+    except ImportError as exc:
+        raise RenderingUnavailable(f"MUJOCO_GL={backend}: {exc}. Install {SYSTEM_PACKAGES}.") from exc
+    return GLContext
+
+
+class Renderer:
+    """Renders RGB (and optionally depth) images of one camera of a model, offscreen.
+
+    Shows geom groups 0-2 (scene and visual geoms), hides collision geoms (group 3) and
+    sites. ``render`` returns a new ``(height, width, 3)`` uint8 array, top row first.
+    """
+
+    def __init__(self, model: mujoco.MjModel, width: int, height: int, quality: str = "fast"):
+        if quality not in ("fast", "high"):
+            raise ValueError(f"quality must be 'fast' or 'high', not {quality!r}")
+        if width > model.vis.global_.offwidth or height > model.vis.global_.offheight:
+            model.vis.global_.offwidth = max(width, model.vis.global_.offwidth)
+            model.vis.global_.offheight = max(height, model.vis.global_.offheight)
+        if quality == "fast":
+            model.vis.quality.offsamples = 0
+        self.width, self.height, self.model = width, height, model
+        self._gl = _context_class(gl_backend())(width, height)
+        self._gl.make_current()
+        self._context = mujoco.MjrContext(model, mujoco.mjtFontScale.mjFONTSCALE_100)
+        mujoco.mjr_setBuffer(mujoco.mjtFramebuffer.mjFB_OFFSCREEN, self._context)
+        self._scene = mujoco.MjvScene(model, maxgeom=4000)
+        self._scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = quality == "high"
+        self._scene.flags[mujoco.mjtRndFlag.mjRND_REFLECTION] = quality == "high"
+        self._scene.flags[mujoco.mjtRndFlag.mjRND_SKYBOX] = True
+        self._option = mujoco.MjvOption()
+        self._option.geomgroup[:] = [1, 1, 1, 0, 0, 0]
+        self._option.sitegroup[:] = 0
+        self._option.flags[mujoco.mjtVisFlag.mjVIS_RANGEFINDER] = 0
+        self._camera = mujoco.MjvCamera()
+        self._rect = mujoco.MjrRect(0, 0, width, height)
+        self._rgb = np.empty((height, width, 3), np.uint8)
+        self._depth = np.empty((height, width), np.float32)
+
+    def _draw(self, data: mujoco.MjData, camera: int | str | mujoco.MjvCamera) -> None:
+        if isinstance(camera, mujoco.MjvCamera):
+            cam = camera
+        else:
+            cam = self._camera
+            cam.type = mujoco.mjtCamera.mjCAMERA_FIXED
+            cam.fixedcamid = camera if isinstance(camera, int) else self.model.camera(camera).id
+        self._gl.make_current()
+        mujoco.mjv_updateScene(self.model, data, self._option, None, cam, mujoco.mjtCatBit.mjCAT_ALL, self._scene)
+        mujoco.mjr_render(self._rect, self._scene, self._context)
+
+    def render(self, data: mujoco.MjData, camera: int | str | mujoco.MjvCamera) -> np.ndarray:
+        """RGB image of ``camera`` (id, name or free MjvCamera) in the state ``data``."""
+        self._draw(data, camera)
+        mujoco.mjr_readPixels(self._rgb, None, self._rect, self._context)
+        return self._rgb[::-1].copy()
+
+    def render_depth(self, data: mujoco.MjData, camera: int | str) -> np.ndarray:
+        """Depth along the optical axis in metres, float32 ``(height, width)``."""
+        self._draw(data, camera)
+        mujoco.mjr_readPixels(None, self._depth, self._rect, self._context)
+        extent = self.model.stat.extent
+        near, far = self.model.vis.map.znear * extent, self.model.vis.map.zfar * extent
+        z = self._depth[::-1].astype(np.float64)
+        return (near * far / (far - z * (far - near))).astype(np.float32)
+
+    def close(self) -> None:
+        if self._gl is not None:
+            self._context.free()
+            self._gl.free()
+            self._gl = None
+
+    def __del__(self):
+        try:
+            self.close()
+        except Exception:  # interpreter shutdown: GL may already be gone
+            pass

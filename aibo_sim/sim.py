@@ -1,0 +1,194 @@
+"""The simulated ERS-7: model loading, 8 ms joint frames, servos, sensors, head camera.
+
+Time is kept as OPEN-R keeps it: the robot advances in 8 ms joint frames (``FRAME_MS``),
+each a whole number of MuJoCo steps; the head camera produces a frame whenever the
+simulated time reaches the next multiple of 1/30 s.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import mujoco
+import numpy as np
+
+from openr_bridge import FRAME_RATE, LAYER_H_HEIGHT, LAYER_H_WIDTH, FULL_HEIGHT, FULL_WIDTH
+
+from .ers7 import JOINTS, SENSORS
+from .render import Renderer
+
+FRAME_MS = 8  # OPEN-R joint frame
+GRAVITY = 9.80665
+ACCEL_RANGE = 2 * GRAVITY  # Sony: +-19 613 300 um/s^2
+IR_NOISE = 0.1  # Webots lookup tables: 10 % noise at mid-range, none at the ends
+
+
+class ModelError(ValueError):
+    """A model or scene file is missing or invalid; the message names the file."""
+
+
+class SimulationDiverged(RuntimeError):
+    """The physics produced NaN or unbounded accelerations."""
+
+
+def models_dir() -> Path:
+    """The bundled ``models/`` folder (source checkout or installed wheel)."""
+    here = Path(__file__).resolve().parent
+    for candidate in (here / "models", here.parent / "models"):
+        if (candidate / "ers7.xml").is_file():
+            return candidate
+    raise ModelError(f"bundled models not found next to {here}")
+
+
+def load_model(scene: str | Path | None = None) -> mujoco.MjModel:
+    """Compile a scene file (default: the RoboCup field), with an error that names the file."""
+    path = Path(scene) if scene is not None else models_dir() / "scene.xml"
+    if not path.is_file():
+        raise ModelError(f"{path}: no such model file")
+    try:
+        return mujoco.MjModel.from_xml_path(str(path))
+    except ValueError as exc:
+        raise ModelError(f"{path}: {exc}") from None
+
+
+class Servos:
+    """Webots/OPEN-R style position servos in front of MuJoCo's position actuators.
+
+    Each 8 ms frame the commanded set-point moves towards the target no faster than the
+    joint's velocity limit (Sony's maximum speed by default) and, when an acceleration
+    limit is set, with bounded acceleration; targets are clipped to the joint range.
+    """
+
+    def __init__(self, model: mujoco.MjModel):
+        ids = [model.actuator(j.name).id for j in JOINTS]
+        if ids != list(range(len(JOINTS))):
+            raise ModelError("actuators must follow the order of ers7.JOINTS")
+        self.low, self.high = model.actuator_ctrlrange[:, 0].copy(), model.actuator_ctrlrange[:, 1].copy()
+        self.max_velocity = np.array([j.max_speed for j in JOINTS])
+        self.velocity = self.max_velocity.copy()
+        self.acceleration = np.full(len(JOINTS), np.inf)
+        self.target = np.zeros(len(JOINTS))
+        self.command = np.zeros(len(JOINTS))
+        self._speed = np.zeros(len(JOINTS))
+
+    def reset(self, positions: np.ndarray) -> None:
+        self.target[:] = self.command[:] = np.clip(positions, self.low, self.high)
+        self._speed[:] = 0
+
+    def set_target(self, index, position) -> None:
+        self.target[index] = np.clip(position, self.low[index], self.high[index])
+
+    def advance(self, dt: float) -> np.ndarray:
+        """Move the set-points one frame towards the targets; returns them."""
+        error = self.target - self.command
+        limit = np.minimum(self.velocity, self.max_velocity)
+        accel = np.minimum(self.acceleration, 1e9)  # "unlimited" stays finite arithmetic
+        # Speed that still stops at the target under the acceleration limit.
+        stop = np.sqrt(2 * accel * np.abs(error))
+        wanted = np.sign(error) * np.minimum(limit, stop)
+        self._speed = np.clip(wanted, self._speed - accel * dt, self._speed + accel * dt)
+        step = self._speed * dt
+        arrived = np.abs(step) >= np.abs(error)
+        self.command = np.where(arrived, self.target, self.command + step)
+        self._speed[arrived] = 0
+        return self.command
+
+
+class Simulation:
+    """One ERS-7 in a scene, advanced in 8 ms frames, with its head camera."""
+
+    def __init__(self, scene=None, *, seed: int = 0, keyframe: str = "stand", camera_full: bool = False):
+        self.model = load_model(scene)
+        self.data = mujoco.MjData(self.model)
+        self.keyframe = keyframe
+        steps = FRAME_MS / 1000 / self.model.opt.timestep
+        if abs(steps - round(steps)) > 1e-9:
+            raise ModelError(f"timestep {self.model.opt.timestep} does not divide the 8 ms joint frame")
+        self.steps_per_frame = round(steps)
+        self.servos = Servos(self.model)
+        self.camera_size = (FULL_WIDTH, FULL_HEIGHT) if camera_full else (LAYER_H_WIDTH, LAYER_H_HEIGHT)
+        self._renderer: Renderer | None = None
+        self._sensor_slices = {
+            s.name: slice(self.model.sensor(s.name).adr[0], self.model.sensor(s.name).adr[0] + self.model.sensor(s.name).dim[0])
+            for s in SENSORS if s.kind != "camera"
+        }
+        self._joint_qpos = np.array([self.model.joint(j.name).qposadr[0] for j in JOINTS])
+        self.reset(seed)
+
+    # ---------------------------------------------------------------- time and state
+
+    def reset(self, seed: int | None = None, keyframe: str | None = None) -> None:
+        if seed is not None:
+            self.rng = np.random.default_rng(seed)
+        key = self.model.key(keyframe or self.keyframe).id
+        mujoco.mj_resetDataKeyframe(self.model, self.data, key)
+        mujoco.mj_forward(self.model, self.data)
+        self.servos.reset(self.joint_positions())
+        self.frame = 0  # 8 ms frames since reset
+        self.camera_frames = 0
+
+    @property
+    def time_ms(self) -> int:
+        return self.frame * FRAME_MS
+
+    def step_frame(self) -> None:
+        """Advance one 8 ms joint frame; raises SimulationDiverged on NaN physics."""
+        self.data.ctrl[:] = self.servos.advance(FRAME_MS / 1000)
+        mujoco.mj_step(self.model, self.data, nstep=self.steps_per_frame)
+        self.frame += 1
+        warnings = self.data.warning
+        bad = warnings[mujoco.mjtWarning.mjWARN_BADQACC].number + warnings[mujoco.mjtWarning.mjWARN_BADCTRL].number
+        if bad or not np.isfinite(self.data.qpos).all():
+            raise SimulationDiverged(f"physics diverged at t = {self.data.time:.3f} s (frame {self.frame})")
+
+    def camera_due(self) -> bool:
+        """True when the 30 fps camera has a new frame at the current time."""
+        return self.time_ms * FRAME_RATE >= self.camera_frames * 1000
+
+    # ---------------------------------------------------------------- readings
+
+    def joint_positions(self) -> np.ndarray:
+        return self.data.qpos[self._joint_qpos].copy()
+
+    def sensor(self, name: str) -> np.ndarray:
+        return self.data.sensordata[self._sensor_slices[name]]
+
+    def distance_mm(self, name: str) -> float:
+        """IR range in mm as Webots' lookup tables give it: clamped, 10 % noise mid-range."""
+        low, high = next(s.range_mm for s in SENSORS if s.name == name)
+        metres = float(self.sensor(name)[0])
+        mm = high if metres < 0 else min(max(metres * 1000, low), high)
+        mid_weight = 1 - abs(2 * (mm - low) / (high - low) - 1)
+        return mm * (1 + IR_NOISE * mid_weight * self.rng.standard_normal())
+
+    def touched(self, name: str, threshold: float) -> bool:
+        return float(self.sensor(name)[0]) > threshold
+
+    def acceleration(self) -> np.ndarray:
+        """Body-frame proper acceleration (x forward, y left, z up), m/s^2, within +-2 g."""
+        return np.clip(self.sensor("accelerometer"), -ACCEL_RANGE, ACCEL_RANGE)
+
+    def body_pose(self) -> tuple[np.ndarray, float, float]:
+        """Body position, yaw (rad) and the angle between the body's up axis and vertical."""
+        xmat = self.data.xmat[self.model.body("body").id].reshape(3, 3)
+        yaw = math.atan2(xmat[1, 0], xmat[0, 0])
+        tilt = math.acos(max(-1.0, min(1.0, xmat[2, 2])))
+        return self.data.xpos[self.model.body("body").id].copy(), yaw, tilt
+
+    def fallen(self) -> bool:
+        return self.body_pose()[2] > math.radians(60)
+
+    # ---------------------------------------------------------------- camera
+
+    def render_camera(self) -> np.ndarray:
+        """The head camera's RGB frame, (height, width, 3) uint8; counts a camera frame."""
+        if self._renderer is None:
+            self._renderer = Renderer(self.model, *self.camera_size)
+        self.camera_frames += 1
+        return self._renderer.render(self.data, "camera")
+
+    def close(self) -> None:
+        if self._renderer is not None:
+            self._renderer.close()
+            self._renderer = None

@@ -1,0 +1,173 @@
+"""The ERS-7 MJCF model and its scenes (issue 2)."""
+
+import math
+
+import mujoco
+import numpy as np
+import pytest
+
+from aibo_sim import ers7, mjcf
+from aibo_sim.sim import ModelError, Simulation, load_model, models_dir
+
+SCENES = sorted(models_dir().glob("scene*.xml"))
+
+# Sony hardware limits in degrees, typed in from the spec's table A.4 (not read from ers7.py).
+SPEC_HW_LIMITS = {
+    "neck_tilt": (-80, 3), "head_pan": (-93, 93), "head_tilt": (-20, 50), "mouth": (-60, 0),
+    "ear_l": (0, 15), "ear_r": (0, 15), "tail_tilt": (0, 65), "tail_pan": (-60, 60),
+    **{f"{leg}_j1": (-120, 135) for leg in ("lf", "rf")},
+    **{f"{leg}_j1": (-135, 120) for leg in ("lh", "rh")},
+    **{f"{leg}_j2": (-15, 93) for leg in ("lf", "lh", "rf", "rh")},
+    **{f"{leg}_j3": (-30, 127) for leg in ("lf", "lh", "rf", "rh")},
+}
+
+
+@pytest.fixture(scope="module")
+def model():
+    return load_model()
+
+
+def test_generated_files_are_committed():
+    for name, text in mjcf.generated_files().items():
+        assert (models_dir() / name).read_text() == text, f"models/{name} is stale: run python -m aibo_sim.mjcf"
+
+
+@pytest.mark.parametrize("scene", SCENES, ids=[s.name for s in SCENES])
+def test_every_scene_compiles_and_holds_the_robot(scene):
+    model = mujoco.MjModel.from_xml_path(str(scene))
+    assert model.nu == 20 and model.nkey >= 2
+    assert {model.key(i).name for i in range(model.nkey)} >= {"stand", "sit"}
+
+
+def test_joint_ranges_equal_the_spec(model):
+    assert [model.joint(i + 1).name for i in range(20)] == [j.name for j in ers7.JOINTS]
+    for name, (low, high) in SPEC_HW_LIMITS.items():
+        np.testing.assert_allclose(np.degrees(model.joint(name).range), (low, high), atol=1e-9)
+        np.testing.assert_allclose(np.degrees(model.actuator(name).ctrlrange), (low, high), atol=1e-9)
+        assert model.actuator(name).forcerange[1] == pytest.approx(5.4542)
+
+
+def test_locator_table_covers_sony_primitives():
+    locators = ers7.all_locators()
+    assert len(locators) == len(set(locators))
+    assert "PRM:/r2/c1-Joint2:21" in locators and "PRM:/r5/c1/c2/c3-Joint2:53" in locators
+    assert "PRM:/r1/c1/c2/c3/i1-FbkImageSensor:F1" in locators
+    assert len(ers7.LEDS) == 26 and sum(s.kind == "touch" for s in ers7.SENSORS) == 9
+
+
+def test_masses_follow_the_spec(model):
+    body = model.body("body").id
+    assert model.body_subtreemass[body] == pytest.approx(1.628, abs=1e-6)
+    assert 1.5 <= model.body_subtreemass[body] <= 1.7
+    assert model.body_mass[body] == pytest.approx(0.613)
+    assert model.body_mass[model.body("lf_j2").id] == pytest.approx(0.073)
+
+
+def test_visual_and_collision_geoms_are_separate(model):
+    for g in range(model.ngeom):
+        if model.geom_bodyid[g] == 0 or model.body_rootid[model.geom_bodyid[g]] != model.body("body").id:
+            continue
+        if model.geom_group[g] == 2:
+            assert model.geom_contype[g] == 0 and model.geom_conaffinity[g] == 0
+        else:
+            assert model.geom_group[g] == 3 and model.geom_contype[g] != 0
+    assert model.geom_size[model.geom("lf_paw").id][0] == pytest.approx(0.01172)
+
+
+def test_random_control_over_full_ranges_raises_no_warning(model):
+    data = mujoco.MjData(model)
+    mujoco.mj_resetDataKeyframe(model, data, model.key("stand").id)
+    rng = np.random.default_rng(7)
+    low, high = model.actuator_ctrlrange.T
+    while data.time < 1.0:
+        data.ctrl[:] = rng.uniform(low, high)
+        mujoco.mj_step(model, data, nstep=4)
+    assert [w.number for w in data.warning] == [0] * len(data.warning)
+    assert np.isfinite(data.qpos).all()
+
+
+def test_standing_for_10_s_drifts_less_than_5_mm():
+    sim = Simulation()
+    start = sim.data.qpos[2]
+    heights = []
+    while sim.time_ms < 10_000:
+        sim.step_frame()
+        heights.append(sim.data.qpos[2])
+    assert max(abs(h - start) for h in heights[-125:]) < 0.005
+    assert not sim.fallen()
+
+
+def test_camera_fields_of_view_measured_by_projecting_points(tmp_path):
+    """Markers at known angles off the optical axis land where 56.9 x 45.2 deg predicts."""
+    from aibo_sim.render import Renderer
+
+    spec = mujoco.MjSpec.from_file(str(models_dir() / "ers7.xml"))
+    angles = [(-25.0, 0.0), (25.0, 0.0), (0.0, -20.0), (0.0, 20.0), (0.0, 0.0)]
+    for i in range(len(angles)):
+        body = spec.worldbody.add_body(name=f"marker{i}", mocap=True)
+        body.add_geom(type=mujoco.mjtGeom.mjGEOM_SPHERE, size=[0.01, 0, 0], rgba=[1, 1, 1, 1], contype=0, conaffinity=0)
+    spec.visual.headlight.ambient = [1, 1, 1]
+    model = spec.compile()
+    data = mujoco.MjData(model)
+    mujoco.mj_resetDataKeyframe(model, data, model.key("stand").id)
+    mujoco.mj_forward(model, data)
+    cam = model.camera("camera").id
+    pos, rot = data.cam_xpos[cam], data.cam_xmat[cam].reshape(3, 3)
+    for i, (h, v) in enumerate(angles):  # camera frame: x right, y up, -z forward
+        direction = rot @ np.array([math.tan(math.radians(h)), math.tan(math.radians(v)), -1.0])
+        data.mocap_pos[i] = pos + 2.0 * direction
+    mujoco.mj_forward(model, data)
+    renderer = Renderer(model, 416, 320)
+    image = renderer.render(data, "camera").max(axis=2)
+    renderer.close()
+    centres = _blob_centres(image > 200)
+    assert len(centres) == len(angles)
+
+    def nearest(x, y):
+        return min(centres, key=lambda c: (c[0] - x) ** 2 + (c[1] - y) ** 2)
+
+    left, right = nearest(0, 160), nearest(416, 160)
+    top, bottom = nearest(208, 0), nearest(208, 320)
+    fx = (right[0] - left[0]) / (2 * math.tan(math.radians(25)))
+    fy = (bottom[1] - top[1]) / (2 * math.tan(math.radians(20)))
+    assert math.degrees(2 * math.atan(208 / fx)) == pytest.approx(56.9, abs=0.2)
+    assert math.degrees(2 * math.atan(160 / fy)) == pytest.approx(45.2, abs=0.2)
+    centre = nearest(208, 160)
+    assert centre == pytest.approx((207.5, 159.5), abs=0.6)
+
+
+def _blob_centres(mask: np.ndarray) -> list[tuple[float, float]]:
+    import cv2
+
+    count, _, stats, centroids = cv2.connectedComponentsWithStats(mask.astype(np.uint8))
+    return [tuple(c) for c, s in zip(centroids[1:], stats[1:]) if s[cv2.CC_STAT_AREA] >= 4]
+
+
+def test_sensors_read_plausible_values_when_standing():
+    sim = Simulation()
+    for _ in range(125):  # 1 s to settle
+        sim.step_frame()
+    data, model = sim.data, sim.model
+    site = model.site("ir_chest").id
+    origin, axis = data.site_xpos[site], data.site_xmat[site].reshape(3, 3)[:, 2]
+    assert axis[2] < -0.4  # aimed about 30 deg below the body's horizontal
+    expected = origin[2] / -axis[2]  # where the ray meets the floor
+    assert sim.sensor("ir_chest")[0] == pytest.approx(expected, abs=1e-4)
+    assert 100 < sim.distance_mm("ir_chest") < 900
+    for leg in ers7.LEGS:
+        assert sim.touched(f"touch_paw_{leg}", 0.1)
+    for name in ("touch_head", "touch_chin", "touch_back_front", "touch_back_middle", "touch_back_rear"):
+        assert not sim.touched(name, 0.1)
+    accel = sim.acceleration()
+    assert np.linalg.norm(accel) == pytest.approx(9.81, abs=0.1)
+    assert accel[2] > 9.5
+    np.testing.assert_allclose(sim.joint_positions(), sim.servos.command, atol=0.05)
+
+
+@pytest.mark.parametrize("content", [None, "<mujoco><worldbody><body></mujoco>", "not xml at all"])
+def test_bad_model_file_names_the_file(tmp_path, content):
+    path = tmp_path / "broken_scene.xml"
+    if content is not None:
+        path.write_text(content)
+    with pytest.raises(ModelError, match="broken_scene.xml"):
+        load_model(path)
