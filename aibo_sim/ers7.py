@@ -122,6 +122,7 @@ class Led:
     colour: tuple[float, float, float]
 
 
+LED_OFF_RGBA = (0.15, 0.15, 0.16, 1.0)
 _WHITE, _RED, _BLUE = (1.0, 1.0, 1.0), (1.0, 0.1, 0.1), (0.2, 0.4, 1.0)
 LEDS: tuple[Led, ...] = (
     Led("led_head_colour", "PRM:/r1/c1/c2/c3/l1-LED2:l1", (1.0, 0.6, 0.1)),
@@ -144,6 +145,7 @@ LEDS: tuple[Led, ...] = (
 )
 
 LED_BY_LOCATOR = {led.locator: led for led in LEDS}
+LED_BY_NAME = {led.name: led for led in LEDS}
 
 
 def all_locators() -> list[str]:

@@ -13,8 +13,8 @@ from pathlib import Path
 import numpy as np
 
 from . import field as F
-from .ers7 import JOINT_BY_NAME, JOINTS, LEDS, LEGS, SENSORS
-from openr_bridge import FULL_HEIGHT, FULL_WIDTH, HFOV_DEG, VFOV_DEG
+from .ers7 import JOINT_BY_NAME, JOINTS, LED_OFF_RGBA, LEGS, SENSORS
+from openr_bridge import FULL_HEIGHT, FULL_WIDTH, HORIZONTAL_FOV_DEG, VERTICAL_FOV_DEG
 
 MODELS_DIR = Path(__file__).resolve().parent.parent / "models"
 
@@ -33,7 +33,7 @@ SERVO_ARMATURE = 0.004  # kg m^2: reflected rotor inertia of a geared servo
 # with the Webots default head. Unlisted joints take their table default.
 POSES = {
     "stand": {
-        "neck_tilt": -30, "head_tilt": 30, "mouth": -3, "tail_tilt": 10,
+        "neck_tilt": -30, "head_tilt": 15, "mouth": -3, "tail_tilt": 10,
         **{f"{leg}_j{i}": v for leg in ("lf", "rf") for i, v in zip((1, 2, 3), (-10, 0, 30))},
         **{f"{leg}_j{i}": v for leg in ("lh", "rh") for i, v in zip((1, 2, 3), (0, 0, 25))},
     },
@@ -112,7 +112,7 @@ def _defaults() -> ET.Element:
                 E("default", E("geom", type="sphere", size=PAW_RADIUS, condim=3, priority=1), class_="paw"),
                 class_="collision",
             ),
-            E("default", E("geom", type="sphere", size=0.0025, group=2, contype=0, conaffinity=0, density=0, material="led_off"), class_="led"),
+            E("default", E("geom", type="sphere", size=0.0025, group=2, contype=0, conaffinity=0, density=0, rgba=LED_OFF_RGBA), class_="led"),
             E("default", E("site", type="sphere", group=5), class_="touch"),
             class_="ers7",
         ),
@@ -126,14 +126,13 @@ def _assets() -> ET.Element:
         "dark": dict(rgba=(0.22, 0.22, 0.24, 1), specular=0.3),
         "paw": dict(rgba=(0.35, 0.35, 0.37, 1), specular=0.2),
         "lens": dict(rgba=(0.1, 0.1, 0.15, 1), specular=1.0, shininess=1.0),
-        "led_off": dict(rgba=(0.15, 0.15, 0.16, 1)),
     }
     return E("asset", *(E("material", name=n, **a) for n, a in materials.items()))
 
 
 def _camera() -> ET.Element:
     # Both Sony fields of view hold exactly: sensor size = 2 f tan(fov / 2) on each axis.
-    sensor = [2 * CAMERA_FOCAL * math.tan(math.radians(f) / 2) for f in (HFOV_DEG, VFOV_DEG)]
+    sensor = [2 * CAMERA_FOCAL * math.tan(math.radians(f) / 2) for f in (HORIZONTAL_FOV_DEG, VERTICAL_FOV_DEG)]
     return E(
         "camera", name="camera", pos=(0.08106, 0, -0.0146), xyaxes=(0, -1, 0, 0, 0, 1),
         focal=(CAMERA_FOCAL, CAMERA_FOCAL), sensorsize=sensor, resolution=(FULL_WIDTH, FULL_HEIGHT),

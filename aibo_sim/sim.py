@@ -13,12 +13,13 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
-from openr_bridge import FRAME_RATE, LAYER_H_HEIGHT, LAYER_H_WIDTH, FULL_HEIGHT, FULL_WIDTH
+from openr_bridge import FRAME_RATE_HZ, FRAME_TICK_MS, FULL_HEIGHT, FULL_WIDTH, LAYER_SIZE
 
-from .ers7 import JOINTS, SENSORS
+from .field import BALL_RADIUS
+from .ers7 import JOINTS, LED_BY_NAME, LED_OFF_RGBA, SENSORS
 from .render import Renderer
 
-FRAME_MS = 8  # OPEN-R joint frame
+FRAME_MS = FRAME_TICK_MS  # OPEN-R joint frame, 8 ms
 GRAVITY = 9.80665
 ACCEL_RANGE = 2 * GRAVITY  # Sony: +-19 613 300 um/s^2
 IR_NOISE = 0.1  # Webots lookup tables: 10 % noise at mid-range, none at the ends
@@ -107,7 +108,7 @@ class Simulation:
             raise ModelError(f"timestep {self.model.opt.timestep} does not divide the 8 ms joint frame")
         self.steps_per_frame = round(steps)
         self.servos = Servos(self.model)
-        self.camera_size = (FULL_WIDTH, FULL_HEIGHT) if camera_full else (LAYER_H_WIDTH, LAYER_H_HEIGHT)
+        self.camera_size = (FULL_WIDTH, FULL_HEIGHT) if camera_full else LAYER_SIZE[0]
         self._renderer: Renderer | None = None
         self._sensor_slices = {
             s.name: slice(self.model.sensor(s.name).adr[0], self.model.sensor(s.name).adr[0] + self.model.sensor(s.name).dim[0])
@@ -126,7 +127,23 @@ class Simulation:
         mujoco.mj_forward(self.model, self.data)
         self.servos.reset(self.joint_positions())
         self.frame = 0  # 8 ms frames since reset
-        self.camera_frames = 0
+        self._rendered_camera_frame = -1
+
+    def place_robot(self, x: float, y: float, yaw: float) -> None:
+        """Put the robot at (x, y) on the field heading ``yaw`` (rad), keeping its height and pitch."""
+        qpos = self.data.qpos
+        pitch_quat = qpos[3:7].copy()
+        yaw_quat = np.array([math.cos(yaw / 2), 0, 0, math.sin(yaw / 2)])
+        qpos[0:2] = x, y
+        mujoco.mju_mulQuat(qpos[3:7], yaw_quat, pitch_quat)
+        mujoco.mj_forward(self.model, self.data)
+
+    def place_ball(self, x: float, y: float) -> None:
+        """Put the ball at rest on the carpet at (x, y)."""
+        joint = self.model.joint("ball")
+        self.data.qpos[joint.qposadr[0]:joint.qposadr[0] + 7] = (x, y, BALL_RADIUS, 1, 0, 0, 0)
+        self.data.qvel[joint.dofadr[0]:joint.dofadr[0] + 6] = 0
+        mujoco.mj_forward(self.model, self.data)
 
     @property
     def time_ms(self) -> int:
@@ -142,9 +159,13 @@ class Simulation:
         if bad or not np.isfinite(self.data.qpos).all():
             raise SimulationDiverged(f"physics diverged at t = {self.data.time:.3f} s (frame {self.frame})")
 
+    def camera_frame_index(self) -> int:
+        """Index of the newest 30 fps camera frame at the current time (frame k at k/30 s)."""
+        return self.time_ms * FRAME_RATE_HZ // 1000
+
     def camera_due(self) -> bool:
-        """True when the 30 fps camera has a new frame at the current time."""
-        return self.time_ms * FRAME_RATE >= self.camera_frames * 1000
+        """True when the camera has a frame newer than the last one rendered."""
+        return self.camera_frame_index() != self._rendered_camera_frame
 
     # ---------------------------------------------------------------- readings
 
@@ -182,11 +203,16 @@ class Simulation:
     # ---------------------------------------------------------------- camera
 
     def render_camera(self) -> np.ndarray:
-        """The head camera's RGB frame, (height, width, 3) uint8; counts a camera frame."""
+        """The head camera's RGB frame now, (height, width, 3) uint8."""
         if self._renderer is None:
             self._renderer = Renderer(self.model, *self.camera_size)
-        self.camera_frames += 1
+        self._rendered_camera_frame = self.camera_frame_index()
         return self._renderer.render(self.data, "camera")
+
+    def set_led(self, name: str, level: float) -> None:
+        """Light an LED geom at ``level`` in 0..1 of its colour (0: the unlit material)."""
+        off, lit = np.array(LED_OFF_RGBA), np.array([*LED_BY_NAME[name].colour, 1.0])
+        self.model.geom_rgba[self.model.geom(name).id] = off + level * (lit - off)
 
     def close(self) -> None:
         if self._renderer is not None:

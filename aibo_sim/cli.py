@@ -1,0 +1,142 @@
+"""The ``aibo-sim`` command: run controllers, render the camera, inspect and play MTN files."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+EXIT_BAD_INPUT, EXIT_CONTROLLER, EXIT_DIVERGED = 2, 1, 3
+
+
+def _run(args) -> int:
+    from .runner import run_controller
+
+    summary = run_controller(
+        args.controller, backend=args.backend, duration=args.duration, scene=args.scene, seed=args.seed,
+        out=args.out, mtn_mode=args.mtn_mode, memory_stick=args.memory_stick, camera_full=args.camera_full,
+    )
+    print(f"ran {Path(summary.controller).name} on the {summary.backend} backend: {summary.simulated_s:.2f} s simulated "
+          f"in {summary.wall_s:.2f} s (real-time factor {summary.real_time_factor:.1f}), "
+          f"{summary.camera_frames} camera frames written" + (f" to {args.out}" if args.out else ""))
+    return 0
+
+
+def _render(args) -> int:
+    import math
+
+    import cv2
+
+    from .render import Renderer
+    from .sim import Simulation
+
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    sim = Simulation(args.scene, keyframe=args.keyframe, camera_full=True)
+    sim.place_robot(*args.pose[:2], math.radians(args.pose[2]))
+    if args.ball is not None:
+        sim.place_ball(*args.ball)
+    for _ in range(int(args.settle * 125)):
+        sim.step_frame()
+    images = {"head_camera.png": sim.render_camera()}
+    third = Renderer(sim.model, 640, 480, quality="high")
+    images["tracking.png"] = third.render(sim.data, "tracking")
+    third.close()
+    sim.close()
+    for name, rgb in images.items():
+        cv2.imwrite(str(out / name), rgb[:, :, ::-1])
+        print(f"wrote {out / name} ({rgb.shape[1]}x{rgb.shape[0]})")
+    return 0
+
+
+def _mtn_info(args) -> int:
+    from .mtn import format_motion_info, motion_info, read_mtn
+
+    info = motion_info(read_mtn(args.file))
+    print(json.dumps(info, indent=2) if args.json else format_motion_info(info))
+    return 0
+
+
+def _mtn_play(args) -> int:
+    from .motions import play_motion
+
+    if args.repeat < 1:
+        raise ValueError(f"--repeat must be at least 1, not {args.repeat}")
+    result = play_motion(args.file, repeat=args.repeat, mode=args.mode)
+    if args.json:
+        print(json.dumps(result, indent=2))
+    else:
+        dx, dy = result["displacement_m"]
+        print(f"displacement {dx:+.3f} m forward, {dy:+.3f} m left ({result['distance_m']:.3f} m), "
+              f"heading {result['heading_change_deg']:+.1f} deg, {'FELL' if result['fell'] else 'did not fall'}, "
+              f"{result['duration_s']:.2f} s")
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="aibo-sim", description=__doc__)
+    commands = parser.add_subparsers(dest="command", required=True)
+
+    run = commands.add_parser("run", help="run a controller headless")
+    run.add_argument("controller", help="controller file (Python, Webots-era Aibo API)")
+    run.add_argument("--backend", choices=("sim", "openr"), default="sim")
+    run.add_argument("--duration", type=float, default=10.0, help="simulated seconds (default 10)")
+    run.add_argument("--scene", help="MJCF scene file (default: the RoboCup 2005 field)")
+    run.add_argument("--seed", type=int, default=0)
+    run.add_argument("--out", help="folder for camera frames and the controller's files")
+    run.add_argument("--mtn-mode", choices=("openr", "webots"), default="openr",
+                     help="MTN playback: OPEN-R interpolation (default) or Webots keyframe stepping")
+    run.add_argument("--memory-stick", help="OPEN-R memory stick folder for the openr backend")
+    run.add_argument("--camera-full", action="store_true", help="render 416x320 (else the 208x160 layer)")
+    run.set_defaults(handler=_run)
+
+    render = commands.add_parser("render", help="render the head camera and a third-person view")
+    render.add_argument("--scene")
+    render.add_argument("--keyframe", default="stand")
+    render.add_argument("--settle", type=float, default=0.5, help="seconds to simulate first")
+    render.add_argument("--pose", type=float, nargs=3, default=(0.0, 0.0, 0.0), metavar=("X", "Y", "YAW_DEG"),
+                        help="robot position on the field (m) and heading")
+    render.add_argument("--ball", type=float, nargs=2, metavar=("X", "Y"), help="ball position on the field (m)")
+    render.add_argument("--out", default="renders")
+    render.set_defaults(handler=_render)
+
+    mtn = commands.add_parser("mtn", help="OPEN-R motion files").add_subparsers(dest="mtn_command", required=True)
+    info = mtn.add_parser("info", help="print a file's name, creator, design, frames, length, locators")
+    info.add_argument("file")
+    info.add_argument("--json", action="store_true")
+    info.set_defaults(handler=_mtn_info)
+    play = mtn.add_parser("play", help="play a file on the standing robot and report how it moved")
+    play.add_argument("file")
+    play.add_argument("--repeat", type=int, default=1)
+    play.add_argument("--mode", choices=("openr", "webots"), default="openr")
+    play.add_argument("--json", action="store_true")
+    play.set_defaults(handler=_mtn_play)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    from openr_bridge import OpenRError
+
+    from .mtn import MtnError
+    from .render import RenderingUnavailable
+    from .robot import DeviceError
+    from .runner import ControllerFailed
+    from .sim import ModelError, SimulationDiverged
+
+    args = build_parser().parse_args(argv)
+    try:
+        return args.handler(args)
+    except ControllerFailed as exc:
+        print(f"aibo-sim: {exc}", file=sys.stderr)
+        return EXIT_CONTROLLER
+    except SimulationDiverged as exc:
+        print(f"aibo-sim: error: {exc}", file=sys.stderr)
+        return EXIT_DIVERGED
+    except (ModelError, MtnError, OpenRError, DeviceError, RenderingUnavailable, OSError, ValueError) as exc:
+        print(f"aibo-sim: error: {exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,287 @@
+"""The 2005-08 Webots C API for Aibo controllers, under its own names, for Python.
+
+A controller does ``from aibo_sim.controller import *`` and is run by ``aibo-sim run``
+(or by the OPEN-R wrapper on the robot): one robot per controller process, as in Webots.
+Device tags are small positive integers (0 is never a valid tag). Units: radians, rad/s,
+rad/s^2, N m, millimetres for distance sensors, m/s^2 for the accelerometer.
+
+Choices where the Webots 5 API is unconfirmed (spec section F): numeric results are Python
+floats; ``camera_get_image`` returns the RGB bytes (3 per pixel, row-major from the top
+left) that the OPEN-R wrapper's ``camera_get_image`` fills, on both backends; ``led_set``
+takes 0 (off), 1 (on) or a Sony intensity 2..255; ``robot_step`` returns 0, and both it and
+``robot_run`` end the controller with ``SimulationEnd`` when the run's duration is over.
+"""
+
+from __future__ import annotations
+
+import sys
+
+import numpy as np
+from openr_bridge.wrapper import camera_image_get_blue, camera_image_get_green, camera_image_get_red
+
+from .mtn import MtnError
+from .robot import (Accelerometer, Camera, Device, DeviceError, DistanceSensor, Led, Robot, Servo,
+                    SimulationEnd, TouchSensor)
+
+_robot: Robot | None = None
+_tags: list[Device] = []
+_reset_fn = None
+_die_fns: list = []
+
+
+def install(robot: Robot | None) -> None:
+    """Make ``robot`` the one the API functions drive (the runner calls this)."""
+    global _robot, _reset_fn
+    _robot, _reset_fn = robot, None
+    _tags.clear()
+    _die_fns.clear()
+
+
+def current_robot() -> Robot:
+    if _robot is None:
+        raise RuntimeError("no robot: run the controller with `aibo-sim run CONTROLLER`")
+    return _robot
+
+
+def _device(tag, kind: type) -> Device:
+    if not isinstance(tag, (int, np.integer)) or not 0 < tag <= len(_tags):
+        raise DeviceError(f"invalid device tag {tag!r}: use the value robot_get_device returned")
+    device = _tags[tag - 1]
+    if not isinstance(device, kind):
+        raise DeviceError(f"device {device.locator} is a {device.kind}, not a {kind.kind}")
+    return device
+
+
+# ------------------------------------------------------------------------- robot
+
+
+def robot_live(reset_fn=None) -> None:
+    """Register the reset (initialisation) function and call it once."""
+    global _reset_fn
+    current_robot()
+    _reset_fn = reset_fn
+    if reset_fn is not None:
+        reset_fn()
+
+
+def robot_die(exit_fn) -> None:
+    """Register a function called when the controller quits."""
+    _die_fns.append(exit_fn)
+
+
+def call_die_functions() -> None:
+    for fn in _die_fns:
+        fn()
+
+
+def robot_run(run_fn) -> None:
+    """Call ``run_fn(ms)`` forever; each call returns the duration of the next step in ms."""
+    ms = 0
+    while True:
+        ms = run_fn(ms)
+        if not isinstance(ms, (int, np.integer)) or ms <= 0:
+            raise ValueError(f"run function returned {ms!r}: it must return the next step in ms (e.g. TIME_STEP)")
+        current_robot().step(ms)
+
+
+def robot_step(ms: int) -> int:
+    current_robot().step(ms)
+    return 0
+
+
+def robot_get_device(name: str) -> int:
+    device = current_robot().get_device(name)
+    if device not in _tags:
+        _tags.append(device)
+    return _tags.index(device) + 1
+
+
+def robot_get_time() -> float:
+    return current_robot().time_ms / 1000.0
+
+
+def robot_get_name() -> str:
+    return "ERS-7"
+
+
+def robot_console_printf(fmt: str, *args) -> None:
+    sys.stdout.write(fmt % args if args else fmt)
+    sys.stdout.flush()
+
+
+# ------------------------------------------------------------------------- servo
+
+def servo_enable_position(tag, ms: int) -> None:
+    _device(tag, Servo).enable(ms)
+
+
+def servo_disable_position(tag) -> None:
+    _device(tag, Servo).disable()
+
+
+def servo_get_position(tag) -> float:
+    return _device(tag, Servo).get_position()
+
+
+def servo_set_position(tag, radians: float) -> None:
+    _device(tag, Servo).set_position(radians)
+
+
+def servo_set_velocity(tag, rad_per_s: float) -> None:
+    _device(tag, Servo).set_velocity(rad_per_s)
+
+
+def servo_set_acceleration(tag, rad_per_s2: float) -> None:
+    _device(tag, Servo).set_acceleration(rad_per_s2)
+
+
+def servo_set_motor_force(tag, newton_metres: float) -> None:
+    _device(tag, Servo).set_motor_force(newton_metres)
+
+
+def servo_set_control_p(tag, p: float) -> None:
+    _device(tag, Servo).set_control_p(p)
+
+
+# ------------------------------------------------------------------------- camera
+
+
+def camera_enable(tag, ms: int) -> None:
+    _device(tag, Camera).enable(ms)
+
+
+def camera_disable(tag) -> None:
+    _device(tag, Camera).disable()
+
+
+def camera_get_image(tag) -> np.ndarray:
+    return _device(tag, Camera).get_image()
+
+
+def camera_get_width(tag) -> int:
+    return _device(tag, Camera).width
+
+
+def camera_get_height(tag) -> int:
+    return _device(tag, Camera).height
+
+
+def camera_get_fov(tag) -> float:
+    return _device(tag, Camera).fov
+
+
+def camera_image_get_grey(image, width: int, x: int, y: int) -> int:
+    """Mean of the three channels, as Webots' camera_image_get_grey."""
+    red, green = camera_image_get_red(image, width, x, y), camera_image_get_green(image, width, x, y)
+    return (red + green + camera_image_get_blue(image, width, x, y)) // 3
+
+
+# ------------------------------------------------------------------------- sensors, LEDs
+
+
+def distance_sensor_enable(tag, ms: int) -> None:
+    _device(tag, DistanceSensor).enable(ms)
+
+
+def distance_sensor_disable(tag) -> None:
+    _device(tag, DistanceSensor).disable()
+
+
+def distance_sensor_get_value(tag) -> float:
+    return _device(tag, DistanceSensor).value()
+
+
+def touch_sensor_enable(tag, ms: int) -> None:
+    _device(tag, TouchSensor).enable(ms)
+
+
+def touch_sensor_disable(tag) -> None:
+    _device(tag, TouchSensor).disable()
+
+
+def touch_sensor_get_value(tag) -> float:
+    return _device(tag, TouchSensor).value()
+
+
+def accelerometer_enable(tag, ms: int) -> None:
+    _device(tag, Accelerometer).enable(ms)
+
+
+def accelerometer_disable(tag) -> None:
+    _device(tag, Accelerometer).disable()
+
+
+def accelerometer_get_values(tag) -> tuple[float, float, float]:
+    return _device(tag, Accelerometer).value()
+
+
+def accelerometer_value_x(values) -> float:
+    return values[0]
+
+
+def accelerometer_value_y(values) -> float:
+    return values[1]
+
+
+def accelerometer_value_z(values) -> float:
+    return values[2]
+
+
+def led_set(tag, value: int) -> None:
+    _device(tag, Led).set(value)
+
+
+# ------------------------------------------------------------------------- MTN
+
+_mtn_error = ""
+
+
+def mtn_new(filename: str):
+    """Load a motion file; returns None and sets ``mtn_get_error()`` on failure, as Webots."""
+    global _mtn_error
+    try:
+        return current_robot().mtn_new(filename)
+    except (MtnError, OSError) as exc:
+        _mtn_error = str(exc)
+        return None
+
+
+def mtn_get_error() -> str:
+    return _mtn_error
+
+
+def mtn_delete(motion) -> None:
+    robot = current_robot()
+    robot.playing = [p for p in robot.playing if p.motion is not motion]
+
+
+def mtn_play(motion) -> None:
+    current_robot().mtn_play(_motion(motion))
+
+
+def mtn_is_over(motion) -> bool:
+    return current_robot().mtn_is_over(_motion(motion))
+
+
+def mtn_get_length(motion) -> int:
+    return int(_motion(motion).length_ms)
+
+
+def mtn_get_time(motion) -> int:
+    return current_robot().mtn_get_time(_motion(motion))
+
+
+def mtn_get_name(motion) -> str:
+    """Not in Webots (spec: no such function found); the name is in the file's section 1."""
+    return _motion(motion).name
+
+
+def _motion(motion):
+    if motion is None:
+        raise ValueError("MTN is NULL: mtn_new failed (" + (_mtn_error or "no error recorded") + ")")
+    return motion
+
+
+__all__ = [name for name in dir() if name.split("_")[0] in {
+    "robot", "servo", "camera", "distance", "touch", "accelerometer", "led", "mtn"}] + [
+    "SimulationEnd", "DeviceError"]

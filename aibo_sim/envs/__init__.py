@@ -1,0 +1,29 @@
+"""Gymnasium environments of the ERS-7, registered under the ``aibo_sim/`` namespace.
+
+``register_envs()`` registers them (``import aibo_sim`` calls it); registration imports no
+simulation code. Then::
+
+    env = gymnasium.make("aibo_sim/HeadTrackBall-v0", camera="rgb", camera_layer="H")
+
+Without importing anything first, name the module in the id (Gymnasium 1.x has no plugin
+loading): ``gymnasium.make("aibo_sim.envs:aibo_sim/HeadTrackBall-v0")``.
+The classes live in ``aibo_sim.envs.head_track`` and ``aibo_sim.envs.reach_ball``; the options
+and observations are described in ``aibo_sim.envs.base``.
+"""
+
+import gymnasium
+
+ENV_SPECS = {
+    "aibo_sim/HeadTrackBall-v0": ("aibo_sim.envs.head_track:HeadTrackBallEnv", 300),
+    "aibo_sim/ReachBall-v0": ("aibo_sim.envs.reach_ball:ReachBallEnv", 450),
+}
+
+
+def register_envs() -> None:
+    """Register the environments with Gymnasium; calling it again changes nothing."""
+    for env_id, (entry_point, max_episode_steps) in ENV_SPECS.items():
+        if env_id not in gymnasium.registry:
+            gymnasium.register(env_id, entry_point=entry_point, max_episode_steps=max_episode_steps)
+
+
+register_envs()

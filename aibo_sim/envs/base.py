@@ -1,0 +1,237 @@
+"""The shared base of the ERS-7 environments: simulation, observations, actions, rendering.
+
+One environment step is one frame of the head camera at the robot's 30 fps: the 8 ms joint
+frames run until the camera is due (4 or 5 of them), then one image is taken.
+
+Observations (a ``Dict``):
+
+- ``image`` (unless ``camera=None``): the head camera, ``(height, width, 3)`` uint8, of layer
+  ``camera_layer`` (H 208x160, M 104x80, L 52x40). ``camera="rgb"``: the rendered RGB, layers
+  M and L as 2x2 / 4x4 block means (the Haar low band the robot computes); ``"ycrcb"``: the
+  Y, Cr, Cb bands of that layer of the OPEN-R message; ``"openr"``: the RGB image that the
+  OPEN-R wrapper's ``camera_get_image`` serves from that message.
+- ``joint_positions`` (rad, the order of ``ers7.JOINTS``), ``acceleration`` (m/s^2, body
+  frame), ``distance_mm`` (IR near, far, chest), ``touch`` (0/1, the order of ``ers7.SENSORS``).
+
+Actions: one number in [-1, 1] per actuated joint, mapped affinely onto the actuator's
+control range, and given to the servos as targets.
+
+Domain randomisation, drawn at each reset from the environment's RNG:
+``randomize={"lighting": m, "ball_start": r, "camera_gain": g}`` (any subset) scales each
+light's intensity by a factor in [1-m, 1+m], moves the ball's start by up to r metres in
+each horizontal direction, and multiplies the camera's R, G, B by gains in [1-g, 1+g]
+(a simple camera model of white balance and gain, applied to the RGB frame before encoding).
+"""
+
+from __future__ import annotations
+
+import gymnasium as gym
+import mujoco
+import numpy as np
+import openr_bridge
+
+from ..ers7 import JOINT_BY_NAME, JOINTS, LEGS, SENSORS
+from ..render import Renderer
+from ..sim import ACCEL_RANGE, Simulation
+
+CAMERA_MODES = ("rgb", "ycrcb", "openr", None)
+LAYERS = {"H": openr_bridge.ofbkimageLAYER_H, "M": openr_bridge.ofbkimageLAYER_M, "L": openr_bridge.ofbkimageLAYER_L}
+YCRCB_BANDS = (openr_bridge.ofbkimageBAND_Y, openr_bridge.ofbkimageBAND_Cr, openr_bridge.ofbkimageBAND_Cb)
+RANDOMIZATIONS = ("lighting", "ball_start", "camera_gain")
+RENDER_SIZE = (480, 360)  # third-person view, width x height
+HEAD_JOINTS = ("neck_tilt", "head_pan", "head_tilt")
+LEG_JOINTS = tuple(j.name for j in JOINTS if j.name.split("_")[0] in LEGS)
+DISTANCE_SENSORS = tuple(s for s in SENSORS if s.kind == "distance")
+TOUCH_SENSORS = tuple(s for s in SENSORS if s.kind == "touch")
+
+
+class AiboEnv(gym.Env):
+    """An ERS-7 in the RoboCup scene; subclasses set ``actuated_joints`` and the task."""
+
+    metadata = {"render_modes": ["rgb_array"], "render_fps": 30}
+    actuated_joints: tuple[str, ...] = ()
+
+    def __init__(self, camera: str | None = "rgb", camera_layer: str = "H", render_mode: str | None = None,
+                 randomize: dict[str, float] | None = None):
+        if camera not in CAMERA_MODES:
+            raise ValueError(f"camera must be one of {CAMERA_MODES}, not {camera!r}")
+        if camera_layer not in LAYERS:
+            raise ValueError(f"camera_layer must be one of {tuple(LAYERS)}, not {camera_layer!r}")
+        if render_mode not in (None, *self.metadata["render_modes"]):
+            raise ValueError(f"render_mode must be None or 'rgb_array', not {render_mode!r}")
+        self.randomize = dict(randomize or {})
+        unknown = set(self.randomize) - set(RANDOMIZATIONS)
+        if unknown:
+            raise ValueError(f"unknown randomisations {sorted(unknown)}; known: {RANDOMIZATIONS}")
+        if camera == "openr" and camera_layer != "H":
+            raise ValueError("camera='openr' serves layer H, as the wrapper's camera_get_image does; "
+                             "use camera='ycrcb' or 'rgb' for layers M and L")
+        self.camera, self.camera_layer, self.render_mode = camera, camera_layer, render_mode
+        self.camera_message: openr_bridge.OFbkImageVectorData | None = None  # the last one encoded
+        self._openr = openr_bridge.OpenRSystem.from_memory_stick() if camera == "openr" else None
+        self.sim = Simulation()
+        model = self.sim.model
+        self._actuated = np.array([JOINTS.index(JOINT_BY_NAME[name]) for name in self.actuated_joints])
+        self._target_low, self._target_high = model.actuator_ctrlrange[self._actuated].T
+        self._ball_qpos = model.joint("ball").qposadr[0]
+        self._ball_qvel = model.joint("ball").dofadr[0]
+        self._nominal_lights = (model.light_diffuse.copy(), model.vis.headlight.diffuse.copy())
+        self.camera_gains = np.ones(3)
+        self._renderer: Renderer | None = None
+
+        self.action_space = gym.spaces.Box(-1.0, 1.0, (len(self._actuated),), np.float32)
+        spaces = {
+            "joint_positions": gym.spaces.Box(-np.pi, np.pi, (len(JOINTS),), np.float32),
+            "acceleration": gym.spaces.Box(-ACCEL_RANGE, ACCEL_RANGE, (3,), np.float32),
+            "distance_mm": gym.spaces.Box(0.0, np.array([s.range_mm[1] for s in DISTANCE_SENSORS], np.float32)),
+            "touch": gym.spaces.MultiBinary(len(TOUCH_SENSORS)),
+        }
+        if camera is not None:
+            width, height = openr_bridge.LAYER_SIZE[LAYERS[camera_layer]]
+            spaces["image"] = gym.spaces.Box(0, 255, (height, width, 3), np.uint8)
+        self.observation_space = gym.spaces.Dict(spaces)
+
+    # ---------------------------------------------------------------- task hooks
+
+    def _reset_task(self) -> None:
+        """Place the ball and draw the task's random parameters (from ``self.np_random``)."""
+
+    def _before_frame(self) -> None:
+        """Called before each 8 ms joint frame (e.g. to move the ball kinematically)."""
+
+    def _evaluate(self) -> tuple[float, bool]:
+        """Reward and termination for the state after a step."""
+        raise NotImplementedError
+
+    def _info(self) -> dict:
+        return {}
+
+    # ---------------------------------------------------------------- gymnasium API
+
+    def reset(self, *, seed: int | None = None, options: dict | None = None):
+        super().reset(seed=seed)
+        self.sim.reset(seed=int(self.np_random.integers(2**63)))
+        self._randomize_scene()
+        self._reset_task()
+        mujoco.mj_forward(self.sim.model, self.sim.data)
+        return self._observation(), self._info()
+
+    def step(self, action):
+        targets = self.action_to_targets(action)
+        self.sim.servos.set_target(self._actuated, targets)
+        camera_frame = self.sim.camera_frame_index()
+        while self.sim.camera_frame_index() == camera_frame:
+            self._before_frame()
+            self.sim.step_frame()
+        observation = self._observation()
+        reward, terminated = self._evaluate()
+        return observation, reward, terminated, False, self._info()
+
+    def render(self):
+        if self.render_mode != "rgb_array":
+            return None
+        if self._renderer is None:
+            self._renderer = Renderer(self.sim.model, *RENDER_SIZE, quality="fast")
+        return self._renderer.render(self.sim.data, "tracking")
+
+    def close(self):
+        if self._renderer is not None:
+            self._renderer.close()
+            self._renderer = None
+        self.sim.close()
+
+    # ---------------------------------------------------------------- actions
+
+    def action_to_targets(self, action) -> np.ndarray:
+        """Joint targets (rad) for a normalised action; NaN or infinity raises ValueError."""
+        action = np.asarray(action, dtype=np.float64)
+        if action.shape != self.action_space.shape:
+            raise ValueError(f"action has shape {action.shape}, expected {self.action_space.shape}")
+        bad = np.flatnonzero(~np.isfinite(action))
+        if bad.size:
+            raise ValueError(f"action[{bad[0]}] ({self.actuated_joints[bad[0]]}) is {action[bad[0]]}: actions must be finite")
+        action = np.clip(action, -1.0, 1.0)
+        return self._target_low + (action + 1) / 2 * (self._target_high - self._target_low)
+
+    def targets_to_action(self, targets) -> np.ndarray:
+        """The normalised action that commands ``targets`` (rad, clipped to the joint ranges)."""
+        scaled = 2 * (np.asarray(targets, dtype=np.float64) - self._target_low) / (self._target_high - self._target_low) - 1
+        return np.clip(scaled, -1, 1).astype(np.float32)
+
+    # ---------------------------------------------------------------- scene
+
+    def _randomize_scene(self) -> None:
+        model, rng = self.sim.model, self.np_random
+        lights, headlight = self._nominal_lights
+        spread = self.randomize.get("lighting", 0.0)
+        model.light_diffuse[:] = lights * rng.uniform(1 - spread, 1 + spread, (len(lights), 1))
+        model.vis.headlight.diffuse[:] = headlight * rng.uniform(1 - spread, 1 + spread)
+        gain = self.randomize.get("camera_gain", 0.0)
+        self.camera_gains = rng.uniform(1 - gain, 1 + gain, 3)
+
+    def ball_start(self, nominal_xy) -> np.ndarray:
+        """The ball's start on the ground: ``nominal_xy`` moved by the ``ball_start`` randomisation."""
+        reach = self.randomize.get("ball_start", 0.0)
+        return np.asarray(nominal_xy, dtype=np.float64) + self.np_random.uniform(-reach, reach, 2)
+
+    def place_ball(self, position, velocity=(0.0, 0.0, 0.0)) -> None:
+        """Put the ball (unrotated) at ``position`` with linear ``velocity``."""
+        qpos, qvel = self.sim.data.qpos, self.sim.data.qvel
+        qpos[self._ball_qpos:self._ball_qpos + 7] = (*position, 1.0, 0.0, 0.0, 0.0)
+        qvel[self._ball_qvel:self._ball_qvel + 6] = (*velocity, 0.0, 0.0, 0.0)
+
+    def ball_position(self) -> np.ndarray:
+        """The ball centre in the world, as the camera and renderer see it."""
+        return self.sim.data.xpos[self.sim.model.body("ball").id].copy()
+
+    def image_position(self, point) -> tuple[np.ndarray, bool]:
+        """Where a world point lies in the head camera's image, by projection (not from pixels).
+
+        Returns the normalised offset from the image centre (x right, y down; -1 and 1 at the
+        edges, clipped to +-2) and whether the point is in front of the camera and inside the
+        image. Uses the camera's pose and its focal length over its sensor size.
+        """
+        model, data = self.sim.model, self.sim.data
+        cam = model.camera("camera").id
+        local = data.cam_xmat[cam].reshape(3, 3).T @ (np.asarray(point) - data.cam_xpos[cam])
+        depth = -local[2]  # MuJoCo cameras look along -z, with y up
+        half_fov = model.cam_sensorsize[cam] / 2 / model.cam_intrinsic[cam][:2]  # tan of the half angles
+        offset = np.array([local[0], -local[1]]) / max(abs(depth), 1e-9) / half_fov
+        offset = np.clip(offset, -2.0, 2.0)
+        return offset, bool(depth > 0 and np.all(np.abs(offset) <= 1))
+
+    # ---------------------------------------------------------------- observations
+
+    def _observation(self) -> dict:
+        sim = self.sim
+        observation = {
+            "joint_positions": sim.joint_positions().astype(np.float32),
+            "acceleration": sim.acceleration().astype(np.float32),
+            "distance_mm": np.array([sim.distance_mm(s.name) for s in DISTANCE_SENSORS], np.float32),
+            "touch": np.array([sim.touched(s.name, s.threshold) for s in TOUCH_SENSORS], np.int8),
+        }
+        observation["distance_mm"] = np.clip(observation["distance_mm"], 0, self.observation_space["distance_mm"].high)
+        if self.camera is not None:
+            observation["image"] = self._camera_image()
+        return observation
+
+    def _camera_image(self) -> np.ndarray:
+        rgb = self.sim.render_camera()
+        if not np.all(self.camera_gains == 1):
+            rgb = np.clip(rgb * self.camera_gains + 0.5, 0, 255).astype(np.uint8)
+        if self.camera == "rgb":
+            height, width, _ = self.observation_space["image"].shape
+            if rgb.shape[0] == height:
+                return rgb
+            scale = rgb.shape[0] // height
+            return (rgb.reshape(height, scale, width, scale, 3).mean(axis=(1, 3)) + 0.5).astype(np.uint8)
+        index = self.sim.camera_frame_index()
+        self.camera_message = openr_bridge.encode_frame(
+            rgb, frame_number=openr_bridge.frame_number_for_image(index), field_counter=index
+        )
+        if self.camera == "ycrcb":
+            layer = LAYERS[self.camera_layer]
+            return np.stack([self.camera_message.band(layer, band) for band in YCRCB_BANDS], axis=-1)
+        self._openr.robot_comm.publish_image(self.camera_message)
+        controller = self._openr.controller
+        return controller.camera_get_image().reshape(controller.camera_get_height(), controller.camera_get_width(), 3)

@@ -1,0 +1,53 @@
+"""HeadTrackBall: keep a moving ball centred in the head camera with the three head joints.
+
+The body stands (keyframe ``stand``, leg servos holding it). The ball rolls kinematically on
+the ground in front of the robot along a seeded random path: per horizontal axis a sine
+``amplitude * (sin(w t + phase) - sin(phase))`` added to its start, so that it starts there.
+
+Reward per step, in [0, 1]: ``1 - max(|x|, |y|)`` where (x, y) is the ball centre's offset
+from the image centre in half-widths and half-heights, found by projecting the ball centre
+through the camera pose and intrinsics; 0 when the centre is outside the image or behind the
+camera. ``info``: ``ball_offset`` (x, y) and ``ball_visible``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..field import BALL_RADIUS
+from .base import HEAD_JOINTS, AiboEnv
+
+BALL_START = (0.9, 0.0)  # metres ahead of the robot, on the ground
+AMPLITUDE = np.array([0.2, 0.4])  # m, forward and sideways
+FREQUENCY_HZ = (0.1, 0.4)
+NEAREST_X = 0.4  # the path never comes closer than this to the robot's centre
+
+
+class HeadTrackBallEnv(AiboEnv):
+    actuated_joints = HEAD_JOINTS
+
+    def _reset_task(self) -> None:
+        rng = self.np_random
+        self._start = self.ball_start(BALL_START)
+        self._omega = 2 * np.pi * rng.uniform(*FREQUENCY_HZ, 2)
+        self._phase = rng.uniform(0, 2 * np.pi, 2)
+        self._before_frame()
+
+    def _before_frame(self) -> None:
+        t = self.sim.data.time
+        xy = self._start + AMPLITUDE * (np.sin(self._omega * t + self._phase) - np.sin(self._phase))
+        velocity = AMPLITUDE * self._omega * np.cos(self._omega * t + self._phase)
+        if xy[0] < NEAREST_X:
+            xy[0], velocity[0] = NEAREST_X, 0.0
+        self.place_ball((*xy, BALL_RADIUS), (*velocity, 0.0))
+
+    def _ball_in_image(self) -> tuple[np.ndarray, bool]:
+        return self.image_position(self.ball_position())
+
+    def _evaluate(self) -> tuple[float, bool]:
+        offset, visible = self._ball_in_image()
+        return (1.0 - float(np.max(np.abs(offset)))) if visible else 0.0, False
+
+    def _info(self) -> dict:
+        offset, visible = self._ball_in_image()
+        return {"ball_offset": offset, "ball_visible": visible}

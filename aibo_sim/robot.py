@@ -1,0 +1,300 @@
+"""The Pythonic face of the Webots-era Aibo controller API: a robot and its devices.
+
+Devices are addressed by their OPEN-R locators. Sensors follow Webots' sampling rules:
+``enable(ms)`` starts sampling, the value refreshes at every multiple of the period
+after the call, reading before the first sample or after ``disable`` is an error.
+The camera delivers at most 30 frames a second.
+
+Backends differ only in where camera images come from:
+- ``sim``: the rendered RGB frame, as the Webots simulator's camera gives it;
+- ``openr``: each frame is encoded into an ``OFbkImageVectorData``, published by
+  ``OVirtualRobotComm``, routed by a memory stick's CONNECT.CFG to the wrapper object
+  ``Controller`` and read back through its ``camera_get_image``.
+"""
+
+from __future__ import annotations
+
+import difflib
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from . import ers7
+from .mtn import MotionPlayer, mtn_new
+from .sim import FRAME_MS, Simulation
+
+BACKENDS = ("sim", "openr")
+MTN_MODES = ("openr", "webots")
+
+
+class DeviceError(RuntimeError):
+    """Misuse of a device: unknown name, wrong kind, not enabled, no value yet."""
+
+
+class SimulationEnd(Exception):
+    """Raised inside the controller when the run's duration is over (Webots ends it too)."""
+
+
+class Device:
+    """A named device with Webots' enable/sample/disable cycle."""
+
+    kind = "device"
+
+    def __init__(self, robot: "Robot", locator: str, name: str):
+        self.robot, self.locator, self.name = robot, locator, name
+        self.period: int | None = None
+        self._next_sample_ms = 0
+        self._value = None
+
+    def enable(self, ms: int) -> None:
+        ms = int(ms)
+        if ms <= 0:
+            raise DeviceError(f"{self.locator}: sampling period must be a positive number of ms, not {ms}")
+        self.period, self._value = ms, None
+        self._next_sample_ms = self.robot.time_ms + ms
+
+    def disable(self) -> None:
+        self.period, self._value = None, None
+
+    def _after_frame(self, time_ms: int) -> None:
+        if self.period is not None and time_ms >= self._next_sample_ms:
+            self._value = self._sample()
+            while self._next_sample_ms <= time_ms:
+                self._next_sample_ms += self.period
+
+    def _sample(self):
+        raise NotImplementedError
+
+    def value(self):
+        if self.period is None:
+            raise DeviceError(f"{self.locator}: {self.kind} is not enabled (call {self.kind}_enable first)")
+        if self._value is None:
+            raise DeviceError(
+                f"{self.locator}: no sample yet: enabled with a {self.period} ms period, first value at "
+                f"t = {self._next_sample_ms} ms (now {self.robot.time_ms} ms)"
+            )
+        return self._value
+
+
+class Servo(Device):
+    kind = "servo"
+
+    def __init__(self, robot, locator, name):
+        super().__init__(robot, locator, name)
+        self.index = [j.name for j in ers7.JOINTS].index(name)
+
+    def set_position(self, radians: float) -> None:
+        self.robot.sim.servos.set_target(self.index, float(radians))
+
+    def set_velocity(self, rad_per_s: float) -> None:
+        """Speed limit; never above Sony's maximum for the joint."""
+        self.robot.sim.servos.velocity[self.index] = abs(float(rad_per_s))
+
+    def set_acceleration(self, rad_per_s2: float) -> None:
+        """Acceleration limit; -1 means unlimited, as in Webots."""
+        value = float(rad_per_s2)
+        self.robot.sim.servos.acceleration[self.index] = math.inf if value < 0 else value
+
+    def set_motor_force(self, newton_metres: float) -> None:
+        force = abs(float(newton_metres))
+        self.robot.sim.model.actuator_forcerange[self.index] = (-force, force)
+
+    def set_control_p(self, p: float) -> None:
+        model = self.robot.sim.model
+        model.actuator_gainprm[self.index, 0] = float(p)
+        model.actuator_biasprm[self.index, 1] = -float(p)
+
+    def _sample(self) -> float:
+        return float(self.robot.sim.joint_positions()[self.index])
+
+    def get_position(self) -> float:
+        return self.value()
+
+
+class DistanceSensor(Device):
+    kind = "distance_sensor"
+
+    def _sample(self) -> float:
+        return self.robot.sim.distance_mm(self.name)
+
+
+class TouchSensor(Device):
+    kind = "touch_sensor"
+
+    def _sample(self) -> float:
+        sensor = ers7.SENSOR_BY_NAME[self.name]
+        return 1.0 if self.robot.sim.touched(self.name, sensor.threshold) else 0.0
+
+
+class Accelerometer(Device):
+    kind = "accelerometer"
+
+    def _sample(self) -> tuple[float, float, float]:
+        return tuple(float(v) for v in self.robot.sim.acceleration())
+
+
+class Camera(Device):
+    kind = "camera"
+
+    def _after_frame(self, time_ms: int) -> None:
+        # A sample takes a new picture only when the 30 fps camera has a newer one.
+        if self._value is not None and not self.robot.sim.camera_due():
+            while self.period is not None and self._next_sample_ms <= time_ms:
+                self._next_sample_ms += self.period
+            return
+        super()._after_frame(time_ms)
+
+    def _sample(self) -> np.ndarray:
+        return self.robot.camera_source.capture()
+
+    def get_image(self) -> np.ndarray:
+        """Row-major RGB, 3 bytes a pixel (what the OPEN-R wrapper's camera_get_image fills)."""
+        return self.value()
+
+    @property
+    def width(self) -> int:
+        return self.robot.camera_source.width
+
+    @property
+    def height(self) -> int:
+        return self.robot.camera_source.height
+
+    @property
+    def fov(self) -> float:
+        return self.robot.camera_source.fov
+
+
+class Led(Device):
+    """LED: 0 switches it off, 1 on at full intensity, 2..255 Sony intensities (value/255)."""
+
+    kind = "led"
+
+    def set(self, value: int) -> None:
+        value = int(value)
+        level = 0.0 if value <= 0 else 1.0 if value == 1 else min(value, 255) / 255
+        self.robot.sim.set_led(self.name, level)
+
+
+_DEVICE_CLASSES = {"distance": DistanceSensor, "touch": TouchSensor, "accelerometer": Accelerometer, "camera": Camera}
+
+
+class Robot:
+    """A simulated ERS-7 seen through the controller API, on one backend."""
+
+    def __init__(self, sim: Simulation | None = None, *, backend: str = "sim", mtn_mode: str = "openr",
+                 memory_stick: str | Path | None = None, search_dirs: tuple[Path, ...] = ()):
+        if backend not in BACKENDS:
+            raise ValueError(f"backend must be one of {BACKENDS}, not {backend!r}")
+        if mtn_mode not in MTN_MODES:
+            raise ValueError(f"mtn_mode must be one of {MTN_MODES}, not {mtn_mode!r}")
+        self.sim = sim or Simulation()
+        self.backend, self.mtn_mode = backend, mtn_mode
+        self.search_dirs = tuple(search_dirs)
+        from .camera import OpenRCamera, SimCamera
+
+        self.camera_source = OpenRCamera(self.sim, memory_stick) if backend == "openr" else SimCamera(self.sim)
+        self.devices: dict[str, Device] = {}
+        for j in ers7.JOINTS:
+            self.devices[j.locator] = Servo(self, j.locator, j.name)
+        for s in ers7.SENSORS:
+            self.devices[s.locator] = _DEVICE_CLASSES[s.kind](self, s.locator, s.name)
+        for alias in ers7.ACCELEROMETER_ALIASES:
+            self.devices[alias] = self.devices[ers7.SENSOR_BY_NAME["accelerometer"].locator]
+        for led in ers7.LEDS:
+            self.devices[led.locator] = Led(self, led.locator, led.name)
+        self.playing: list[_Playing] = []
+        self._sampled_devices = list({id(d): d for d in self.devices.values() if not isinstance(d, (Servo, Led))}.values())
+        self._sampled_devices += [d for d in self.devices.values() if isinstance(d, Servo)]
+        self.end_ms: int | None = None
+        self.frame_listeners = []  # called with (robot) after every 8 ms frame
+
+    @property
+    def time_ms(self) -> int:
+        return self.sim.time_ms
+
+    def get_device(self, name: str) -> Device:
+        try:
+            return self.devices[name]
+        except (KeyError, TypeError):
+            near = difflib.get_close_matches(str(name), list(self.devices), n=3, cutoff=0.5)
+            hint = f"; nearest: {', '.join(near)}" if near else ""
+            raise DeviceError(f"no device named {name!r} on the ERS-7{hint}") from None
+
+    def step(self, ms: int) -> None:
+        """Advance ``ms`` of simulated time in 8 ms frames; raises SimulationEnd at the end.
+
+        Webots-mode motions advance once per call, as Webots' ``mtn_step(ms)`` does once
+        per control step; OPEN-R-mode motions write every 8 ms joint frame.
+        """
+        ms = int(ms)
+        if ms <= 0 or ms % FRAME_MS:
+            raise ValueError(f"step of {ms} ms: must be a positive multiple of the {FRAME_MS} ms joint frame")
+        if self.mtn_mode == "webots":
+            self._step_webots_motions(ms)
+        for _ in range(ms // FRAME_MS):
+            if self.end_ms is not None and self.time_ms >= self.end_ms:
+                raise SimulationEnd()
+            if self.mtn_mode == "openr":
+                self._play_openr_frame()
+            self.sim.step_frame()
+            for device in self._sampled_devices:
+                device._after_frame(self.time_ms)
+            for listener in self.frame_listeners:
+                listener(self)
+
+    # ---------------------------------------------------------------- MTN
+
+    def mtn_new(self, path: str | Path):
+        """Load a motion, resolving relative names in the search folders; MtnError if not found."""
+        candidates = [Path(path)] + [d / path for d in self.search_dirs]
+        found = next((c for c in candidates if c.is_file()), None)
+        if found is None:  # OPEN-R's memory stick is case-insensitive
+            name = Path(path).name.lower()
+            found = next((f for d in self.search_dirs if d.is_dir() for f in d.iterdir() if f.name.lower() == name), None)
+        return mtn_new(found if found is not None else path, ers7.all_locators())
+
+    def mtn_play(self, motion) -> None:
+        player = MotionPlayer(motion, mode=self.mtn_mode)
+        joints = [ers7.JOINT_BY_LOCATOR[locator] for locator in motion.locators]
+        self.playing.append(_Playing(motion, player, [ers7.JOINTS.index(j) for j in joints], self.time_ms))
+
+    def _playing(self, motion) -> "_Playing | None":
+        return next((p for p in self.playing if p.motion is motion), None)
+
+    def mtn_is_over(self, motion) -> bool:
+        return self._playing(motion) is None
+
+    def mtn_get_time(self, motion) -> int:
+        """Milliseconds played (0 when not playing); Webots mode counts as Webots does."""
+        playing = self._playing(motion)
+        if playing is None:
+            return 0
+        return playing.player.time_ms if self.mtn_mode == "webots" else self.time_ms - playing.start_ms
+
+    def _play_openr_frame(self) -> None:
+        servos = self.sim.servos
+        for playing in list(self.playing):
+            frame = (self.time_ms - playing.start_ms) // FRAME_MS
+            if frame >= playing.player.num_frames:
+                self.playing.remove(playing)
+                continue
+            servos.set_target(playing.indices, playing.player.frame(frame) / 1e6)
+            servos.command[playing.indices] = servos.target[playing.indices]
+
+    def _step_webots_motions(self, ms: int) -> None:
+        for playing in list(self.playing):
+            commands = playing.player.step(ms)
+            for locator, radians in (commands or {}).items():
+                self.sim.servos.set_target(ers7.JOINTS.index(ers7.JOINT_BY_LOCATOR[locator]), radians)
+            if playing.player.is_over:
+                self.playing.remove(playing)
+
+
+@dataclass
+class _Playing:
+    motion: object
+    player: MotionPlayer
+    indices: list[int]
+    start_ms: int

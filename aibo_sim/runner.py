@@ -1,0 +1,141 @@
+"""Runs a controller file headless, as Webots would, on either backend."""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import os
+import runpy
+import sys
+import time
+import traceback
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from . import controller
+from .robot import Robot, SimulationEnd
+from .sim import Simulation, SimulationDiverged, models_dir
+
+
+class ControllerFailed(RuntimeError):
+    """The controller raised; the message carries the simulated time and the traceback."""
+
+
+@dataclass
+class RunSummary:
+    controller: str
+    backend: str
+    simulated_s: float
+    wall_s: float
+    real_time_factor: float
+    camera_frames: int
+
+
+def motion_dirs(controller_path: Path) -> tuple[Path, ...]:
+    """Where ``mtn_new`` looks for relative names: the controller's folder, then the bundled motions."""
+    return (controller_path.parent, models_dir() / "motions")
+
+
+class FrameWriter:
+    """Writes each camera frame the controller's camera captured as ``frames/NNNNNN.png``."""
+
+    def __init__(self, directory: Path):
+        self.directory = directory / "frames"
+        self.directory.mkdir(parents=True, exist_ok=True)
+        self.count = 0
+
+    def __call__(self, index: int, rgb: np.ndarray) -> None:
+        path = self.directory / f"{index:06d}.png"
+        partial = path.with_suffix(".partial.png")
+        if not cv2.imwrite(str(partial), np.ascontiguousarray(rgb[:, :, ::-1])):
+            raise OSError(f"could not write {partial}")
+        os.replace(partial, path)
+        self.count += 1
+
+
+@contextlib.contextmanager
+def _controller_context(controller_dir: Path, out: Path | None):
+    """Modules beside the controller import; its files land in ``out`` (when given)."""
+    previous = Path.cwd()
+    sys.path.insert(0, str(controller_dir))
+    if out is not None:
+        os.chdir(out)
+    try:
+        yield
+    finally:
+        os.chdir(previous)
+        sys.path.remove(str(controller_dir))
+
+
+class Progress:
+    """A one-line progress bar on a terminal; silent otherwise."""
+
+    def __init__(self, duration_s: float, stream=sys.stderr):
+        self.duration_s, self.stream = duration_s, stream
+        self.enabled = stream.isatty()
+        self._last = 0.0
+
+    def __call__(self, robot: Robot) -> None:
+        now = time.monotonic()
+        if self.enabled and now - self._last > 0.25:
+            self._last = now
+            done = min(1.0, robot.time_ms / 1000 / self.duration_s)
+            bar = "#" * int(30 * done)
+            self.stream.write(f"\r[{bar:<30}] {robot.time_ms / 1000:7.2f} / {self.duration_s:.2f} s")
+            self.stream.flush()
+
+    def close(self) -> None:
+        if self.enabled:
+            self.stream.write("\n")
+
+
+def run_controller(path: str | Path, *, backend: str = "sim", duration: float = 10.0, scene=None, seed: int = 0,
+                   out: str | Path | None = None, mtn_mode: str = "openr", memory_stick=None,
+                   camera_full: bool = False) -> RunSummary:
+    """Run a controller file for ``duration`` simulated seconds; frames and its files go to ``out``."""
+    path = Path(path).resolve()
+    if not path.is_file():
+        raise FileNotFoundError(f"{path}: no such controller file")
+    if duration <= 0:
+        raise ValueError(f"--duration must be positive, not {duration}")
+    sim = Simulation(scene, seed=seed, camera_full=camera_full)
+    robot = Robot(sim, backend=backend, mtn_mode=mtn_mode, memory_stick=memory_stick, search_dirs=motion_dirs(path))
+    robot.end_ms = int(round(duration * 1000))
+    writer = None
+    if out is not None:
+        out = Path(out).resolve()
+        out.mkdir(parents=True, exist_ok=True)
+        writer = FrameWriter(out)
+        robot.camera_source.listeners.append(writer)
+    progress = Progress(duration)
+    robot.frame_listeners.append(progress)
+    controller.install(robot)
+    start = time.perf_counter()
+    try:
+        with _controller_context(path.parent, out):
+            try:
+                runpy.run_path(str(path), run_name="__main__")
+            except SimulationEnd:
+                pass
+            except SimulationDiverged:
+                raise
+            except Exception as exc:
+                raise ControllerFailed(
+                    f"controller {path.name} raised at simulated t = {robot.time_ms / 1000:.3f} s:\n"
+                    + "".join(traceback.format_exception(exc))
+                ) from exc
+            finally:
+                controller.call_die_functions()
+    finally:
+        progress.close()
+        controller.install(None)
+        sim.close()
+    wall = time.perf_counter() - start
+    summary = RunSummary(str(path), backend, robot.time_ms / 1000, wall, robot.time_ms / 1000 / max(wall, 1e-9),
+                         writer.count if writer else 0)
+    if out is not None:
+        (out / "run.json").write_text(json.dumps(asdict(summary), indent=2) + "\n")
+    return summary

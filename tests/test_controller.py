@@ -1,0 +1,196 @@
+"""The Webots-era controller API, sampling rules, MTN playback through it, both backends (issue 4)."""
+
+import numpy as np
+import pytest
+
+from aibo_sim import controller as api
+from aibo_sim.mtn import Motion, write_mtn
+from aibo_sim.robot import DeviceError, Robot, SimulationEnd
+from aibo_sim.sim import Simulation
+
+CAMERA = "PRM:/r1/c1/c2/c3/i1-FbkImageSensor:F1"
+HEAD_PAN = "PRM:/r1/c1/c2-Joint2:12"
+LF_J1 = "PRM:/r2/c1-Joint2:21"
+
+
+@pytest.fixture
+def robot():
+    robot = Robot(Simulation(), backend="sim")
+    api.install(robot)
+    yield robot
+    api.install(None)
+    robot.sim.close()
+
+
+def test_unknown_device_lists_the_nearest_names(robot):
+    with pytest.raises(DeviceError, match=r"nearest: PRM:/r2/c1-Joint2:21"):
+        api.robot_get_device("PRM:/r2/c1-Joint2:2l")
+    assert api.robot_get_device(LF_J1) == api.robot_get_device(LF_J1) > 0
+
+
+def test_tags_are_checked(robot):
+    pan = api.robot_get_device(HEAD_PAN)
+    with pytest.raises(DeviceError, match="invalid device tag 99"):
+        api.servo_set_position(99, 0.1)
+    with pytest.raises(DeviceError, match="is a servo, not a camera"):
+        api.camera_enable(pan, 32)
+
+
+def test_reading_before_enable_or_first_sample_is_an_error(robot):
+    pan = api.robot_get_device(HEAD_PAN)
+    with pytest.raises(DeviceError, match="not enabled"):
+        api.servo_get_position(pan)
+    api.servo_enable_position(pan, 32)
+    with pytest.raises(DeviceError, match="no sample yet"):
+        api.servo_get_position(pan)
+    api.robot_step(32)
+    assert api.servo_get_position(pan) == pytest.approx(0.0, abs=0.02)
+    api.servo_disable_position(pan)
+    with pytest.raises(DeviceError, match="not enabled"):
+        api.servo_get_position(pan)
+
+
+def test_values_refresh_only_at_multiples_of_the_period(robot):
+    pan = api.robot_get_device(HEAD_PAN)
+    api.servo_enable_position(pan, 64)
+    api.servo_set_position(pan, 1.0)
+    api.robot_step(64)
+    first = api.servo_get_position(pan)
+    api.robot_step(32)  # t = 96: between samples
+    assert api.servo_get_position(pan) == first
+    api.robot_step(32)  # t = 128: a new sample
+    assert api.servo_get_position(pan) > first + 0.1
+
+
+def test_servo_speed_is_limited_to_the_set_velocity(robot):
+    pan = api.robot_get_device(HEAD_PAN)
+    api.servo_enable_position(pan, 8)
+    api.servo_set_velocity(pan, 1.0)
+    api.servo_set_position(pan, 1.5)
+    api.robot_step(200)
+    assert robot.sim.servos.command[1] == pytest.approx(0.2, abs=1e-9)  # 1 rad/s for 200 ms
+    api.robot_step(1400)
+    assert api.servo_get_position(pan) == pytest.approx(1.5, abs=0.03)
+    api.servo_set_position(pan, 10.0)  # clipped to the hardware limit, 93 deg
+    assert robot.sim.servos.target[1] == pytest.approx(np.radians(93))
+
+
+def test_acceleration_limit_ramps_the_speed(robot):
+    pan = api.robot_get_device(HEAD_PAN)
+    api.servo_set_acceleration(pan, 10.0)
+    api.servo_set_position(pan, 1.0)
+    api.robot_step(96)
+    # v = a t: after 96 ms at most 0.5 * 10 * 0.096^2 + a frame of slack
+    assert robot.sim.servos.command[1] < 0.5 * 10 * 0.104**2 + 1e-9
+
+
+def test_camera_delivers_at_most_30_frames_a_second(robot):
+    camera = api.robot_get_device(CAMERA)
+    with pytest.raises(DeviceError, match="not enabled"):
+        api.camera_get_image(camera)
+    api.camera_enable(camera, 8)
+    pan = api.robot_get_device(HEAD_PAN)
+    api.servo_set_position(pan, 1.0)  # the view changes every frame
+    images = []
+    for _ in range(125):  # 1 s
+        api.robot_step(8)
+        images.append(api.camera_get_image(camera).tobytes())
+    changes = sum(a != b for a, b in zip(images, images[1:]))
+    assert 25 <= changes <= 30
+    assert len(images[0]) == 208 * 160 * 3
+    assert api.camera_get_width(camera) == 208 and api.camera_get_height(camera) == 160
+    assert api.camera_get_fov(camera) == pytest.approx(0.993092)
+
+
+def test_sensors_read_in_their_units(robot):
+    chest = api.robot_get_device("PRM:/p1-Sensor:p1")
+    paw = api.robot_get_device("PRM:/r2/c1/c2/c3/c4-Sensor:24")
+    head = api.robot_get_device("PRM:/r1/c1/c2/c3/t1-Sensor:t1")
+    accel = api.robot_get_device("PRM:/a1-Sensor:a1")
+    for tag, enable in ((chest, api.distance_sensor_enable), (paw, api.touch_sensor_enable),
+                        (head, api.touch_sensor_enable), (accel, api.accelerometer_enable)):
+        enable(tag, 16)
+    api.robot_step(320)
+    assert 100 <= api.distance_sensor_get_value(chest) <= 900
+    assert api.touch_sensor_get_value(paw) == 1.0 and api.touch_sensor_get_value(head) == 0.0
+    values = api.accelerometer_get_values(accel)
+    assert api.accelerometer_value_z(values) == pytest.approx(9.81, abs=0.3)
+    assert api.robot_get_device("PRM:/a3-Sensor:a3") == accel
+
+
+def test_led_set_colours_the_geom(robot):
+    led = api.robot_get_device("PRM:/lu-LED3:lu")
+    geom = robot.sim.model.geom("led_back_front_colour").id
+    off = robot.sim.model.geom_rgba[geom].copy()
+    api.led_set(led, 1)
+    assert robot.sim.model.geom_rgba[geom][2] > 0.9  # blue
+    api.led_set(led, 0)
+    np.testing.assert_allclose(robot.sim.model.geom_rgba[geom], off)
+
+
+def test_step_must_be_whole_joint_frames(robot):
+    with pytest.raises(ValueError, match="multiple of the 8 ms"):
+        api.robot_step(10)
+
+
+def test_run_ends_with_simulation_end(robot):
+    robot.end_ms = 64
+    calls = []
+
+    def run(ms):
+        calls.append(api.robot_get_time())
+        return 32
+
+    with pytest.raises(SimulationEnd):
+        api.robot_run(run)
+    assert calls == [0.0, 0.032, 0.064]
+
+
+def _two_keyframe_motion(tmp_path, name="TEST.MTN", locators=(LF_J1,)):
+    motion = Motion.from_poses("a_stand#stand_test", list(locators), np.radians([[0.0], [20.0]]), [48])
+    write_mtn(motion, tmp_path / name)
+    return tmp_path / name
+
+
+def test_mtn_through_the_api_follows_openr_interpolation(robot, tmp_path):
+    robot.search_dirs = (tmp_path,)
+    motion = api.mtn_new(_two_keyframe_motion(tmp_path).name)
+    assert api.mtn_get_length(motion) == 48 and api.mtn_get_name(motion) == "a_stand#stand_test"
+    api.mtn_play(motion)
+    assert not api.mtn_is_over(motion)
+    commands = []
+    for _ in range(7):
+        api.robot_step(8)
+        commands.append(robot.sim.servos.command[6])
+    # 6 sub-frames of 8 ms stepping by the integer micro-radian (v1 - v0) / 6, then the last keyframe.
+    end = round(np.radians(20) * 1e6)
+    np.testing.assert_allclose(np.array(commands) * 1e6, [i * (end // 6) for i in range(6)] + [end], atol=1e-6)
+    api.robot_step(8)
+    assert api.mtn_is_over(motion)
+
+
+def test_mtn_new_failures_set_the_webots_error(robot, tmp_path):
+    path = _two_keyframe_motion(tmp_path, "BAD.MTN", locators=("PRM:/r9/c1-Joint2:91",))
+    assert api.mtn_new(str(path)) is None
+    assert api.mtn_get_error() == "Missing device in model: PRM:/r9/c1-Joint2:91"
+    assert api.mtn_new("NOSUCH.MTN") is None and "NOSUCH.MTN" in api.mtn_get_error()
+    with pytest.raises(ValueError, match="mtn_new failed"):
+        api.mtn_play(None)
+
+
+def test_webots_mode_steps_one_keyframe_per_control_step(tmp_path):
+    robot = Robot(Simulation(), mtn_mode="webots")
+    api.install(robot)
+    try:
+        motion = Motion.from_poses("a#b_c", [LF_J1], np.radians([[0.0], [10.0], [20.0], [30.0]]), [16, 16, 16])
+        api.mtn_play(motion)
+        targets = []
+        for _ in range(5):
+            api.robot_step(64)
+            targets.append(round(float(np.degrees(robot.sim.servos.target[6])), 3))
+        # One keyframe per 64 ms call (Webots' quirk), not 16 ms apart.
+        assert targets[:4] == [0.0, 10.0, 20.0, 30.0]
+        assert api.mtn_is_over(motion)
+    finally:
+        api.install(None)
+        robot.sim.close()
