@@ -44,6 +44,20 @@ COLOURS = {
 }
 
 
+def _line_segments() -> tuple[tuple[float, float, float, float], ...]:
+    """Straight field lines as (x0, y0, x1, y1) centre lines; the centre circle is separate."""
+    hl, hw = FIELD_LENGTH / 2, FIELD_WIDTH / 2
+    box_x, box_y = hl - PENALTY_BOX_DEPTH, PENALTY_BOX_WIDTH / 2
+    segments = [(-hl, hw, hl, hw), (-hl, -hw, hl, -hw), (hl, -hw, hl, hw), (-hl, -hw, -hl, hw), (0, -hw, 0, hw)]
+    for s in (1, -1):
+        segments += [(s * box_x, -box_y, s * box_x, box_y), (s * box_x, box_y, s * hl, box_y),
+                     (s * box_x, -box_y, s * hl, -box_y)]
+    return tuple(segments)
+
+
+LINE_SEGMENTS = _line_segments()
+
+
 @dataclass(frozen=True)
 class Beacon:
     name: str

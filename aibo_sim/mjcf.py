@@ -78,6 +78,11 @@ def visual(**attrs) -> ET.Element:
     return E("geom", **{"class_": "visual", **attrs})
 
 
+def hidden_visual(**attrs) -> ET.Element:
+    """A visual geom the head camera can never see (behind its lens): group 1, see Renderer."""
+    return E("geom", **{"class_": "behind_camera", **attrs})
+
+
 def collision(**attrs) -> ET.Element:
     return E("geom", **{"class_": "collision", **attrs})
 
@@ -105,14 +110,19 @@ def _defaults() -> ET.Element:
             E("position", inheritrange=1),
             E("site", group=4, rgba=(0.9, 0.2, 0.2, 0.4)),
             *(servo(cls) for cls in KP),
-            E("default", E("geom", group=2, contype=0, conaffinity=0, density=0, material="shell"), class_="visual"),
+            E(
+                "default",
+                E("geom", group=2, contype=0, conaffinity=0, density=0, material="shell"),
+                E("default", E("geom", group=1), class_="behind_camera"),
+                class_="visual",
+            ),
             E(
                 "default",
                 E("geom", group=3, contype=2, conaffinity=1, density=0, friction=(0.99, 0.005, 0.0001), rgba=(0.5, 0.5, 0.9, 0.4)),
                 E("default", E("geom", type="sphere", size=PAW_RADIUS, condim=3, priority=1), class_="paw"),
                 class_="collision",
             ),
-            E("default", E("geom", type="sphere", size=0.0025, group=2, contype=0, conaffinity=0, density=0, rgba=LED_OFF_RGBA), class_="led"),
+            E("default", E("geom", type="sphere", size=0.0025, group=1, contype=0, conaffinity=0, density=0, rgba=LED_OFF_RGBA), class_="led"),
             E("default", E("site", type="sphere", group=5), class_="touch"),
             class_="ers7",
         ),
@@ -146,7 +156,7 @@ def _head() -> ET.Element:
             "body",
             E("inertial", pos=(0, 0, -0.015), mass=0.005, diaginertia=box_inertia(0.005, (0.012, 0.004, 0.03))),
             joint(f"ear_{side}", (sign, 0, 0)),
-            visual(type="box", size=(0.011, 0.002, 0.017), pos=(0, 0, -0.016), material="dark"),
+            hidden_visual(type="box", size=(0.011, 0.002, 0.017), pos=(0, 0, -0.016), material="dark"),
             name=f"ear_{side}", pos=(-0.011, sign * 0.042, 0.0145),
         ))
     face_leds = [
@@ -165,7 +175,7 @@ def _head() -> ET.Element:
         "body",
         E("inertial", pos=(0.015, 0, -0.006), mass=0.01, diaginertia=box_inertia(0.01, (0.04, 0.03, 0.015))),
         joint("mouth", (0, -1, 0)),
-        visual(type="ellipsoid", size=(0.022, 0.019, 0.008), pos=(0.013, 0, -0.007), material="dark"),
+        hidden_visual(type="ellipsoid", size=(0.022, 0.019, 0.008), pos=(0.013, 0, -0.007), material="dark"),
         collision(type="capsule", fromto=(0.0, 0, -0.007, 0.028, 0, -0.009), size=0.008),
         touch_site("touch_chin", (0.015, 0, -0.015), 0.012),
         name="mouth", pos=(0.04, 0, -0.0175),
@@ -174,9 +184,9 @@ def _head() -> ET.Element:
         "body",
         E("inertial", pos=(0.04, 0, 0), mass=0.18, diaginertia=box_inertia(0.18, (0.1, 0.07, 0.07))),
         joint("head_tilt", (0, -1, 0)),
-        visual(type="ellipsoid", size=(0.054, 0.036, 0.036), pos=(0.018, 0, 0.008)),
-        visual(type="ellipsoid", size=(0.03, 0.03, 0.022), pos=(0.046, 0, 0.002), material="visor"),
-        visual(type="cylinder", size=(0.0045, 0.004), pos=(0.0765, 0, -0.0146), zaxis=(1, 0, 0), material="lens"),
+        hidden_visual(type="ellipsoid", size=(0.054, 0.036, 0.036), pos=(0.018, 0, 0.008)),
+        hidden_visual(type="ellipsoid", size=(0.03, 0.03, 0.022), pos=(0.046, 0, 0.002), material="visor"),
+        hidden_visual(type="cylinder", size=(0.0045, 0.004), pos=(0.0765, 0, -0.0146), zaxis=(1, 0, 0), material="lens"),
         collision(type="sphere", size=0.033),
         collision(type="capsule", fromto=(-0.0116, 0, 0.0111, 0.0516, 0, -0.0083), size=0.034),
         _camera(),
@@ -196,7 +206,7 @@ def _neck() -> ET.Element:
         "body",
         E("inertial", pos=(0, 0, 0), mass=0.010, diaginertia=box_inertia(0.010, (0.03, 0.03, 0.03))),
         joint("head_pan", (0, 0, 1)),
-        visual(type="sphere", size=0.03, material="dark"),
+        hidden_visual(type="sphere", size=0.03, material="dark"),
         _head(),
         name="head_pan_link", pos=(0, 0, 0.080),
     )
@@ -204,7 +214,7 @@ def _neck() -> ET.Element:
         "body",
         E("inertial", pos=(0, 0, 0.04), mass=0.015, diaginertia=box_inertia(0.015, (0.023, 0.023, 0.08))),
         joint("neck_tilt", (0, -1, 0)),
-        visual(type="cylinder", fromto=(0, 0, 0, 0, 0, 0.08), size=0.0117, material="dark"),
+        hidden_visual(type="cylinder", fromto=(0, 0, 0, 0, 0, 0.08), size=0.0117, material="dark"),
         collision(type="cylinder", fromto=(0, 0, 0, 0, 0, 0.08), size=0.0117),
         pan,
         name="neck", pos=(0.0675, 0, 0.0195), childclass="head",
@@ -259,14 +269,14 @@ def _tail() -> ET.Element:
         "body",
         E("inertial", pos=0.03 * tail_dir, mass=0.005, diaginertia=box_inertia(0.005, (0.06, 0.012, 0.012))),
         joint("tail_pan", (1, 0, 0)),
-        visual(type="capsule", fromto=(0, 0, 0, *(0.06 * tail_dir)), size=0.006, material="dark"),
+        hidden_visual(type="capsule", fromto=(0, 0, 0, *(0.06 * tail_dir)), size=0.006, material="dark"),
         name="tail", pos=(0, 0, 0),
     )
     return E(
         "body",
         E("inertial", pos=(0, 0, 0), mass=0.001, diaginertia=(1e-7, 1e-7, 1e-7)),
         joint("tail_tilt", (0, 1, 0)),
-        visual(type="sphere", size=0.008, material="dark"),
+        hidden_visual(type="sphere", size=0.008, material="dark"),
         tail,
         name="tail_base", pos=(-0.102, 0, 0.033), childclass="small",
     )
@@ -380,37 +390,28 @@ def _with_keyframes(root: ET.Element) -> ET.Element:
 # ----------------------------------------------------------------------------- scenes
 
 
-def _field_geoms() -> list[ET.Element]:
-    half_l, half_w, lw = F.FIELD_LENGTH / 2, F.FIELD_WIDTH / 2, F.LINE_WIDTH
-    z = 0.0005
+def _line_mesh(ring_segments: int = 48) -> ET.Element:
+    """All field lines as one flat mesh (one draw call instead of dozens of boxes)."""
+    half, z = F.LINE_WIDTH / 2, 0.001
+    vertices, faces = [], []
 
-    def line(name, x0, y0, x1, y1):
-        cx, cy, length = (x0 + x1) / 2, (y0 + y1) / 2, math.hypot(x1 - x0, y1 - y0) + lw
-        angle = math.atan2(y1 - y0, x1 - x0)
-        return E("geom", name=name, type="box", size=(length / 2, lw / 2, z), pos=(cx, cy, z),
-                 euler=(0, 0, angle), material="line", contype=0, conaffinity=0)
+    def quad(corners):  # counter-clockwise seen from above: normals point up
+        base = len(vertices)
+        vertices.extend((x, y, z) for x, y in corners)
+        faces.extend([(base, base + 1, base + 2), (base, base + 2, base + 3)])
 
-    box_x = half_l - F.PENALTY_BOX_DEPTH
-    pb = F.PENALTY_BOX_WIDTH / 2
-    geoms = [
-        line("line_side_left", -half_l, half_w, half_l, half_w),
-        line("line_side_right", -half_l, -half_w, half_l, -half_w),
-        line("line_goal_skyblue", half_l, -half_w, half_l, half_w),
-        line("line_goal_yellow", -half_l, -half_w, -half_l, half_w),
-        line("line_halfway", 0, -half_w, 0, half_w),
-    ]
-    for sign, goal in ((1, "skyblue"), (-1, "yellow")):
-        geoms += [
-            line(f"line_box_{goal}_front", sign * box_x, -pb, sign * box_x, pb),
-            line(f"line_box_{goal}_left", sign * box_x, pb, sign * half_l, pb),
-            line(f"line_box_{goal}_right", sign * box_x, -pb, sign * half_l, -pb),
-        ]
-    n = 36
+    for x0, y0, x1, y1 in F.LINE_SEGMENTS:
+        length = math.hypot(x1 - x0, y1 - y0)
+        ux, uy = (x1 - x0) / length, (y1 - y0) / length
+        ax, ay, bx, by = x0 - ux * half, y0 - uy * half, x1 + ux * half, y1 + uy * half
+        quad([(ax + uy * half, ay - ux * half), (bx + uy * half, by - ux * half),
+              (bx - uy * half, by + ux * half), (ax - uy * half, ay + ux * half)])
     r = F.CENTRE_CIRCLE_RADIUS
-    for i in range(n):
-        a0, a1 = 2 * math.pi * i / n, 2 * math.pi * (i + 1) / n
-        geoms.append(line(f"line_circle_{i}", r * math.cos(a0), r * math.sin(a0), r * math.cos(a1), r * math.sin(a1)))
-    return geoms
+    for i in range(ring_segments):
+        a0, a1 = (2 * math.pi * k / ring_segments for k in (i, i + 1))
+        quad([((r - half) * math.cos(a0), (r - half) * math.sin(a0)), ((r + half) * math.cos(a0), (r + half) * math.sin(a0)),
+              ((r + half) * math.cos(a1), (r + half) * math.sin(a1)), ((r - half) * math.cos(a1), (r - half) * math.sin(a1))])
+    return E("mesh", name="field_lines", vertex=np.array(vertices).ravel(), face=np.array(faces).ravel(), inertia="shell")
 
 
 def _goal(colour: str, line_x: float) -> ET.Element:
@@ -470,13 +471,14 @@ def scene_xml() -> ET.Element:
             "asset",
             E("texture", type="skybox", builtin="gradient", rgb1=(0.75, 0.75, 0.72), rgb2=(0.45, 0.45, 0.45), width=64, height=64),
             *(E("material", name=n, rgba=c, specular=0.1) for n, c in colours.items()),
+            _line_mesh(),
         ),
         E(
             "worldbody",
             E("light", name="ceiling_1", pos=(-1.2, 0, 3), dir=(0, 0, -1), directional="false", diffuse=(0.45, 0.45, 0.43), castshadow="false"),
             E("light", name="ceiling_2", pos=(1.2, 0, 3), dir=(0, 0, -1), directional="false", diffuse=(0.45, 0.45, 0.43), castshadow="true"),
-            E("geom", name="field_carpet", type="plane", size=(cl + 0.5, cw + 0.5, 0.05), material="carpet", friction=(0.9, 0.005, 0.0001)),
-            *_field_geoms(),
+            E("geom", name="field_carpet", type="plane", size=(cl + 0.5, cw + 0.5, 1.0), material="carpet", friction=(0.9, 0.005, 0.0001)),
+            E("geom", name="field_lines", type="mesh", mesh="field_lines", material="line", contype=0, conaffinity=0),
             *walls,
             *(_goal(c, x) for c, x in F.GOALS.items()),
             *(_beacon(b) for b in F.BEACONS),

@@ -22,6 +22,7 @@ from .render import Renderer
 FRAME_MS = FRAME_TICK_MS  # OPEN-R joint frame, 8 ms
 GRAVITY = 9.80665
 ACCEL_RANGE = 2 * GRAVITY  # Sony: +-19 613 300 um/s^2
+HEAD_CAMERA_GROUPS = (0, 2)  # group 1 holds the robot's geoms behind the head camera
 IR_NOISE = 0.1  # Webots lookup tables: 10 % noise at mid-range, none at the ends
 
 
@@ -205,7 +206,7 @@ class Simulation:
     def render_camera(self) -> np.ndarray:
         """The head camera's RGB frame now, (height, width, 3) uint8."""
         if self._renderer is None:
-            self._renderer = Renderer(self.model, *self.camera_size)
+            self._renderer = Renderer(self.model, *self.camera_size, groups=HEAD_CAMERA_GROUPS)
         self._rendered_camera_frame = self.camera_frame_index()
         return self._renderer.render(self.data, "camera")
 

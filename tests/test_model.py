@@ -67,7 +67,7 @@ def test_visual_and_collision_geoms_are_separate(model):
     for g in range(model.ngeom):
         if model.geom_bodyid[g] == 0 or model.body_rootid[model.geom_bodyid[g]] != model.body("body").id:
             continue
-        if model.geom_group[g] == 2:
+        if model.geom_group[g] in (1, 2):  # visual; group 1 is hidden from the head camera
             assert model.geom_contype[g] == 0 and model.geom_conaffinity[g] == 0
         else:
             assert model.geom_group[g] == 3 and model.geom_contype[g] != 0

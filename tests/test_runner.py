@@ -1,0 +1,117 @@
+"""The headless runner, the CLI, both backends on one controller, the Annex I port (issue 4)."""
+
+import importlib.util
+import json
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+
+import openr_bridge
+from aibo_sim.cli import main
+from aibo_sim.runner import ControllerFailed, run_controller
+
+ROOT = Path(__file__).resolve().parents[1]
+SCRIPTED = Path(__file__).parent / "controllers" / "scripted_head.py"
+ROUND_TRIP_BOUND = 2  # max |RGB -> YCrCb -> RGB| per channel, over all 2^24 colours (see below)
+TAG_PIXELS = 12  # the tag Sony writes over the start of layer H's last Y row
+
+
+def test_colour_round_trip_bound_holds_for_every_rgb_colour():
+    levels = np.arange(256, dtype=np.uint8)
+    green, blue = np.meshgrid(levels, levels, indexing="ij")
+    worst = 0
+    for red in range(0, 256):
+        rgb = np.stack([np.full_like(green, red), green, blue], axis=-1)
+        back = openr_bridge.ycrcb_to_rgb(*openr_bridge.rgb_to_ycrcb(rgb))
+        worst = max(worst, int(np.abs(back.astype(int) - rgb).max()))
+    assert worst == ROUND_TRIP_BOUND
+
+
+def test_one_controller_on_both_backends(tmp_path):
+    runs = {}
+    for backend in ("sim", "openr"):
+        out = tmp_path / backend
+        summary = run_controller(SCRIPTED, backend=backend, duration=1.0, seed=3, out=out)
+        assert summary.camera_frames == 30 and summary.simulated_s == pytest.approx(1.0)
+        runs[backend] = out
+    logs = {b: [line for line in (out / "joints.txt").read_text().splitlines() if not line.startswith("pixel")]
+            for b, out in runs.items()}
+    assert len(logs["sim"]) > 50 and logs["sim"] == logs["openr"]  # identical joint trajectories
+    frames = sorted(p.name for p in (runs["sim"] / "frames").iterdir())
+    assert frames == sorted(p.name for p in (runs["openr"] / "frames").iterdir())
+    worst = 0
+    for name in frames:
+        sim = cv2.imread(str(runs["sim"] / "frames" / name)).astype(int)
+        openr = cv2.imread(str(runs["openr"] / "frames" / name)).astype(int)
+        assert sim.shape == openr.shape == (160, 208, 3)
+        difference = np.abs(sim - openr)
+        assert difference[-1, :TAG_PIXELS].max() > 0 or name == frames[0]  # the tag is really there
+        difference[-1, :TAG_PIXELS] = 0
+        worst = max(worst, int(difference.max()))
+    assert 0 < worst <= ROUND_TRIP_BOUND
+
+
+def test_controller_exception_reports_simulated_time(tmp_path):
+    bad = tmp_path / "bad.py"
+    bad.write_text(
+        "from aibo_sim.controller import *\n"
+        "def run(ms):\n"
+        "    if robot_get_time() >= 0.2:\n"
+        "        raise RuntimeError('boom')\n"
+        "    return 32\n"
+        "robot_live(None)\nrobot_run(run)\n"
+    )
+    with pytest.raises(ControllerFailed, match=r"t = 0\.224 s(.|\n)*RuntimeError: boom"):
+        run_controller(bad, duration=1.0)
+    assert main(["run", str(bad), "--duration", "1"]) == 1
+
+
+def test_cli_bad_input_exits_2_with_a_clear_message(tmp_path, capsys):
+    assert main(["run", str(tmp_path / "missing.py")]) == 2
+    assert "missing.py: no such controller file" in capsys.readouterr().err
+    assert main(["run", str(SCRIPTED), "--duration", "-1"]) == 2
+    assert "--duration must be positive" in capsys.readouterr().err
+    assert main(["run", str(SCRIPTED), "--scene", str(tmp_path / "nope.xml")]) == 2
+    assert "nope.xml: no such model file" in capsys.readouterr().err
+
+
+def test_physics_divergence_is_a_clear_error(tmp_path, capsys):
+    wild = tmp_path / "wild.py"
+    wild.write_text(
+        "from aibo_sim.controller import *\n"
+        "j = robot_get_device('PRM:/r2/c1-Joint2:21')\n"
+        "servo_set_control_p(j, 1e12)\nservo_set_motor_force(j, 1e12)\n"
+        "servo_set_position(j, 2.0)\n"
+        "while True:\n    robot_step(8)\n"
+    )
+    assert main(["run", str(wild), "--duration", "2"]) == 3
+    assert "physics diverged at t =" in capsys.readouterr().err
+
+
+def _annex_module():
+    spec = importlib.util.spec_from_file_location("annex_capture", ROOT / "controllers" / "annex_capture.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_annex_yuv_bytes_for_known_pixels():
+    # Hand-computed with the Annex's C expressions: y = (uchar)(0.299 r + 0.587 g + 0.114 b),
+    # u = (uchar)(0.492 (b - y) + 128), v = (uchar)(0.5 (r - y) + 128).
+    image = np.array([255, 0, 0, 0, 255, 0, 0, 0, 255, 255, 255, 255, 0, 0, 0, 10, 200, 30], np.uint8)
+    expected = [76, 90, 217, 149, 54, 53, 29, 239, 113, 255, 128, 128, 0, 128, 128, 123, 82, 71]  # checked with gcc
+    assert list(_annex_module().annex_yuv(image, 6, 1)) == expected
+
+
+def test_annex_port_writes_image_raw_of_the_last_frame(tmp_path):
+    annex = _annex_module()
+    summary = run_controller(ROOT / "controllers" / "annex_capture.py", duration=30.0, out=tmp_path)
+    raw = (tmp_path / "image.raw").read_bytes()
+    assert len(raw) == 208 * 160 * 3
+    last = sorted((tmp_path / "frames").iterdir())[-1]
+    rgb = cv2.imread(str(last))[:, :, ::-1].reshape(-1)
+    assert raw == annex.annex_yuv(rgb, 208, 160).tobytes()
+    assert summary.camera_frames > 800
+    assert json.loads((tmp_path / "run.json").read_text())["backend"] == "sim"
