@@ -16,6 +16,7 @@ def _run(args) -> int:
     summary = run_controller(
         args.controller, backend=args.backend, duration=args.duration, scene=args.scene, seed=args.seed,
         out=args.out, mtn_mode=args.mtn_mode, memory_stick=args.memory_stick, camera_full=args.camera_full,
+        ball=args.ball,
     )
     print(f"ran {Path(summary.controller).name} on the {summary.backend} backend: {summary.simulated_s:.2f} s simulated "
           f"in {summary.wall_s:.2f} s (real-time factor {summary.real_time_factor:.1f}), "
@@ -89,6 +90,7 @@ def build_parser() -> argparse.ArgumentParser:
                      help="MTN playback: OPEN-R interpolation (default) or Webots keyframe stepping")
     run.add_argument("--memory-stick", help="OPEN-R memory stick folder for the openr backend")
     run.add_argument("--camera-full", action="store_true", help="render 416x320 (else the 208x160 layer)")
+    run.add_argument("--ball", type=float, nargs=2, metavar=("X", "Y"), help="ball position on the field (m)")
     run.set_defaults(handler=_run)
 
     render = commands.add_parser("render", help="render the head camera and a third-person view")

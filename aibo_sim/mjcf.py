@@ -350,7 +350,8 @@ def _pose_qpos(model, pose: dict[str, float]) -> np.ndarray:
     mujoco.mj_kinematics(model, data)
     p = data.geom_xpos[paws]
     front, hind = p[[0, 2]].mean(axis=0), p[[1, 3]].mean(axis=0)
-    pitch = math.atan2(hind[2] - front[2], front[0] - hind[0])  # about +Y: nose down if > 0
+    # Rotating by q about +Y maps z to z cos q - x sin q: equal paw heights need tan q = dz / dx.
+    pitch = math.atan2(front[2] - hind[2], front[0] - hind[0])  # > 0 tips the nose down
     qpos[3:7] = (math.cos(pitch / 2), 0, math.sin(pitch / 2), 0)
     data.qpos[:] = qpos
     mujoco.mj_kinematics(model, data)

@@ -9,9 +9,10 @@ Z up, origin midway between the four J1 axes. Angles are radians with Sony's sig
 
 from __future__ import annotations
 
+import itertools
 import math
 import os
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -66,12 +67,13 @@ def leg_angles(leg: str, position) -> np.ndarray:
     returned. Raises ValueError when the point is out of reach."""
     fb, side, hip, knee, paw = _leg_geometry(leg)
     d = np.asarray(position, dtype=float) - hip
+    unreachable = ValueError(f"{leg}: paw position ({', '.join(f'{v:.4f}' for v in d + hip)}) m is out of reach")
     # J3 sets the J2-to-paw distance: |knee + Ry(phi) paw| = |d|, phi = -fb * J3.
     a = knee[0] * paw[0] + knee[2] * paw[2]
     b = knee[0] * paw[2] - knee[2] * paw[0]
     c = (d @ d - knee @ knee - paw @ paw) / 2
     if abs(c) > math.hypot(a, b):
-        raise ValueError(f"{leg}: paw position {tuple(position)} out of reach")
+        raise unreachable
     alpha = math.atan2(b, a)
     phi = alpha - fb * math.acos(c / math.hypot(a, b))
     q3 = -fb * phi
@@ -79,7 +81,7 @@ def leg_angles(leg: str, position) -> np.ndarray:
     # J2 sets the lateral offset: Rx(side * J2) shin has y = d_y.
     r, gamma = math.hypot(shin[1], shin[2]), math.atan2(shin[2], shin[1])
     if abs(d[1]) > r:
-        raise ValueError(f"{leg}: paw position {tuple(position)} out of reach")
+        raise unreachable
     a2 = -gamma - math.acos(d[1] / r)
     w = _rot_x(a2, shin)
     # J1 turns the leg in the sagittal plane onto d.
@@ -90,6 +92,12 @@ def leg_angles(leg: str, position) -> np.ndarray:
 
 # ----------------------------------------------------------------------------- poses
 
+LOCATORS = tuple(j.locator for j in JOINTS)  # posture changes drive all 20 joints, as Sony's do
+_LEG_INDEX = {leg: [JOINTS.index(JOINT_BY_NAME[f"{leg}_j{i}"]) for i in (1, 2, 3)] for leg in LEGS}
+# Gaits drive the 12 leg joints only, so a controller can move the head while walking.
+_GAIT_COLUMNS = sorted(i for columns in _LEG_INDEX.values() for i in columns)
+GAIT_LOCATORS = tuple(JOINTS[i].locator for i in _GAIT_COLUMNS)
+
 
 def pose_vector(pose: dict[str, float]) -> np.ndarray:
     """Joint angles (rad) in ``ers7.JOINTS`` order from a {name: degrees} pose; unlisted
@@ -97,82 +105,105 @@ def pose_vector(pose: dict[str, float]) -> np.ndarray:
     return np.radians([pose.get(j.name, j.default_deg) for j in JOINTS])
 
 
-_LEG_INDEX = {leg: [JOINTS.index(JOINT_BY_NAME[f"{leg}_j{i}"]) for i in (1, 2, 3)] for leg in LEGS}
+def paw_pose(paws: dict[str, tuple[float, float, float]], base: np.ndarray) -> np.ndarray:
+    """``base`` (rad, ``ers7.JOINTS`` order) with each leg in ``paws`` set by inverse kinematics."""
+    pose = np.array(base, dtype=float)
+    for leg, position in paws.items():
+        pose[_LEG_INDEX[leg]] = leg_angles(leg, position)
+    return pose
+
+
+def mirrored(front, hind) -> dict[str, tuple[float, float, float]]:
+    """Paw positions of all four legs from the left front and left hind ones."""
+    paws = {}
+    for leg, (_, side, is_front) in LEGS.items():
+        x, y, z = front if is_front else hind
+        paws[leg] = (x, side * y, z)
+    return paws
+
+
+STAND_POSE, SIT_POSE = pose_vector(POSES["stand"]), pose_vector(POSES["sit"])
+# Sit -> stand passes through a crouch: chest lowered onto folded front legs while the hind
+# legs stay folded, which brings the centre of mass ahead of the hind paws before they push.
+# (Unfolding straight from sit pushes the rump back and the robot rolls over backwards.)
+CROUCH_POSE = paw_pose(mirrored((0.085, 0.07, -0.095), (-0.03, 0.07, -0.085)), STAND_POSE)
 
 
 @dataclass(frozen=True)
 class Gait:
-    """A periodic gait. Paws move on a box-with-rounded-top path: in stance (``duty`` of the
-    period) a paw sweeps backward and turns about the body origin at constant speed, in swing
-    it returns with a sine lift. Legs ``lf``/``rh`` and ``rf``/``lh`` are half a period apart
-    (a trot). Nominal paw positions are in the body frame, metres."""
+    """A trot: legs ``lf``/``rh`` and ``rf``/``lh`` half a period apart. In stance (``duty`` of
+    the period) a paw sweeps backward and turns about the body origin at constant speed; in
+    swing it returns on a cosine ease with a sine lift. Paw positions: body frame, metres."""
 
     step_length: float = 0.0  # m the body advances per period
     turn_rate: float = 0.0  # deg/s, + = to the left
-    step_height: float = 0.02  # m
-    period_ms: int = 480  # multiple of 16 ms
+    step_height: float = 0.012  # m
+    period_ms: int = 320  # multiple of 16 ms
     duty: float = 0.5  # stance fraction of the period
-    front: tuple[float, float, float] = (0.075, 0.075, -0.115)  # left front paw
-    hind: tuple[float, float, float] = (-0.075, 0.075, -0.12)  # left hind paw
+    # Left paws; the diagonals cross 17.5 mm ahead of the origin, under the centre of mass.
+    front: tuple[float, float, float] = (0.09, 0.075, -0.115)
+    hind: tuple[float, float, float] = (-0.055, 0.075, -0.12)
 
 
 _PHASE = {"lf": 0.0, "rh": 0.0, "rf": 0.5, "lh": 0.5}
 
 
-def _paw_path(gait: Gait, leg: str, t: float) -> np.ndarray:
-    """Paw position of ``leg`` at time fraction ``t`` of the period."""
-    _, side, front = LEGS[leg]
-    x0, y0, z0 = gait.front if front else gait.hind
+def paw_path(gait: Gait, leg: str, t: float) -> np.ndarray:
+    """Paw position of ``leg`` at time ``t`` (fraction of the period), body frame."""
     phase = (t + _PHASE[leg]) % 1.0
     if phase < gait.duty:  # stance: u from +1/2 to -1/2
         u, lift = 0.5 - phase / gait.duty, 0.0
-    else:  # swing: back to +1/2 with a smooth start and stop
+    else:  # swing: back to +1/2
         s = (phase - gait.duty) / (1 - gait.duty)
         u, lift = -0.5 + (1 - math.cos(math.pi * s)) / 2, gait.step_height * math.sin(math.pi * s)
-    # In stance the paw sweeps step_length * duty: the body advances that much per half
-    # period while one diagonal pair carries it, a whole step_length per period.
+    # A stance lasts duty * period and carries the body the whole way in that time.
     u *= gait.duty
-    turn = math.radians(gait.turn_rate) * gait.period_ms / 1000
-    c, s_ = math.cos(u * turn), math.sin(u * turn)
-    y0 *= side
-    return np.array([c * x0 - s_ * y0 + u * gait.step_length, s_ * x0 + c * y0, z0 + lift])
+    turn = u * math.radians(gait.turn_rate) * gait.period_ms / 1000
+    x, y, z = mirrored(gait.front, gait.hind)[leg]
+    c, s = math.cos(turn), math.sin(turn)
+    return np.array([c * x - s * y + u * gait.step_length, s * x + c * y, z + lift])
 
 
 def gait_poses(gait: Gait) -> np.ndarray:
-    """One period of ``gait`` as (N + 1, 20) joint poses at 16 ms keyframes, the last equal to
+    """One period of ``gait`` as (N + 1, 20) poses (rad) at 16 ms keyframes, the last equal to
     the first; head and tail hold the stand pose."""
     if gait.period_ms % KEYFRAME_MS:
         raise ValueError(f"period {gait.period_ms} ms is not a multiple of {KEYFRAME_MS} ms")
     n = gait.period_ms // KEYFRAME_MS
-    poses = np.tile(pose_vector(POSES["stand"]), (n + 1, 1))
-    for k in range(n + 1):
-        for leg, idx in _LEG_INDEX.items():
-            poses[k, idx] = leg_angles(leg, _paw_path(gait, leg, (k % n) / n))
-    return poses
+    return np.array([paw_pose({leg: paw_path(gait, leg, k / n) for leg in LEGS}, STAND_POSE) for k in range(n + 1)])
 
 
-def transition_poses(start: dict[str, float], end: dict[str, float], keyframes: int) -> np.ndarray:
-    """``keyframes`` poses from ``start`` to ``end`` (degree dicts) on a cosine ease."""
-    a, b = pose_vector(start), pose_vector(end)
-    s = (1 - np.cos(np.linspace(0, math.pi, keyframes))) / 2
-    return a + s[:, None] * (b - a)
+def transition_poses(poses, segments: int) -> np.ndarray:
+    """From each pose of ``poses`` to the next in ``segments`` steps on a cosine ease (at rest
+    at every pose); (len(poses) - 1) * segments + 1 poses."""
+    s = (1 - np.cos(np.linspace(0, math.pi, segments + 1)[1:])) / 2
+    path = [np.asarray(poses[0], dtype=float)]
+    for a, b in zip(poses[:-1], poses[1:]):
+        path += [a + k * (b - a) for k in s]
+    return np.array(path)
 
 
 # ----------------------------------------------------------------------------- motion files
 
-WALK = Gait(step_length=0.06)
+WALK = Gait(step_length=0.045)
 TURN = Gait(turn_rate=30.0)
-LOCATORS = tuple(j.locator for j in JOINTS)
+TRANSITION_SEGMENT_MS = 160  # numInterpolate 9: OPEN-R interpolates linearly in between
+
+
+def _gait_motion(name: str, gait: Gait) -> Motion:
+    return Motion.from_poses(name, GAIT_LOCATORS, gait_poses(gait)[:, _GAIT_COLUMNS], KEYFRAME_MS)
 
 
 def motions() -> dict[str, Motion]:
     """File name -> motion, for every motion aibo-sim ships."""
-    ease = 11  # keyframes; 10 segments of 160 ms (numInterpolate 9) = 1.6 s
+    sit = transition_poses([STAND_POSE, SIT_POSE], 10)
+    stand = transition_poses([SIT_POSE, CROUCH_POSE, STAND_POSE], 5)
     return {
-        "WALKFWD.MTN": Motion.from_poses("a_walk#walk_fwd", LOCATORS, gait_poses(WALK), KEYFRAME_MS),
-        "TURNL.MTN": Motion.from_poses("a_walk#walk_turn_l", LOCATORS, gait_poses(TURN), KEYFRAME_MS),
-        "SIT.MTN": Motion.from_poses("a_stand#sit_sitdown", LOCATORS, transition_poses(POSES["stand"], POSES["sit"], ease), 160),
-        "STAND.MTN": Motion.from_poses("a_sit#stand_standup", LOCATORS, transition_poses(POSES["sit"], POSES["stand"], ease), 160),
+        "WALKFWD.MTN": _gait_motion("a_walk#walk_fwd", WALK),
+        "TURNL.MTN": _gait_motion("a_walk#walk_turn_l", TURN),
+        "TURNR.MTN": _gait_motion("a_walk#walk_turn_r", replace(TURN, turn_rate=-TURN.turn_rate)),
+        "SIT.MTN": Motion.from_poses("a_stand#sit_sitdown", LOCATORS, sit, TRANSITION_SEGMENT_MS),
+        "STAND.MTN": Motion.from_poses("a_sit#stand_standup", LOCATORS, stand, TRANSITION_SEGMENT_MS),
     }
 
 
@@ -190,17 +221,37 @@ def generate_motion_files(directory: str | os.PathLike) -> list[Path]:
 # ----------------------------------------------------------------------------- playback
 
 
-def play_motion(motion_or_path, repeat: int = 1, sim: Simulation | None = None, mode: str = "openr", step_ms: int = 16) -> dict:
-    """Play a motion ``repeat`` times on ``sim`` (default: a new robot standing on the field).
+def _openr_frames(motion: Motion, repeat: int):
+    """Targets (rad) for each 8 ms frame. A loop does not send the last keyframe, as MTN.cc
+    does not; the very end does, so the motion ends on it."""
+    player = MotionPlayer(motion)
+    for r in range(repeat):
+        for i in range(player.num_frames if r == repeat - 1 else player.num_frames - 1):
+            yield player.frame(i) / 1e6
 
-    The servo set-points first blend from their current values to the motion's first
-    keyframe over ``BLEND_MS`` when they differ. ``mode="openr"``: every 8 ms frame the
-    player's targets are written straight to the set-points (as OPEN-R joint command frames);
-    a loop sends the last keyframe only at the very end, like ``MTN.cc``. ``mode="webots"``:
-    ``mtn_step(step_ms)`` each ``step_ms`` control step, commands through
-    ``servos.set_target`` (velocity limits apply), ``mtn_play`` again when over. Playback stops
-    early if the robot falls. Displacement is in the start heading's frame (x forward, y left);
-    the heading change is unwrapped (+ = left)."""
+
+def _webots_frames(motion: Motion, repeat: int, step_ms: int):
+    """Targets (rad) or None for each 8 ms frame: ``mtn_step(step_ms)`` every control step,
+    ``mtn_play`` again once over."""
+    player = MotionPlayer(motion, "webots")
+    for _ in range(repeat):
+        player.play()
+        while not player.is_over:
+            commands = player.step(step_ms)
+            yield None if commands is None else np.array([commands[loc] for loc in motion.locators])
+            yield from [None] * (step_ms // FRAME_MS - 1)
+
+
+def play_motion(motion_or_path, repeat: int = 1, sim: Simulation | None = None, mode: str = "openr", step_ms: int = 16) -> dict:
+    """Play a motion (or MTN file) ``repeat`` times on ``sim`` (default: a new robot standing on
+    the field) and say where it went.
+
+    The set-points first blend from their current values to the motion's first keyframe over
+    ``BLEND_MS`` when they differ. ``mode="openr"``: every 8 ms frame the player's targets are
+    written straight to the set-points, as OPEN-R joint command frames. ``mode="webots"``:
+    Webots' ``mtn_step(step_ms)`` per control step, commands through ``servos.set_target``
+    (velocity limits apply). Playback stops if the robot falls. The displacement is in the
+    start heading's frame (x forward, y left); the heading change is unwrapped (+ = left)."""
     motion = motion_or_path if isinstance(motion_or_path, Motion) else read_mtn(motion_or_path)
     if mode not in ("openr", "webots"):
         raise ValueError(f"mode must be 'openr' or 'webots', not {mode!r}")
@@ -208,66 +259,38 @@ def play_motion(motion_or_path, repeat: int = 1, sim: Simulation | None = None, 
         raise ValueError(f"step_ms must be a positive multiple of {FRAME_MS} ms")
     unknown = [loc for loc in motion.locators if loc not in JOINT_BY_LOCATOR]
     if unknown:
-        raise ValueError(f"{motion.name}: locators without a joint: {', '.join(unknown)}")
+        raise ValueError(f"{motion.name}: no joint for locator(s) {', '.join(unknown)}")
     sim = sim or Simulation()
-    idx = np.array([JOINTS.index(JOINT_BY_LOCATOR[loc]) for loc in motion.locators])
-    position, yaw0, _ = sim.body_pose()
-    start_frame, state = sim.frame, {"yaw": yaw0, "turned": 0.0, "fell": False}
+    idx = [JOINTS.index(JOINT_BY_LOCATOR[loc]) for loc in motion.locators]
 
-    def advance() -> bool:
-        sim.step_frame()
-        yaw = sim.body_pose()[1]
-        state["turned"] += math.remainder(yaw - state["yaw"], 2 * math.pi)
-        state["yaw"] = yaw
-        state["fell"] = sim.fallen()
-        return not state["fell"]
-
-    def command(targets: np.ndarray) -> None:
-        if mode == "openr":
-            sim.servos.target[idx] = sim.servos.command[idx] = targets
-        else:
-            sim.servos.set_target(idx, targets)
-
+    start = sim.servos.command[idx].copy()
     first = motion.positions_rad()[0]
-    current = sim.servos.command[idx].copy()
-    ok = True
-    if np.abs(first - current).max() > 1e-3:
-        n = BLEND_MS // FRAME_MS
-        for i in range(1, n + 1):
-            command(current + (first - current) * (1 - math.cos(math.pi * i / n)) / 2)
-            if not (ok := advance()):
-                break
-    if mode == "openr":
-        player = MotionPlayer(motion)
-        for r in range(repeat if ok else 0):
-            frames = player.num_frames if r == repeat - 1 else player.num_frames - 1
-            for i in range(frames):
-                command(player.frame(i) / 1e6)
-                if not (ok := advance()):
-                    break
-            if not ok:
-                break
-    else:
-        player = MotionPlayer(motion, "webots")
-        for r in range(repeat if ok else 0):
-            player.play()
-            while ok and not player.is_over:
-                commands = player.step(step_ms)
-                if commands:
-                    command(np.array([commands[loc] for loc in motion.locators]))
-                for _ in range(step_ms // FRAME_MS):
-                    if not (ok := advance()):
-                        break
-            if not ok:
-                break
+    n = BLEND_MS // FRAME_MS if np.abs(first - start).max() > 1e-3 else 0
+    blend = (start + (first - start) * (1 - math.cos(math.pi * i / n)) / 2 for i in range(1, n + 1))
+    frames = _openr_frames(motion, repeat) if mode == "openr" else _webots_frames(motion, repeat, step_ms)
+
+    position, yaw, _ = sim.body_pose()
+    start_frame, yaw0, turned, fell = sim.frame, yaw, 0.0, False
+    for targets in itertools.chain(blend, frames):
+        if targets is not None:
+            if mode == "openr":
+                sim.servos.target[idx] = sim.servos.command[idx] = targets
+            else:
+                sim.servos.set_target(idx, targets)
+        sim.step_frame()
+        new_yaw = sim.body_pose()[1]
+        turned += math.remainder(new_yaw - yaw, 2 * math.pi)
+        yaw = new_yaw
+        if fell := sim.fallen():
+            break
     dx, dy = sim.body_pose()[0][:2] - position[:2]
     c, s = math.cos(yaw0), math.sin(yaw0)
-    forward, left = c * dx + s * dy, -s * dx + c * dy
+    forward, left = float(c * dx + s * dy), float(-s * dx + c * dy)
     return {
         "displacement_m": [forward, left],
         "distance_m": math.hypot(forward, left),
-        "heading_change_deg": math.degrees(state["turned"]),
-        "fell": state["fell"],
+        "heading_change_deg": math.degrees(turned),
+        "fell": fell,
         "duration_s": (sim.frame - start_frame) * FRAME_MS / 1000,
     }
 

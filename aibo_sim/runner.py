@@ -32,6 +32,8 @@ class RunSummary:
     wall_s: float
     real_time_factor: float
     camera_frames: int
+    robot_xy_yaw: tuple[float, float, float]  # at the end: metres, metres, radians
+    ball_xy: tuple[float, float]
 
 
 def motion_dirs(controller_path: Path) -> tuple[Path, ...]:
@@ -94,7 +96,7 @@ class Progress:
 
 def run_controller(path: str | Path, *, backend: str = "sim", duration: float = 10.0, scene=None, seed: int = 0,
                    out: str | Path | None = None, mtn_mode: str = "openr", memory_stick=None,
-                   camera_full: bool = False) -> RunSummary:
+                   camera_full: bool = False, ball: tuple[float, float] | None = None) -> RunSummary:
     """Run a controller file for ``duration`` simulated seconds; frames and its files go to ``out``."""
     path = Path(path).resolve()
     if not path.is_file():
@@ -102,6 +104,8 @@ def run_controller(path: str | Path, *, backend: str = "sim", duration: float = 
     if duration <= 0:
         raise ValueError(f"--duration must be positive, not {duration}")
     sim = Simulation(scene, seed=seed, camera_full=camera_full)
+    if ball is not None:
+        sim.place_ball(*ball)
     robot = Robot(sim, backend=backend, mtn_mode=mtn_mode, memory_stick=memory_stick, search_dirs=motion_dirs(path))
     robot.end_ms = int(round(duration * 1000))
     writer = None
@@ -134,8 +138,10 @@ def run_controller(path: str | Path, *, backend: str = "sim", duration: float = 
         controller.install(None)
         sim.close()
     wall = time.perf_counter() - start
+    position, yaw, _ = sim.body_pose()
     summary = RunSummary(str(path), backend, robot.time_ms / 1000, wall, robot.time_ms / 1000 / max(wall, 1e-9),
-                         writer.count if writer else 0)
+                         writer.count if writer else 0, (float(position[0]), float(position[1]), yaw),
+                         tuple(float(v) for v in sim.ball_position()[:2]))
     if out is not None:
         (out / "run.json").write_text(json.dumps(asdict(summary), indent=2) + "\n")
     return summary

@@ -146,6 +146,9 @@ class Simulation:
         self.data.qvel[joint.dofadr[0]:joint.dofadr[0] + 6] = 0
         mujoco.mj_forward(self.model, self.data)
 
+    def ball_position(self) -> np.ndarray:
+        return self.data.xpos[self.model.body("ball").id].copy()
+
     @property
     def time_ms(self) -> int:
         return self.frame * FRAME_MS

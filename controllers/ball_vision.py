@@ -6,14 +6,14 @@ import numpy as np
 
 
 def find_ball(image, width, height):
-    """(x, y) pixel centroid of the orange pixels, or None when fewer than 4 are seen."""
+    """(x, y, pixel count) of the orange pixels' centroid, or None when fewer than 4 are seen."""
     rgb = np.asarray(image, dtype=np.int16).reshape(height, width, 3)
     r, g, b = rgb[..., 0], rgb[..., 1], rgb[..., 2]
     mask = (r > 110) & (r > 3 * g // 2 + 10) & (g > 3 * b // 2)
     ys, xs = np.nonzero(mask)
     if len(xs) < 4:
         return None
-    return float(xs.mean()), float(ys.mean())
+    return float(xs.mean()), float(ys.mean()), len(xs)
 
 
 def pixel_angles(x, y, width, height, fov):

@@ -97,6 +97,19 @@ def test_standing_for_10_s_drifts_less_than_5_mm():
     assert not sim.fallen()
 
 
+def test_sit_keyframe_rests_nose_up_on_its_paws_and_rump():
+    sim = Simulation(keyframe="sit")
+    start = sim.data.qpos[2]
+    for _ in range(250):  # 2 s
+        sim.step_frame()
+    _, _, tilt = sim.body_pose()
+    pitch_up = -2 * math.asin(sim.data.qpos[5])  # quaternion y component: negative = nose up
+    assert 25 < math.degrees(pitch_up) < 45 and math.degrees(tilt) < 45
+    assert abs(sim.data.qpos[2] - start) < 0.005
+    for leg in ers7.LEGS:
+        assert sim.touched(f"touch_paw_{leg}", 0.1)
+
+
 def test_camera_fields_of_view_measured_by_projecting_points(tmp_path):
     """Markers at known angles off the optical axis land where 56.9 x 45.2 deg predicts."""
     from aibo_sim.render import Renderer
