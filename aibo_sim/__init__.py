@@ -1,3 +1,7 @@
 """aibo-sim: a MuJoCo simulator of the Sony Aibo ERS-7 with OPEN-R's camera data path."""
 
+from ._gl import choose_gl_backend
+
+choose_gl_backend()  # before anything imports mujoco
+
 __version__ = "0.1.0"

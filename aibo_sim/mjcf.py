@@ -22,7 +22,7 @@ CAMERA_FOCAL = 0.00327  # m (Sony: f = 3.27 mm)
 PAW_RADIUS = 0.01172  # Tekkotsu BallOfFootRadius; Webots uses 0.017 (see models/README.md)
 PAW_TOUCH_RADIUS = 0.015  # Webots touch sphere
 MAX_TORQUE = 5.4542  # N m, Webots maxForce for every servo (carried over from the ERS-210)
-TIMESTEP = 0.002  # s: four physics steps per 8 ms OPEN-R joint frame
+TIMESTEP = 0.004  # s: two physics steps per 8 ms OPEN-R joint frame
 
 # Position-servo stiffness (N m / rad) by Sony gain class, and shared servo dynamics.
 KP = {"leg_j1": 20.0, "leg_j2": 16.0, "leg_j3": 20.0, "head": 6.0, "small": 1.0}

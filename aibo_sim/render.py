@@ -1,8 +1,8 @@
 """Headless offscreen rendering: OpenGL backend choice and a small camera renderer.
 
-Backend: ``MUJOCO_GL`` when it is set (egl, osmesa or glfw); otherwise EGL, then OSMesa,
-each probed once in a subprocess (a failed GL library load cannot be undone in-process).
-The choice is written back to ``MUJOCO_GL`` so worker processes inherit it.
+Backend: ``MUJOCO_GL`` (egl, osmesa or glfw), which ``import aibo_sim`` sets to EGL or
+OSMesa when it is unset (see ``_gl.py``). A backend that cannot make a context raises
+``RenderingUnavailable`` naming the system packages that provide one.
 
 Quality: software OpenGL (Mesa llvmpipe) pays ~20x per frame for MuJoCo's default
 4096^2 shadow map, so the head camera renders without shadows, reflections or
@@ -15,14 +15,12 @@ pictures (README renders, third-person views).
 from __future__ import annotations
 
 import os
-import subprocess
-import sys
 
 import mujoco
 import numpy as np
 
-_BACKENDS = ("egl", "osmesa")
-_PROBE = "from mujoco.{0} import GLContext; c = GLContext(8, 8); c.make_current(); c.free()"
+from ._gl import choose_gl_backend
+
 SYSTEM_PACKAGES = (
     "EGL: Debian/Ubuntu 'libegl1 libgl1-mesa-dri' (Mesa's software renderer works); "
     "OSMesa: 'libosmesa6'"
@@ -34,28 +32,14 @@ class RenderingUnavailable(RuntimeError):
 
 
 def gl_backend() -> str:
-    """The OpenGL backend to render with (see the module docstring)."""
-    chosen = os.environ.get("MUJOCO_GL", "").strip().lower()
-    if chosen:
-        return chosen
-    errors = []
-    for backend in _BACKENDS:
-        env = dict(os.environ, MUJOCO_GL=backend, PYOPENGL_PLATFORM=backend)
-        probe = subprocess.run(
-            [sys.executable, "-c", _PROBE.format(backend)], env=env, capture_output=True, text=True
-        )
-        if probe.returncode == 0:
-            os.environ["MUJOCO_GL"] = backend
-            return backend
-        errors.append(f"{backend}: {(probe.stderr.strip().splitlines() or ['failed'])[-1]}")
-    raise RenderingUnavailable(
-        "no headless OpenGL backend works (" + "; ".join(errors) + "). Install " + SYSTEM_PACKAGES
-        + ", or set MUJOCO_GL."
-    )
+    """The OpenGL backend to render with."""
+    backend = os.environ.get("MUJOCO_GL", "").strip().lower() or choose_gl_backend()
+    if not backend:
+        raise RenderingUnavailable(f"no headless OpenGL library found. Install {SYSTEM_PACKAGES}, or set MUJOCO_GL.")
+    return backend
 
 
 def _context_class(backend: str):
-    os.environ.setdefault("PYOPENGL_PLATFORM", backend if backend in _BACKENDS else "")
     try:
         if backend == "egl":
             from mujoco.egl import GLContext
@@ -87,8 +71,17 @@ class Renderer:
             model.vis.global_.offwidth = max(width, model.vis.global_.offwidth)
             model.vis.global_.offheight = max(height, model.vis.global_.offheight)
         self.width, self.height, self.model = width, height, model
-        self._gl = _context_class(gl_backend())(width, height)
-        self._gl.make_current()
+        backend = gl_backend()
+        try:
+            self._gl = _context_class(backend)(width, height)
+            self._gl.make_current()
+        except RenderingUnavailable:
+            raise
+        except Exception as exc:  # EGL/OSMesa report failures with their own exception types
+            raise RenderingUnavailable(
+                f"MUJOCO_GL={backend}: cannot create an OpenGL context ({exc}). Install {SYSTEM_PACKAGES}, "
+                "or try another MUJOCO_GL."
+            ) from exc
         built_in = model.vis.quality
         saved = built_in.offsamples, built_in.numslices, built_in.numstacks
         if quality == "fast":  # no multisampling, coarser spheres and capsules

@@ -54,9 +54,11 @@ class Device:
             raise DeviceError(f"{self.locator}: sampling period must be a positive number of ms, not {ms}")
         self.period, self._value = ms, None
         self._next_sample_ms = self.robot.time_ms + ms
+        self.robot.enabled_devices[self.locator] = self
 
     def disable(self) -> None:
         self.period, self._value = None, None
+        self.robot.enabled_devices.pop(self.locator, None)
 
     def _after_frame(self, time_ms: int) -> None:
         if self.period is not None and time_ms >= self._next_sample_ms:
@@ -140,13 +142,14 @@ class Camera(Device):
 
     def _after_frame(self, time_ms: int) -> None:
         # A sample takes a new picture only when the 30 fps camera has a newer one.
-        if self._value is not None and not self.robot.sim.camera_due():
+        if self._value is not None and self.robot.sim.camera_frame_index() == self._frame_index:
             while self.period is not None and self._next_sample_ms <= time_ms:
                 self._next_sample_ms += self.period
             return
         super()._after_frame(time_ms)
 
     def _sample(self) -> np.ndarray:
+        self._frame_index = self.robot.sim.camera_frame_index()
         return self.robot.camera_source.capture()
 
     def get_image(self) -> np.ndarray:
@@ -205,8 +208,7 @@ class Robot:
         for led in ers7.LEDS:
             self.devices[led.locator] = Led(self, led.locator, led.name)
         self.playing: list[_Playing] = []
-        self._sampled_devices = list({id(d): d for d in self.devices.values() if not isinstance(d, (Servo, Led))}.values())
-        self._sampled_devices += [d for d in self.devices.values() if isinstance(d, Servo)]
+        self.enabled_devices: dict[str, Device] = {}  # sampled after every frame, in enabling order
         self.end_ms: int | None = None
         self.frame_listeners = []  # called with (robot) after every 8 ms frame
 
@@ -239,8 +241,9 @@ class Robot:
             if self.mtn_mode == "openr":
                 self._play_openr_frame()
             self.sim.step_frame()
-            for device in self._sampled_devices:
-                device._after_frame(self.time_ms)
+            now = self.sim.time_ms
+            for device in list(self.enabled_devices.values()):
+                device._after_frame(now)
             for listener in self.frame_listeners:
                 listener(self)
 

@@ -83,6 +83,8 @@ class Servos:
 
     def advance(self, dt: float) -> np.ndarray:
         """Move the set-points one frame towards the targets; returns them."""
+        if np.array_equal(self.target, self.command):  # at rest: speeds are zero on arrival
+            return self.command
         error = self.target - self.command
         limit = np.minimum(self.velocity, self.max_velocity)
         accel = np.minimum(self.acceleration, 1e9)  # "unlimited" stays finite arithmetic
@@ -207,11 +209,18 @@ class Simulation:
     # ---------------------------------------------------------------- camera
 
     def render_camera(self) -> np.ndarray:
-        """The head camera's RGB frame now, (height, width, 3) uint8."""
+        """The head camera's RGB frame for the current 30 fps camera frame, (h, w, 3) uint8.
+
+        Rendered at the first call once the frame is due and shared (read-only) by every
+        caller until the next one: the camera exposes one picture per frame.
+        """
         if self._renderer is None:
             self._renderer = Renderer(self.model, *self.camera_size, groups=HEAD_CAMERA_GROUPS)
-        self._rendered_camera_frame = self.camera_frame_index()
-        return self._renderer.render(self.data, "camera")
+        if self.camera_due():
+            self._camera_image = self._renderer.render(self.data, "camera")
+            self._camera_image.flags.writeable = False
+            self._rendered_camera_frame = self.camera_frame_index()
+        return self._camera_image
 
     def set_led(self, name: str, level: float) -> None:
         """Light an LED geom at ``level`` in 0..1 of its colour (0: the unlit material)."""

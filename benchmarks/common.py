@@ -1,0 +1,22 @@
+"""Timing helpers shared by the benchmark modules."""
+
+import time
+
+REPEATS = 5
+
+
+def best_mean_seconds(run, iterations: int, repeats: int = REPEATS) -> float:
+    """Best over ``repeats`` of the mean time of ``iterations`` calls (after one warm-up)."""
+    run()
+    best = float("inf")
+    for _ in range(repeats):
+        start = time.perf_counter()
+        for _ in range(iterations):
+            run()
+        best = min(best, (time.perf_counter() - start) / iterations)
+    return best
+
+
+def row(name: str, value: float, unit: str, reference: str | None = None, ratio: float | None = None) -> dict:
+    """One table row; ``ratio`` compares with the row named ``reference`` (> 1: this is faster)."""
+    return {"name": name, "value": value, "unit": unit, "reference": reference, "ratio": ratio}

@@ -1,0 +1,80 @@
+"""The camera pipeline against bare MuJoCo, and the real-time factor, on the default scene.
+
+- head-camera render alone (aibo_sim's Renderer, 208x160);
+- the floor: bare MuJoCo doing what one camera frame needs, physics steps for 1/30 s
+  plus ``mujoco.Renderer`` update, render and readback of the head camera at 208x160,
+  shadows off (its default 2048^2 shadow map would make the floor ~10x slower here);
+- the whole camera pipeline per backend: the controller API stepping 8 ms frames with
+  the camera enabled, every 30 fps frame captured (sim: rendered RGB; openr: encoded,
+  routed to the wrapper and decoded), in camera frames per second;
+- real-time factor with the camera at 30 fps and without it.
+
+    python -m benchmarks.pipeline
+"""
+
+import time
+
+import mujoco
+
+from aibo_sim.robot import Robot
+from aibo_sim.sim import Simulation
+
+from .common import best_mean_seconds, row
+
+CAMERA = "PRM:/r1/c1/c2/c3/i1-FbkImageSensor:F1"
+SIM_SECONDS = 3.0
+
+
+def _floor_seconds_per_frame(sim: Simulation) -> float:
+    model, data = sim.model, sim.data
+    renderer = mujoco.Renderer(model, 160, 208)
+    renderer.scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = False
+    steps = round(1 / 30 / model.opt.timestep)
+
+    def frame():
+        mujoco.mj_step(model, data, nstep=steps)
+        renderer.update_scene(data, camera="camera")
+        renderer.render()
+
+    seconds = best_mean_seconds(frame, 30)
+    renderer.close()
+    return seconds
+
+
+def _run_seconds(backend: str, camera: bool) -> float:
+    """Wall seconds to simulate SIM_SECONDS through the controller API."""
+    robot = Robot(Simulation(), backend=backend)
+    if camera:
+        robot.get_device(CAMERA).enable(8)  # sampled every frame: every 30 fps picture is taken
+    robot.step(80)  # warm-up: GL context, first frames
+    start = time.perf_counter()
+    robot.step(int(SIM_SECONDS * 1000))
+    seconds = time.perf_counter() - start
+    robot.sim.close()
+    return seconds
+
+
+def measure() -> list[dict]:
+    sim = Simulation()
+    render_s = best_mean_seconds(lambda: sim._renderer.render(sim.data, "camera") if sim._renderer else sim.render_camera(), 50)
+    floor_s = _floor_seconds_per_frame(sim)
+    sim.close()
+    floor = "bare MuJoCo: steps for 1/30 s + Renderer 208x160 + readback"
+    rows = [
+        row("head-camera render alone, 208x160", render_s * 1e3, "ms"),
+        row(floor, 1 / floor_s, "frames/s"),
+    ]
+    for backend in ("sim", "openr"):
+        seconds = min(_run_seconds(backend, camera=True) for _ in range(2))
+        fps = SIM_SECONDS * 30 / seconds
+        rows.append(row(f"camera pipeline, {backend} backend (physics + camera at 30 fps)", fps, "frames/s",
+                        floor, fps * floor_s))
+        rows.append(row(f"real-time factor, {backend} backend, camera at 30 fps", SIM_SECONDS / seconds, "x"))
+    blind = min(_run_seconds("sim", camera=False) for _ in range(2))
+    rows.append(row("real-time factor, no camera", SIM_SECONDS / blind, "x"))
+    return rows
+
+
+if __name__ == "__main__":
+    for r in measure():
+        print(r)
