@@ -1,0 +1,25 @@
+"""The ERS-7 camera facts, kept here once (spec sections 1, 3, 8; the report section 3.2.5)."""
+
+from .image import odataFBK_CDT, odataFBK_YCrCb_HPF
+
+CAMERA_LOCATOR = "PRM:/r1/c1/c2/c3/i1-FbkImageSensor:F1"
+
+FULL_WIDTH, FULL_HEIGHT = 416, 320
+# (width, height) of the layers H, M, L, C, indexed by ofbkimageLAYER_*.
+LAYER_SIZE = ((208, 160), (104, 80), (52, 40), (104, 80))
+LAYER_TYPE = (odataFBK_YCrCb_HPF, odataFBK_YCrCb_HPF, odataFBK_YCrCb_HPF, odataFBK_CDT)
+
+FRAME_RATE_HZ = 30
+FRAME_TICK_MS = 8  # frameNumber counts 8 ms system frames, not images
+
+HORIZONTAL_FOV_DEG = 56.9
+VERTICAL_FOV_DEG = 45.2
+# What the report's camera_get_fov returns. Its text calls this "the height" and quotes
+# 56.7 degrees, but 0.993092 rad is 56.900 degrees: the horizontal field of view (the
+# value Webots' ERS-7 camera uses too).
+FIELD_OF_VIEW = 0.993092
+
+
+def frame_number_for_image(index: int) -> int:
+    """frameNumber of the index-th image at 30 fps: steps of 4 or 5, 25 per 6 images."""
+    return index * 1000 // (FRAME_RATE_HZ * FRAME_TICK_MS)

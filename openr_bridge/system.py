@@ -1,0 +1,60 @@
+"""An OPEN-R system: objects connected as a memory stick's CONNECT.CFG says.
+
+The objects' stub.cfg files are known to the system (by default ``OVirtualRobotComm`` and the
+wrapper ``Controller``, both shipped in ``data/``); the memory stick only brings
+CONNECT.CFG. Every connection must name a service of a known object, or ``ConfigError``
+names the line: object names are case-sensitive in OPEN-R, so the report's spelling
+``OvirtualRobotComm`` (a typo for ``OVirtualRobotComm``) is rejected with a hint.
+"""
+
+from pathlib import Path
+
+from .config import Connection, ServiceName, find_connect_cfg, load_connect_cfg
+from .errors import ConfigError
+from .wiring import DATA_DIR, OObject, OVirtualRobotComm
+from .wrapper import Controller
+
+DEFAULT_MEMORY_STICK = DATA_DIR / "ms"
+
+
+class OpenRSystem:
+    def __init__(self, connections: list[Connection], objects: list[OObject] | None = None):
+        """Connect ``objects`` (default: OVirtualRobotComm and Controller), then start them."""
+        objects = objects if objects is not None else [OVirtualRobotComm(), Controller()]
+        self.objects = {obj.stub.object_name: obj for obj in objects}
+        self._gates = {str(gate.service.name): gate for obj in objects for gate in (*obj.subject, *obj.observer)}
+        for connection in connections:
+            subject = self._gate(connection.subject, connection)
+            subject.connect(self._gate(connection.observer, connection))
+        for obj in objects:
+            obj.DoStart()
+
+    @classmethod
+    def from_memory_stick(
+        cls, memory_stick: str | Path = DEFAULT_MEMORY_STICK, objects: list[OObject] | None = None
+    ) -> "OpenRSystem":
+        return cls(load_connect_cfg(find_connect_cfg(memory_stick)), objects)
+
+    @property
+    def robot_comm(self) -> OVirtualRobotComm:
+        return self.objects["OVirtualRobotComm"]
+
+    @property
+    def controller(self) -> Controller:
+        return self.objects["Controller"]
+
+    def _gate(self, name: ServiceName, connection: Connection):
+        if str(name) in self._gates:
+            return self._gates[str(name)]
+        known = sorted({gate.service.name.object for gate in self._gates.values()})
+        if name.object in known:
+            services = sorted(key for key in self._gates if key.startswith(name.object + "."))
+            problem = f"{name.object} has no service {name} (it has {', '.join(services)})"
+        else:
+            problem = f"unknown object {name.object!r} (known: {', '.join(known)})"
+            problem += "".join(
+                f"; object names are case-sensitive: did you mean {candidate!r}?"
+                for candidate in known
+                if candidate.lower() == name.object.lower()
+            )
+        raise ConfigError(problem, connection.path, connection.line)
