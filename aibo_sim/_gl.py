@@ -4,6 +4,10 @@
 OSMesa when libOSMesa is, and ``MUJOCO_GL`` is set to the choice so that MuJoCo's own
 renderer (and gymnasium's MuJoCo environments, and worker processes) render headless too.
 No display is ever needed.
+
+Mesa's software renderer (llvmpipe) draws small frames faster on one thread than on
+several (a 208x160 head-camera frame: ~1.5 ms against ~2.3 ms on a 2-core machine), so
+``LP_NUM_THREADS`` defaults to 1; set it to override.
 """
 
 import ctypes.util
@@ -20,4 +24,5 @@ def choose_gl_backend() -> str | None:
             os.environ["MUJOCO_GL"] = chosen
     if chosen in ("egl", "osmesa"):
         os.environ.setdefault("PYOPENGL_PLATFORM", chosen)
+        os.environ.setdefault("LP_NUM_THREADS", "1")
     return chosen or None

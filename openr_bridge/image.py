@@ -20,7 +20,7 @@ inline functions do; ``restore_tag_pixels`` hides it.
 """
 
 import struct
-from dataclasses import astuple, dataclass
+from dataclasses import dataclass, fields
 
 import numpy as np
 
@@ -91,7 +91,7 @@ class ODataVectorInfo:
     optional: bytes = bytes(128)
 
     def pack(self) -> bytes:
-        return struct.pack(VECTOR_INFO_FORMAT, *astuple(self))
+        return struct.pack(VECTOR_INFO_FORMAT, *_values(self))
 
 
 @dataclass(frozen=True)
@@ -108,7 +108,12 @@ class OFbkImageInfo:
     padding: int = 0
 
     def pack(self) -> bytes:
-        return struct.pack(IMAGE_INFO_FORMAT, *astuple(self))
+        return struct.pack(IMAGE_INFO_FORMAT, *_values(self))
+
+
+def _values(record) -> list:
+    """Field values in declaration order (dataclasses.astuple deep-copies: slow per frame)."""
+    return [getattr(record, f.name) for f in fields(record)]
 
 
 class OFbkImageVectorData:
