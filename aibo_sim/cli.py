@@ -114,6 +114,10 @@ def build_parser() -> argparse.ArgumentParser:
     play.add_argument("--mode", choices=("openr", "webots"), default="openr")
     play.add_argument("--json", action="store_true")
     play.set_defaults(handler=_mtn_play)
+
+    from .dump import add_dump_parser
+
+    add_dump_parser(commands)
     return parser
 
 

@@ -445,6 +445,24 @@ def _beacon(b: F.Beacon) -> ET.Element:
     )
 
 
+def _hall(half_x: float, half_y: float, height: float = 4.0) -> list[ET.Element]:
+    """The venue: a plain hall instead of a skybox (a textured skybox costs ~25 % of a head
+    camera frame in software GL; five boxes cost almost nothing)."""
+    return [
+        E("geom", name=f"hall_{n}", type="box", size=size, pos=pos, material="hall", contype=0, conaffinity=0)
+        for n, size, pos in (
+            ("north", (half_x, 0.05, height / 2), (0, half_y, height / 2)),
+            ("south", (half_x, 0.05, height / 2), (0, -half_y, height / 2)),
+            ("east", (0.05, half_y, height / 2), (half_x, 0, height / 2)),
+            ("west", (0.05, half_y, height / 2), (-half_x, 0, height / 2)),
+            ("ceiling", (half_x, half_y, 0.05), (0, 0, height)),
+        )
+    ]
+
+
+HALL_MATERIAL = dict(name="hall", rgba=(0.72, 0.72, 0.70, 1), specular=0)
+
+
 def scene_xml() -> ET.Element:
     cl, cw, h = F.CARPET_LENGTH / 2, F.CARPET_WIDTH / 2, F.WALL_HEIGHT
     walls = [
@@ -454,17 +472,6 @@ def scene_xml() -> ET.Element:
             ("right", (cl + 0.02, 0.01, h / 2), (0, -cw - 0.01, h / 2)),
             ("skyblue", (0.01, cw, h / 2), (cl + 0.01, 0, h / 2)),
             ("yellow", (0.01, cw, h / 2), (-cl - 0.01, 0, h / 2)),
-        )
-    ]
-    # The venue: a plain hall instead of a skybox (a textured skybox costs ~25 % of a head
-    # camera frame in software GL; five boxes cost almost nothing).
-    hx, hy, hz = cl + 2.0, cw + 2.0, 4.0
-    hall = [
-        E("geom", name=f"hall_{n}", type="box", size=size, pos=pos, material="hall", contype=0, conaffinity=0)
-        for n, size, pos in (
-            ("north", (hx, 0.05, hz / 2), (0, hy, hz / 2)), ("south", (hx, 0.05, hz / 2), (0, -hy, hz / 2)),
-            ("east", (0.05, hy, hz / 2), (hx, 0, hz / 2)), ("west", (0.05, hy, hz / 2), (-hx, 0, hz / 2)),
-            ("ceiling", (hx, hy, 0.05), (0, 0, hz)),
         )
     ]
     return E(
@@ -481,7 +488,7 @@ def scene_xml() -> ET.Element:
         E(
             "asset",
             *(E("material", name=n, rgba=c, specular=0.1) for n, c in F.COLOURS.items()),
-            E("material", name="hall", rgba=(0.72, 0.72, 0.70, 1), specular=0),
+            E("material", **HALL_MATERIAL),
             _line_mesh(),
         ),
         E(
@@ -491,7 +498,7 @@ def scene_xml() -> ET.Element:
             E("geom", name="field_carpet", type="plane", size=(cl + 0.5, cw + 0.5, 1.0), material="carpet", friction=(0.9, 0.005, 0.0001)),
             E("geom", name="field_lines", type="mesh", mesh="field_lines", material="line", contype=0, conaffinity=0),
             *walls,
-            *hall,
+            *_hall(cl + 2.0, cw + 2.0),
             *(_goal(c, x) for c, x in F.GOALS.items()),
             *(_beacon(b) for b in F.BEACONS),
             E(
@@ -507,6 +514,69 @@ def scene_xml() -> ET.Element:
     )
 
 
+# Webots' aibo_ers7.wbt world (spec E.1): a 2002-era 3.5 x 1.8 m pitch with six landmarks.
+WEBOTS_LANDMARKS = (  # x, y, bottom colour, top colour
+    (1.5, -1.03, "blue", "red"), (1.5, 1.03, "red", "blue"), (-1.5, 1.03, "red", "yellow"),
+    (-1.5, -1.03, "yellow", "red"), (0.0, -1.03, "green", "red"), (0.0, 1.03, "red", "green"),
+)
+WEBOTS_COLOURS = {
+    "pitch": (0.2, 0.55, 0.25, 1), "border": (0.15, 0.5, 0.2, 1), "white": (0.95, 0.95, 0.95, 1),
+    "blue": (0.1, 0.3, 0.9, 1), "yellow": (0.95, 0.85, 0.1, 1), "green": (0.1, 0.7, 0.2, 1),
+    "red": (0.9, 0.1, 0.1, 1), "pink": (1.0, 0.07, 0.40, 1),
+}
+
+
+def webots_scene_xml() -> ET.Element:
+    """The Webots ERS-7 world: goals blue at +x and yellow at -x, landmarks, borders, pink ball."""
+    goals = []
+    for colour, sign in (("blue", 1), ("yellow", -1)):
+        back, d, w, h, t = sign * 1.75, 0.25, 0.6, 0.3, 0.01
+        goals += [
+            E("geom", name=f"goal_{colour}_back", type="box", size=(t / 2, w / 2, h / 2), pos=(back, 0, h / 2), material=colour),
+            *(E("geom", name=f"goal_{colour}_{side}", type="box", size=(d / 2, t / 2, h / 2),
+                pos=(back - sign * d / 2, s * w / 2, h / 2), material=colour) for side, s in (("left", 1), ("right", -1))),
+            E("geom", name=f"goal_{colour}_roof", type="box", size=(d / 2, w / 2, t / 2), pos=(back - sign * d / 2, 0, 0.305), material=colour),
+        ]
+    landmarks = []
+    for i, (x, y, bottom, top) in enumerate(WEBOTS_LANDMARKS):
+        landmarks.append(E(
+            "body",
+            E("geom", name=f"beacon_{i}_post", type="box", size=(0.005, 0.005, 0.2), pos=(0, 0, 0.2), material="white"),
+            E("geom", name=f"beacon_{i}_bottom", type="cylinder", size=(0.02, 0.025), pos=(0, 0, 0.425), material=bottom),
+            E("geom", name=f"beacon_{i}_top", type="cylinder", size=(0.02, 0.025), pos=(0, 0, 0.475), material=top),
+            name=f"beacon_{i}", pos=(x, y, 0),
+        ))
+    borders = [
+        E("geom", name=f"wall_border_{n}", type="box", size=size, pos=pos, material="border")
+        for n, size, pos in (
+            ("left", (1.65, 0.025, 0.1), (0, 0.98, 0.1)), ("right", (1.65, 0.025, 0.1), (0, -0.98, 0.1)),
+            *((f"end_{i}", (0.025, 0.34, 0.1), (sx * 1.58, sy * 0.64, 0.1))
+              for i, (sx, sy) in enumerate(((1, 1), (1, -1), (-1, 1), (-1, -1)))),
+        )
+    ]
+    return E(
+        "mujoco",
+        E("include", file="ers7.xml"),
+        E("statistic", center=(0, 0, 0.2), extent=1.5),
+        E("visual", E("headlight", diffuse=(0.5, 0.5, 0.5), ambient=(0.3, 0.3, 0.3), specular=(0, 0, 0)),
+          E("map", znear=0.002, zfar=20), E("global", offwidth=640, offheight=480)),
+        E("asset",
+          *(E("material", name=n, rgba=c, specular=0.1, emission=0.31 if n == "red" else 0) for n, c in WEBOTS_COLOURS.items()),
+          E("material", **HALL_MATERIAL)),
+        E(
+            "worldbody",
+            E("light", name="ceiling", pos=(0, 0, 3), dir=(0, 0, -1), directional="false", diffuse=(0.6, 0.6, 0.58)),
+            E("geom", name="field_carpet", type="plane", size=(2.0, 1.5, 1.0), material="pitch", friction=(0.99, 0.005, 0.0001)),
+            *_hall(4.0, 3.0),
+            *goals, *borders, *landmarks,
+            E("body", E("freejoint", name="ball"),
+              E("geom", name="ball", type="sphere", size=0.035, mass=0.1, material="pink", condim=6, friction=(0.7, 0.005, 0.002)),
+              name="ball", pos=(0.5, 0, 0.035)),
+        ),
+        model="ers7_webots_aibo_ers7_wbt",
+    )
+
+
 def _xml_text(root: ET.Element, comment: str) -> str:
     ET.indent(root, space="  ")
     return f"<!-- {comment} -->\n" + ET.tostring(root, encoding="unicode") + "\n"
@@ -518,6 +588,7 @@ def generated_files() -> dict[str, str]:
     return {
         "ers7.xml": _xml_text(_with_keyframes(robot_xml()), note),
         "scene.xml": _xml_text(scene_xml(), note.replace("ers7.py", "field.py")),
+        "scene_webots.xml": _xml_text(webots_scene_xml(), note.replace("ers7.py", "its Webots table")),
     }
 
 

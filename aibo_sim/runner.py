@@ -75,9 +75,9 @@ def _controller_context(controller_dir: Path, out: Path | None):
 class Progress:
     """A one-line progress bar on a terminal; silent otherwise."""
 
-    def __init__(self, duration_s: float, stream=sys.stderr):
+    def __init__(self, duration_s: float, stream=sys.stderr, enabled: bool = True):
         self.duration_s, self.stream = duration_s, stream
-        self.enabled = stream.isatty()
+        self.enabled = enabled and stream.isatty()
         self._last = 0.0
 
     def __call__(self, robot: Robot) -> None:
@@ -96,8 +96,13 @@ class Progress:
 
 def run_controller(path: str | Path, *, backend: str = "sim", duration: float = 10.0, scene=None, seed: int = 0,
                    out: str | Path | None = None, mtn_mode: str = "openr", memory_stick=None,
-                   camera_full: bool = False, ball: tuple[float, float] | None = None) -> RunSummary:
-    """Run a controller file for ``duration`` simulated seconds; frames and its files go to ``out``."""
+                   camera_full: bool = False, ball: tuple[float, float] | None = None,
+                   frame_listeners=(), progress: bool = True) -> RunSummary:
+    """Run a controller file for ``duration`` simulated seconds; frames and its files go to ``out``.
+
+    ``frame_listeners`` are called with the robot after every 8 ms frame; ``progress=False``
+    silences the progress bar (worker processes).
+    """
     path = Path(path).resolve()
     if not path.is_file():
         raise FileNotFoundError(f"{path}: no such controller file")
@@ -114,8 +119,9 @@ def run_controller(path: str | Path, *, backend: str = "sim", duration: float = 
         out.mkdir(parents=True, exist_ok=True)
         writer = FrameWriter(out)
         robot.camera_source.listeners.append(writer)
-    progress = Progress(duration)
-    robot.frame_listeners.append(progress)
+    robot.frame_listeners.extend(frame_listeners)
+    progress_bar = Progress(duration, enabled=progress)
+    robot.frame_listeners.append(progress_bar)
     controller.install(robot)
     start = time.perf_counter()
     try:
@@ -134,7 +140,7 @@ def run_controller(path: str | Path, *, backend: str = "sim", duration: float = 
             finally:
                 controller.call_die_functions()
     finally:
-        progress.close()
+        progress_bar.close()
         controller.install(None)
         sim.close()
     wall = time.perf_counter() - start

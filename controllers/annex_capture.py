@@ -16,9 +16,8 @@ The motion file is this project's own forward walk (Sony's wwfwd.mtn is not ship
 the file path is relative to the run's output folder instead of /ms/open-r/mw/data/p/.
 """
 
-import numpy as np
-
 from aibo_sim.controller import *  # noqa: F403
+from aibo_sim.dump import annex_yuv  # the Annex's three formulas, shared with `aibo-sim dump`
 
 SIMULATION_STEP = 16
 IMAGE_SIZE = 208 * 160
@@ -59,17 +58,6 @@ def die():
         mtn_delete(mtn)
 
 
-def annex_yuv(image, w, h):
-    """Interleaved Y, U, V bytes with the Annex's formulas, as (h*w*3,) uint8."""
-    r = image[0::3].astype(np.float64)  # camera_image_get_red(image, w, i, j) for every pixel
-    g = image[1::3].astype(np.float64)
-    b = image[2::3].astype(np.float64)
-    y = (0.299 * r + 0.587 * g + 0.114 * b).astype(np.uint8)
-    u = (0.492 * (b - y) + 128).astype(np.uint8)
-    v = (0.5 * (r - y) + 128).astype(np.uint8)
-    return np.stack([y, u, v], axis=1).reshape(-1)
-
-
 def run(ms):
     global loop
     if mtn_is_over(mtn) and loop < MTN_REPLAY:
@@ -80,7 +68,7 @@ def run(ms):
         w = camera_get_width(camera)
         h = camera_get_height(camera)
         with open(IMAGE_FILE, "wb") as raw:
-            raw.write(annex_yuv(image, w, h).tobytes())
+            raw.write(annex_yuv(image.reshape(h, w, 3)).tobytes())
     return SIMULATION_STEP
 
 

@@ -1,6 +1,5 @@
 """The headless runner, the CLI, both backends on one controller, the Annex I port (issue 4)."""
 
-import importlib.util
 import json
 from pathlib import Path
 
@@ -10,6 +9,7 @@ import pytest
 
 import openr_bridge
 from aibo_sim.cli import main
+from aibo_sim.dump import annex_yuv
 from aibo_sim.runner import ControllerFailed, run_controller
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -90,29 +90,21 @@ def test_physics_divergence_is_a_clear_error(tmp_path, capsys):
     assert "physics diverged at t =" in capsys.readouterr().err
 
 
-def _annex_module():
-    spec = importlib.util.spec_from_file_location("annex_capture", ROOT / "controllers" / "annex_capture.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
 def test_annex_yuv_bytes_for_known_pixels():
     # Hand-computed with the Annex's C expressions: y = (uchar)(0.299 r + 0.587 g + 0.114 b),
     # u = (uchar)(0.492 (b - y) + 128), v = (uchar)(0.5 (r - y) + 128).
     image = np.array([255, 0, 0, 0, 255, 0, 0, 0, 255, 255, 255, 255, 0, 0, 0, 10, 200, 30], np.uint8)
     expected = [76, 90, 217, 149, 54, 53, 29, 239, 113, 255, 128, 128, 0, 128, 128, 123, 82, 71]  # checked with gcc
-    assert list(_annex_module().annex_yuv(image, 6, 1)) == expected
+    assert list(annex_yuv(image.reshape(1, 6, 3)).reshape(-1)) == expected
 
 
 def test_annex_port_writes_image_raw_of_the_last_frame(tmp_path):
-    annex = _annex_module()
     summary = run_controller(ROOT / "controllers" / "annex_capture.py", duration=30.0, out=tmp_path)
     raw = (tmp_path / "image.raw").read_bytes()
     assert len(raw) == 208 * 160 * 3
     last = sorted((tmp_path / "frames").iterdir())[-1]
     rgb = cv2.imread(str(last))[:, :, ::-1].reshape(-1)
-    assert raw == annex.annex_yuv(rgb, 208, 160).tobytes()
+    assert raw == annex_yuv(rgb.reshape(160, 208, 3)).tobytes()
     assert summary.camera_frames > 800
     assert json.loads((tmp_path / "run.json").read_text())["backend"] == "sim"
 
