@@ -4,4 +4,6 @@ from ._gl import choose_gl_backend
 
 choose_gl_backend()  # before anything imports mujoco
 
+from .envs import register_envs  # noqa: E402,F401  (registers the gymnasium environments)
+
 __version__ = "0.1.0"

@@ -1,15 +1,18 @@
 """The shared base of the ERS-7 environments: simulation, observations, actions, rendering.
 
 One environment step is one frame of the head camera at the robot's 30 fps: the 8 ms joint
-frames run until the camera is due (4 or 5 of them), then one image is taken.
+frames run until the camera's next frame is due (4 or 5 of them), then one image is taken.
 
 Observations (a ``Dict``):
 
 - ``image`` (unless ``camera=None``): the head camera, ``(height, width, 3)`` uint8, of layer
   ``camera_layer`` (H 208x160, M 104x80, L 52x40). ``camera="rgb"``: the rendered RGB, layers
   M and L as 2x2 / 4x4 block means (the Haar low band the robot computes); ``"ycrcb"``: the
-  Y, Cr, Cb bands of that layer of the OPEN-R message; ``"openr"``: the RGB image that the
-  OPEN-R wrapper's ``camera_get_image`` serves from that message.
+  Y, Cr, Cb bands of that layer of the OPEN-R message (``openr_bridge.encode_frame``);
+  ``"openr"`` (layer H only): the RGB that the wrapper ``Controller``'s ``camera_get_image``
+  serves once the message has gone through CONNECT.CFG's wiring. Both are bytes as the robot
+  has them, OPEN-R's tag in the first 12 Y bytes of the last row included; the last message
+  is ``env.camera_message``.
 - ``joint_positions`` (rad, the order of ``ers7.JOINTS``), ``acceleration`` (m/s^2, body
   frame), ``distance_mm`` (IR near, far, chest), ``touch`` (0/1, the order of ``ers7.SENSORS``).
 
@@ -21,6 +24,9 @@ Domain randomisation, drawn at each reset from the environment's RNG:
 light's intensity by a factor in [1-m, 1+m], moves the ball's start by up to r metres in
 each horizontal direction, and multiplies the camera's R, G, B by gains in [1-g, 1+g]
 (a simple camera model of white balance and gain, applied to the RGB frame before encoding).
+
+``render_mode="rgb_array"``: the ``tracking`` camera at 480x360 with shadows and reflections
+(``quality="high"``): about 50 ms a frame in Mesa's software OpenGL, against 13 ms without.
 """
 
 from __future__ import annotations
@@ -73,10 +79,8 @@ class AiboEnv(gym.Env):
         model = self.sim.model
         self._actuated = np.array([JOINTS.index(JOINT_BY_NAME[name]) for name in self.actuated_joints])
         self._target_low, self._target_high = model.actuator_ctrlrange[self._actuated].T
-        self._ball_qpos = model.joint("ball").qposadr[0]
-        self._ball_qvel = model.joint("ball").dofadr[0]
         self._nominal_lights = (model.light_diffuse.copy(), model.vis.headlight.diffuse.copy())
-        self.camera_gains = np.ones(3)
+        self.camera_gains = np.ones(3)  # R, G, B gains of this episode
         self._renderer: Renderer | None = None
 
         self.action_space = gym.spaces.Box(-1.0, 1.0, (len(self._actuated),), np.float32)
@@ -131,7 +135,7 @@ class AiboEnv(gym.Env):
         if self.render_mode != "rgb_array":
             return None
         if self._renderer is None:
-            self._renderer = Renderer(self.sim.model, *RENDER_SIZE, quality="fast")
+            self._renderer = Renderer(self.sim.model, *RENDER_SIZE, quality="high")
         return self._renderer.render(self.sim.data, "tracking")
 
     def close(self):
@@ -174,16 +178,6 @@ class AiboEnv(gym.Env):
         reach = self.randomize.get("ball_start", 0.0)
         return np.asarray(nominal_xy, dtype=np.float64) + self.np_random.uniform(-reach, reach, 2)
 
-    def place_ball(self, position, velocity=(0.0, 0.0, 0.0)) -> None:
-        """Put the ball (unrotated) at ``position`` with linear ``velocity``."""
-        qpos, qvel = self.sim.data.qpos, self.sim.data.qvel
-        qpos[self._ball_qpos:self._ball_qpos + 7] = (*position, 1.0, 0.0, 0.0, 0.0)
-        qvel[self._ball_qvel:self._ball_qvel + 6] = (*velocity, 0.0, 0.0, 0.0)
-
-    def ball_position(self) -> np.ndarray:
-        """The ball centre in the world, as the camera and renderer see it."""
-        return self.sim.data.xpos[self.sim.model.body("ball").id].copy()
-
     def image_position(self, point) -> tuple[np.ndarray, bool]:
         """Where a world point lies in the head camera's image, by projection (not from pixels).
 
@@ -204,19 +198,19 @@ class AiboEnv(gym.Env):
 
     def _observation(self) -> dict:
         sim = self.sim
+        distances = np.array([sim.distance_mm(s.name) for s in DISTANCE_SENSORS], np.float32)
         observation = {
             "joint_positions": sim.joint_positions().astype(np.float32),
             "acceleration": sim.acceleration().astype(np.float32),
-            "distance_mm": np.array([sim.distance_mm(s.name) for s in DISTANCE_SENSORS], np.float32),
+            "distance_mm": np.clip(distances, 0, self.observation_space["distance_mm"].high),  # noise can overshoot
             "touch": np.array([sim.touched(s.name, s.threshold) for s in TOUCH_SENSORS], np.int8),
         }
-        observation["distance_mm"] = np.clip(observation["distance_mm"], 0, self.observation_space["distance_mm"].high)
         if self.camera is not None:
             observation["image"] = self._camera_image()
         return observation
 
     def _camera_image(self) -> np.ndarray:
-        rgb = self.sim.render_camera()
+        rgb = self.sim.render_camera().copy()  # the simulation's frame is shared and read-only
         if not np.all(self.camera_gains == 1):
             rgb = np.clip(rgb * self.camera_gains + 0.5, 0, 255).astype(np.uint8)
         if self.camera == "rgb":
@@ -227,7 +221,7 @@ class AiboEnv(gym.Env):
             return (rgb.reshape(height, scale, width, scale, 3).mean(axis=(1, 3)) + 0.5).astype(np.uint8)
         index = self.sim.camera_frame_index()
         self.camera_message = openr_bridge.encode_frame(
-            rgb, frame_number=openr_bridge.frame_number_for_image(index), field_counter=index
+            rgb, frame_number=self.sim.frame, field_counter=index  # as the openr backend and dumps
         )
         if self.camera == "ycrcb":
             layer = LAYERS[self.camera_layer]

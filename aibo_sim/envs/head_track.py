@@ -1,8 +1,9 @@
 """HeadTrackBall: keep a moving ball centred in the head camera with the three head joints.
 
-The body stands (keyframe ``stand``, leg servos holding it). The ball rolls kinematically on
-the ground in front of the robot along a seeded random path: per horizontal axis a sine
-``amplitude * (sin(w t + phase) - sin(phase))`` added to its start, so that it starts there.
+The body stands (keyframe ``stand``, leg servos holding it). The ball is moved kinematically
+over the ground in front of the robot along a seeded random path: per horizontal axis a sine
+``amplitude * (sin(w t + phase) - sin(phase))`` added to its start, so that it starts there,
+with frequency and phase drawn at reset.
 
 Reward per step, in [0, 1]: ``1 - max(|x|, |y|)`` where (x, y) is the ball centre's offset
 from the image centre in half-widths and half-heights, found by projecting the ball centre
@@ -24,7 +25,14 @@ NEAREST_X = 0.4  # the path never comes closer than this to the robot's centre
 
 
 class HeadTrackBallEnv(AiboEnv):
+    """``aibo_sim/HeadTrackBall-v0``: actions for neck_tilt, head_pan and head_tilt."""
+
     actuated_joints = HEAD_JOINTS
+
+    def __init__(self, **options):
+        super().__init__(**options)
+        ball = self.sim.model.joint("ball")
+        self._ball_qpos, self._ball_qvel = ball.qposadr[0], ball.dofadr[0]
 
     def _reset_task(self) -> None:
         rng = self.np_random
@@ -39,10 +47,11 @@ class HeadTrackBallEnv(AiboEnv):
         velocity = AMPLITUDE * self._omega * np.cos(self._omega * t + self._phase)
         if xy[0] < NEAREST_X:
             xy[0], velocity[0] = NEAREST_X, 0.0
-        self.place_ball((*xy, BALL_RADIUS), (*velocity, 0.0))
+        self.sim.data.qpos[self._ball_qpos:self._ball_qpos + 7] = (*xy, BALL_RADIUS, 1.0, 0.0, 0.0, 0.0)
+        self.sim.data.qvel[self._ball_qvel:self._ball_qvel + 6] = (*velocity, 0.0, 0.0, 0.0, 0.0)
 
     def _ball_in_image(self) -> tuple[np.ndarray, bool]:
-        return self.image_position(self.ball_position())
+        return self.image_position(self.sim.ball_position())
 
     def _evaluate(self) -> tuple[float, bool]:
         offset, visible = self._ball_in_image()

@@ -9,10 +9,8 @@ horizontal distance (m) from the body to the ball; on reaching it (distance belo
 
 from __future__ import annotations
 
-import mujoco
 import numpy as np
 
-from ..field import BALL_RADIUS
 from .base import HEAD_JOINTS, LEG_JOINTS, AiboEnv
 
 BALL_START = (0.8, 0.0)
@@ -21,16 +19,17 @@ PROGRESS_REWARD = 10.0  # per metre
 
 
 class ReachBallEnv(AiboEnv):
+    """``aibo_sim/ReachBall-v0``: actions for the 12 leg joints, then the 3 head joints."""
+
     actuated_joints = LEG_JOINTS + HEAD_JOINTS
 
     def _reset_task(self) -> None:
-        self.place_ball((*self.ball_start(BALL_START), BALL_RADIUS))
-        mujoco.mj_kinematics(self.sim.model, self.sim.data)
+        self.sim.place_ball(*self.ball_start(BALL_START))
         self._distance = self._ball_distance()
 
     def _ball_distance(self) -> float:
         body, _, _ = self.sim.body_pose()
-        return float(np.linalg.norm(self.ball_position()[:2] - body[:2]))
+        return float(np.linalg.norm(self.sim.ball_position()[:2] - body[:2]))
 
     def _evaluate(self) -> tuple[float, bool]:
         distance = self._ball_distance()
