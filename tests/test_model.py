@@ -74,16 +74,31 @@ def test_visual_and_collision_geoms_are_separate(model):
     assert model.geom_size[model.geom("lf_paw").id][0] == pytest.approx(0.01172)
 
 
-def test_random_control_over_full_ranges_raises_no_warning(model):
+@pytest.mark.parametrize("scene", SCENES, ids=[s.name for s in SCENES])
+def test_pseudorandom_control_over_full_ranges_raises_no_warning(scene):
+    """Menagerie's protocol: from qpos0, a new Halton-sequence control over each actuator's
+    whole range every physics step, for 1 s; then from the stand keyframe with random controls
+    held for one 8 ms joint frame."""
+    model = mujoco.MjModel.from_xml_path(str(scene))
+    centre, radius = model.actuator_ctrlrange.mean(axis=1), np.ptp(model.actuator_ctrlrange, axis=1) / 2
     data = mujoco.MjData(model)
+    step = 0
+    while data.time < 1.0:
+        data.ctrl[:] = centre + radius * np.array([2 * mujoco.mju_Halton(step, j + 2) - 1 for j in range(model.nu)])
+        mujoco.mj_step(model, data)
+        step += 1
     mujoco.mj_resetDataKeyframe(model, data, model.key("stand").id)
     rng = np.random.default_rng(7)
-    low, high = model.actuator_ctrlrange.T
-    while data.time < 1.0:
-        data.ctrl[:] = rng.uniform(low, high)
+    while data.time < 2.0:
+        data.ctrl[:] = rng.uniform(centre - radius, centre + radius)
         mujoco.mj_step(model, data, nstep=2)  # one 8 ms joint frame
     assert [w.number for w in data.warning] == [0] * len(data.warning)
     assert np.isfinite(data.qpos).all()
+
+
+def test_model_folder_has_menagerie_files():
+    for name in ("README.md", "LICENSE", "CHANGELOG.md", "ers7.png"):
+        assert (models_dir() / name).is_file(), name
 
 
 def test_standing_for_10_s_drifts_less_than_5_mm():
