@@ -132,3 +132,17 @@ def _ball_centre(rgb):
     r, g, b = rgb[..., 0], rgb[..., 1], rgb[..., 2]
     ys, xs = np.nonzero((r > 110) & (r > 3 * g // 2 + 10) & (g > 3 * b // 2))
     return xs.mean(), ys.mean()
+
+
+def test_cli_mtn_info_and_play(capsys, tmp_path):
+    walk = ROOT / "models" / "motions" / "WALKFWD.MTN"
+    assert main(["mtn", "info", str(walk), "--json"]) == 0
+    info = json.loads(capsys.readouterr().out)
+    assert (info["name"], info["num_keyframes"], info["length_ms"], len(info["locators"])) == ("a_walk#walk_fwd", 21, 320, 12)
+    assert main(["mtn", "play", str(walk), "--repeat", "15", "--json"]) == 0
+    played = json.loads(capsys.readouterr().out)
+    assert played["displacement_m"][0] > 0.25 and not played["fell"] and abs(played["heading_change_deg"]) < 10
+    broken = tmp_path / "BROKEN.MTN"
+    broken.write_bytes(walk.read_bytes()[:100])
+    assert main(["mtn", "info", str(broken)]) == 2
+    assert "BROKEN.MTN" in capsys.readouterr().err
