@@ -51,10 +51,18 @@ def _render(args) -> int:
     return 0
 
 
+def _motion_file(name: str) -> Path:
+    """A motion file path, or the name of a bundled motion (WALKFWD.MTN ...)."""
+    from .robot import find_file
+    from .sim import models_dir
+
+    return find_file(name, [models_dir() / "motions"])
+
+
 def _mtn_info(args) -> int:
     from .mtn import format_motion_info, motion_info, read_mtn
 
-    info = motion_info(read_mtn(args.file))
+    info = motion_info(read_mtn(_motion_file(args.file)))
     print(json.dumps(info, indent=2) if args.json else format_motion_info(info))
     return 0
 
@@ -64,7 +72,7 @@ def _mtn_play(args) -> int:
 
     if args.repeat < 1:
         raise ValueError(f"--repeat must be at least 1, not {args.repeat}")
-    result = play_motion(args.file, repeat=args.repeat, mode=args.mode)
+    result = play_motion(_motion_file(args.file), repeat=args.repeat, mode=args.mode)
     if args.json:
         print(json.dumps(result, indent=2))
     else:
@@ -105,11 +113,11 @@ def build_parser() -> argparse.ArgumentParser:
 
     mtn = commands.add_parser("mtn", help="OPEN-R motion files").add_subparsers(dest="mtn_command", required=True)
     info = mtn.add_parser("info", help="print a file's name, creator, design, frames, length, locators")
-    info.add_argument("file")
+    info.add_argument("file", help="an MTN file, or the name of a bundled motion (WALKFWD.MTN, TURNL.MTN, ...)")
     info.add_argument("--json", action="store_true")
     info.set_defaults(handler=_mtn_info)
     play = mtn.add_parser("play", help="play a file on the standing robot and report how it moved")
-    play.add_argument("file")
+    play.add_argument("file", help="an MTN file, or the name of a bundled motion")
     play.add_argument("--repeat", type=int, default=1)
     play.add_argument("--mode", choices=("openr", "webots"), default="openr")
     play.add_argument("--json", action="store_true")

@@ -183,6 +183,17 @@ class Led(Device):
 _DEVICE_CLASSES = {"distance": DistanceSensor, "touch": TouchSensor, "accelerometer": Accelerometer, "camera": Camera}
 
 
+def find_file(path: str | Path, search_dirs) -> Path:
+    """``path`` itself if it exists, else the same name in the first search folder that has
+    it, ignoring case as OPEN-R's memory stick does; ``path`` unchanged when none has it."""
+    candidates = [Path(path)] + [Path(d) / path for d in search_dirs]
+    found = next((c for c in candidates if c.is_file()), None)
+    if found is None:
+        name = Path(path).name.lower()
+        found = next((f for d in map(Path, search_dirs) if d.is_dir() for f in d.iterdir() if f.name.lower() == name), None)
+    return found if found is not None else Path(path)
+
+
 class Robot:
     """A simulated ERS-7 seen through the controller API, on one backend."""
 
@@ -251,12 +262,7 @@ class Robot:
 
     def mtn_new(self, path: str | Path):
         """Load a motion, resolving relative names in the search folders; MtnError if not found."""
-        candidates = [Path(path)] + [d / path for d in self.search_dirs]
-        found = next((c for c in candidates if c.is_file()), None)
-        if found is None:  # OPEN-R's memory stick is case-insensitive
-            name = Path(path).name.lower()
-            found = next((f for d in self.search_dirs if d.is_dir() for f in d.iterdir() if f.name.lower() == name), None)
-        return mtn_new(found if found is not None else path, ers7.all_locators())
+        return mtn_new(find_file(path, self.search_dirs), ers7.all_locators())
 
     def mtn_play(self, motion) -> None:
         player = MotionPlayer(motion, mode=self.mtn_mode)
