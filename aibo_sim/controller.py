@@ -75,7 +75,8 @@ def call_die_functions() -> None:
 
 
 def robot_run(run_fn) -> None:
-    """Call ``run_fn(ms)`` forever; each call returns the duration of the next step in ms."""
+    """Call ``run_fn(ms)`` until the run ends: ``ms`` is the step just simulated (0 on the
+    first call, before any sample), the return value the duration of the next step."""
     ms = 0
     while True:
         ms = run_fn(ms)

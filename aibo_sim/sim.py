@@ -16,7 +16,7 @@ import numpy as np
 from openr_bridge import FRAME_RATE_HZ, FRAME_TICK_MS, FULL_HEIGHT, FULL_WIDTH, LAYER_SIZE
 
 from .field import BALL_RADIUS
-from .ers7 import JOINTS, LED_BY_NAME, LED_OFF_RGBA, SENSORS
+from .ers7 import JOINTS, LED_BY_NAME, LED_OFF_RGBA, SENSOR_BY_NAME, SENSORS
 from .render import Renderer
 
 FRAME_MS = FRAME_TICK_MS  # OPEN-R joint frame, 8 ms
@@ -183,7 +183,7 @@ class Simulation:
 
     def distance_mm(self, name: str) -> float:
         """IR range in mm as Webots' lookup tables give it: clamped, 10 % noise mid-range."""
-        low, high = next(s.range_mm for s in SENSORS if s.name == name)
+        low, high = SENSOR_BY_NAME[name].range_mm
         metres = float(self.sensor(name)[0])
         mm = high if metres < 0 else min(max(metres * 1000, low), high)
         mid_weight = 1 - abs(2 * (mm - low) / (high - low) - 1)
