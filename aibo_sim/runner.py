@@ -33,7 +33,7 @@ class RunSummary:
     real_time_factor: float
     camera_frames: int
     robot_xy_yaw: tuple[float, float, float]  # at the end: metres, metres, radians
-    ball_xy: tuple[float, float]
+    ball_xy: tuple[float, float] | None  # None in a scene without a ball
 
 
 def motion_dirs(controller_path: Path) -> tuple[Path, ...]:
@@ -145,9 +145,10 @@ def run_controller(path: str | Path, *, backend: str = "sim", duration: float = 
         sim.close()
     wall = time.perf_counter() - start
     position, yaw, _ = sim.body_pose()
+    ball = sim.ball_position()
     summary = RunSummary(str(path), backend, robot.time_ms / 1000, wall, robot.time_ms / 1000 / max(wall, 1e-9),
                          writer.count if writer else 0, (float(position[0]), float(position[1]), yaw),
-                         tuple(float(v) for v in sim.ball_position()[:2]))
+                         None if ball is None else (float(ball[0]), float(ball[1])))
     if out is not None:
         (out / "run.json").write_text(json.dumps(asdict(summary), indent=2) + "\n")
     return summary

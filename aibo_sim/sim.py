@@ -141,15 +141,22 @@ class Simulation:
         mujoco.mju_mulQuat(qpos[3:7], yaw_quat, pitch_quat)
         mujoco.mj_forward(self.model, self.data)
 
+    @property
+    def has_ball(self) -> bool:
+        return mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_BODY, "ball") >= 0
+
     def place_ball(self, x: float, y: float) -> None:
         """Put the ball at rest on the carpet at (x, y)."""
+        if not self.has_ball:
+            raise ModelError("this scene has no body named 'ball' to place")
         joint = self.model.joint("ball")
         self.data.qpos[joint.qposadr[0]:joint.qposadr[0] + 7] = (x, y, BALL_RADIUS, 1, 0, 0, 0)
         self.data.qvel[joint.dofadr[0]:joint.dofadr[0] + 6] = 0
         mujoco.mj_forward(self.model, self.data)
 
-    def ball_position(self) -> np.ndarray:
-        return self.data.xpos[self.model.body("ball").id].copy()
+    def ball_position(self) -> np.ndarray | None:
+        """The ball's centre, or None in a scene without a ball."""
+        return self.data.xpos[self.model.body("ball").id].copy() if self.has_ball else None
 
     @property
     def time_ms(self) -> int:

@@ -75,6 +75,10 @@ def test_cli_bad_input_exits_2_with_a_clear_message(tmp_path, capsys):
     assert "--duration must be positive" in capsys.readouterr().err
     assert main(["run", str(SCRIPTED), "--scene", str(tmp_path / "nope.xml")]) == 2
     assert "nope.xml: no such model file" in capsys.readouterr().err
+    robot_only = str(ROOT / "models" / "ers7.xml")
+    assert main(["run", str(SCRIPTED), "--scene", robot_only, "--duration", "0.1", "--ball", "1", "0"]) == 2
+    assert "no body named 'ball'" in capsys.readouterr().err
+    assert run_controller(SCRIPTED, scene=robot_only, duration=0.1, out=tmp_path / "robot_only").ball_xy is None
 
 
 def test_physics_divergence_is_a_clear_error(tmp_path, capsys):
