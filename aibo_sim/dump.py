@@ -64,10 +64,13 @@ from pathlib import Path
 from types import SimpleNamespace
 
 import cv2
+import gymnasium
 import mujoco
 import numpy as np
 
 import openr_bridge
+from openr_bridge import FRAME_RATE_HZ
+from openr_bridge.image import BAND_RUNS
 
 from .ers7 import JOINTS
 from .field import SEGMENTATION_CLASSES
@@ -82,11 +85,7 @@ POLICIES = ("random", "scripted", "zero")
 DUMP_FORMAT = "aibo-sim dump 1"
 CAMERA = "camera"
 TEMP_PREFIX = ".tmp."
-LAYERS = {"H": openr_bridge.ofbkimageLAYER_H, "M": openr_bridge.ofbkimageLAYER_M,
-          "L": openr_bridge.ofbkimageLAYER_L, "C": openr_bridge.ofbkimageLAYER_C}
-SONY_BANDS = (openr_bridge.ofbkimageBAND_Y, openr_bridge.ofbkimageBAND_Cr, openr_bridge.ofbkimageBAND_Cb,
-              openr_bridge.ofbkimageBAND_Y_LH, openr_bridge.ofbkimageBAND_Y_HL, openr_bridge.ofbkimageBAND_Y_HH,
-              openr_bridge.ofbkimageBAND_CDT)
+LAYERS = {name: layer for layer, name in enumerate(openr_bridge.LAYER_NAMES)}
 # Geoms by name prefix (first match wins); unnamed geoms of the robot's bodies are "robot".
 CLASS_PREFIXES = (("field_line", "line"), ("field", "field"), ("wall", "wall"), ("goal", "goal"),
                   ("beacon", "beacon"), ("ball", "ball"))
@@ -210,8 +209,8 @@ def file_layouts(formats, width: int, height: int) -> dict:
         "openr": ("openr/{index:06d}.ofbk", "OFbkImageVectorData message bytes", None),
         "bands": ("bands/{index:06d}_{layer}.raw", "a layer's GetData bytes: H, M, L rows of Y, Cr, Cb, Y_LH, "
                   "Y_HL, Y_HH (6 w h bytes), C the CDT band (w h bytes)",
-                  {name: (6 if layer != openr_bridge.ofbkimageLAYER_C else 1) * w * h
-                   for (name, layer), (w, h) in zip(LAYERS.items(), openr_bridge.LAYER_SIZE)}),
+                  {name: BAND_RUNS[layer_type][1] * w * h for name, (w, h), layer_type
+                   in zip(openr_bridge.LAYER_NAMES, openr_bridge.LAYER_SIZE, openr_bridge.LAYER_TYPE, strict=True)}),
         "luma": ("luma/{index:06d}.png", f"PNG, 8-bit grey, {full}, reconstruct_luma of layer H", None),
         "depth": ("depth/{index:06d}.npy", f"NumPy float32 {size}, metres along the optical axis", None),
         "seg": ("seg/{index:06d}.png", f"PNG, 8-bit class ids (segmentation_classes), {size}", None),
@@ -263,7 +262,8 @@ class DumpWriter:
         self._video = self._video_path = None
         if "mp4" in self.formats:
             self._video_path = out / (TEMP_PREFIX + "video.mp4")
-            self._video = cv2.VideoWriter(str(self._video_path), cv2.VideoWriter_fourcc(*"mp4v"), 30, (width, height))
+            self._video = cv2.VideoWriter(str(self._video_path), cv2.VideoWriter_fourcc(*"mp4v"), FRAME_RATE_HZ,
+                                          (width, height))
             if not self._video.isOpened():
                 raise DumpError(f"cannot write {self._video_path}: OpenCV's mp4v video writer did not open")
 
@@ -335,9 +335,7 @@ class DumpWriter:
     def finish(self) -> None:
         """Close the files; the video takes its final name only now."""
         self._close()
-        if self._video is not None:
-            self._video.release()
-            self._video = None
+        if self._video_path is not None:
             final = self.out / "video.mp4"
             try:
                 os.replace(self._video_path, final)
@@ -348,12 +346,12 @@ class DumpWriter:
     def abort(self) -> None:
         """Stop after a failure: complete frames stay, temporary files go."""
         self._close()
-        if self._video is not None:
-            self._video.release()
         _remove_temporary_files(self.out)
 
     def _close(self) -> None:
         self._lines.close()
+        if self._video is not None:
+            self._video.release()
         if self._renderer is not None:
             self._renderer.close()
 
@@ -369,10 +367,10 @@ def _prepare_folder(out: Path, meta: dict, resume: bool) -> set[int]:
     if meta_path.exists():
         if not resume:
             raise DumpError(f"{out} already holds a dump: pass --resume to continue it, or choose another --out")
-        previous = json.loads(meta_path.read_text())
-        if previous.get("parameters") != meta["parameters"]:
-            changed = sorted(k for k in meta["parameters"] if previous.get("parameters", {}).get(k) != meta["parameters"][k])
-            raise DumpError(f"{meta_path}: cannot resume, the dump was made with other parameters ({', '.join(changed)})")
+        parameters, previous = meta["parameters"], json.loads(meta_path.read_text()).get("parameters") or {}
+        if previous != parameters:
+            changed = ", ".join(sorted(k for k in parameters if previous.get(k) != parameters[k]))
+            raise DumpError(f"{meta_path}: cannot resume, the dump was made with other parameters ({changed})")
         complete = _complete_frames(lines_path)
     _remove_temporary_files(out)
     write_atomic(meta_path, (json.dumps(meta, indent=2) + "\n").encode())
@@ -451,7 +449,7 @@ def _dump_controller(parameters: dict, out: Path, resume: bool) -> DumpWriter:
     with DumpWriter(out, parameters["formats"], parameters, resume=resume, width=width, height=height,
                     model=load_model()) as writer:
         listener = _CameraFrames(writer, frames)
-        run_controller(parameters["controller"], backend=parameters["backend"], duration=frames / 30,
+        run_controller(parameters["controller"], backend=parameters["backend"], duration=frames / FRAME_RATE_HZ,
                        seed=parameters["seed"], camera_full=camera_full, ball=parameters["ball"],
                        frame_listeners=[listener], progress=parameters.get("progress", True))
         if listener.error is not None:
@@ -466,22 +464,18 @@ def _policy(name: str, action_space, seed: int):
         return lambda step: action_space.sample()
     if name == "zero":
         return lambda step: np.zeros(action_space.shape, action_space.dtype)
-    phases = np.arange(action_space.shape[0])
-    return lambda step: (0.8 * np.sin(2 * np.pi * SCRIPTED_SWEEP_HZ * step / 30 + phases)).astype(action_space.dtype)
+    phases, dtype = np.arange(action_space.shape[0]), action_space.dtype
+    return lambda step: (0.8 * np.sin(2 * np.pi * SCRIPTED_SWEEP_HZ * step / FRAME_RATE_HZ + phases)).astype(dtype)
 
 
 def _dump_env(parameters: dict, out: Path, resume: bool) -> DumpWriter:
-    import gymnasium
-
-    from . import envs  # noqa: F401  (registers the environments)
-
     camera = "openr" if parameters["backend"] == "openr" else "rgb"
     try:
         env = gymnasium.make(parameters["env"], camera=camera)
     except gymnasium.error.Error as exc:
         raise ValueError(f"environment {parameters['env']!r}: {exc}") from None
     steps, seed = parameters["frames"], parameters["seed"]
-    progress = Progress(steps / 30)
+    progress = Progress(steps / FRAME_RATE_HZ)
     try:
         sim = env.unwrapped.sim
         with DumpWriter(out, parameters["formats"], parameters, resume=resume, width=sim.camera_size[0],
@@ -500,7 +494,7 @@ def _dump_env(parameters: dict, out: Path, resume: bool) -> DumpWriter:
                     env.reset()
                     index, episode = index + 1, episode + 1
                     writer.write(sim, index, {"episode": episode, "action": None, "reward": None})
-                progress(SimpleNamespace(time_ms=(step + 1) * 1000 / 30))
+                progress(SimpleNamespace(time_ms=(step + 1) * 1000 / FRAME_RATE_HZ))
     finally:
         progress.close()
         env.close()
@@ -616,13 +610,11 @@ class DumpFrame:
 
     def bands(self, layer: str | int) -> dict[int, np.ndarray]:
         """The bands of a layer ("H", "M", "L", "C" or ofbkimageLAYER_*) keyed by ofbkimageBAND_*."""
-        name = layer if isinstance(layer, str) else next(n for n, v in LAYERS.items() if v == layer)
-        index = LAYERS[name]
-        data = np.fromfile(self.path("bands", name), np.uint8)
+        index = LAYERS[layer] if isinstance(layer, str) else layer
+        data = np.fromfile(self.path("bands", openr_bridge.LAYER_NAMES[index]), np.uint8)
         width, height = openr_bridge.LAYER_SIZE[index]
         info = openr_bridge.OFbkImageInfo(openr_bridge.LAYER_TYPE[index], 0, 0, 0, data.size, width, height)
-        images = {band: openr_bridge.OFbkImage(info, data, band) for band in SONY_BANDS}
-        return {band: image.array for band, image in images.items() if image.IsValid()}
+        return {band: openr_bridge.OFbkImage(info, data, band).array for band in BAND_RUNS[info.type][0]}
 
     @property
     def luma(self) -> np.ndarray:
@@ -647,16 +639,17 @@ class Dump:
         if not meta_path.is_file():
             raise FileNotFoundError(f"{meta_path}: not a dump (no meta.json)")
         self.meta = json.loads(meta_path.read_text())
-        shards = [self.folder / s for s in self.meta.get("shards", ())]
-        self.parts = [Dump(s) for s in shards] if shards else []
-        self.frames: list[DumpFrame] = [f for part in self.parts for f in part.frames]
-        self.videos = [v for part in self.parts for v in part.videos]
-        if not shards:
+        self.parts = [Dump(self.folder / shard) for shard in self.meta.get("shards", ())]
+        if self.parts:
+            self.frames = [f for part in self.parts for f in part.frames]
+            self.videos = [v for part in self.parts for v in part.videos]
+        else:
             lines = self.folder / "frames.jsonl"
             text = lines.read_text() if lines.exists() else ""
             records = [json.loads(line) for line in text.splitlines(keepends=True) if line.endswith("\n")]
             self.frames = [DumpFrame(self.folder, r, self.meta) for r in sorted(records, key=lambda r: r["index"])]
-            self.videos = [self.folder / "video.mp4"] if (self.folder / "video.mp4").is_file() else []
+            video = self.folder / "video.mp4"
+            self.videos = [video] if video.is_file() else []
         self.segmentation_classes = tuple(self.meta.get("segmentation_classes", SEGMENTATION_CLASSES))
 
     def __len__(self) -> int:
@@ -681,7 +674,7 @@ def _dump_command(args) -> int:
     formats = FORMATS if args.formats == "all" else tuple(f.strip() for f in args.formats.split(",") if f.strip())
     if args.steps is not None and args.steps <= 0 or args.duration is not None and args.duration <= 0:
         raise ValueError("--steps and --duration must be positive")
-    frames = args.steps if args.steps is not None else round((args.duration or 10.0) * 30)
+    frames = args.steps if args.steps is not None else round((args.duration or 10.0) * FRAME_RATE_HZ)
     summary = dump(args.out, controller=args.controller, env=args.env, policy=args.policy, frames=frames,
                    backend=args.backend, seed=args.seed, formats=formats, camera_full=args.camera_full,
                    ball=args.ball and tuple(args.ball), resume=args.resume, workers=args.workers)

@@ -221,28 +221,27 @@ def generate_motion_files(directory: str | os.PathLike) -> list[Path]:
 # ----------------------------------------------------------------------------- playback
 
 
-def _openr_frames(motion: Motion, repeat: int):
+def _openr_frames(player: MotionPlayer, repeat: int):
     """Targets (rad) for each 8 ms frame. A loop does not send the last keyframe, as MTN.cc
     does not; the very end does, so the motion ends on it."""
-    player = MotionPlayer(motion)
     for r in range(repeat):
         for i in range(player.num_frames if r == repeat - 1 else player.num_frames - 1):
             yield player.frame(i) / 1e6
 
 
-def _webots_frames(motion: Motion, repeat: int, step_ms: int):
+def _webots_frames(player: MotionPlayer, repeat: int, step_ms: int):
     """Targets (rad) or None for each 8 ms frame: ``mtn_step(step_ms)`` every control step,
     ``mtn_play`` again once over."""
-    player = MotionPlayer(motion, "webots")
     for _ in range(repeat):
         player.play()
         while not player.is_over:
             commands = player.step(step_ms)
-            yield None if commands is None else np.array([commands[loc] for loc in motion.locators])
+            yield None if commands is None else np.array([commands[loc] for loc in player.motion.locators])
             yield from [None] * (step_ms // FRAME_MS - 1)
 
 
-def play_motion(motion_or_path, repeat: int = 1, sim: Simulation | None = None, mode: str = "openr", step_ms: int = 16) -> dict:
+def play_motion(motion_or_path, repeat: int = 1, sim: Simulation | None = None, mode: str = "openr",
+                step_ms: int = 16) -> dict:
     """Play a motion (or MTN file) ``repeat`` times on ``sim`` (default: a new robot standing on
     the field) and say where it went.
 
@@ -253,8 +252,7 @@ def play_motion(motion_or_path, repeat: int = 1, sim: Simulation | None = None, 
     (velocity limits apply). Playback stops if the robot falls. The displacement is in the
     start heading's frame (x forward, y left); the heading change is unwrapped (+ = left)."""
     motion = motion_or_path if isinstance(motion_or_path, Motion) else read_mtn(motion_or_path)
-    if mode not in ("openr", "webots"):
-        raise ValueError(f"mode must be 'openr' or 'webots', not {mode!r}")
+    player = MotionPlayer(motion, mode)
     if step_ms <= 0 or step_ms % FRAME_MS:
         raise ValueError(f"step_ms must be a positive multiple of {FRAME_MS} ms")
     unknown = [loc for loc in motion.locators if loc not in JOINT_BY_LOCATOR]
@@ -267,7 +265,7 @@ def play_motion(motion_or_path, repeat: int = 1, sim: Simulation | None = None, 
     first = motion.positions_rad()[0]
     n = BLEND_MS // FRAME_MS if np.abs(first - start).max() > 1e-3 else 0
     blend = (start + (first - start) * (1 - math.cos(math.pi * i / n)) / 2 for i in range(1, n + 1))
-    frames = _openr_frames(motion, repeat) if mode == "openr" else _webots_frames(motion, repeat, step_ms)
+    frames = _openr_frames(player, repeat) if mode == "openr" else _webots_frames(player, repeat, step_ms)
 
     position, yaw, _ = sim.body_pose()
     start_frame, yaw0, turned, fell = sim.frame, yaw, 0.0, False

@@ -28,6 +28,7 @@ Decisions where the spec leaves room (also listed in the report that came with t
 
 from __future__ import annotations
 
+import contextlib
 import os
 import secrets
 import struct
@@ -37,12 +38,15 @@ from typing import Iterable, Iterator, Sequence
 
 import numpy as np
 
+from . import ers7
+
 MAGIC = b"OMTN"
 VERSION = (1, 2)
 NUM_SECTIONS = 4
 SECTION0_SIZE = 24
 DEFAULT_FRAME_TIME_MS = 16
 SUBFRAME_MS = 8  # OPEN-R command vectors carry one joint value per 8 ms
+MODES = ("openr", "webots")  # MotionPlayer's playback modes
 _S32_MIN, _S32_MAX = -(2**31), 2**31 - 1
 
 
@@ -57,6 +61,13 @@ class MtnError(ValueError):
         if offset is not None:
             where.append(f"byte {offset} (0x{offset:x})")
         super().__init__(": ".join(where + [message]))
+
+
+def _check(source: str, checks) -> None:
+    """Raise the MtnError of the first (bad, message) pair whose ``bad`` is true."""
+    for bad, message in checks:
+        if bad:
+            raise MtnError(source, None, message)
 
 
 @dataclass(eq=False)
@@ -83,19 +94,17 @@ class Motion:
         self.attitudes = np.asarray(self.attitudes, dtype=np.int64)
         self.interpolate = np.asarray(self.interpolate, dtype=np.int64).reshape(-1)
         n, j = len(self.keyframes), len(self.locators)
-        problems = [
+        _check(self.name, [
             (n < 1, "a motion needs at least one keyframe"),
             (j < 1, "a motion needs at least one joint"),
             (len(set(self.locators)) != j, "duplicate locator"),
             (self.keyframes.shape != (n, j), f"keyframes shape {self.keyframes.shape} is not ({n}, {j})"),
             (self.attitudes.shape != (n, 3), f"attitudes shape {self.attitudes.shape} is not ({n}, 3)"),
-            (self.interpolate.shape != (max(n - 1, 0),), f"interpolate has {self.interpolate.size} counts, want {n - 1}"),
+            (self.interpolate.shape != (max(n - 1, 0),),
+             f"interpolate has {self.interpolate.size} counts, want {n - 1}"),
             (bool((self.interpolate < 0).any()), "negative interpolation count"),
             (int(self.frame_time_ms) <= 0, f"frame time {self.frame_time_ms} ms is not positive"),
-        ]
-        for bad, text in problems:
-            if bad:
-                raise MtnError(self.name, None, text)
+        ])
         self.frame_time_ms = int(self.frame_time_ms)
         self.option = int(self.option)
 
@@ -144,8 +153,6 @@ class Motion:
         positive multiples of ``frame_time_ms``. Values are rounded to the nearest µrad (ties to
         even); attitudes are zero."""
         if locators is None:
-            from aibo_sim import ers7
-
             locators = [j.locator for j in ers7.JOINTS]
         poses = np.asarray(poses_rad, dtype=np.float64)
         if poses.ndim != 2 or not np.isfinite(poses).all():
@@ -157,7 +164,8 @@ class Motion:
         if seg.shape != (max(n - 1, 0),):
             raise MtnError(name, None, f"{seg.size} segment durations for {n} poses (want {n - 1})")
         if frame_time_ms <= 0 or any(int(s) != s or s <= 0 or int(s) % frame_time_ms for s in seg.tolist()):
-            raise MtnError(name, None, f"segment durations {seg.tolist()} must be positive multiples of {frame_time_ms} ms")
+            raise MtnError(name, None,
+                           f"segment durations {seg.tolist()} must be positive multiples of {frame_time_ms} ms")
         micro = np.rint(poses * 1e6)
         if (micro < _S32_MIN).any() or (micro > _S32_MAX).any():
             raise MtnError(name, None, "pose out of the s32 micro-radian range")
@@ -319,12 +327,11 @@ def serialize_mtn(motion: Motion) -> bytes:
     ]
     for arr, what in ((m.keyframes, "joint value"), (m.attitudes, "attitude")):
         checks.append((bool(((arr < _S32_MIN) | (arr > _S32_MAX)).any()), f"{what} out of the s32 range"))
-    for bad, text in checks:
-        if bad:
-            raise MtnError(src, None, text)
+    _check(src, checks)
 
     sec0 = struct.pack("<IIIHHHHI", 0, SECTION0_SIZE, NUM_SECTIONS, *VERSION, n, m.frame_time_ms, m.option)
-    sec1 = _section(1, b"".join(_pstring(s, w, src) for s, w in ((m.name, "name"), (m.creator, "creator"), (m.design, "design"))))
+    strings = ((m.name, "name"), (m.creator, "creator"), (m.design, "design"))
+    sec1 = _section(1, b"".join(_pstring(text, what, src) for text, what in strings))
     sec2 = _section(2, struct.pack("<H", j) + b"".join(_pstring(loc, "locator", src) for loc in m.locators))
     rows = np.empty((n, 4 + j), dtype="<i4")
     rows[:, 0] = 0
@@ -350,10 +357,8 @@ def write_mtn(motion: Motion, path: str | os.PathLike) -> None:
             os.fsync(f.fileno())
         os.replace(tmp, path)
     except BaseException:
-        try:
+        with contextlib.suppress(FileNotFoundError):
             os.unlink(tmp)
-        except FileNotFoundError:
-            pass
         raise
 
 
@@ -379,12 +384,13 @@ class MotionPlayer:
     """
 
     def __init__(self, motion: Motion, mode: str = "openr"):
-        if mode not in ("openr", "webots"):
+        if mode not in MODES:
             raise ValueError(f"mode must be 'openr' or 'webots', not {mode!r}")
         self.motion, self.mode = motion, mode
         if mode == "openr":
             if motion.frame_time_ms % SUBFRAME_MS:
-                raise ValueError(f"{motion.name}: frame time {motion.frame_time_ms} ms is not a multiple of {SUBFRAME_MS} ms")
+                raise ValueError(
+                    f"{motion.name}: frame time {motion.frame_time_ms} ms is not a multiple of {SUBFRAME_MS} ms")
             self._subframes = (motion.interpolate + 1) * (motion.frame_time_ms // SUBFRAME_MS)
             self._start = np.concatenate(([0], np.cumsum(self._subframes)))  # segment k starts at _start[k]
             kf = motion.keyframes
@@ -446,8 +452,7 @@ class MotionPlayer:
     def play(self) -> None:
         """Start again after the motion is over (Webots ``mtn_play`` on a finished MTN)."""
         self._need("webots")
-        if self._over:
-            self._over = False
+        self._over = False
 
     @property
     def is_over(self) -> bool:
@@ -486,8 +491,6 @@ def mtn_new(path: str | os.PathLike, available_locators: Iterable[str] | None = 
         except OSError as exc:
             raise MtnError(None, None, f"File not found: {os.fspath(path)}") from exc
         if available_locators is None:
-            from aibo_sim import ers7
-
             available_locators = ers7.all_locators()
         available = set(available_locators)
         for loc in motion.locators:

@@ -59,6 +59,7 @@ from .ers7_camera import (
     FULL_HEIGHT,
     FULL_WIDTH,
     HORIZONTAL_FOV_DEG,
+    LAYER_NAMES,
     LAYER_SIZE,
     LAYER_TYPE,
     VERTICAL_FOV_DEG,

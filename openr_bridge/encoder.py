@@ -37,7 +37,7 @@ root-sum-square over a block).
 
 import numpy as np
 
-from .cdt import OCdtVectorData, cdt_layer
+from .cdt import OCdtVectorData, cdt_layer, ocdtNUM_CHANNELS
 from .colour import rgb_to_ycrcb
 from .errors import FrameError
 from .ers7_camera import FULL_HEIGHT, FULL_WIDTH, LAYER_SIZE, LAYER_TYPE
@@ -146,6 +146,6 @@ def _sum2x2(image: np.ndarray) -> np.ndarray:
 
 
 def _tag(field_counter: int, c_layer: np.ndarray) -> np.ndarray:
-    frequency = [min(255, np.count_nonzero(c_layer & (1 << k)) // 16) for k in range(8)]
+    frequency = [min(255, np.count_nonzero(c_layer & (1 << k)) // 16) for k in range(ocdtNUM_CHANNELS)]
     counter = field_counter % 2**16
     return np.array([counter & 0xFF, counter >> 8, 0, 0, *frequency[4:], *frequency[:4]], np.uint8)

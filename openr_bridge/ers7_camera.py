@@ -5,7 +5,8 @@ from .image import odataFBK_CDT, odataFBK_YCrCb_HPF
 CAMERA_LOCATOR = "PRM:/r1/c1/c2/c3/i1-FbkImageSensor:F1"
 
 FULL_WIDTH, FULL_HEIGHT = 416, 320
-# (width, height) of the layers H, M, L, C, indexed by ofbkimageLAYER_*.
+# Names, (width, height) and types of the layers H, M, L, C, indexed by ofbkimageLAYER_*.
+LAYER_NAMES = ("H", "M", "L", "C")
 LAYER_SIZE = ((208, 160), (104, 80), (52, 40), (104, 80))
 LAYER_TYPE = (odataFBK_YCrCb_HPF, odataFBK_YCrCb_HPF, odataFBK_YCrCb_HPF, odataFBK_CDT)
 

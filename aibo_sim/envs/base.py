@@ -41,7 +41,7 @@ from ..render import Renderer
 from ..sim import ACCEL_RANGE, Simulation
 
 CAMERA_MODES = ("rgb", "ycrcb", "openr", None)
-LAYERS = {"H": openr_bridge.ofbkimageLAYER_H, "M": openr_bridge.ofbkimageLAYER_M, "L": openr_bridge.ofbkimageLAYER_L}
+LAYERS = {name: layer for layer, name in enumerate(openr_bridge.LAYER_NAMES[:3])}  # the YCrCb layers H, M, L
 YCRCB_BANDS = (openr_bridge.ofbkimageBAND_Y, openr_bridge.ofbkimageBAND_Cr, openr_bridge.ofbkimageBAND_Cb)
 RANDOMIZATIONS = ("lighting", "ball_start", "camera_gain")
 RENDER_SIZE = (480, 360)  # third-person view, width x height
@@ -54,7 +54,7 @@ TOUCH_SENSORS = tuple(s for s in SENSORS if s.kind == "touch")
 class AiboEnv(gym.Env):
     """An ERS-7 in the RoboCup scene; subclasses set ``actuated_joints`` and the task."""
 
-    metadata = {"render_modes": ["rgb_array"], "render_fps": 30}
+    metadata = {"render_modes": ["rgb_array"], "render_fps": openr_bridge.FRAME_RATE_HZ}
     actuated_joints: tuple[str, ...] = ()
 
     def __init__(self, camera: str | None = "rgb", camera_layer: str = "H", render_mode: str | None = None,
@@ -153,13 +153,15 @@ class AiboEnv(gym.Env):
             raise ValueError(f"action has shape {action.shape}, expected {self.action_space.shape}")
         bad = np.flatnonzero(~np.isfinite(action))
         if bad.size:
-            raise ValueError(f"action[{bad[0]}] ({self.actuated_joints[bad[0]]}) is {action[bad[0]]}: actions must be finite")
+            i = bad[0]
+            raise ValueError(f"action[{i}] ({self.actuated_joints[i]}) is {action[i]}: actions must be finite")
         action = np.clip(action, -1.0, 1.0)
         return self._target_low + (action + 1) / 2 * (self._target_high - self._target_low)
 
     def targets_to_action(self, targets) -> np.ndarray:
         """The normalised action that commands ``targets`` (rad, clipped to the joint ranges)."""
-        scaled = 2 * (np.asarray(targets, dtype=np.float64) - self._target_low) / (self._target_high - self._target_low) - 1
+        span = self._target_high - self._target_low
+        scaled = 2 * (np.asarray(targets, dtype=np.float64) - self._target_low) / span - 1
         return np.clip(scaled, -1, 1).astype(np.float32)
 
     # ---------------------------------------------------------------- scene
