@@ -7,6 +7,9 @@ import json
 import sys
 from pathlib import Path
 
+from .mtn import MODES as MTN_MODES
+from .robot import BACKENDS
+
 EXIT_BAD_INPUT, EXIT_CONTROLLER, EXIT_DIVERGED = 2, 1, 3
 
 
@@ -89,12 +92,12 @@ def build_parser() -> argparse.ArgumentParser:
 
     run = commands.add_parser("run", help="run a controller headless")
     run.add_argument("controller", help="controller file (Python, Webots-era Aibo API)")
-    run.add_argument("--backend", choices=("sim", "openr"), default="sim")
+    run.add_argument("--backend", choices=BACKENDS, default="sim")
     run.add_argument("--duration", type=float, default=10.0, help="simulated seconds (default 10)")
     run.add_argument("--scene", help="MJCF scene file (default: the RoboCup 2005 field)")
     run.add_argument("--seed", type=int, default=0)
     run.add_argument("--out", help="folder for camera frames and the controller's files")
-    run.add_argument("--mtn-mode", choices=("openr", "webots"), default="openr",
+    run.add_argument("--mtn-mode", choices=MTN_MODES, default="openr",
                      help="MTN playback: OPEN-R interpolation (default) or Webots keyframe stepping")
     run.add_argument("--memory-stick", help="OPEN-R memory stick folder for the openr backend")
     run.add_argument("--camera-full", action="store_true", help="render 416x320 (else the 208x160 layer)")
@@ -119,7 +122,7 @@ def build_parser() -> argparse.ArgumentParser:
     play = mtn.add_parser("play", help="play a file on the standing robot and report how it moved")
     play.add_argument("file", help="an MTN file, or the name of a bundled motion")
     play.add_argument("--repeat", type=int, default=1)
-    play.add_argument("--mode", choices=("openr", "webots"), default="openr")
+    play.add_argument("--mode", choices=MTN_MODES, default="openr")
     play.add_argument("--json", action="store_true")
     play.set_defaults(handler=_mtn_play)
 

@@ -19,7 +19,7 @@ import sys
 import numpy as np
 from openr_bridge.wrapper import camera_image_get_blue, camera_image_get_green, camera_image_get_red
 
-from .mtn import MtnError
+from .mtn import MtnError, mtn_get_error
 from .robot import (Accelerometer, Camera, Device, DeviceError, DistanceSensor, Led, Robot, Servo,
                     SimulationEnd, TouchSensor)
 
@@ -234,21 +234,12 @@ def led_set(tag, value: int) -> None:
 
 # ------------------------------------------------------------------------- MTN
 
-_mtn_error = ""
-
-
 def mtn_new(filename: str):
     """Load a motion file; returns None and sets ``mtn_get_error()`` on failure, as Webots."""
-    global _mtn_error
     try:
         return current_robot().mtn_new(filename)
-    except (MtnError, OSError) as exc:
-        _mtn_error = str(exc)
+    except MtnError:
         return None
-
-
-def mtn_get_error() -> str:
-    return _mtn_error
 
 
 def mtn_delete(motion) -> None:
@@ -279,7 +270,7 @@ def mtn_get_name(motion) -> str:
 
 def _motion(motion):
     if motion is None:
-        raise ValueError("MTN is NULL: mtn_new failed (" + (_mtn_error or "no error recorded") + ")")
+        raise ValueError("MTN is NULL: mtn_new failed (" + (mtn_get_error() or "no error recorded") + ")")
     return motion
 
 

@@ -61,7 +61,6 @@ from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 from multiprocessing import get_context
 from pathlib import Path
-from types import SimpleNamespace
 
 import cv2
 import gymnasium
@@ -72,7 +71,7 @@ import openr_bridge
 from openr_bridge import FRAME_RATE_HZ
 from openr_bridge.image import BAND_RUNS
 
-from .ers7 import JOINTS
+from .ers7 import HEAD_CAMERA, JOINTS
 from .field import SEGMENTATION_CLASSES
 from .render import Renderer
 from .robot import BACKENDS, SimulationEnd
@@ -83,7 +82,7 @@ FORMATS = ("rgb", "yuv444", "yuv420", "annex", "openr", "bands", "luma", "depth"
 DEFAULT_FORMATS = ("rgb", "yuv420", "openr", "mp4")
 POLICIES = ("random", "scripted", "zero")
 DUMP_FORMAT = "aibo-sim dump 1"
-CAMERA = "camera"
+
 TEMP_PREFIX = ".tmp."
 LAYERS = {name: layer for layer, name in enumerate(openr_bridge.LAYER_NAMES)}
 # Geoms by name prefix (first match wins); unnamed geoms of the robot's bodies are "robot".
@@ -152,7 +151,7 @@ def geom_classes(model: mujoco.MjModel) -> np.ndarray:
 
 def camera_intrinsics(model: mujoco.MjModel, width: int, height: int) -> dict:
     """Pinhole intrinsics of the head camera at a render size, pixel centres at integers."""
-    cam = model.camera(CAMERA).id
+    cam = model.camera(HEAD_CAMERA).id
     focal, sensor = model.cam_intrinsic[cam][:2], model.cam_sensorsize[cam]
     return {"width": width, "height": height, "fx": float(focal[0] / sensor[0] * width),
             "fy": float(focal[1] / sensor[1] * height), "cx": (width - 1) / 2, "cy": (height - 1) / 2}
@@ -165,7 +164,7 @@ def ball_in_image(sim: Simulation, intrinsics: dict) -> dict:
     the centre hits the ball first (the head camera's geom groups).
     """
     model, data = sim.model, sim.data
-    cam = model.camera(CAMERA).id
+    cam = model.camera(HEAD_CAMERA).id
     ball = sim.ball_position()
     offset = ball - data.cam_xpos[cam]
     x, y, z = data.cam_xmat[cam].reshape(3, 3).T @ offset  # camera frame: looks along -z, y up
@@ -184,7 +183,7 @@ def ball_in_image(sim: Simulation, intrinsics: dict) -> dict:
 
 def frame_metadata(sim: Simulation, index: int, intrinsics: dict) -> dict:
     """A frames.jsonl record: time, OPEN-R counters, camera pose, joints (rad), the ball."""
-    cam = sim.model.camera(CAMERA).id
+    cam = sim.model.camera(HEAD_CAMERA).id
     return {
         "index": index,
         "time_s": sim.time_ms / 1000,
@@ -318,10 +317,10 @@ class DumpWriter:
             self._renderer = Renderer(sim.model, *rgb.shape[1::-1], groups=HEAD_CAMERA_GROUPS)
         if "depth" in wants:
             buffer = io.BytesIO()
-            np.save(buffer, self._renderer.render_depth(sim.data, CAMERA))
+            np.save(buffer, self._renderer.render_depth(sim.data, HEAD_CAMERA))
             yield path("depth"), buffer.getvalue()
         if "seg" in wants:
-            yield path("seg"), _png(self._classes[self._renderer.render_segmentation(sim.data, CAMERA)])
+            yield path("seg"), _png(self._classes[self._renderer.render_segmentation(sim.data, HEAD_CAMERA)])
 
     def __enter__(self) -> "DumpWriter":
         return self
@@ -494,7 +493,7 @@ def _dump_env(parameters: dict, out: Path, resume: bool) -> DumpWriter:
                     env.reset()
                     index, episode = index + 1, episode + 1
                     writer.write(sim, index, {"episode": episode, "action": None, "reward": None})
-                progress(SimpleNamespace(time_ms=(step + 1) * 1000 / FRAME_RATE_HZ))
+                progress.update((step + 1) / FRAME_RATE_HZ)
     finally:
         progress.close()
         env.close()

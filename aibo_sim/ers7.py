@@ -15,6 +15,7 @@ from dataclasses import dataclass
 from openr_bridge import CAMERA_LOCATOR
 
 DEG = math.pi / 180.0
+HEAD_CAMERA = "camera"  # the MJCF name of the head camera
 
 
 @dataclass(frozen=True)
@@ -75,6 +76,12 @@ JOINTS: tuple[Joint, ...] = (
 
 JOINT_BY_NAME = {j.name: j for j in JOINTS}
 JOINT_BY_LOCATOR = {j.locator: j for j in JOINTS}
+JOINT_INDEX = {j.name: i for i, j in enumerate(JOINTS)}  # position in JOINTS (and in actuators)
+
+
+def joint_indices(locators) -> list[int]:
+    """Positions in ``JOINTS`` of the joints with these OPEN-R locators."""
+    return [JOINT_INDEX[JOINT_BY_LOCATOR[locator].name] for locator in locators]
 
 
 @dataclass(frozen=True)
@@ -89,7 +96,7 @@ class Sensor:
 
 
 SENSORS: tuple[Sensor, ...] = (
-    Sensor("camera", CAMERA_LOCATOR, "camera"),
+    Sensor(HEAD_CAMERA, CAMERA_LOCATOR, "camera"),
     # Which head IR is on which side is unconfirmed: Webots' placement is used.
     Sensor("ir_near", "PRM:/r1/c1/c2/c3/p1-Sensor:p1", "distance", (50.0, 500.0)),
     Sensor("ir_far", "PRM:/r1/c1/c2/c3/p2-Sensor:p2", "distance", (200.0, 1500.0)),

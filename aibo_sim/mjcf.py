@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from . import field as F
-from .ers7 import JOINT_BY_NAME, JOINTS, LED_OFF_RGBA, LEGS, SENSORS
+from .ers7 import HEAD_CAMERA, JOINT_BY_NAME, JOINTS, LED_OFF_RGBA, LEGS, SENSORS
 from openr_bridge import FULL_HEIGHT, FULL_WIDTH, HORIZONTAL_FOV_DEG, VERTICAL_FOV_DEG
 
 MODELS_DIR = Path(__file__).resolve().parent.parent / "models"
@@ -144,7 +144,7 @@ def _camera() -> ET.Element:
     # Both Sony fields of view hold exactly: sensor size = 2 f tan(fov / 2) on each axis.
     sensor = [2 * CAMERA_FOCAL * math.tan(math.radians(f) / 2) for f in (HORIZONTAL_FOV_DEG, VERTICAL_FOV_DEG)]
     return E(
-        "camera", name="camera", pos=(0.08106, 0, -0.0146), xyaxes=(0, -1, 0, 0, 0, 1),
+        "camera", name=HEAD_CAMERA, pos=(0.08106, 0, -0.0146), xyaxes=(0, -1, 0, 0, 0, 1),
         focal=(CAMERA_FOCAL, CAMERA_FOCAL), sensorsize=sensor, resolution=(FULL_WIDTH, FULL_HEIGHT),
     )
 
@@ -221,6 +221,8 @@ def _neck() -> ET.Element:
     )
 
 
+HIP_OFFSET = (0.065, 0.0625, 0.0)  # J1 axis from the body origin (x: front +, hind -; y: left +)
+KNEE_OFFSET = (0.009, 0.0047, -0.0695)  # J3 axis from J1/J2 (x: front +, hind -; y: outward)
 PAW_OFFSET = {True: (-0.0055, 0.0, -0.0658), False: (0.01409, 0.0, -0.0676)}  # from J3, at J3 = 0
 
 
@@ -229,6 +231,7 @@ def _leg(leg: str) -> ET.Element:
     fb = 1 if front else -1  # front legs: + swings forward; hind legs mirrored
     paw = np.array(PAW_OFFSET[front])
     shin_axis = paw / np.linalg.norm(paw)
+    knee = (fb * KNEE_OFFSET[0], side * KNEE_OFFSET[1], KNEE_OFFSET[2])
     shin_len = 0.046 if front else 0.080
     shin = E(
         "body",
@@ -240,18 +243,18 @@ def _leg(leg: str) -> ET.Element:
         collision(type="box", size=(0.0175, 0.0185, shin_len / 2), pos=0.45 * paw, zaxis=shin_axis),
         collision(name=f"{leg}_paw", class_="paw", pos=paw),
         touch_site(f"touch_paw_{leg}", paw, PAW_TOUCH_RADIUS),
-        name=f"{leg}_j3", pos=(fb * 0.009, side * 0.0047, -0.0695), childclass="leg_j3",
+        name=f"{leg}_j3", pos=knee, childclass="leg_j3",
     )
     thigh = E(
         "body",
         E("inertial", pos=(0, 0, -0.04), mass=0.073, diaginertia=box_inertia(0.073, (0.033, 0.028, 0.065))),
         joint(f"{leg}_j2", (side, 0, 0)),
-        visual(type="capsule", fromto=(0, 0, 0, fb * 0.009, side * 0.0047, -0.0695), size=0.017),
+        visual(type="capsule", fromto=(0, 0, 0, *knee), size=0.017),
         collision(type="box", size=(0.0165, 0.014, 0.0325), pos=(0, 0, -0.021)),
         shin,
         name=f"{leg}_j2", pos=(0, 0, 0), childclass="leg_j2",
     )
-    disc_y = side * (0.049 - 0.0625)
+    disc_y = side * (0.049 - HIP_OFFSET[1])
     return E(
         "body",
         E("inertial", pos=(0, disc_y, 0), mass=0.05, diaginertia=box_inertia(0.05, (0.064, 0.01, 0.064))),
@@ -259,7 +262,7 @@ def _leg(leg: str) -> ET.Element:
         visual(type="sphere", size=0.024),
         collision(type="cylinder", fromto=(0, disc_y - 0.005, 0, 0, disc_y + 0.005, 0), size=0.032),
         thigh,
-        name=f"{leg}_j1", pos=(fb * 0.065, side * 0.0625, 0), childclass="leg_j1",
+        name=f"{leg}_j1", pos=(fb * HIP_OFFSET[0], side * HIP_OFFSET[1], HIP_OFFSET[2]), childclass="leg_j1",
     )
 
 

@@ -17,13 +17,11 @@ from pathlib import Path
 
 import numpy as np
 
-from .ers7 import JOINT_BY_LOCATOR, JOINT_BY_NAME, JOINTS, LEGS
-from .mjcf import PAW_OFFSET, POSES
+from .ers7 import JOINT_BY_LOCATOR, JOINT_INDEX, JOINTS, LEGS, joint_indices
+from .mjcf import HIP_OFFSET, KNEE_OFFSET, PAW_OFFSET, POSES
 from .mtn import Motion, MotionPlayer, read_mtn, write_mtn
 from .sim import FRAME_MS, Simulation, models_dir
 
-HIP = (0.065, 0.0625, 0.0)  # J1 axis from the body origin (x: front +, hind -; y: left +)
-KNEE = (0.009, 0.0047, -0.0695)  # J3 axis from J1/J2 at zero (x: front +, hind -; y: outward)
 KEYFRAME_MS = 16  # Sony's walks: pre-sampled 16 ms keyframes, numInterpolate 0
 BLEND_MS = 512  # play_motion's blend from the current pose to a motion's first keyframe
 
@@ -35,8 +33,8 @@ def _leg_geometry(leg: str) -> tuple[int, int, np.ndarray, np.ndarray, np.ndarra
     """(fb, side, hip, knee, paw): fb = +1 front / -1 hind, side = +1 left / -1 right."""
     _, side, front = LEGS[leg]
     fb = 1 if front else -1
-    hip = np.array([fb * HIP[0], side * HIP[1], HIP[2]])
-    knee = np.array([fb * KNEE[0], side * KNEE[1], KNEE[2]])
+    hip = np.array([fb * HIP_OFFSET[0], side * HIP_OFFSET[1], HIP_OFFSET[2]])
+    knee = np.array([fb * KNEE_OFFSET[0], side * KNEE_OFFSET[1], KNEE_OFFSET[2]])
     return fb, side, hip, knee, np.array(PAW_OFFSET[front])
 
 
@@ -93,7 +91,7 @@ def leg_angles(leg: str, position) -> np.ndarray:
 # ----------------------------------------------------------------------------- poses
 
 LOCATORS = tuple(j.locator for j in JOINTS)  # posture changes drive all 20 joints, as Sony's do
-_LEG_INDEX = {leg: [JOINTS.index(JOINT_BY_NAME[f"{leg}_j{i}"]) for i in (1, 2, 3)] for leg in LEGS}
+_LEG_INDEX = {leg: [JOINT_INDEX[f"{leg}_j{i}"] for i in (1, 2, 3)] for leg in LEGS}
 # Gaits drive the 12 leg joints only, so a controller can move the head while walking.
 _GAIT_COLUMNS = sorted(i for columns in _LEG_INDEX.values() for i in columns)
 GAIT_LOCATORS = tuple(JOINTS[i].locator for i in _GAIT_COLUMNS)
@@ -259,7 +257,7 @@ def play_motion(motion_or_path, repeat: int = 1, sim: Simulation | None = None, 
     if unknown:
         raise ValueError(f"{motion.name}: no joint for locator(s) {', '.join(unknown)}")
     sim = sim or Simulation()
-    idx = [JOINTS.index(JOINT_BY_LOCATOR[loc]) for loc in motion.locators]
+    idx = joint_indices(motion.locators)
 
     start = sim.servos.command[idx].copy()
     first = motion.positions_rad()[0]

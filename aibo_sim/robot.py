@@ -22,11 +22,11 @@ from pathlib import Path
 import numpy as np
 
 from . import ers7
+from .mtn import MODES as MTN_MODES
 from .mtn import MotionPlayer, mtn_new
 from .sim import FRAME_MS, Simulation
 
 BACKENDS = ("sim", "openr")
-MTN_MODES = ("openr", "webots")
 
 
 class DeviceError(RuntimeError):
@@ -85,7 +85,7 @@ class Servo(Device):
 
     def __init__(self, robot, locator, name):
         super().__init__(robot, locator, name)
-        self.index = [j.name for j in ers7.JOINTS].index(name)
+        self.index = ers7.JOINT_INDEX[name]
 
     def set_position(self, radians: float) -> None:
         self.robot.sim.servos.set_target(self.index, float(radians))
@@ -266,8 +266,7 @@ class Robot:
 
     def mtn_play(self, motion) -> None:
         player = MotionPlayer(motion, mode=self.mtn_mode)
-        joints = [ers7.JOINT_BY_LOCATOR[locator] for locator in motion.locators]
-        self.playing.append(_Playing(motion, player, [ers7.JOINTS.index(j) for j in joints], self.time_ms))
+        self.playing.append(_Playing(motion, player, ers7.joint_indices(motion.locators), self.time_ms))
 
     def _playing(self, motion) -> "_Playing | None":
         return next((p for p in self.playing if p.motion is motion), None)
@@ -295,8 +294,8 @@ class Robot:
     def _step_webots_motions(self, ms: int) -> None:
         for playing in list(self.playing):
             commands = playing.player.step(ms)
-            for locator, radians in (commands or {}).items():
-                self.sim.servos.set_target(ers7.JOINTS.index(ers7.JOINT_BY_LOCATOR[locator]), radians)
+            if commands:
+                self.sim.servos.set_target(playing.indices, [commands[loc] for loc in playing.motion.locators])
             if playing.player.is_over:
                 self.playing.remove(playing)
 

@@ -81,12 +81,15 @@ class Progress:
         self._last = 0.0
 
     def __call__(self, robot: Robot) -> None:
+        """Frame listener form of ``update``."""
+        self.update(robot.time_ms / 1000)
+
+    def update(self, simulated_s: float) -> None:
         now = time.monotonic()
         if self.enabled and now - self._last > 0.25:
             self._last = now
-            done = min(1.0, robot.time_ms / 1000 / self.duration_s)
-            bar = "#" * int(30 * done)
-            self.stream.write(f"\r[{bar:<30}] {robot.time_ms / 1000:7.2f} / {self.duration_s:.2f} s")
+            bar = "#" * int(30 * min(1.0, simulated_s / self.duration_s))
+            self.stream.write(f"\r[{bar:<30}] {simulated_s:7.2f} / {self.duration_s:.2f} s")
             self.stream.flush()
 
     def close(self) -> None:

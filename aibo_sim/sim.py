@@ -16,7 +16,7 @@ import numpy as np
 from openr_bridge import FRAME_RATE_HZ, FRAME_TICK_MS, FULL_HEIGHT, FULL_WIDTH, LAYER_SIZE
 
 from .field import BALL_RADIUS
-from .ers7 import JOINTS, LED_BY_NAME, LED_OFF_RGBA, SENSOR_BY_NAME, SENSORS
+from .ers7 import HEAD_CAMERA, JOINTS, LED_BY_NAME, LED_OFF_RGBA, SENSOR_BY_NAME, SENSORS
 from .render import Renderer
 
 FRAME_MS = FRAME_TICK_MS  # OPEN-R joint frame, 8 ms
@@ -224,7 +224,7 @@ class Simulation:
         if self._renderer is None:
             self._renderer = Renderer(self.model, *self.camera_size, groups=HEAD_CAMERA_GROUPS)
         if self.camera_due():
-            self._camera_image = self._renderer.render(self.data, "camera")
+            self._camera_image = self._renderer.render(self.data, HEAD_CAMERA)
             self._camera_image.flags.writeable = False
             self._rendered_camera_frame = self.camera_frame_index()
         return self._camera_image

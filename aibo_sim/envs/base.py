@@ -36,7 +36,7 @@ import mujoco
 import numpy as np
 import openr_bridge
 
-from ..ers7 import JOINT_BY_NAME, JOINTS, LEGS, SENSORS
+from ..ers7 import HEAD_CAMERA, JOINT_INDEX, JOINTS, LEGS, SENSORS
 from ..render import Renderer
 from ..sim import ACCEL_RANGE, Simulation
 
@@ -77,7 +77,7 @@ class AiboEnv(gym.Env):
         self._openr = openr_bridge.OpenRSystem.from_memory_stick() if camera == "openr" else None
         self.sim = Simulation()
         model = self.sim.model
-        self._actuated = np.array([JOINTS.index(JOINT_BY_NAME[name]) for name in self.actuated_joints])
+        self._actuated = np.array([JOINT_INDEX[name] for name in self.actuated_joints])
         self._target_low, self._target_high = model.actuator_ctrlrange[self._actuated].T
         self._nominal_lights = (model.light_diffuse.copy(), model.vis.headlight.diffuse.copy())
         self.camera_gains = np.ones(3)  # R, G, B gains of this episode
@@ -188,7 +188,7 @@ class AiboEnv(gym.Env):
         image. Uses the camera's pose and its focal length over its sensor size.
         """
         model, data = self.sim.model, self.sim.data
-        cam = model.camera("camera").id
+        cam = model.camera(HEAD_CAMERA).id
         local = data.cam_xmat[cam].reshape(3, 3).T @ (np.asarray(point) - data.cam_xpos[cam])
         depth = -local[2]  # MuJoCo cameras look along -z, with y up
         half_fov = model.cam_sensorsize[cam] / 2 / model.cam_intrinsic[cam][:2]  # tan of the half angles
