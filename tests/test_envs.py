@@ -76,9 +76,10 @@ def test_make_in_a_fresh_process_by_naming_the_module_in_the_id():
     assert result.stdout.split() == ["(160,", "208,", "3)", "300"]
 
 
+@pytest.mark.parametrize("options", [{}, {"render_mode": "rgb_array"}, {"camera": "openr"}, {"camera": None}])
 @pytest.mark.parametrize("env_id", AIBO_IDS)
-def test_check_env_passes_with_warnings_as_errors(env_id):
-    env = gym.make(env_id)
+def test_check_env_passes_with_warnings_as_errors(env_id, options):
+    env = gym.make(env_id, **options)
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         check_env(env.unwrapped)
