@@ -10,7 +10,7 @@ from pathlib import Path
 from .mtn import MODES as MTN_MODES
 from .robot import BACKENDS
 
-EXIT_BAD_INPUT, EXIT_CONTROLLER, EXIT_DIVERGED = 2, 1, 3
+EXIT_BAD_INPUT, EXIT_CONTROLLER, EXIT_DIVERGED, EXIT_INTERRUPTED = 2, 1, 3, 130
 
 
 def _run(args) -> int:
@@ -87,7 +87,7 @@ def _mtn_play(args) -> int:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="aibo-sim", description=__doc__)
+    parser = argparse.ArgumentParser(prog="aibo-sim", description="Sony Aibo ERS-7 simulator: run controllers, render the camera, inspect and play MTN files, dump camera frames.")
     commands = parser.add_subparsers(dest="command", required=True)
 
     run = commands.add_parser("run", help="run a controller headless")
@@ -153,6 +153,9 @@ def main(argv: list[str] | None = None) -> int:
     except (ModelError, MtnError, OpenRError, DeviceError, RenderingUnavailable, OSError, ValueError) as exc:
         print(f"aibo-sim: error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
+    except KeyboardInterrupt:
+        print("\naibo-sim: interrupted (a dump can continue with --resume)", file=sys.stderr)
+        return EXIT_INTERRUPTED
 
 
 if __name__ == "__main__":
