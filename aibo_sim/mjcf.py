@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import math
 import xml.etree.ElementTree as ET
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -106,7 +107,7 @@ def _defaults() -> ET.Element:
         "default",
         E(
             "default",
-            E("joint", damping=SERVO_DAMPING, armature=SERVO_ARMATURE, frictionloss=0.005),
+            E("joint", damping=SERVO_DAMPING, armature=SERVO_ARMATURE),
             E("position", inheritrange=1),
             E("site", group=4, rgba=(0.9, 0.2, 0.2, 0.4)),
             *(servo(cls) for cls in KP),
@@ -418,47 +419,99 @@ def _line_mesh(ring_segments: int = 48) -> ET.Element:
     return E("mesh", name="field_lines", vertex=np.array(vertices).ravel(), face=np.array(faces).ravel(), inertia="shell")
 
 
-def _goal(colour: str, line_x: float) -> ET.Element:
+@dataclass(frozen=True)
+class StaticPart:
+    """A fixed box or cylinder of a scene. Parts with the same ``mesh`` are drawn as one mesh
+    geom of that name (software OpenGL pays per drawn geom; the name's prefix is its
+    segmentation class); ``name`` is its collision geom (group 3), None for no collision."""
+
+    mesh: str
+    material: str
+    shape: str  # "box" (size: half extents) or "cylinder" (size: radius, half height)
+    pos: tuple[float, float, float]
+    size: tuple[float, ...]
+    name: str | None = None
+
+
+def _part_triangles(part: StaticPart, segments: int = 16) -> tuple[np.ndarray, list[tuple[int, int, int]]]:
+    """Vertices and outward-facing triangles of a part, in world coordinates."""
+    centre = np.array(part.pos, float)
+    if part.shape == "box":
+        half = np.array(part.size, float)
+        vertices = centre + half * np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)])
+        quads = [(0, 1, 3, 2), (4, 5, 7, 6), (0, 1, 5, 4), (2, 3, 7, 6), (0, 2, 6, 4), (1, 3, 7, 5)]
+    else:
+        radius, half_height = part.size
+        ring = [(radius * math.cos(a), radius * math.sin(a)) for a in np.linspace(0, 2 * math.pi, segments, endpoint=False)]
+        vertices = centre + np.array([(x, y, z) for z in (-half_height, half_height) for x, y in ring]
+                                     + [(0, 0, -half_height), (0, 0, half_height)])
+        quads = [(i, (i + 1) % segments, segments + (i + 1) % segments, segments + i) for i in range(segments)]
+        quads += [(2 * segments, i, (i + 1) % segments, 2 * segments) for i in range(segments)]
+        quads += [(2 * segments + 1, segments + i, segments + (i + 1) % segments, 2 * segments + 1) for i in range(segments)]
+    triangles = []
+    for a, b, c, d in quads:
+        for tri in ((a, b, c), (a, c, d)):
+            if len(set(tri)) < 3:
+                continue
+            p0, p1, p2 = vertices[list(tri)]
+            outward = np.dot(np.cross(p1 - p0, p2 - p0), (p0 + p1 + p2) / 3 - centre) > 0
+            triangles.append(tri if outward else tri[::-1])
+    return vertices, triangles
+
+
+def static_parts(parts: list[StaticPart]) -> tuple[list[ET.Element], list[ET.Element]]:
+    """Mesh assets, and the geoms: one visual mesh per ``mesh`` name, then the collision geoms."""
+    meshes: dict[str, tuple[str, list, list]] = {}
+    collision_geoms = []
+    for part in parts:
+        material, vertices, faces = meshes.setdefault(part.mesh, (part.material, [], []))
+        if material != part.material:
+            raise ValueError(f"mesh {part.mesh}: parts of materials {material} and {part.material}")
+        part_vertices, triangles = _part_triangles(part)
+        faces.extend(tuple(i + len(vertices) for i in tri) for tri in triangles)
+        vertices.extend(part_vertices)
+        if part.name is not None:
+            collision_geoms.append(E("geom", name=part.name, type=part.shape, pos=part.pos, size=part.size, group=3,
+                                     rgba=(0.5, 0.5, 0.9, 0.4)))
+    assets = [E("mesh", name=n, vertex=np.array(v).ravel(), face=np.array(f).ravel(), inertia="shell")
+              for n, (_, v, f) in meshes.items()]
+    visuals = [E("geom", name=n, type="mesh", mesh=n, material=m, contype=0, conaffinity=0)
+               for n, (m, _, _) in meshes.items()]
+    return assets, visuals + collision_geoms
+
+
+def _goal(colour: str, line_x: float) -> list[StaticPart]:
     sign = 1 if line_x > 0 else -1
     d, w, h, t = F.GOAL_DEPTH, F.GOAL_WIDTH, F.GOAL_HEIGHT, 0.01
-    back = line_x + sign * (d - t / 2)
-    return E(
-        "body",
-        E("geom", name=f"goal_{colour}_back", type="box", size=(t / 2, w / 2 + t, h / 2), pos=(back, 0, h / 2), material=colour),
-        *(
-            E("geom", name=f"goal_{colour}_{side}", type="box", size=(d / 2, t / 2, h / 2),
-              pos=(line_x + sign * d / 2, s * (w / 2 + t / 2), h / 2), material=colour)
-            for side, s in (("left", 1), ("right", -1))
-        ),
-        E("geom", name=f"goal_{colour}_roof", type="box", size=(d / 2 + t / 2, w / 2 + t, t / 2),
-          pos=(line_x + sign * (d / 2 + t / 2), 0, h + t / 2), material=colour),
-        name=f"goal_{colour}",
-    )
+    mesh = f"goal_{colour}"
+    return [
+        StaticPart(mesh, colour, "box", (line_x + sign * (d - t / 2), 0, h / 2), (t / 2, w / 2 + t, h / 2), f"{mesh}_back"),
+        *(StaticPart(mesh, colour, "box", (line_x + sign * d / 2, s * (w / 2 + t / 2), h / 2), (d / 2, t / 2, h / 2),
+                     f"{mesh}_{side}") for side, s in (("left", 1), ("right", -1))),
+        StaticPart(mesh, colour, "box", (line_x + sign * (d / 2 + t / 2), 0, h + t / 2), (d / 2 + t / 2, w / 2 + t, t / 2),
+                   f"{mesh}_roof"),
+    ]
 
 
-def _beacon(b: F.Beacon) -> ET.Element:
+def _beacon(b: F.Beacon) -> list[StaticPart]:
     r, ph = F.BEACON_RADIUS, F.BEACON_PART_HEIGHT
     c_top = 0.30 - ph  # bottom of the coloured part; centre of the coloured part at 0.30 m
-    return E(
-        "body",
-        E("geom", name=f"{b.name}_white", type="cylinder", size=(r, c_top / 2), pos=(0, 0, c_top / 2), material="white"),
-        E("geom", name=f"{b.name}_middle", type="cylinder", size=(r, ph / 2), pos=(0, 0, c_top + ph / 2), material=b.middle),
-        E("geom", name=f"{b.name}_top", type="cylinder", size=(r, ph / 2), pos=(0, 0, c_top + 1.5 * ph), material=b.top),
-        name=b.name, pos=(b.x, b.y, 0),
-    )
-
-
-def _hall(half_x: float, half_y: float, height: float = 4.0) -> list[ET.Element]:
-    """The venue: a plain hall instead of a skybox (a textured skybox costs ~25 % of a head
-    camera frame in software GL; five boxes cost almost nothing)."""
     return [
-        E("geom", name=f"hall_{n}", type="box", size=size, pos=pos, material="hall", contype=0, conaffinity=0)
-        for n, size, pos in (
-            ("north", (half_x, 0.05, height / 2), (0, half_y, height / 2)),
-            ("south", (half_x, 0.05, height / 2), (0, -half_y, height / 2)),
-            ("east", (0.05, half_y, height / 2), (half_x, 0, height / 2)),
-            ("west", (0.05, half_y, height / 2), (-half_x, 0, height / 2)),
-            ("ceiling", (half_x, half_y, 0.05), (0, 0, height)),
+        StaticPart(f"beacon_{material}", material, "cylinder", (b.x, b.y, z), (r, half), f"{b.name}_{part}")
+        for part, material, z, half in (("white", "white", c_top / 2, c_top / 2), ("middle", b.middle, c_top + ph / 2, ph / 2),
+                                        ("top", b.top, c_top + 1.5 * ph, ph / 2))
+    ]
+
+
+def _hall(half_x: float, half_y: float, height: float = 4.0) -> list[StaticPart]:
+    """The venue: a plain hall instead of a skybox (a textured skybox costs ~25 % of a head
+    camera frame in software GL; one mesh costs almost nothing)."""
+    return [
+        StaticPart("hall", "hall", "box", pos, size)
+        for size, pos in (
+            ((half_x, 0.05, height / 2), (0, half_y, height / 2)), ((half_x, 0.05, height / 2), (0, -half_y, height / 2)),
+            ((0.05, half_y, height / 2), (half_x, 0, height / 2)), ((0.05, half_y, height / 2), (-half_x, 0, height / 2)),
+            ((half_x, half_y, 0.05), (0, 0, height)),
         )
     ]
 
@@ -469,7 +522,7 @@ HALL_MATERIAL = dict(name="hall", rgba=(0.72, 0.72, 0.70, 1), specular=0)
 def scene_xml() -> ET.Element:
     cl, cw, h = F.CARPET_LENGTH / 2, F.CARPET_WIDTH / 2, F.WALL_HEIGHT
     walls = [
-        E("geom", name=f"wall_{n}", type="box", size=size, pos=pos, material="wall")
+        StaticPart("wall", "wall", "box", pos, size, f"wall_{n}")
         for n, size, pos in (
             ("left", (cl + 0.02, 0.01, h / 2), (0, cw + 0.01, h / 2)),
             ("right", (cl + 0.02, 0.01, h / 2), (0, -cw - 0.01, h / 2)),
@@ -477,6 +530,9 @@ def scene_xml() -> ET.Element:
             ("yellow", (0.01, cw, h / 2), (-cl - 0.01, 0, h / 2)),
         )
     ]
+    goals = [part for colour, x in F.GOALS.items() for part in _goal(colour, x)]
+    beacons = [part for b in F.BEACONS for part in _beacon(b)]
+    meshes, fixed = static_parts(walls + _hall(cl + 2.0, cw + 2.0) + goals + beacons)
     return E(
         "mujoco",
         E("include", file="ers7.xml"),
@@ -493,6 +549,7 @@ def scene_xml() -> ET.Element:
             *(E("material", name=n, rgba=c, specular=0.1) for n, c in F.COLOURS.items()),
             E("material", **HALL_MATERIAL),
             _line_mesh(),
+            *meshes,
         ),
         E(
             "worldbody",
@@ -500,10 +557,7 @@ def scene_xml() -> ET.Element:
             E("light", name="ceiling_2", pos=(1.2, 0, 3), dir=(0, 0, -1), directional="false", diffuse=(0.45, 0.45, 0.43), castshadow="true"),
             E("geom", name="field_carpet", type="plane", size=(cl + 0.5, cw + 0.5, 1.0), material="carpet", friction=(0.9, 0.005, 0.0001)),
             E("geom", name="field_lines", type="mesh", mesh="field_lines", material="line", contype=0, conaffinity=0),
-            *walls,
-            *_hall(cl + 2.0, cw + 2.0),
-            *(_goal(c, x) for c, x in F.GOALS.items()),
-            *(_beacon(b) for b in F.BEACONS),
+            *fixed,
             E(
                 "body",
                 E("freejoint", name="ball"),
@@ -531,32 +585,30 @@ WEBOTS_COLOURS = {
 
 def webots_scene_xml() -> ET.Element:
     """The Webots ERS-7 world: goals blue at +x and yellow at -x, landmarks, borders, pink ball."""
-    goals = []
+    parts = []
     for colour, sign in (("blue", 1), ("yellow", -1)):
-        back, d, w, h, t = sign * 1.75, 0.25, 0.6, 0.3, 0.01
-        goals += [
-            E("geom", name=f"goal_{colour}_back", type="box", size=(t / 2, w / 2, h / 2), pos=(back, 0, h / 2), material=colour),
-            *(E("geom", name=f"goal_{colour}_{side}", type="box", size=(d / 2, t / 2, h / 2),
-                pos=(back - sign * d / 2, s * w / 2, h / 2), material=colour) for side, s in (("left", 1), ("right", -1))),
-            E("geom", name=f"goal_{colour}_roof", type="box", size=(d / 2, w / 2, t / 2), pos=(back - sign * d / 2, 0, 0.305), material=colour),
+        back, d, w, h, t, mesh = sign * 1.75, 0.25, 0.6, 0.3, 0.01, f"goal_{colour}"
+        parts += [
+            StaticPart(mesh, colour, "box", (back, 0, h / 2), (t / 2, w / 2, h / 2), f"{mesh}_back"),
+            *(StaticPart(mesh, colour, "box", (back - sign * d / 2, s * w / 2, h / 2), (d / 2, t / 2, h / 2),
+                         f"{mesh}_{side}") for side, s in (("left", 1), ("right", -1))),
+            StaticPart(mesh, colour, "box", (back - sign * d / 2, 0, 0.305), (d / 2, w / 2, t / 2), f"{mesh}_roof"),
         ]
-    landmarks = []
     for i, (x, y, bottom, top) in enumerate(WEBOTS_LANDMARKS):
-        landmarks.append(E(
-            "body",
-            E("geom", name=f"beacon_{i}_post", type="box", size=(0.005, 0.005, 0.2), pos=(0, 0, 0.2), material="white"),
-            E("geom", name=f"beacon_{i}_bottom", type="cylinder", size=(0.02, 0.025), pos=(0, 0, 0.425), material=bottom),
-            E("geom", name=f"beacon_{i}_top", type="cylinder", size=(0.02, 0.025), pos=(0, 0, 0.475), material=top),
-            name=f"beacon_{i}", pos=(x, y, 0),
-        ))
-    borders = [
-        E("geom", name=f"wall_border_{n}", type="box", size=size, pos=pos, material="border")
+        parts += [
+            StaticPart("beacon_white", "white", "box", (x, y, 0.2), (0.005, 0.005, 0.2), f"beacon_{i}_post"),
+            StaticPart(f"beacon_{bottom}", bottom, "cylinder", (x, y, 0.425), (0.02, 0.025), f"beacon_{i}_bottom"),
+            StaticPart(f"beacon_{top}", top, "cylinder", (x, y, 0.475), (0.02, 0.025), f"beacon_{i}_top"),
+        ]
+    parts += [
+        StaticPart("wall_border", "border", "box", pos, size, f"wall_border_{n}")
         for n, size, pos in (
             ("left", (1.65, 0.025, 0.1), (0, 0.98, 0.1)), ("right", (1.65, 0.025, 0.1), (0, -0.98, 0.1)),
             *((f"end_{i}", (0.025, 0.34, 0.1), (sx * 1.58, sy * 0.64, 0.1))
               for i, (sx, sy) in enumerate(((1, 1), (1, -1), (-1, 1), (-1, -1)))),
         )
     ]
+    meshes, fixed = static_parts(parts + _hall(4.0, 3.0))
     return E(
         "mujoco",
         E("include", file="ers7.xml"),
@@ -565,13 +617,12 @@ def webots_scene_xml() -> ET.Element:
           E("map", znear=0.002, zfar=20), E("global", offwidth=640, offheight=480)),
         E("asset",
           *(E("material", name=n, rgba=c, specular=0.1, emission=0.31 if n == "red" else 0) for n, c in WEBOTS_COLOURS.items()),
-          E("material", **HALL_MATERIAL)),
+          E("material", **HALL_MATERIAL), *meshes),
         E(
             "worldbody",
             E("light", name="ceiling", pos=(0, 0, 3), dir=(0, 0, -1), directional="false", diffuse=(0.6, 0.6, 0.58)),
             E("geom", name="field_carpet", type="plane", size=(2.0, 1.5, 1.0), material="pitch", friction=(0.99, 0.005, 0.0001)),
-            *_hall(4.0, 3.0),
-            *goals, *borders, *landmarks,
+            *fixed,
             E("body", E("freejoint", name="ball"),
               E("geom", name="ball", type="sphere", size=0.035, mass=0.1, material="pink", condim=6, friction=(0.7, 0.005, 0.002)),
               name="ball", pos=(0.5, 0, 0.035)),
