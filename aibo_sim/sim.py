@@ -118,6 +118,7 @@ class Simulation:
             for s in SENSORS if s.kind != "camera"
         }
         self._joint_qpos = np.array([self.model.joint(j.name).qposadr[0] for j in JOINTS])
+        self._ball_body = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_BODY, "ball")  # -1: no ball
         self.reset(seed)
 
     # ---------------------------------------------------------------- time and state
@@ -143,7 +144,7 @@ class Simulation:
 
     @property
     def has_ball(self) -> bool:
-        return mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_BODY, "ball") >= 0
+        return self._ball_body >= 0
 
     def place_ball(self, x: float, y: float) -> None:
         """Put the ball at rest on the carpet at (x, y)."""
@@ -156,7 +157,7 @@ class Simulation:
 
     def ball_position(self) -> np.ndarray | None:
         """The ball's centre, or None in a scene without a ball."""
-        return self.data.xpos[self.model.body("ball").id].copy() if self.has_ball else None
+        return self.data.xpos[self._ball_body].copy() if self.has_ball else None
 
     @property
     def time_ms(self) -> int:

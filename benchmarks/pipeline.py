@@ -65,12 +65,12 @@ def measure() -> list[dict]:
         row(floor, 1 / floor_s, "frames/s"),
     ]
     for backend in ("sim", "openr"):
-        seconds = min(_run_seconds(backend, camera=True) for _ in range(2))
+        seconds = min(_run_seconds(backend, camera=True) for _ in range(3))
         fps = SIM_SECONDS * 30 / seconds
         rows.append(row(f"camera pipeline, {backend} backend (physics + camera at 30 fps)", fps, "frames/s",
                         floor, fps * floor_s))
         rows.append(row(f"real-time factor, {backend} backend, camera at 30 fps", SIM_SECONDS / seconds, "x"))
-    blind = min(_run_seconds("sim", camera=False) for _ in range(2))
+    blind = min(_run_seconds("sim", camera=False) for _ in range(3))
     rows.append(row("real-time factor, no camera", SIM_SECONDS / blind, "x"))
     return rows
 
