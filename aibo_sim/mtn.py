@@ -10,8 +10,8 @@ Decisions where the spec leaves room (also listed in the report that came with t
 * Section 0 must be exactly 24 bytes (Sony: "fixed length"; OPEN-R's struct and Webots'
   reader both hard-code it). Sections 1 and 2 are jumped by ``sectionSize``: slack after the
   parsed strings is skipped (its bytes, normally zero padding, are not kept; the writer emits
-  zeros). Section 3's size must equal ``12 + N*4*(3+J) + 4*(N-1)`` exactly, and no bytes may
-  follow it. A motion needs at least one keyframe, one joint, distinct locators, a frame time
+  zeros). Section 3's size must equal ``12 + N*4*(3+J) + 4*(N-1)`` exactly; bytes after it
+  are ignored (OPEN-R and Webots stop reading there), so they do not survive a round trip. A motion needs at least one keyframe, one joint, distinct locators, a frame time
   > 0 and non-negative interpolation counts.
 * Strings are latin-1 (a pstring is a u8 length, so at most 255 bytes).
 * A missing file is an ``OSError`` from :func:`read_mtn` (it is not a malformed file);
@@ -264,14 +264,12 @@ def parse_mtn(data: bytes, source: str = "<bytes>") -> Motion:
         raise r.fail(end2 + 4, f"section 3 size {size}, expected {want} for {nkey} keyframes of {njoint} joints")
     if dtype != 0:
         raise r.fail(end2 + 8, f"data type {dtype}, expected 0")
-    r.need(end2, size, "section 3")
-    if end2 + size != len(r.data):
-        raise r.fail(end2 + size, f"{len(r.data) - end2 - size} trailing bytes after section 3")
+    r.need(end2, size, "section 3")  # bytes after section 3 are ignored, as OPEN-R and Webots read
 
     # Keyframe 0, then (numInterpolate, keyframe) pairs: view as rows of 1 + kf_words s32,
     # with a dummy interpolation word in front of keyframe 0.
     body = end2 + 12
-    words = np.frombuffer(b"\0\0\0\0" + r.data[body:], dtype="<i4").astype(np.int64).reshape(nkey, 1 + kf_words)
+    words = np.frombuffer(b"\0\0\0\0" + r.data[body:end2 + size], dtype="<i4").astype(np.int64).reshape(nkey, 1 + kf_words)
     interpolate = words[1:, 0]
     if (interpolate < 0).any():
         k = int(np.argmax(interpolate < 0)) + 1

@@ -174,8 +174,11 @@ BAD_TINY = {
     "data type": (_patch(TINY, 80, "<I", 1), 80),
     "negative interpolation": (_patch(TINY, 104, "<i", -1), 104),
     "truncated section 3": (TINY[:127], 72),
-    "trailing bytes": (TINY + b"\0", 128),
 }
+
+
+def test_bytes_after_section_3_are_ignored_as_the_robot_reads():
+    assert parse_mtn(TINY + b"\0\xff\0\0", "tiny.mtn") == parse_mtn(TINY, "tiny.mtn")
 
 
 @pytest.mark.parametrize("case", sorted(BAD_TINY))
