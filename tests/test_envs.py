@@ -269,3 +269,12 @@ def test_reach_ball_rewards_progress_and_ends_on_reaching_or_falling():
     _, reward, terminated, _, info = env.step(hold)
     assert terminated and info["fallen"] and reward < -0.5
     env.close()
+
+
+def test_reset_info_describes_the_new_episode():
+    env, fresh = gym.make(HEAD_TRACK, randomize=RANDOMIZE), gym.make(HEAD_TRACK, randomize=RANDOMIZE)
+    env.reset(seed=1)
+    _, info = env.reset(seed=2)
+    _, expected = fresh.reset(seed=2)
+    np.testing.assert_array_equal(info["ball_offset"], expected["ball_offset"])
+    env.close(), fresh.close()

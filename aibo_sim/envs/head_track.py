@@ -13,6 +13,8 @@ camera. ``info``: ``ball_offset`` (x, y) and ``ball_visible``.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from ..field import BALL_RADIUS
@@ -39,19 +41,26 @@ class HeadTrackBallEnv(AiboEnv):
         self._start = self.ball_start(BALL_START)
         self._omega = 2 * np.pi * rng.uniform(*FREQUENCY_HZ, 2)
         self._phase = rng.uniform(0, 2 * np.pi, 2)
+        self._ball_seen_at = -1  # the frame counter starts again at 0
         self._before_frame()
 
     def _before_frame(self) -> None:
-        t = self.sim.data.time
-        xy = self._start + AMPLITUDE * (np.sin(self._omega * t + self._phase) - np.sin(self._phase))
-        velocity = AMPLITUDE * self._omega * np.cos(self._omega * t + self._phase)
-        if xy[0] < NEAREST_X:
-            xy[0], velocity[0] = NEAREST_X, 0.0
-        self.sim.data.qpos[self._ball_qpos:self._ball_qpos + 7] = (*xy, BALL_RADIUS, 1.0, 0.0, 0.0, 0.0)
-        self.sim.data.qvel[self._ball_qvel:self._ball_qvel + 6] = (*velocity, 0.0, 0.0, 0.0, 0.0)
+        t = self.sim.data.time  # scalar math: this runs every 8 ms frame
+        angles = [w * t + p for w, p in zip(self._omega, self._phase)]
+        x, y = (s + a * (math.sin(q) - math.sin(p))
+                for s, a, q, p in zip(self._start, AMPLITUDE, angles, self._phase))
+        vx, vy = (a * w * math.cos(q) for a, w, q in zip(AMPLITUDE, self._omega, angles))
+        if x < NEAREST_X:
+            x, vx = NEAREST_X, 0.0
+        self.sim.data.qpos[self._ball_qpos:self._ball_qpos + 7] = (x, y, BALL_RADIUS, 1.0, 0.0, 0.0, 0.0)
+        self.sim.data.qvel[self._ball_qvel:self._ball_qvel + 6] = (vx, vy, 0.0, 0.0, 0.0, 0.0)
 
     def _ball_in_image(self) -> tuple[np.ndarray, bool]:
-        return self.image_position(self.sim.ball_position())
+        """The ball's projected offset and visibility, computed once per joint frame."""
+        if self._ball_seen_at != self.sim.frame:
+            self._ball_seen = self.image_position(self.sim.ball_position())
+            self._ball_seen_at = self.sim.frame
+        return self._ball_seen
 
     def _evaluate(self) -> tuple[float, bool]:
         offset, visible = self._ball_in_image()
