@@ -19,7 +19,7 @@ import sys
 import numpy as np
 from openr_bridge.wrapper import camera_image_get_blue, camera_image_get_green, camera_image_get_red
 
-from .mtn import MtnError, mtn_get_error
+from .mtn import MtnError, format_motion_info, motion_info, mtn_get_error
 from .robot import (Accelerometer, Camera, Device, DeviceError, DistanceSensor, Led, Robot, Servo,
                     SimulationEnd, TouchSensor)
 
@@ -177,6 +177,9 @@ def camera_image_get_grey(image, width: int, x: int, y: int) -> int:
     return (red + green + camera_image_get_blue(image, width, x, y)) // 3
 
 
+camera_image_get_gray = camera_image_get_grey  # the later Webots spelling
+
+
 # ------------------------------------------------------------------------- sensors, LEDs
 
 
@@ -261,6 +264,11 @@ def mtn_get_length(motion) -> int:
 
 def mtn_get_time(motion) -> int:
     return current_robot().mtn_get_time(_motion(motion))
+
+
+def mtn_fprint(file, motion) -> None:
+    """Webots' debug dump of a motion: name, creator, design, frames, length, locators."""
+    file.write(format_motion_info(motion_info(_motion(motion))) + "\n")
 
 
 def mtn_get_name(motion) -> str:

@@ -1,5 +1,6 @@
 """The Webots-era controller API, sampling rules, MTN playback through it, both backends (issue 4)."""
 
+import sys
 import numpy as np
 import pytest
 
@@ -167,6 +168,16 @@ def test_mtn_through_the_api_follows_openr_interpolation(robot, tmp_path):
     np.testing.assert_allclose(np.array(commands) * 1e6, [i * (end // 6) for i in range(6)] + [end], atol=1e-6)
     api.robot_step(8)
     assert api.mtn_is_over(motion)
+
+
+def test_mtn_fprint_and_grey(robot, tmp_path, capsys):
+    robot.search_dirs = (tmp_path,)
+    motion = api.mtn_new(_two_keyframe_motion(tmp_path).name)
+    api.mtn_fprint(sys.stdout, motion)
+    out = capsys.readouterr().out
+    assert "a_stand#stand_test" in out and "48 ms" in out and LF_J1 in out
+    image = np.array([30, 60, 91], np.uint8)
+    assert api.camera_image_get_grey(image, 1, 0, 0) == api.camera_image_get_gray(image, 1, 0, 0) == 60
 
 
 def test_mtn_new_failures_set_the_webots_error(robot, tmp_path):
