@@ -1,6 +1,7 @@
 """The Webots-era controller API, sampling rules, MTN playback through it, both backends (issue 4)."""
 
 import sys
+
 import numpy as np
 import pytest
 
