@@ -41,6 +41,7 @@ class Device:
     """A named device with Webots' enable/sample/disable cycle."""
 
     kind = "device"
+    enable_call = ""  # the API function that enables it, when not ``<kind>_enable``
 
     def __init__(self, robot: "Robot", locator: str, name: str):
         self.robot, self.locator, self.name = robot, locator, name
@@ -71,7 +72,8 @@ class Device:
 
     def value(self):
         if self.period is None:
-            raise DeviceError(f"{self.locator}: {self.kind} is not enabled (call {self.kind}_enable first)")
+            call = self.enable_call or f"{self.kind}_enable"
+            raise DeviceError(f"{self.locator}: {self.kind} is not enabled (call {call} first)")
         if self._value is None:
             raise DeviceError(
                 f"{self.locator}: no sample yet: enabled with a {self.period} ms period, first value at "
@@ -82,31 +84,39 @@ class Device:
 
 class Servo(Device):
     kind = "servo"
+    enable_call = "servo_enable_position"
 
     def __init__(self, robot, locator, name):
         super().__init__(robot, locator, name)
         self.index = ers7.JOINT_INDEX[name]
 
+    def _number(self, value, what: str) -> float:
+        number = float(value)
+        if not math.isfinite(number):
+            raise DeviceError(f"{self.locator}: {what} must be a finite number, not {value!r}")
+        return number
+
     def set_position(self, radians: float) -> None:
-        self.robot.sim.servos.set_target(self.index, float(radians))
+        self.robot.sim.servos.set_target(self.index, self._number(radians, "position"))
 
     def set_velocity(self, rad_per_s: float) -> None:
         """Speed limit; never above Sony's maximum for the joint."""
-        self.robot.sim.servos.velocity[self.index] = abs(float(rad_per_s))
+        self.robot.sim.servos.velocity[self.index] = abs(self._number(rad_per_s, "velocity"))
 
     def set_acceleration(self, rad_per_s2: float) -> None:
         """Acceleration limit; -1 means unlimited, as in Webots."""
-        value = float(rad_per_s2)
+        value = self._number(rad_per_s2, "acceleration")
         self.robot.sim.servos.acceleration[self.index] = math.inf if value < 0 else value
 
     def set_motor_force(self, newton_metres: float) -> None:
-        force = abs(float(newton_metres))
+        force = abs(self._number(newton_metres, "motor force"))
         self.robot.sim.model.actuator_forcerange[self.index] = (-force, force)
 
     def set_control_p(self, p: float) -> None:
+        p = self._number(p, "control P")
         model = self.robot.sim.model
-        model.actuator_gainprm[self.index, 0] = float(p)
-        model.actuator_biasprm[self.index, 1] = -float(p)
+        model.actuator_gainprm[self.index, 0] = p
+        model.actuator_biasprm[self.index, 1] = -p
 
     def _sample(self) -> float:
         return float(self.robot.sim.joint_positions()[self.index])

@@ -40,8 +40,10 @@ def test_tags_are_checked(robot):
 
 def test_reading_before_enable_or_first_sample_is_an_error(robot):
     pan = api.robot_get_device(HEAD_PAN)
-    with pytest.raises(DeviceError, match="not enabled"):
+    with pytest.raises(DeviceError, match="not enabled \\(call servo_enable_position first\\)"):
         api.servo_get_position(pan)
+    with pytest.raises(DeviceError, match=r"PRM:/r1/c1/c2-Joint2:12: position must be a finite number"):
+        api.servo_set_position(pan, float("nan"))
     api.servo_enable_position(pan, 32)
     with pytest.raises(DeviceError, match="no sample yet"):
         api.servo_get_position(pan)
