@@ -42,14 +42,17 @@ class OpenRCamera(SimCamera):
         self.wrapper = self.system.controller
         self.last_message: openr_bridge.OFbkImageVectorData | None = None
 
-    def capture(self) -> np.ndarray:
-        rendered = self.sim.render_camera()
-        self.last_message = openr_bridge.encode_frame(
-            rendered, frame_number=self.sim.frame, field_counter=self.sim.camera_frame_index()
-        )
+    def serve(self, rgb: np.ndarray) -> np.ndarray:
+        """Deliver ``rgb`` as the current frame's message to the wrapper; what its
+        ``camera_get_image`` then serves, (h, w, 3)."""
+        self.last_message = self.sim.openr_message(rgb)
         self.system.robot_comm.publish_image(self.last_message)
         image = np.asarray(self.wrapper.camera_get_image(), dtype=np.uint8)
         self.width, self.height = self.wrapper.camera_get_width(), self.wrapper.camera_get_height()
         self.fov = self.wrapper.camera_get_fov()
-        self._notify(image.reshape(self.height, self.width, 3))
+        return image.reshape(self.height, self.width, 3)
+
+    def capture(self) -> np.ndarray:
+        image = self.serve(self.sim.render_camera())
+        self._notify(image)
         return image.reshape(-1)

@@ -76,7 +76,7 @@ from .field import SEGMENTATION_CLASSES
 from .render import Renderer
 from .robot import BACKENDS, SimulationEnd
 from .runner import Progress, run_controller
-from .sim import HEAD_CAMERA_GROUPS, Simulation, load_model
+from .sim import HEAD_CAMERA_GROUPS, Simulation, camera_size, load_model
 
 FORMATS = ("rgb", "yuv444", "yuv420", "annex", "openr", "bands", "luma", "depth", "seg", "mp4")
 DEFAULT_FORMATS = ("rgb", "yuv420", "openr", "mp4")
@@ -305,7 +305,7 @@ class DumpWriter:
         if "annex" in wants:
             yield path("annex"), annex_yuv(rgb).tobytes()
         if wants & {"openr", "bands", "luma"}:
-            message = openr_bridge.encode_frame(rgb, frame_number=sim.frame, field_counter=sim.camera_frame_index())
+            message = sim.openr_message(rgb)
             if "openr" in wants:
                 yield path("openr"), bytes(message)
             if "bands" in wants:
@@ -444,7 +444,7 @@ class _CameraFrames:
 
 def _dump_controller(parameters: dict, out: Path, resume: bool) -> DumpWriter:
     frames, camera_full = parameters["frames"], parameters["camera_full"]
-    width, height = (openr_bridge.FULL_WIDTH, openr_bridge.FULL_HEIGHT) if camera_full else openr_bridge.LAYER_SIZE[0]
+    width, height = camera_size(camera_full)
     with DumpWriter(out, parameters["formats"], parameters, resume=resume, width=width, height=height,
                     model=load_model()) as writer:
         listener = _CameraFrames(writer, frames)

@@ -13,7 +13,7 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
-from openr_bridge import FRAME_RATE_HZ, FRAME_TICK_MS, FULL_HEIGHT, FULL_WIDTH, LAYER_SIZE
+from openr_bridge import FRAME_RATE_HZ, FRAME_TICK_MS, FULL_HEIGHT, FULL_WIDTH, LAYER_SIZE, OFbkImageVectorData, encode_frame
 
 from .field import BALL_RADIUS
 from .ers7 import HEAD_CAMERA, JOINTS, LED_BY_NAME, LED_OFF_RGBA, SENSOR_BY_NAME, SENSORS
@@ -52,6 +52,11 @@ def load_model(scene: str | Path | None = None) -> mujoco.MjModel:
         return mujoco.MjModel.from_xml_path(str(path))
     except ValueError as exc:
         raise ModelError(f"{path}: {exc}") from None
+
+
+def camera_size(camera_full: bool) -> tuple[int, int]:
+    """(width, height) the head camera renders: the sensor's 416x320, or layer H's 208x160."""
+    return (FULL_WIDTH, FULL_HEIGHT) if camera_full else LAYER_SIZE[0]
 
 
 class Servos:
@@ -111,7 +116,7 @@ class Simulation:
             raise ModelError(f"timestep {self.model.opt.timestep} does not divide the 8 ms joint frame")
         self.steps_per_frame = round(steps)
         self.servos = Servos(self.model)
-        self.camera_size = (FULL_WIDTH, FULL_HEIGHT) if camera_full else LAYER_SIZE[0]
+        self.camera_size = camera_size(camera_full)
         self._renderer: Renderer | None = None
         self._sensor_slices = {
             s.name: slice(self.model.sensor(s.name).adr[0], self.model.sensor(s.name).adr[0] + self.model.sensor(s.name).dim[0])
@@ -229,6 +234,11 @@ class Simulation:
             self._camera_image.flags.writeable = False
             self._rendered_camera_frame = self.camera_frame_index()
         return self._camera_image
+
+    def openr_message(self, rgb: np.ndarray) -> OFbkImageVectorData:
+        """``rgb`` as the robot delivers it now: frameNumber = this 8 ms tick, field counter =
+        the 30 fps camera frame index."""
+        return encode_frame(rgb, frame_number=self.frame, field_counter=self.camera_frame_index())
 
     def set_led(self, name: str, level: float) -> None:
         """Light an LED geom at ``level`` in 0..1 of its colour (0: the unlit material)."""

@@ -37,6 +37,7 @@ import numpy as np
 import openr_bridge
 
 from ..ers7 import HEAD_CAMERA, JOINT_INDEX, JOINTS, LEGS, SENSORS
+from ..camera import OpenRCamera
 from ..render import Renderer
 from ..sim import ACCEL_RANGE, Simulation
 
@@ -74,8 +75,8 @@ class AiboEnv(gym.Env):
                              "use camera='ycrcb' or 'rgb' for layers M and L")
         self.camera, self.camera_layer, self.render_mode = camera, camera_layer, render_mode
         self.camera_message: openr_bridge.OFbkImageVectorData | None = None  # the last one encoded
-        self._openr = openr_bridge.OpenRSystem.from_memory_stick() if camera == "openr" else None
         self.sim = Simulation()
+        self._openr = OpenRCamera(self.sim) if camera == "openr" else None
         model = self.sim.model
         self._actuated = np.array([JOINT_INDEX[name] for name in self.actuated_joints])
         self._target_low, self._target_high = model.actuator_ctrlrange[self._actuated].T
@@ -221,13 +222,10 @@ class AiboEnv(gym.Env):
                 return rgb
             scale = rgb.shape[0] // height
             return (rgb.reshape(height, scale, width, scale, 3).mean(axis=(1, 3)) + 0.5).astype(np.uint8)
-        index = self.sim.camera_frame_index()
-        self.camera_message = openr_bridge.encode_frame(
-            rgb, frame_number=self.sim.frame, field_counter=index  # as the openr backend and dumps
-        )
-        if self.camera == "ycrcb":
-            layer = LAYERS[self.camera_layer]
-            return np.stack([self.camera_message.band(layer, band) for band in YCRCB_BANDS], axis=-1)
-        self._openr.robot_comm.publish_image(self.camera_message)
-        controller = self._openr.controller
-        return controller.camera_get_image().reshape(controller.camera_get_height(), controller.camera_get_width(), 3)
+        if self.camera == "openr":
+            image = self._openr.serve(rgb)
+            self.camera_message = self._openr.last_message
+            return image
+        self.camera_message = self.sim.openr_message(rgb)
+        layer = LAYERS[self.camera_layer]
+        return np.stack([self.camera_message.band(layer, band) for band in YCRCB_BANDS], axis=-1)
