@@ -10,10 +10,17 @@ multisampling, with spheres and capsules of 16 x 10 facets (MuJoCo's default is 
 at 208 x 160 the difference is invisible and the frame costs ~35 % less) by default
 (``quality="fast"``); ``quality="high"`` keeps MuJoCo's settings with shadows for
 pictures (README renders, third-person views).
+
+Culling: MuJoCo hands every geom of the shown groups to OpenGL, and llvmpipe spends
+~20 us on each even when it lies outside the picture. Without shadows and reflections a geom
+whose bounding sphere is outside the camera's view frustum cannot change a pixel, so such
+geoms are left out of the scene (the head camera typically draws 10 of its 30 geoms:
+~0.43 ms a frame instead of ~0.72 ms). The image is the same, bit for bit (tested).
 """
 
 from __future__ import annotations
 
+import math
 import os
 
 import mujoco
@@ -60,11 +67,12 @@ class Renderer:
     Shows the geom groups in ``groups`` (default 0-2: scene and visual geoms; collision
     geoms are group 3), no sites. The head camera leaves out group 1, the robot's visual
     geoms behind its lens, which it cannot see anyway. ``render`` returns a new
-    ``(height, width, 3)`` uint8 array, top row first.
+    ``(height, width, 3)`` uint8 array, top row first. ``cull=False`` draws the geoms outside
+    the view too (same pixels, slower); ``scene`` is the ``MjvScene`` last drawn.
     """
 
     def __init__(self, model: mujoco.MjModel, width: int, height: int, quality: str = "fast",
-                 groups: tuple[int, ...] = (0, 1, 2)):
+                 groups: tuple[int, ...] = (0, 1, 2), cull: bool = True):
         if quality not in ("fast", "high"):
             raise ValueError(f"quality must be 'fast' or 'high', not {quality!r}")
         if width > model.vis.global_.offwidth or height > model.vis.global_.offheight:
@@ -96,6 +104,8 @@ class Renderer:
         self._option.geomgroup[:] = [int(g in groups) for g in range(6)]
         self._option.sitegroup[:] = 0
         self._option.flags[mujoco.mjtVisFlag.mjVIS_RANGEFINDER] = 0
+        self._cullable_key = None
+        self._hidden_group = next((g for g in range(mujoco.mjNGROUP) if g not in groups), None) if cull else None
         self._camera = mujoco.MjvCamera()
         self._rect = mujoco.MjrRect(0, 0, width, height)
         self._rgb = np.empty((height, width, 3), np.uint8)
@@ -109,8 +119,59 @@ class Renderer:
             cam.type = mujoco.mjtCamera.mjCAMERA_FIXED
             cam.fixedcamid = camera if isinstance(camera, int) else self.model.camera(camera).id
         self._gl.make_current()
-        mujoco.mjv_updateScene(self.model, data, self._option, None, cam, mujoco.mjtCatBit.mjCAT_ALL, self._scene)
+        culled = self._outside_view(data, cam)
+        group = self.model.geom_group
+        saved = group[culled]
+        if culled.size:
+            group[culled] = self._hidden_group
+        try:
+            mujoco.mjv_updateScene(self.model, data, self._option, None, cam, mujoco.mjtCatBit.mjCAT_ALL, self._scene)
+        finally:
+            group[culled] = saved
         mujoco.mjr_render(self._rect, self._scene, self._context)
+
+    @property
+    def scene(self) -> mujoco.MjvScene:
+        return self._scene
+
+    def _outside_view(self, data: mujoco.MjData, cam: mujoco.MjvCamera) -> np.ndarray:
+        """Ids of the shown geoms whose bounding spheres lie outside the view frustum; none
+        when shadows or reflections are on (a geom out of view can still cast or mirror) or
+        every group is shown (no group left to hide them in), or culling is off."""
+        flags = self._scene.flags
+        if self._hidden_group is None or flags[mujoco.mjtRndFlag.mjRND_SHADOW] or flags[mujoco.mjtRndFlag.mjRND_REFLECTION]:
+            return np.empty(0, np.intp)
+        shown, minus_radius = self._cullable_geoms()
+        mujoco.mjv_updateCamera(self.model, data, cam, self._scene)
+        eye = mujoco.mjv_averageCamera(*self._scene.camera)  # the two stereo eyes sit ipd apart; mono draws their mean
+        near, far, centre = eye.frustum_near, eye.frustum_far, eye.frustum_center
+        half_width = eye.frustum_width or 0.5 * (eye.frustum_top - eye.frustum_bottom) * self.width / self.height
+        # Inward unit normals of the OpenGL frustum's planes (in Python floats: numpy's
+        # per-call overhead would cost more than the arithmetic): left, right, bottom, top,
+        # each from the tangent of its angle at the eye, then near and far.
+        f, u, eye_pos = eye.forward.tolist(), eye.up.tolist(), eye.pos.tolist()
+        r = [f[1] * u[2] - f[2] * u[1], f[2] * u[0] - f[0] * u[2], f[0] * u[1] - f[1] * u[0]]
+        sides = (((centre - half_width) / near, r), (-(centre + half_width) / near, [-c for c in r]),
+                 (eye.frustum_bottom / near, u), (-eye.frustum_top / near, [-c for c in u]))
+        normals = [[(a - t * fc) / math.hypot(1, t) for a, fc in zip(axis, f)] for t, axis in sides]
+        normals += [f, [-c for c in f]]
+        offsets = [sum(n * p for n, p in zip(normal, eye_pos)) for normal in normals]
+        offsets[4] += near
+        offsets[5] -= far
+        distance = data.geom_xpos[shown] @ np.array(normals).T - offsets
+        return shown[(distance < minus_radius).any(axis=1)]
+
+    def _cullable_geoms(self) -> tuple[np.ndarray, np.ndarray]:
+        """Ids of the geoms in the shown groups with a finite bounding sphere (planes have
+        radius 0), and minus their radii as a column; cached while the groups stay the same."""
+        model = self.model
+        key = model.geom_group.tobytes() + self._option.geomgroup.tobytes()
+        if self._cullable_key != key:
+            radius = model.geom_rbound
+            shown = np.flatnonzero(self._option.geomgroup[model.geom_group] & (radius > 0))
+            self._cullable = shown, -radius[shown, None]
+            self._cullable_key = key
+        return self._cullable
 
     def render(self, data: mujoco.MjData, camera: int | str | mujoco.MjvCamera) -> np.ndarray:
         """RGB image of ``camera`` (id, name or free MjvCamera) in the state ``data``."""

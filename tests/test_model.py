@@ -199,3 +199,36 @@ def test_bad_model_file_names_the_file(tmp_path, content):
         path.write_text(content)
     with pytest.raises(ModelError, match="broken_scene.xml"):
         load_model(path)
+
+
+def test_culling_geoms_out_of_view_changes_no_pixel():
+    """Random robot poses and head angles on the field, the ball near the robot, and two head
+    poses that see the front legs: RGB, depth and segmentation from the culling renderer
+    equal those drawn with every geom."""
+    from aibo_sim.render import Renderer
+    from aibo_sim.sim import HEAD_CAMERA_GROUPS
+
+    sim = Simulation()
+    sim.place_ball(0.35, 0.05)
+    culling = Renderer(sim.model, 208, 160, groups=HEAD_CAMERA_GROUPS)
+    drawing_all = Renderer(sim.model, 208, 160, groups=HEAD_CAMERA_GROUPS, cull=False)
+    rng = np.random.default_rng(7)
+    drawn, total, robot_seen = [], [], False
+    robot_geoms = {g for g in range(sim.model.ngeom) if sim.model.geom_group[g] == 2}
+    head_poses = [(-1.3, -0.8, -0.3), (-1.3, 0.8, -0.3)]  # neck tilt, pan, head tilt: legs in view
+    head_poses += rng.uniform((-1.3, -1.5, -0.3), (0.05, 1.5, 0.7), (40, 3)).tolist()
+    for head_pose in head_poses:
+        sim.place_robot(*rng.uniform(-2.0, 2.0, 2), rng.uniform(-math.pi, math.pi))
+        for name, angle in zip(("neck_tilt", "head_pan", "head_tilt"), head_pose):
+            sim.data.qpos[sim.model.joint(name).qposadr[0]] = angle
+        mujoco.mj_forward(sim.model, sim.data)
+        for method in ("render", "render_depth", "render_segmentation"):
+            culled, full = getattr(culling, method)(sim.data, "camera"), getattr(drawing_all, method)(sim.data, "camera")
+            assert np.array_equal(culled, full), method
+        drawn.append(culling.scene.ngeom)
+        total.append(drawing_all.scene.ngeom)
+        robot_seen |= bool(robot_geoms & set(np.unique(full).tolist()))
+    culling.close()
+    drawing_all.close()
+    assert robot_seen  # some poses look at the robot's own legs: partly visible geoms were kept
+    assert sum(drawn) < 0.5 * sum(total)
