@@ -16,6 +16,10 @@ import ctypes.util
 import os
 
 HEADLESS_LIBRARIES = (("egl", "EGL"), ("osmesa", "OSMesa"))
+SYSTEM_PACKAGES = (
+    "EGL: Debian/Ubuntu 'libegl1 libgl1-mesa-dri' (Mesa's software renderer works); "
+    "OSMesa: 'libosmesa6'"
+)
 
 
 def choose_gl_backend() -> str | None:
@@ -28,3 +32,16 @@ def choose_gl_backend() -> str | None:
         os.environ.setdefault("PYOPENGL_PLATFORM", chosen)
         os.environ.setdefault("LP_NUM_THREADS", "0")
     return chosen or None
+
+
+def import_mujoco() -> None:
+    """Import MuJoCo, which loads the OpenGL library ``MUJOCO_GL`` names at import time;
+    when that fails (e.g. ``MUJOCO_GL=osmesa`` without libOSMesa) the ImportError says so
+    instead of PyOpenGL's traceback."""
+    try:
+        import mujoco  # noqa: F401
+    except Exception as exc:
+        raise ImportError(
+            f"MuJoCo cannot load the OpenGL backend MUJOCO_GL={os.environ.get('MUJOCO_GL', '')!r} "
+            f"({type(exc).__name__}: {exc}). Install {SYSTEM_PACKAGES}, or unset MUJOCO_GL to let aibo_sim choose."
+        ) from None

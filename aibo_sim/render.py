@@ -26,12 +26,7 @@ import os
 import mujoco
 import numpy as np
 
-from ._gl import choose_gl_backend
-
-SYSTEM_PACKAGES = (
-    "EGL: Debian/Ubuntu 'libegl1 libgl1-mesa-dri' (Mesa's software renderer works); "
-    "OSMesa: 'libosmesa6'"
-)
+from ._gl import SYSTEM_PACKAGES, choose_gl_backend
 
 
 class RenderingUnavailable(RuntimeError):

@@ -26,3 +26,29 @@ def test_every_model_file_is_package_data():
         if path.is_file():
             name = path.relative_to(models).as_posix()
             assert any(fnmatch.fnmatch(name, p) for p in patterns), f"models/{name} would be left out of the wheel"
+
+
+def _import_aibo_sim(**env: str):
+    import os
+    import subprocess
+    import sys
+
+    environment = {k: v for k, v in os.environ.items() if k not in ("MUJOCO_GL", "LP_NUM_THREADS")} | env
+    code = "import os, aibo_sim; print(os.environ['MUJOCO_GL'], os.environ['LP_NUM_THREADS'])"
+    return subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=environment, cwd=ROOT)
+
+
+def test_import_chooses_a_headless_backend_and_keeps_the_users_settings():
+    chosen = _import_aibo_sim()
+    assert chosen.returncode == 0, chosen.stderr
+    assert chosen.stdout.split() in (["egl", "0"], ["osmesa", "0"])
+    kept = _import_aibo_sim(MUJOCO_GL=chosen.stdout.split()[0], LP_NUM_THREADS="3")
+    assert kept.stdout.split() == [chosen.stdout.split()[0], "3"]
+
+
+def test_unusable_mujoco_gl_fails_at_import_with_a_clear_message():
+    result = _import_aibo_sim(MUJOCO_GL="nonsense")
+    assert result.returncode != 0
+    last = result.stderr.strip().splitlines()[-1]
+    assert last.startswith("ImportError: MuJoCo cannot load the OpenGL backend MUJOCO_GL='nonsense'")
+    assert "unset MUJOCO_GL" in last
