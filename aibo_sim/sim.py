@@ -169,9 +169,23 @@ class Simulation:
         return self.frame * FRAME_MS
 
     def step_frame(self) -> None:
-        """Advance one 8 ms joint frame; raises SimulationDiverged on NaN physics."""
+        """Advance one 8 ms joint frame; raises SimulationDiverged on NaN physics.
+
+        Sensors are read once a frame, so MuJoCo computes them only in the frame's last
+        step: they do not feed back into the dynamics, so the trajectory and the readings
+        are those of plain stepping, and each earlier step saves the ~9 us (of ~44 us) that
+        the IR rays, touch sensors and accelerometer cost.
+        """
         self.data.ctrl[:] = self.servos.advance(FRAME_MS / 1000)
-        mujoco.mj_step(self.model, self.data, nstep=self.steps_per_frame)
+        options = self.model.opt
+        if self.steps_per_frame > 1:
+            flags = options.disableflags
+            options.disableflags = flags | mujoco.mjtDisableBit.mjDSBL_SENSOR
+            try:
+                mujoco.mj_step(self.model, self.data, nstep=self.steps_per_frame - 1)
+            finally:
+                options.disableflags = flags
+        mujoco.mj_step(self.model, self.data)
         self.frame += 1
         warnings = self.data.warning
         bad = warnings[mujoco.mjtWarning.mjWARN_BADQACC].number + warnings[mujoco.mjtWarning.mjWARN_BADCTRL].number
