@@ -27,6 +27,17 @@ Choices made where the spec leaves the hardware unconfirmed:
   TagInfo" in its BallTrackingHead sample, so C carries it as well; the Cr, Cb and detail
   bands are left alone. M, L and C are computed from the untagged values.
 
+How the bytes are computed (``encode_frame`` writes every band straight into the message's
+buffer): H's Y, Cr and Cb come from the forward colour table (``colour.rgb_to_ycrcb_packed``);
+the Y bands of M and L (and of H from a 416x320 frame) from two table lookups per 2x2 block
+(``_haar``); the chroma means from ``cv2.resize`` with ``INTER_AREA``, which for an exact
+halving of a uint8 image is (sum + 2) >> 2. Both were checked against the definitions above
+on all 2^32 blocks, at the widths used here; the tests compare whole messages with a direct
+integer implementation. Measured with warm caches (best of repeated runs, 2-core machine):
+a 208x160 rendered frame encodes in about 0.18 ms (0.72 ms when each band was numpy integer
+arithmetic), a 416x320 one in 1.2 ms (3.3 ms); random noise, whose colour lookups miss the
+caches, in 0.48 ms (0.71 ms) and 3.3 ms (3.4 ms).
+
 ``reconstruct_luma`` is Sony's double-resolution reconstruction. It returns exactly the luma
 whose 2x2 blocks the bands can hold: four values of one parity whose sum is a multiple of 4.
 No byte bands can hold every luma (the analysis maps 4 bytes to 4 bytes with determinant
@@ -35,13 +46,19 @@ holdable block, so any other luma comes back within 2 levels per pixel (and with
 root-sum-square over a block).
 """
 
+import struct
+from functools import cache
+from itertools import accumulate
+
+import cv2
 import numpy as np
 
 from .cdt import OCdtVectorData, cdt_layer, ocdtNUM_CHANNELS
-from .colour import rgb_to_ycrcb
+from .colour import rgb_to_ycrcb, rgb_to_ycrcb_packed
 from .errors import FrameError
 from .ers7_camera import FULL_HEIGHT, FULL_WIDTH, LAYER_SIZE, LAYER_TYPE
 from .image import (
+    BAND_RUNS,
     IMAGE_INFO_SIZE,
     TAG_LENGTH,
     VECTOR_INFO_SIZE,
@@ -55,6 +72,20 @@ from .image import (
     ofbkimageLAYER_H,
 )
 
+# The layers' data sizes and offsets: back to back after the header and the four infos.
+_SIZES = [BAND_RUNS[layer_type][1] * width * height for layer_type, (width, height) in zip(LAYER_TYPE, LAYER_SIZE)]
+_OFFSETS = list(accumulate(_SIZES[:-1], initial=VECTOR_INFO_SIZE + IMAGE_INFO_SIZE * len(_SIZES)))
+# The header and the infos, with primitiveID and frameNumber (words 1 and 2 of an info) 0.
+_PREAMBLE = ODataVectorInfo(totalSize=_OFFSETS[-1] + _SIZES[-1], maxNumData=len(_SIZES), numData=len(_SIZES)).pack()
+_PREAMBLE += b"".join(
+    OFbkImageInfo(layer_type, 0, 0, offset, size, width, height).pack()
+    for layer_type, (width, height), offset, size in zip(LAYER_TYPE, LAYER_SIZE, _OFFSETS, _SIZES)
+)
+# Where each layer's last row starts: the tag goes into its first bytes (the Y or CDT band).
+_TAG_STARTS = [offset + size - size // height for (_, height), offset, size in zip(LAYER_SIZE, _OFFSETS, _SIZES)]
+# (256, 8): bit k of each byte value, to count the C layer's pixels per channel.
+_CHANNEL_BITS = (np.arange(256)[:, np.newaxis] >> np.arange(ocdtNUM_CHANNELS)) & 1
+
 
 def encode_frame(
     rgb: np.ndarray,
@@ -65,36 +96,34 @@ def encode_frame(
     primitive_id: int = 0,
 ) -> OFbkImageVectorData:
     """The message for a (320, 416, 3) or (160, 208, 3) uint8 RGB frame."""
-    h_layer = _layer_h(rgb)
-    m_layer = _next_level(h_layer)
-    l_layer = _next_level(m_layer)
-    c_layer = cdt_layer(m_layer[0], m_layer[1], m_layer[2], cdt)
-    layers = [np.stack(h_layer, axis=1), np.stack(m_layer, axis=1), np.stack(l_layer, axis=1), c_layer]
-
-    tag = _tag(field_counter, c_layer)
-    for hpf_layer in layers[:3]:
-        hpf_layer[-1, 0, :TAG_LENGTH] = tag  # run 0 of a row is the Y band
-    c_layer[-1, :TAG_LENGTH] = tag
-
-    offset = VECTOR_INFO_SIZE + IMAGE_INFO_SIZE * len(layers)
-    infos = []
-    for (width, height), layer_type, layer in zip(LAYER_SIZE, LAYER_TYPE, layers, strict=True):
-        info = OFbkImageInfo(layer_type, primitive_id, frame_number % 2**32, offset, layer.size, width, height)
-        infos.append(info.pack())
-        offset += layer.size
-    header = ODataVectorInfo(totalSize=offset, maxNumData=len(layers), numData=len(layers)).pack()
-    return OFbkImageVectorData(bytearray(b"".join([header, *infos, *(layer.tobytes() for layer in layers)])))
+    rgb = _checked_frame(rgb)
+    message = bytearray(_OFFSETS[-1] + _SIZES[-1])
+    message[: _OFFSETS[0]] = _PREAMBLE
+    for index in range(len(_SIZES)):
+        info_start = VECTOR_INFO_SIZE + IMAGE_INFO_SIZE * index
+        struct.pack_into("<2I", message, info_start + 4, primitive_id, frame_number % 2**32)
+    data = np.frombuffer(message, np.uint8)
+    h_layer, m_layer, l_layer, c_layer = (  # each (height, runs, width): run k of row y is [y, k]
+        data[offset : offset + size].reshape(height, -1, width)
+        for (width, height), offset, size in zip(LAYER_SIZE, _OFFSETS, _SIZES)
+    )
+    _layer_h(rgb, h_layer)
+    _next_level(h_layer, m_layer)
+    _next_level(m_layer, l_layer)
+    cdt_bits = cdt_layer(m_layer[:, 0], m_layer[:, 1], m_layer[:, 2], cdt)
+    c_layer[:, 0] = cdt_bits
+    tag = _tag(field_counter, cdt_bits)
+    for start in _TAG_STARTS:
+        message[start : start + TAG_LENGTH] = tag
+    return OFbkImageVectorData(message)
 
 
 def haar_analysis(luma: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """(Y_LL, Y_LH, Y_HL, Y_HH) uint8 bands of a (2h, 2w) uint8 luma."""
-    p = luma.astype(np.int32)
-    p00, p10, p01, p11 = p[0::2, 0::2], p[0::2, 1::2], p[1::2, 0::2], p[1::2, 1::2]
-    ll = (p00 + p10 + p01 + p11 + 2) >> 2
-    lh = 128 + ((p01 + p11 - p00 - p10 + 2) >> 2)
-    hl = 128 + ((p10 + p11 - p00 - p01 + 2) >> 2)
-    hh = 128 + ((p00 + p11 - p10 - p01 + 2) >> 2)
-    return tuple(np.clip(band, 0, 255).astype(np.uint8) for band in (ll, lh, hl, hh))
+    luma = np.ascontiguousarray(luma, np.uint8)
+    bands = np.empty((luma.shape[0] // 2, 4, luma.shape[1] // 2), np.uint8)
+    _haar(luma, [bands[:, k] for k in range(4)])
+    return tuple(bands[:, k] for k in range(4))
 
 
 def reconstruct_luma(message: OFbkImageVectorData, layer: int = ofbkimageLAYER_H) -> np.ndarray:
@@ -113,8 +142,7 @@ def reconstruct_luma(message: OFbkImageVectorData, layer: int = ofbkimageLAYER_H
     return np.clip(luma, 0, 255).astype(np.uint8)
 
 
-def _layer_h(rgb) -> list[np.ndarray]:
-    """H's bands in row order Y, Cr, Cb, Y_LH, Y_HL, Y_HH."""
+def _checked_frame(rgb) -> np.ndarray:
     rgb = np.asarray(rgb)
     width, height = LAYER_SIZE[ofbkimageLAYER_H]
     if rgb.dtype != np.uint8 or rgb.shape not in [(FULL_HEIGHT, FULL_WIDTH, 3), (height, width, 3)]:
@@ -122,30 +150,68 @@ def _layer_h(rgb) -> list[np.ndarray]:
             f"frame of shape {rgb.shape} and dtype {rgb.dtype}, expected uint8 RGB "
             f"({FULL_HEIGHT}, {FULL_WIDTH}, 3) or ({height}, {width}, 3)"
         )
-    if rgb.shape[0] == height:
-        flat = np.full((height, width), 128, np.uint8)
-        return [*rgb_to_ycrcb(rgb), flat, flat, flat]
-    ll, lh, hl, hh = haar_analysis(rgb_to_ycrcb(rgb)[0])
-    _, cr, cb = rgb_to_ycrcb(_sum2x2(rgb), pixels=4)
-    return [ll, cr, cb, lh, hl, hh]
+    return rgb
 
 
-def _next_level(bands: list[np.ndarray]) -> list[np.ndarray]:
-    y, cr, cb = bands[:3]
-    ll, lh, hl, hh = haar_analysis(y)
-    return [ll, _mean2x2(cr), _mean2x2(cb), lh, hl, hh]
+def _layer_h(rgb: np.ndarray, layer: np.ndarray) -> None:
+    """Fill H (rows of Y, Cr, Cb, Y_LH, Y_HL, Y_HH) from the frame."""
+    ycrcb = rgb_to_ycrcb_packed(rgb)
+    if rgb.shape[0] == layer.shape[0]:
+        cv2.split(ycrcb, [layer[:, 0], layer[:, 1], layer[:, 2], np.empty(layer[:, 0].shape, np.uint8)])
+        layer[:, 3:] = 128
+        return
+    _haar(cv2.extractChannel(ycrcb, 0), [layer[:, 0], layer[:, 3], layer[:, 4], layer[:, 5]])
+    _, layer[:, 1], layer[:, 2] = rgb_to_ycrcb(_sum2x2(rgb), pixels=4)
 
 
-def _mean2x2(band: np.ndarray) -> np.ndarray:
-    return ((_sum2x2(band) + 2) >> 2).astype(np.uint8)
+def _next_level(src: np.ndarray, dst: np.ndarray) -> None:
+    """Fill the layer ``dst`` from the layer ``src`` of twice its size (both HPF)."""
+    height, _, width = dst.shape
+    _haar(src[:, 0], [dst[:, 0], dst[:, 3], dst[:, 4], dst[:, 5]])
+    # Cr and Cb side by side; INTER_AREA halving a uint8 image is (sum + 2) >> 2 per 2x2 block.
+    chroma = dst[:, 1:3].reshape(height, 2 * width)
+    cv2.resize(src[:, 1:3].reshape(2 * height, 4 * width), chroma.shape[::-1], dst=chroma, interpolation=cv2.INTER_AREA)
+
+
+def _haar(luma: np.ndarray, bands: list[np.ndarray]) -> None:
+    """Write Y_LL, Y_LH, Y_HL, Y_HH of a (2h, 2w) uint8 luma with contiguous rows to ``bands``.
+
+    Each pair of pixels of a row, read as a uint16, indexes a table (one for even rows, one
+    for odd) of four 16-bit lanes: the pair's share of 4 Y_LL, 4 Y_LH, 4 Y_HL and 4 Y_HH
+    before rounding (the detail bands' 128 as 512). A block's two shares add up without
+    carries, every lane staying in 0..1022, and convertScaleAbs makes a lane v the byte
+    |round(v / 4 + 1/8)| = floor((v + 2) / 4), saturated at 255: rounded half up and clipped.
+    """
+    height, width = luma.shape[0] // 2, luma.shape[1] // 2
+    top, bottom = _pair_tables()
+    pairs = luma.view("<u2")
+    lanes = np.take(top, pairs[0::2])
+    lanes += np.take(bottom, pairs[1::2])
+    packed = cv2.convertScaleAbs(lanes.view("<i2"), alpha=0.25, beta=0.125)
+    cv2.split(packed.reshape(height, width, 4), bands)
+
+
+@cache
+def _pair_tables() -> tuple[np.ndarray, np.ndarray]:
+    """The lanes of ``_haar`` for pairs (p0, p1) = (index & 0xFF, index >> 8), as little-endian
+    uint64: s, 512 - s, 256 + d, 256 - d in even rows and s, s, 256 + d, 256 + d in odd rows,
+    with s = p0 + p1 and d = p1 - p0."""
+    p0, p1 = np.arange(256 * 256) & 0xFF, np.arange(256 * 256) >> 8
+    s, d = p0 + p1, p1 - p0
+    top = np.stack([s, 512 - s, 256 + d, 256 - d], axis=-1).astype("<u2")
+    bottom = np.stack([s, s, 256 + d, 256 + d], axis=-1).astype("<u2")
+    return top.view("<u8").reshape(-1), bottom.view("<u8").reshape(-1)
 
 
 def _sum2x2(image: np.ndarray) -> np.ndarray:
-    p = image.astype(np.int32)
-    return p[0::2, 0::2] + p[0::2, 1::2] + p[1::2, 0::2] + p[1::2, 1::2]
+    rows = np.add(image[0::2], image[1::2], dtype=np.uint16)
+    return rows[:, 0::2] + rows[:, 1::2]
 
 
-def _tag(field_counter: int, c_layer: np.ndarray) -> np.ndarray:
-    frequency = [min(255, np.count_nonzero(c_layer & (1 << k)) // 16) for k in range(ocdtNUM_CHANNELS)]
+def _tag(field_counter: int, cdt_bits: np.ndarray) -> bytes:
+    frequency = [0] * ocdtNUM_CHANNELS
+    if cdt_bits.any():
+        pixels = np.bincount(cdt_bits.reshape(-1), minlength=256) @ _CHANNEL_BITS  # per channel
+        frequency = np.minimum(pixels // 16, 255).tolist()
     counter = field_counter % 2**16
-    return np.array([counter & 0xFF, counter >> 8, 0, 0, *frequency[4:], *frequency[:4]], np.uint8)
+    return bytes([counter & 0xFF, counter >> 8, 0, 0, *frequency[4:], *frequency[:4]])

@@ -20,7 +20,7 @@ inline functions do; ``restore_tag_pixels`` hides it.
 """
 
 import struct
-from dataclasses import dataclass, fields
+from typing import NamedTuple
 
 import numpy as np
 
@@ -71,8 +71,7 @@ BAND_RUNS = {
 }
 
 
-@dataclass(frozen=True)
-class ODataVectorInfo:
+class ODataVectorInfo(NamedTuple):
     """The 192-byte header of every OPEN-R vector message."""
 
     memRegionID: int = 0
@@ -91,11 +90,10 @@ class ODataVectorInfo:
     optional: bytes = bytes(128)
 
     def pack(self) -> bytes:
-        return struct.pack(VECTOR_INFO_FORMAT, *_values(self))
+        return struct.pack(VECTOR_INFO_FORMAT, *self)
 
 
-@dataclass(frozen=True)
-class OFbkImageInfo:
+class OFbkImageInfo(NamedTuple):
     """One layer's 32-byte description."""
 
     type: int
@@ -108,12 +106,7 @@ class OFbkImageInfo:
     padding: int = 0
 
     def pack(self) -> bytes:
-        return struct.pack(IMAGE_INFO_FORMAT, *_values(self))
-
-
-def _values(record) -> list:
-    """Field values in declaration order (dataclasses.astuple deep-copies: slow per frame)."""
-    return [getattr(record, f.name) for f in fields(record)]
+        return struct.pack(IMAGE_INFO_FORMAT, *self)
 
 
 class OFbkImageVectorData:

@@ -5,10 +5,11 @@ Its stub.cfg (``data/Controller/stub.cfg``) carries the report's service line
 requires; CONNECT.CFG must connect ``OVirtualRobotComm.FbkImageSensor.OFbkImageVectorData.S``
 to it. ``Notify`` keeps the newest message and asserts ready, as in the report.
 
-The camera functions read layer H of that message, as the report's do. Where the C code
-would read through a null pointer (no connection, or no image yet) they raise
-``NotConnectedError`` or ``NoImageError``. ``camera_get_fov`` needs no image and returns the
-report's constant (see ``ers7_camera.FIELD_OF_VIEW``).
+The camera functions read layer H of that message, as the report's do (each band's
+``OFbkImage`` is made once per message). Where the C code would read through a null pointer
+(no connection, or no image yet) they raise ``NotConnectedError`` or ``NoImageError``.
+``camera_get_fov`` needs no image and returns the report's constant (see
+``ers7_camera.FIELD_OF_VIEW``).
 """
 
 import numpy as np
@@ -32,6 +33,7 @@ class Controller(OObject):
         self.restore_tag = restore_tag
         self._image_observer = next(o for o in self.observer if str(o.service.name) == IMAGE_SERVICE)
         self._image = None
+        self._bands = {}  # the OFbkImage of each band of _image's layer H read so far
 
     def DoStart(self) -> None:
         for observer in self.observer:
@@ -39,6 +41,7 @@ class Controller(OObject):
 
     def Notify(self, event) -> None:
         self._image = event.Data(0)
+        self._bands = {}
         self.observer[event.ObsIndex()].AssertReady(event.SenderID())
 
     def camera_get_width(self) -> int:
@@ -65,7 +68,10 @@ class Controller(OObject):
             )
         if self._image is None:
             raise NoImageError("no camera image has arrived yet")
-        return OFbkImage(self._image.GetInfo(ofbkimageLAYER_H), self._image.GetData(ofbkimageLAYER_H), band)
+        if band not in self._bands:
+            layer = ofbkimageLAYER_H
+            self._bands[band] = OFbkImage(self._image.GetInfo(layer), self._image.GetData(layer), band)
+        return self._bands[band]
 
 
 def camera_image_get_red(image, width: int, x: int, y: int) -> int:

@@ -99,6 +99,25 @@ def test_forward_model_round_trips_within_two_levels():
     assert error.min() >= -2 and error.max() <= 1
 
 
+def integer_forward_model(r, g, b):
+    """The docstring's exact integer forward model, in int64."""
+    y = (299 * r + 587 * g + 114 * b + 500) // 1000
+    cr = 128 + (128 * (701 * r - 587 * g - 114 * b) + 127500) // 255000
+    cb = 128 + (128 * (886 * b - 299 * r - 587 * g) + 127500) // 255000
+    return y, cr, cb
+
+
+def test_forward_table_is_the_integer_model_on_all_2_24_colours():
+    r, g = np.meshgrid(np.arange(256), np.arange(256), indexing="ij")
+    for b_first in range(0, 256, 16):
+        b = np.arange(b_first, b_first + 16).reshape(-1, 1, 1)
+        rgb = np.stack(np.broadcast_arrays(r, g, b), axis=-1).astype(np.uint8)
+        expected = integer_forward_model(r, g, b)
+        for name, planes in [("table", rgb_to_ycrcb(rgb)), ("arithmetic", rgb_to_ycrcb(rgb.astype(np.int64)))]:
+            for plane, want in zip(planes, expected, strict=True):
+                assert plane.dtype == np.uint8 and np.array_equal(plane, want), f"{name}, B from {b_first}"
+
+
 def test_forward_model_rejects_non_rgb():
     with pytest.raises(FrameError):
         rgb_to_ycrcb(np.zeros((4, 4)))

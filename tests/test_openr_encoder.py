@@ -1,4 +1,5 @@
-"""The encoder against hand-computed bytes: colour model, Haar bands, pyramid, CDT, tag, luma."""
+"""The encoder against hand-computed bytes and against the integer definitions: colour model, Haar
+bands, pyramid, CDT, tag, luma."""
 
 import numpy as np
 import pytest
@@ -11,6 +12,7 @@ from openr_bridge import (
     cdt_layer,
     encode_frame,
     frame_number_for_image,
+    haar_analysis,
     ocdtCHANNEL0,
     ocdtCHANNEL1,
     ocdtCHANNEL7,
@@ -30,6 +32,7 @@ from openr_bridge import (
     reconstruct_luma,
     rgb_to_ycrcb,
 )
+from openr_bridge.encoder import _next_level
 
 H, M, L, C = ofbkimageLAYER_H, ofbkimageLAYER_M, ofbkimageLAYER_L, ofbkimageLAYER_C
 Y_BANDS = (ofbkimageBAND_Y, ofbkimageBAND_Y_LH, ofbkimageBAND_Y_HL, ofbkimageBAND_Y_HH)
@@ -213,6 +216,93 @@ def test_luma_error_is_at_most_2_otherwise():
     block_rss = np.sqrt((error.reshape(160, 2, 208, 2) ** 2).sum(axis=(1, 3)))
     assert block_rss.max() <= 2
     assert (error == 0).mean() > 0.5
+
+
+def integer_haar(luma) -> list[np.ndarray]:
+    """The module docstring's Y subbands, in int64."""
+    p = np.asarray(luma, np.int64)
+    p00, p10, p01, p11 = p[0::2, 0::2], p[0::2, 1::2], p[1::2, 0::2], p[1::2, 1::2]
+    ll = (p00 + p10 + p01 + p11 + 2) >> 2
+    details = [p01 + p11 - p00 - p10, p10 + p11 - p00 - p01, p00 + p11 - p10 - p01]
+    return [ll] + [np.clip(128 + ((x + 2) >> 2), 0, 255) for x in details]
+
+
+def integer_mean2x2(plane) -> np.ndarray:
+    p = np.asarray(plane, np.int64)
+    return (p[0::2, 0::2] + p[0::2, 1::2] + p[1::2, 0::2] + p[1::2, 1::2] + 2) >> 2
+
+
+def integer_next_level(y, cr, cb) -> list[np.ndarray]:
+    """A layer's runs Y, Cr, Cb, Y_LH, Y_HL, Y_HH from the next larger layer's Y, Cr, Cb."""
+    ll, lh, hl, hh = integer_haar(y)
+    return [ll, integer_mean2x2(cr), integer_mean2x2(cb), lh, hl, hh]
+
+
+def reference_layers(rgb, field_counter, cdt) -> list[np.ndarray]:
+    """Layers H, M, L, C as (height, runs, width), from the docstrings' definitions."""
+    r, g, b = (rgb[..., k].astype(np.int64) for k in range(3))
+    y = (299 * r + 587 * g + 114 * b + 500) // 1000
+    if rgb.shape[0] == 160:
+        cr = 128 + (128 * (701 * r - 587 * g - 114 * b) + 127500) // 255000
+        cb = 128 + (128 * (886 * b - 299 * r - 587 * g) + 127500) // 255000
+        h = [y, cr, cb] + [np.full(y.shape, 128)] * 3
+    else:
+        r4, g4, b4 = (p[0::2, 0::2] + p[0::2, 1::2] + p[1::2, 0::2] + p[1::2, 1::2] for p in (r, g, b))
+        ll, lh, hl, hh = integer_haar(y)
+        cr = 128 + (128 * (701 * r4 - 587 * g4 - 114 * b4) + 4 * 127500) // (4 * 255000)
+        cb = 128 + (128 * (886 * b4 - 299 * r4 - 587 * g4) + 4 * 127500) // (4 * 255000)
+        h = [ll, cr, cb, lh, hl, hh]
+    m = integer_next_level(*h[:3])
+    l_ = integer_next_level(*m[:3])
+    c = cdt_layer(*(np.asarray(band, np.uint8) for band in m[:3]), cdt)
+    layers = [np.stack(h, axis=1), np.stack(m, axis=1), np.stack(l_, axis=1), c[:, np.newaxis]]
+    frequency = [min(255, np.count_nonzero(c & (1 << k)) // 16) for k in range(8)]
+    counter = field_counter % 2**16
+    for layer in layers:
+        layer[-1, 0, :12] = [counter & 0xFF, counter >> 8, 0, 0, *frequency[4:], *frequency[:4]]
+    return layers
+
+
+@pytest.mark.parametrize("shape", [(160, 208, 3), (320, 416, 3)])
+def test_messages_match_the_integer_definitions(shape):
+    rng = np.random.default_rng(6)
+    cdt = OCdtVectorData.of(pink_ball_cdt(chan=ocdtCHANNEL0), orange_ball_cdt(chan=ocdtCHANNEL1))
+    frames = [
+        rng.integers(0, 256, shape, dtype=np.uint8),
+        rng.integers(0, 2, shape, dtype=np.uint8) * 255,  # extremes: saturated detail bands
+        np.repeat(rng.integers(0, 256, (shape[0], shape[1] // 8, 3), dtype=np.uint8), 8, axis=1),
+        np.full(shape, (255, 105, 180), np.uint8),
+    ]
+    for index, frame in enumerate(frames):
+        for field_counter, tables in [(index, None), (70000 + index, cdt)]:
+            message = encode_frame(frame, field_counter=field_counter, cdt=tables)
+            for layer, expected in enumerate(reference_layers(frame, field_counter, tables)):
+                actual = message.GetData(layer).reshape(expected.shape)
+                assert np.array_equal(actual, expected), f"frame {index}, layer {layer}, CDT {tables is not None}"
+
+
+def test_pyramid_step_matches_the_integer_definitions_on_all_low_bit_blocks():
+    # every 2x2 block of 32 levels (all residues mod 4, both ends of the range) in each of
+    # Y, Cr and Cb of an H-width layer: Haar bands with their clip, and (sum + 2) >> 2
+    levels = np.r_[0:8, 60:68, 124:132, 248:256].astype(np.uint8)
+    blocks = np.stack(np.meshgrid(levels, levels, levels, levels, indexing="ij"), axis=-1).reshape(-1, 2, 2)
+    width = 104  # blocks per row of M, as made from H
+    blocks = np.concatenate([blocks, blocks[: -len(blocks) % width]])
+    plane = blocks.reshape(-1, width, 2, 2).transpose(0, 2, 1, 3).reshape(-1, 2 * width)
+    src = np.full((plane.shape[0], 6, 2 * width), 128, np.uint8)
+    src[:, 0], src[:, 1], src[:, 2] = plane, np.roll(plane, 2), plane[::-1]
+    dst = np.zeros((plane.shape[0] // 2, 6, width), np.uint8)
+    _next_level(src, dst)
+    expected = integer_next_level(src[:, 0], src[:, 1], src[:, 2])
+    for run, want in enumerate(expected):
+        assert np.array_equal(dst[:, run], want), f"run {run}"
+    assert (expected[3] == 255).any() and (expected[5] == 1).any()  # the clip and the low end are reached
+
+
+def test_haar_analysis_of_any_luma():
+    luma = np.random.default_rng(7).integers(0, 256, (6, 10), dtype=np.uint8)
+    for band, want in zip(haar_analysis(luma[:, ::-1]), integer_haar(luma[:, ::-1]), strict=True):
+        assert band.dtype == np.uint8 and np.array_equal(band, want)
 
 
 def test_frame_numbers_count_8ms_ticks():
