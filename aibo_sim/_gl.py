@@ -7,8 +7,7 @@ No display is ever needed.
 
 Mesa's software renderer (llvmpipe) draws small frames fastest in the calling thread, with
 no rasteriser threads to hand work to and wait for (a 208x160 head-camera frame on a
-2-core machine: ~0.57 ms with ``LP_NUM_THREADS=0``, ~0.75-0.83 ms with 1, ~0.7-0.8 ms with
-2), so ``LP_NUM_THREADS`` defaults to 0; set it to override (e.g. for large third-person
+2-core machine: ~0.46 ms with ``LP_NUM_THREADS=0``, ~0.61 ms with 1 or 2), so ``LP_NUM_THREADS`` defaults to 0; set it to override (e.g. for large third-person
 renders, which do gain from threads).
 """
 
