@@ -48,6 +48,11 @@ def main(argv=None) -> int:
         rows += importlib.import_module(f"benchmarks.{name}").measure()
     print(f"Machine: {machine()}\n")
     print(table(rows))
+    print("\nTargets (issue 7):")
+    for r in rows:
+        if "target" in r:
+            measured = r["ratio"] if r["target"].startswith("ratio") else r["value"]
+            print(f"  {'met   ' if r['met'] else 'MISSED'} {r['name']}: {measured:.3g}, target {r['target']}")
     Path(args.json).write_text(json.dumps({"machine": machine(), "rows": rows}, indent=2) + "\n")
     print(f"\nwrote {args.json}", file=sys.stderr)
     return 0

@@ -17,6 +17,18 @@ def best_mean_seconds(run, iterations: int, repeats: int = REPEATS) -> float:
     return best
 
 
-def row(name: str, value: float, unit: str, reference: str | None = None, ratio: float | None = None) -> dict:
-    """One table row; ``ratio`` compares with the row named ``reference`` (> 1: this is faster)."""
-    return {"name": name, "value": value, "unit": unit, "reference": reference, "ratio": ratio}
+def row(name: str, value: float, unit: str, reference: str | None = None, ratio: float | None = None,
+        target: tuple[str, str, float] | None = None) -> dict:
+    """One table row; ``ratio`` compares with the row named ``reference`` (> 1: this is faster).
+
+    ``target`` is the issue's goal for this row as (``"value"`` or ``"ratio"``, ``">="`` or
+    ``"<="``, threshold); the row records it and whether it was met.
+    """
+    entry = {"name": name, "value": value, "unit": unit, "reference": reference, "ratio": ratio}
+    if target is not None:
+        quantity, comparison, threshold = target
+        measured = entry[quantity]
+        met = measured is not None and (measured >= threshold if comparison == ">=" else measured <= threshold)
+        entry["target"] = f"{quantity} {comparison} {threshold:g}"
+        entry["met"] = bool(met)
+    return entry
