@@ -142,6 +142,8 @@ class Renderer:
         shown, minus_radius = self._cullable_geoms()
         mujoco.mjv_updateCamera(self.model, data, cam, self._scene)
         eye = mujoco.mjv_averageCamera(*self._scene.camera)  # the two stereo eyes sit ipd apart; mono draws their mean
+        if eye.orthographic:  # a box, not a frustum: draw everything
+            return np.empty(0, np.intp)
         near, far, centre = eye.frustum_near, eye.frustum_far, eye.frustum_center
         half_width = eye.frustum_width or 0.5 * (eye.frustum_top - eye.frustum_bottom) * self.width / self.height
         # Inward unit normals of the OpenGL frustum's planes (in Python floats: numpy's
@@ -161,9 +163,9 @@ class Renderer:
 
     def _cullable_geoms(self) -> tuple[np.ndarray, np.ndarray]:
         """Ids of the geoms in the shown groups with a finite bounding sphere (planes have
-        radius 0), and minus their radii as a column; cached while the groups stay the same."""
+        radius 0), and minus their radii as a column; cached while groups and radii stay the same."""
         model = self.model
-        key = model.geom_group.tobytes() + self._option.geomgroup.tobytes()
+        key = model.geom_group.tobytes() + self._option.geomgroup.tobytes() + model.geom_rbound.tobytes()
         if self._cullable_key != key:
             radius = model.geom_rbound
             shown = np.flatnonzero(self._option.geomgroup[model.geom_group] & (radius > 0))

@@ -251,3 +251,20 @@ def test_culling_geoms_out_of_view_changes_no_pixel():
     drawing_all.close()
     assert robot_seen  # some poses look at the robot's own legs: partly visible geoms were kept
     assert sum(drawn) < 0.5 * sum(total)
+
+
+def test_culling_with_a_free_camera_changes_no_pixel():
+    """A third-person free camera close to the robot, so that some geoms fall outside the
+    picture and others cross its edges."""
+    from aibo_sim.render import Renderer
+
+    sim = Simulation()
+    culling, drawing_all = Renderer(sim.model, 160, 120), Renderer(sim.model, 160, 120, cull=False)
+    camera = mujoco.MjvCamera()
+    camera.type, camera.distance = mujoco.mjtCamera.mjCAMERA_FREE, 0.4
+    for azimuth in range(0, 360, 45):
+        camera.lookat[:], camera.azimuth, camera.elevation = (0.1, 0.0, 0.1), azimuth, -25
+        assert np.array_equal(culling.render(sim.data, camera), drawing_all.render(sim.data, camera)), azimuth
+        assert culling.scene.ngeom < drawing_all.scene.ngeom
+    culling.close()
+    drawing_all.close()
