@@ -134,8 +134,9 @@ class Renderer:
 
     def _outside_view(self, data: mujoco.MjData, cam: mujoco.MjvCamera) -> np.ndarray:
         """Ids of the shown geoms whose bounding spheres lie outside the view frustum; none
-        when shadows or reflections are on (a geom out of view can still cast or mirror) or
-        every group is shown (no group left to hide them in), or culling is off."""
+        when culling is off, shadows or reflections are on (a geom out of view can still cast
+        or mirror), every group is shown (no group left to hide them in) or the camera is
+        orthographic."""
         flags = self._scene.flags
         if self._hidden_group is None or flags[mujoco.mjtRndFlag.mjRND_SHADOW] or flags[mujoco.mjtRndFlag.mjRND_REFLECTION]:
             return np.empty(0, np.intp)

@@ -5,9 +5,10 @@ Environment steps per second with camera observations (HeadTrackBall-v0, RGB of 
 async workers; the reference is ``Ant-v5`` with ``render_mode="rgb_array"`` at 208x160,
 rendered every step, set up the same way. Also the peak RSS of a process running one
 environment (RGB observations; OPEN-R observations, which add the colour tables), and, to
-show what a worker costs, the time ``AsyncVectorEnv`` adds to a step of ``CartPole-v1`` (whose
-own step takes microseconds): pipes, shared memory and waking processes. Random actions; the workers are spawned (forking a process that has used
-OpenGL can deadlock in Mesa). Needs ``gymnasium[mujoco]`` for Ant-v5.
+show what a worker costs, the time ``AsyncVectorEnv`` adds to a step of ``CartPole-v1``
+(whose own step takes microseconds): pipes, shared memory and waking processes. Random
+actions; the workers are spawned (forking a process that has used OpenGL can deadlock in
+Mesa). Needs ``gymnasium[mujoco]`` for Ant-v5.
 
 Run: ``python -m benchmarks.envs``
 """
