@@ -88,15 +88,20 @@ class Servos:
 
     def advance(self, dt: float) -> np.ndarray:
         """Move the set-points one frame towards the targets; returns them."""
-        if np.array_equal(self.target, self.command):  # at rest: speeds are zero on arrival
-            return self.command
         error = self.target - self.command
+        if not error.any():  # at rest: speeds are zero on arrival
+            return self.command
         limit = np.minimum(self.velocity, self.max_velocity)
-        accel = np.minimum(self.acceleration, 1e9)  # "unlimited" stays finite arithmetic
-        # Speed that still stops at the target under the acceleration limit.
-        stop = np.sqrt(2 * accel * np.abs(error))
-        wanted = np.sign(error) * np.minimum(limit, stop)
-        self._speed = np.clip(wanted, self._speed - accel * dt, self._speed + accel * dt)
+        if np.isinf(self.acceleration).all():
+            # Full speed until arrival: what the general case below gives bit for bit (its
+            # stopping speed exceeds the limit wherever the target is not reached this frame).
+            self._speed = np.copysign(limit, error)
+        else:
+            accel = np.minimum(self.acceleration, 1e9)  # "unlimited" stays finite arithmetic
+            # Speed that still stops at the target under the acceleration limit.
+            stop = np.sqrt(2 * accel * np.abs(error))
+            wanted = np.sign(error) * np.minimum(limit, stop)
+            self._speed = np.clip(wanted, self._speed - accel * dt, self._speed + accel * dt)
         step = self._speed * dt
         arrived = np.abs(step) >= np.abs(error)
         self.command = np.where(arrived, self.target, self.command + step)

@@ -9,6 +9,8 @@ Without importing anything first, name the module in the id (Gymnasium 1.x has n
 loading): ``gymnasium.make("aibo_sim.envs:aibo_sim/HeadTrackBall-v0")``.
 The classes live in ``aibo_sim.envs.head_track`` and ``aibo_sim.envs.reach_ball``; the options
 and observations are described in ``aibo_sim.envs.base``.
+``aibo_sim.envs.vector.BusyWaitWorker`` is a worker for ``make_vec(..., "async")`` that keeps
+its process awake between steps.
 """
 
 import gymnasium
