@@ -4,15 +4,14 @@ Environment steps per second with camera observations (HeadTrackBall-v0, RGB of 
 208x160; one step = one 30 fps camera frame), for one environment and for ``make_vec`` with 2
 async workers, with Gymnasium's own worker and with ``aibo_sim.envs.vector.BusyWaitWorker``;
 the reference is ``Ant-v5`` with ``render_mode="rgb_array"`` at 208x160, rendered every step,
-set up the same way. Each rate is the best of ``REPEATS`` blocks of steps (blocks of ``STEPS``
-for HeadTrackBall, ``ANT_STEPS`` for the ~50 times slower Ant-v5), measured in a fresh
-process: Mesa reads ``LP_NUM_THREADS`` once per process, and each environment runs as its
-users get it (aibo_sim sets 0, rasterising in the calling thread; Ant-v5 gets Mesa's
+set up the same way. Each rate is the best of ``REPEATS`` blocks of ``STEPS[env_id]`` steps,
+measured in a fresh process: Mesa reads ``LP_NUM_THREADS`` once per process, and each
+environment runs as its users get it (aibo_sim sets 0, rasterising in the calling thread; Ant-v5 gets Mesa's
 default, one rasteriser thread per core, which renders its 208x160 frames with shadows
 ~1.4x faster here than 0 does). Also the peak RSS of a process running one environment
 (RGB observations; OPEN-R observations, which add the colour tables), and, to show what a
-worker costs, the time ``AsyncVectorEnv`` adds to a step of ``CartPole-v1`` (whose own step
-takes microseconds): pipes, shared memory and waking processes. Random actions; the workers
+worker costs, the time ``AsyncVectorEnv`` with 2 workers adds to a step of 2 ``CartPole-v1``
+(whose own step takes microseconds): pipes, shared memory and waking processes. Random actions; the workers
 are spawned (forking a process that has used OpenGL can deadlock in Mesa). Needs
 ``gymnasium[mujoco]`` for Ant-v5.
 
