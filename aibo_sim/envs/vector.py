@@ -25,7 +25,7 @@ import os
 import time
 from multiprocessing.connection import Connection
 
-from gymnasium.vector.async_vector_env import _async_worker
+from gymnasium.vector.async_vector_env import _async_worker  # private, but what AsyncVectorEnv runs by default
 
 SPIN_S = 0.005  # a step loop with the camera turns around in well under this
 _yield_core = getattr(os, "sched_yield", lambda: time.sleep(0))  # sched_yield is POSIX-only
