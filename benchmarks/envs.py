@@ -6,14 +6,14 @@ async workers, with Gymnasium's own worker and with ``aibo_sim.envs.vector.BusyW
 the reference is ``Ant-v5`` with ``render_mode="rgb_array"`` at 208x160, rendered every step,
 set up the same way. Each rate is the best of ``REPEATS`` blocks of ``STEPS[env_id]`` steps,
 measured in a fresh process: Mesa reads ``LP_NUM_THREADS`` once per process, and each
-environment runs as its users get it (aibo_sim sets 0, rasterising in the calling thread; Ant-v5 gets Mesa's
-default, one rasteriser thread per core, which renders its 208x160 frames with shadows
-~1.4x faster here than 0 does). Also the peak RSS of a process running one environment
-(RGB observations; OPEN-R observations, which add the colour tables), and, to show what a
-worker costs, the time ``AsyncVectorEnv`` with 2 workers adds to a step of 2 ``CartPole-v1``
-(whose own step takes microseconds): pipes, shared memory and waking processes. Random actions; the workers
-are spawned (forking a process that has used OpenGL can deadlock in Mesa). Needs
-``gymnasium[mujoco]`` for Ant-v5.
+environment runs as its users get it (aibo_sim sets 0, rasterising in the calling thread;
+Ant-v5 gets Mesa's default, one rasteriser thread per core, which renders its 208x160 frames
+with shadows ~1.4x faster here than 0 does). Also the peak RSS of a process running one
+environment (RGB observations; OPEN-R observations, which add the colour tables), and, to
+show what a worker costs, the time ``AsyncVectorEnv`` with 2 workers adds to a step of 2
+``CartPole-v1`` (whose own step takes microseconds): pipes, shared memory and waking
+processes. Random actions; the workers are spawned (forking a process that has used OpenGL
+can deadlock in Mesa). Needs ``gymnasium[mujoco]`` for Ant-v5.
 
 Run: ``python -m benchmarks.envs``
 """
@@ -59,38 +59,39 @@ def _make(env_id: str, vector_kwargs: dict | None):
     return gym.make_vec(env_id, 2, "async", vector_kwargs=vector_kwargs, **kwargs)
 
 
+def _random_steps(env, steps: int) -> None:
+    """``steps`` random actions, rendering each step where the env renders; a single env is
+    reset at the end of an episode (vector envs reset themselves)."""
+    render = env.render_mode is not None
+    for _ in range(steps):
+        _, _, terminated, truncated, _ = env.step(env.action_space.sample())
+        if render:
+            env.render()
+        if np.ndim(terminated) == 0 and (terminated or truncated):
+            env.reset()
+
+
 def steps_per_second(env_id: str, vector_kwargs: dict | None) -> float:
-    """Steps per second, the best of ``REPEATS`` blocks of ``STEPS[env_id]`` calls to ``step``
-    (and ``render`` where the env renders), after one warm-up step."""
+    """Steps per second, the best of ``REPEATS`` blocks of ``STEPS[env_id]`` random steps,
+    after one warm-up step."""
     env = _make(env_id, vector_kwargs)
-    steps, render = STEPS[env_id], env.render_mode is not None
     env.action_space.seed(0)
     env.reset(seed=0)
-    env.step(env.action_space.sample())
+    _random_steps(env, 1)
     best = 0.0
     for _ in range(REPEATS):
         start = time.perf_counter()
-        for _ in range(steps):
-            _, _, terminated, truncated, _ = env.step(env.action_space.sample())
-            if render:
-                env.render()
-            if np.ndim(terminated) == 0 and (terminated or truncated):  # vector envs reset themselves
-                env.reset()
-        best = max(best, steps * getattr(env, "num_envs", 1) / (time.perf_counter() - start))
+        _random_steps(env, STEPS[env_id])
+        best = max(best, STEPS[env_id] * getattr(env, "num_envs", 1) / (time.perf_counter() - start))
     env.close()
     return best
 
 
 def peak_rss_mib(env_id: str, camera: str | None) -> float:
-    """Peak RSS (VmHWM, Linux) of this process after 100 steps of one environment."""
+    """Peak RSS (VmHWM, Linux) of this process after 100 random steps of one environment."""
     env = gym.make(env_id, **(ANT_KWARGS if env_id == ANT else {"camera": camera}))
     env.reset(seed=0)
-    for _ in range(100):
-        _, _, terminated, truncated, _ = env.step(env.action_space.sample())
-        if env.render_mode:
-            env.render()
-        if terminated or truncated:
-            env.reset()
+    _random_steps(env, 100)
     return int(re.search(r"VmHWM:\s*(\d+) kB", Path("/proc/self/status").read_text()).group(1)) / 1024
 
 
@@ -139,6 +140,8 @@ if __name__ == "__main__":
     parser.add_argument("--rate", nargs=2, metavar=("ENV_ID", "SETTING"), help="print steps/s of one setting")
     parser.add_argument("--peak-rss", nargs=2, metavar=("ENV_ID", "CAMERA"), help="print the peak RSS in MiB")
     args = parser.parse_args()
+    if args.rate and args.rate[1] not in SETTINGS:
+        parser.error(f"--rate: unknown setting {args.rate[1]!r}; choose from {', '.join(map(repr, SETTINGS))}")
     if args.rate:
         print(steps_per_second(args.rate[0], SETTINGS[args.rate[1]][0]))
     elif args.peak_rss:

@@ -58,7 +58,7 @@ def test_async_envs_with_the_busy_wait_worker_step_as_sync_ones_bit_for_bit():
             obs, _ = envs.reset(seed=[7, 8])
             steps = [(obs, np.zeros(2))]
             for action in actions:
-                obs, reward, _, _, info = envs.step(action)
+                obs, reward, _, _, _ = envs.step(action)
                 steps.append((obs, reward))
             runs.append(steps)
         for (obs_busy, reward_busy), (obs_sync, reward_sync) in zip(*runs, strict=True):
