@@ -211,6 +211,23 @@ def test_sensors_read_plausible_values_when_standing():
     np.testing.assert_allclose(sim.joint_positions(), sim.servos.command, atol=0.05)
 
 
+def test_sensor_arrays_equal_the_per_sensor_readings():
+    """The environments read all IR and touch sensors at once; the controller API one by one.
+    Same noise draws in the same order, so the same numbers, bit for bit."""
+    batch, single = Simulation(seed=7), Simulation(seed=7)
+    for sim in (batch, single):
+        sim.place_ball(0.25, 0.0)  # something in front of the head IRs
+        for _ in range(60):
+            sim.step_frame()
+    names = [s.name for s in ers7.DISTANCE_SENSORS]
+    for _ in range(5):  # noise differs from draw to draw
+        one_by_one = [single.distance_mm(name) for name in names]
+        assert batch.distances_mm().tolist() == one_by_one
+    assert any(50 < mm < 1500 for mm in one_by_one)  # some mid-range reading, where noise applies
+    assert batch.touches().tolist() == [single.touched(s.name, s.threshold) for s in ers7.TOUCH_SENSORS]
+    assert batch.touches().sum() == 4  # the paws
+
+
 @pytest.mark.parametrize("content", [None, "<mujoco><worldbody><body></mujoco>", "not xml at all"])
 def test_bad_model_file_names_the_file(tmp_path, content):
     path = tmp_path / "broken_scene.xml"

@@ -37,7 +37,7 @@ import mujoco
 import numpy as np
 import openr_bridge
 
-from ..ers7 import HEAD_CAMERA, JOINT_INDEX, JOINTS, LEGS, SENSORS
+from ..ers7 import DISTANCE_SENSORS, HEAD_CAMERA, JOINT_INDEX, JOINTS, LEGS, TOUCH_SENSORS
 from ..camera import OpenRCamera
 from ..render import Renderer
 from ..sim import ACCEL_RANGE, Simulation
@@ -49,8 +49,6 @@ RANDOMIZATIONS = ("lighting", "ball_start", "camera_gain")
 RENDER_SIZE = (480, 360)  # third-person view, width x height
 HEAD_JOINTS = ("neck_tilt", "head_pan", "head_tilt")
 LEG_JOINTS = tuple(j.name for j in JOINTS if j.name.split("_")[0] in LEGS)
-DISTANCE_SENSORS = tuple(s for s in SENSORS if s.kind == "distance")
-TOUCH_SENSORS = tuple(s for s in SENSORS if s.kind == "touch")
 
 
 class AiboEnv(gym.Env):
@@ -96,6 +94,8 @@ class AiboEnv(gym.Env):
             width, height = openr_bridge.LAYER_SIZE[LAYERS[camera_layer]]
             spaces["image"] = gym.spaces.Box(0, 255, (height, width, 3), np.uint8)
         self.observation_space = gym.spaces.Dict(spaces)
+        self._distance_high = spaces["distance_mm"].high
+        self._head_camera = model.camera(HEAD_CAMERA).id
 
     # ---------------------------------------------------------------- task hooks
 
@@ -153,11 +153,10 @@ class AiboEnv(gym.Env):
         action = np.asarray(action, dtype=np.float64)
         if action.shape != self.action_space.shape:
             raise ValueError(f"action has shape {action.shape}, expected {self.action_space.shape}")
-        bad = np.flatnonzero(~np.isfinite(action))
-        if bad.size:
-            i = bad[0]
+        if not np.isfinite(action).all():
+            i = np.flatnonzero(~np.isfinite(action))[0]
             raise ValueError(f"action[{i}] ({self.actuated_joints[i]}) is {action[i]}: actions must be finite")
-        action = np.clip(action, -1.0, 1.0)
+        action = np.minimum(np.maximum(action, -1.0), 1.0)
         return self._target_low + (action + 1) / 2 * (self._target_high - self._target_low)
 
     def targets_to_action(self, targets) -> np.ndarray:
@@ -189,25 +188,24 @@ class AiboEnv(gym.Env):
         edges, clipped to +-2) and whether the point is in front of the camera and inside the
         image. Uses the camera's pose and its focal length over its sensor size.
         """
-        model, data = self.sim.model, self.sim.data
-        cam = model.camera(HEAD_CAMERA).id
+        model, data, cam = self.sim.model, self.sim.data, self._head_camera
         local = data.cam_xmat[cam].reshape(3, 3).T @ (np.asarray(point) - data.cam_xpos[cam])
         depth = -local[2]  # MuJoCo cameras look along -z, with y up
         half_fov = model.cam_sensorsize[cam] / 2 / model.cam_intrinsic[cam][:2]  # tan of the half angles
         offset = np.array([local[0], -local[1]]) / max(abs(depth), 1e-9) / half_fov
-        offset = np.clip(offset, -2.0, 2.0)
-        return offset, bool(depth > 0 and np.all(np.abs(offset) <= 1))
+        offset = np.minimum(np.maximum(offset, -2.0), 2.0)
+        return offset, bool(depth > 0 and (np.abs(offset) <= 1).all())
 
     # ---------------------------------------------------------------- observations
 
     def _observation(self) -> dict:
         sim = self.sim
-        distances = np.array([sim.distance_mm(s.name) for s in DISTANCE_SENSORS], np.float32)
+        distances = sim.distances_mm().astype(np.float32)
         observation = {
             "joint_positions": sim.joint_positions().astype(np.float32),
             "acceleration": sim.acceleration().astype(np.float32),
-            "distance_mm": np.clip(distances, 0, self.observation_space["distance_mm"].high),  # noise can overshoot
-            "touch": np.array([sim.touched(s.name, s.threshold) for s in TOUCH_SENSORS], np.int8),
+            "distance_mm": np.minimum(np.maximum(distances, 0), self._distance_high),  # noise can overshoot
+            "touch": sim.touches().astype(np.int8),
         }
         if self.camera is not None:
             observation["image"] = self._camera_image()
@@ -215,7 +213,7 @@ class AiboEnv(gym.Env):
 
     def _camera_image(self) -> np.ndarray:
         rgb = self.sim.render_camera().copy()  # the simulation's frame is shared and read-only
-        if not np.all(self.camera_gains == 1):
+        if (self.camera_gains != 1).any():
             rgb = np.clip(rgb * self.camera_gains + 0.5, 0, 255).astype(np.uint8)
         if self.camera == "rgb":
             height, width, _ = self.observation_space["image"].shape

@@ -38,18 +38,19 @@ class HeadTrackBallEnv(AiboEnv):
 
     def _reset_task(self) -> None:
         rng = self.np_random
-        self._start = self.ball_start(BALL_START)
-        self._omega = 2 * np.pi * rng.uniform(*FREQUENCY_HZ, 2)
-        self._phase = rng.uniform(0, 2 * np.pi, 2)
+        start = self.ball_start(BALL_START)
+        omega = 2 * np.pi * rng.uniform(*FREQUENCY_HZ, 2)
+        phase = rng.uniform(0, 2 * np.pi, 2)
+        # Per axis (start, amplitude, angular frequency, phase), in Python floats: scalar math
+        # is the cheapest for what runs every 8 ms frame.
+        self._paths = [tuple(map(float, axis)) for axis in zip(start, AMPLITUDE, omega, phase)]
         self._ball_seen_at = -1  # the frame counter starts again at 0
         self._before_frame()
 
     def _before_frame(self) -> None:
-        t = self.sim.data.time  # scalar math: this runs every 8 ms frame
-        angles = [w * t + p for w, p in zip(self._omega, self._phase)]
-        x, y = (s + a * (math.sin(q) - math.sin(p))
-                for s, a, q, p in zip(self._start, AMPLITUDE, angles, self._phase))
-        vx, vy = (a * w * math.cos(q) for a, w, q in zip(AMPLITUDE, self._omega, angles))
+        t = self.sim.data.time
+        (x, vx), (y, vy) = ((s + a * (math.sin(w * t + p) - math.sin(p)), a * w * math.cos(w * t + p))
+                            for s, a, w, p in self._paths)
         if x < NEAREST_X:
             x, vx = NEAREST_X, 0.0
         self.sim.data.qpos[self._ball_qpos:self._ball_qpos + 7] = (x, y, BALL_RADIUS, 1.0, 0.0, 0.0, 0.0)
