@@ -121,6 +121,22 @@ def test_same_seed_gives_the_same_episode_bit_for_bit(env_id):
     assert not np.array_equal(first[-1][0]["image"], other[-1][0]["image"])
 
 
+def test_a_step_computes_sensors_in_its_last_joint_frame_only(monkeypatch):
+    env = gym.make(HEAD_TRACK, camera=None)
+    env.reset(seed=0)
+    sim = env.unwrapped.sim
+    step_frame, flags = sim.step_frame, []
+    monkeypatch.setattr(sim, "step_frame", lambda sensors=True: (flags.append(sensors), step_frame(sensors)))
+    lengths = set()
+    for _ in range(12):
+        flags.clear()
+        env.step(env.action_space.sample())
+        assert flags[-1] and not any(flags[:-1])
+        lengths.add(len(flags))
+    assert lengths == {4, 5}  # 8 ms joint frames per 1/30 s camera frame
+    env.close()
+
+
 @pytest.mark.parametrize("bad", [np.nan, np.inf, -np.inf])
 def test_non_finite_action_raises_and_names_the_index(bad):
     env = gym.make(REACH, camera=None)

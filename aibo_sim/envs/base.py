@@ -128,7 +128,8 @@ class AiboEnv(gym.Env):
         camera_frame = self.sim.camera_frame_index()
         while self.sim.camera_frame_index() == camera_frame:
             self._before_frame()
-            self.sim.step_frame()
+            # The observation reads the sensors after the last frame only.
+            self.sim.step_frame(sensors=self.sim.camera_frame_index(self.sim.frame + 1) != camera_frame)
         observation = self._observation()
         reward, terminated = self._evaluate()
         return observation, reward, terminated, False, self._info()
