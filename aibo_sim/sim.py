@@ -128,7 +128,6 @@ class Simulation:
             for s in SENSORS if s.kind != "camera"
         }
         self._distance_adr = np.array([self._sensor_slices[s.name].start for s in DISTANCE_SENSORS])
-        self._distance_low, self._distance_high = np.array([s.range_mm for s in DISTANCE_SENSORS]).T
         self._distance_index = {s.name: i for i, s in enumerate(DISTANCE_SENSORS)}
         self._touch_adr = np.array([self._sensor_slices[s.name].start for s in TOUCH_SENSORS])
         self._touch_threshold = np.array([s.threshold for s in TOUCH_SENSORS])
@@ -223,19 +222,22 @@ class Simulation:
     def sensor(self, name: str) -> np.ndarray:
         return self.data.sensordata[self._sensor_slices[name]]
 
-    def distances_mm(self, which: slice = slice(None)) -> np.ndarray:
+    def distances_mm(self, which: slice = slice(None)) -> list[float]:
         """IR ranges in mm of ``ers7.DISTANCE_SENSORS[which]`` as Webots' lookup tables give them:
         clamped to the sensor's range, 10 % noise mid-range (one draw per sensor, in order)."""
-        low, high = self._distance_low[which], self._distance_high[which]
-        metres = self.data.sensordata[self._distance_adr[which]]
-        mm = np.where(metres < 0, high, np.minimum(np.maximum(metres * 1000, low), high))  # < 0: no hit
-        mid_weight = 1 - np.abs(2 * (mm - low) / (high - low) - 1)
-        return mm * (1 + IR_NOISE * mid_weight * self.rng.standard_normal(mm.shape))
+        metres = self.data.sensordata[self._distance_adr[which]].tolist()
+        noise = self.rng.standard_normal(len(metres)).tolist()
+        ranges_mm = [s.range_mm for s in DISTANCE_SENSORS[which]]
+        values = []
+        for reading, (low, high), draw in zip(metres, ranges_mm, noise):  # a few sensors: scalar math is cheapest
+            mm = high if reading < 0 else min(max(reading * 1000, low), high)  # < 0: no hit
+            values.append(mm * (1 + IR_NOISE * (1 - abs(2 * (mm - low) / (high - low) - 1)) * draw))
+        return values
 
     def distance_mm(self, name: str) -> float:
         """One IR range in mm (see ``distances_mm``)."""
         i = self._distance_index[name]
-        return float(self.distances_mm(slice(i, i + 1))[0])
+        return self.distances_mm(slice(i, i + 1))[0]
 
     def touches(self) -> np.ndarray:
         """Whether each of ``ers7.TOUCH_SENSORS`` is pressed beyond its threshold."""

@@ -225,7 +225,7 @@ def test_sensor_arrays_equal_the_per_sensor_readings():
     names = [s.name for s in ers7.DISTANCE_SENSORS]
     for _ in range(5):  # noise differs from draw to draw
         one_by_one = [single.distance_mm(name) for name in names]
-        assert batch.distances_mm().tolist() == one_by_one
+        assert batch.distances_mm() == one_by_one
     assert any(50 < mm < 1500 for mm in one_by_one)  # some mid-range reading, where noise applies
     assert batch.touches().tolist() == [single.touched(s.name, s.threshold) for s in ers7.TOUCH_SENSORS]
     assert batch.touches().sum() == 4  # the paws

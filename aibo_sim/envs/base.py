@@ -201,7 +201,7 @@ class AiboEnv(gym.Env):
 
     def _observation(self) -> dict:
         sim = self.sim
-        distances = sim.distances_mm().astype(np.float32)
+        distances = np.array(sim.distances_mm(), np.float32)
         observation = {
             "joint_positions": sim.joint_positions().astype(np.float32),
             "acceleration": sim.acceleration().astype(np.float32),
