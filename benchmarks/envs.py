@@ -4,11 +4,14 @@ Environment steps per second with camera observations (HeadTrackBall-v0, RGB of 
 208x160; one step = one 30 fps camera frame), for one environment and for ``make_vec`` with 2
 async workers, with Gymnasium's own worker and with ``aibo_sim.envs.vector.BusyWaitWorker``;
 the reference is ``Ant-v5`` with ``render_mode="rgb_array"`` at 208x160, rendered every step,
-set up the same way. Each rate is the best of ``REPEATS`` blocks of ``STEPS[env_id]`` steps,
-measured in a fresh process: Mesa reads ``LP_NUM_THREADS`` once per process, and each
-environment runs as its users get it (aibo_sim sets 0, rasterising in the calling thread;
-Ant-v5 gets Mesa's default, one rasteriser thread per core, which renders its 208x160 frames
-with shadows ~1.4x faster here than 0 does). Also the peak RSS of a process running one
+set up the same way. Each rate is the best of ``ROUNDS`` blocks of ``STEPS[env_id]`` steps,
+stepped in a fresh process that alternates block by block with the reference's, so that both
+see the shared machine's quiet and busy spells (measured one after the other, the ratio moved
+between 34x and 46x from run to run). Fresh processes because
+Mesa reads ``LP_NUM_THREADS`` once per process, and each environment runs as its users get
+it (aibo_sim sets 0, rasterising in the calling thread; Ant-v5 gets Mesa's default, one
+rasteriser thread per core, which renders its 208x160 frames with shadows ~1.4x faster
+here than 0 does). Also the peak RSS of a process running one
 environment (RGB observations; OPEN-R observations, which add the colour tables), and, to
 show what a worker costs, the time ``AsyncVectorEnv`` with 2 workers adds to a step of 2
 ``CartPole-v1`` (whose own step takes microseconds): pipes, shared memory and waking
@@ -26,6 +29,7 @@ import os
 import re
 import subprocess
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -35,12 +39,13 @@ import numpy as np
 import aibo_sim.envs  # noqa: F401  (registers the environments; aibo_sim sets MUJOCO_GL for Ant-v5 too)
 from aibo_sim.envs.vector import BusyWaitWorker
 
-from .common import REPEATS, row
+from .common import row
 
 AIBO = "aibo_sim/HeadTrackBall-v0"
 ANT = "Ant-v5"
 ANT_KWARGS = {"render_mode": "rgb_array", "width": 208, "height": 160}
 STEPS = {AIBO: 300, ANT: 40, "CartPole-v1": 300}
+ROUNDS = 10  # blocks per environment and setting, alternating with the reference's
 SPAWN = {"context": "spawn"}
 SETTINGS = {  # name: vector_kwargs of make_vec with 2 async workers (None: one env), the 40x target applies
     "1 env": (None, True),
@@ -71,20 +76,19 @@ def _random_steps(env, steps: int) -> None:
             env.reset()
 
 
-def steps_per_second(env_id: str, vector_kwargs: dict | None) -> float:
-    """Steps per second, the best of ``REPEATS`` blocks of ``STEPS[env_id]`` random steps,
-    after one warm-up step."""
+def serve_blocks(env_id: str, vector_kwargs: dict | None) -> None:
+    """Print "ready" after a reset and one warm-up step, then, for each line read from stdin,
+    the steps per second of one block of ``STEPS[env_id]`` random steps."""
     env = _make(env_id, vector_kwargs)
     env.action_space.seed(0)
     env.reset(seed=0)
     _random_steps(env, 1)
-    best = 0.0
-    for _ in range(REPEATS):
+    print("ready", flush=True)
+    for _ in sys.stdin:
         start = time.perf_counter()
         _random_steps(env, STEPS[env_id])
-        best = max(best, STEPS[env_id] * getattr(env, "num_envs", 1) / (time.perf_counter() - start))
+        print(STEPS[env_id] * getattr(env, "num_envs", 1) / (time.perf_counter() - start), flush=True)
     env.close()
-    return best
 
 
 def peak_rss_mib(env_id: str, camera: str | None) -> float:
@@ -95,17 +99,57 @@ def peak_rss_mib(env_id: str, camera: str | None) -> float:
     return int(re.search(r"VmHWM:\s*(\d+) kB", Path("/proc/self/status").read_text()).group(1)) / 1024
 
 
-def _in_fresh_process(*args: str) -> float:
-    """Run this module with ``args`` in a new Python process and return the number it prints.
+def _environment(env_id: str) -> dict:
+    """Ant-v5 gets Mesa's default rasteriser threads (aibo_sim sets its own)."""
+    return {**os.environ, **(MESA_DEFAULT if env_id == ANT else {})}
 
-    A fresh process is measured alone; Ant-v5's gets Mesa's default rasteriser threads.
-    """
-    environment = {**os.environ, **(MESA_DEFAULT if ANT in args else {})}
-    result = subprocess.run([sys.executable, "-m", "benchmarks.envs", *args], cwd=ROOT, env=environment,
+
+def _in_fresh_process(*args: str) -> float:
+    """Run this module with ``args`` in a new Python process and return the number it prints."""
+    result = subprocess.run([sys.executable, "-m", "benchmarks.envs", *args], cwd=ROOT, env=_environment(args[1]),
                             capture_output=True, text=True)
     if result.returncode != 0:
         raise RuntimeError(f"benchmarks.envs {' '.join(args)} failed:\n{result.stderr}")
     return float(result.stdout.split()[-1])
+
+
+def _alternating_best(*runs: tuple[str, str]) -> list[float]:
+    """The best steps/s of each of ``runs`` ((env_id, setting) pairs) over ``ROUNDS`` blocks.
+
+    Each runs in a fresh process of its own (``--serve``), started together; once all are
+    ready, they step one block each, in turn, round after round.
+    """
+    children = []  # (process, its stderr)
+    try:
+        for env_id, setting in runs:
+            log = tempfile.TemporaryFile("w+")
+            children.append((subprocess.Popen([sys.executable, "-m", "benchmarks.envs", "--serve", env_id, setting],
+                                              cwd=ROOT, env=_environment(env_id), text=True, stdin=subprocess.PIPE,
+                                              stdout=subprocess.PIPE, stderr=log), log))
+        for child in children:
+            _read_line(*child)  # "ready"
+        best = [0.0] * len(children)
+        for _ in range(ROUNDS):
+            for i, (process, log) in enumerate(children):
+                process.stdin.write("block\n")
+                process.stdin.flush()
+                best[i] = max(best[i], float(_read_line(process, log)))
+        return best
+    finally:
+        for process, log in children:
+            process.stdin.close()
+            process.wait()
+            log.close()
+
+
+def _read_line(process: subprocess.Popen, log) -> str:
+    """The next line a ``--serve`` process prints; RuntimeError with its stderr if it ended."""
+    line = process.stdout.readline()
+    if not line:
+        process.wait()
+        log.seek(0)
+        raise RuntimeError(f"python {' '.join(process.args[1:])} failed:\n{log.read()}")
+    return line
 
 
 def measure() -> list[dict]:
@@ -114,13 +158,12 @@ def measure() -> list[dict]:
     The 40x target applies to one env and to 2 workers with the busy-wait worker, the way to
     run these ~1.5 ms steps on several processes; Gymnasium's own worker is measured beside it.
     """
-    vector_step = 2 / _in_fresh_process("--rate", "CartPole-v1", "make_vec async, 2 workers")  # rates count env steps
-    two_steps = 2 / _in_fresh_process("--rate", "CartPole-v1", "1 env")
+    vector_rate, single_rate = _alternating_best(("CartPole-v1", "make_vec async, 2 workers"), ("CartPole-v1", "1 env"))
+    vector_step, two_steps = 2 / vector_rate, 2 / single_rate  # rates count env steps
     rows = [row("time make_vec async adds to a step of 2 envs on 2 workers (CartPole-v1)",
                 (vector_step - two_steps) * 1e3, "ms")]
     for setting, (_, targeted) in SETTINGS.items():
-        aibo = _in_fresh_process("--rate", AIBO, setting)
-        ant = _in_fresh_process("--rate", ANT, setting)
+        aibo, ant = _alternating_best((AIBO, setting), (ANT, setting))
         reference = f"{ANT} steps/s with render_mode='rgb_array' 208x160, {setting}"
         rows.append(row(reference, ant, "steps/s"))
         rows.append(row(f"{AIBO} steps/s with camera observations, {setting}", aibo, "steps/s", reference, aibo / ant,
@@ -137,13 +180,14 @@ def measure() -> list[dict]:
 
 if __name__ == "__main__":
     parser = argparse.ArgumentParser(prog="python -m benchmarks.envs", description=__doc__)
-    parser.add_argument("--rate", nargs=2, metavar=("ENV_ID", "SETTING"), help="print steps/s of one setting")
+    parser.add_argument("--serve", nargs=2, metavar=("ENV_ID", "SETTING"),
+                        help="print steps/s of one block of steps per line read from stdin")
     parser.add_argument("--peak-rss", nargs=2, metavar=("ENV_ID", "CAMERA"), help="print the peak RSS in MiB")
     args = parser.parse_args()
-    if args.rate and args.rate[1] not in SETTINGS:
-        parser.error(f"--rate: unknown setting {args.rate[1]!r}; choose from {', '.join(map(repr, SETTINGS))}")
-    if args.rate:
-        print(steps_per_second(args.rate[0], SETTINGS[args.rate[1]][0]))
+    if args.serve and args.serve[1] not in SETTINGS:
+        parser.error(f"--serve: unknown setting {args.serve[1]!r}; choose from {', '.join(map(repr, SETTINGS))}")
+    if args.serve:
+        serve_blocks(args.serve[0], SETTINGS[args.serve[1]][0])
     elif args.peak_rss:
         print(peak_rss_mib(args.peak_rss[0], args.peak_rss[1] or None))
     else:
