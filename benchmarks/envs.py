@@ -7,15 +7,14 @@ the reference is ``Ant-v5`` with ``render_mode="rgb_array"`` at 208x160, rendere
 set up the same way. Each rate is the best of ``ROUNDS`` blocks of ``STEPS[env_id]`` steps,
 stepped in a fresh process that alternates block by block with the reference's, so that both
 see the shared machine's quiet and busy spells (measured one after the other, the ratio moved
-between 34x and 46x from run to run). Fresh processes because
-Mesa reads ``LP_NUM_THREADS`` once per process, and each environment runs as its users get
-it (aibo_sim sets 0, rasterising in the calling thread; Ant-v5 gets Mesa's default, one
-rasteriser thread per core, which renders its 208x160 frames with shadows ~1.4x faster
-here than 0 does). Also the peak RSS of a process running one
-environment (RGB observations; OPEN-R observations, which add the colour tables), and, to
-show what a worker costs, the time ``AsyncVectorEnv`` with 2 workers adds to a step of 2
-``CartPole-v1`` (whose own step takes microseconds): pipes, shared memory and waking
-processes. Random actions; the workers are spawned (forking a process that has used OpenGL
+between 34x and 46x from run to run). Fresh processes because Mesa reads ``LP_NUM_THREADS``
+once per process, and each environment runs as its users get it (aibo_sim sets 0,
+rasterising in the calling thread; Ant-v5 gets Mesa's default, one rasteriser thread per
+core, which renders its 208x160 frames with shadows ~1.4x faster here than 0 does). Also the
+peak RSS of a process running one environment (RGB observations; OPEN-R observations, which
+add the colour tables), and, to show what a worker costs, the time ``AsyncVectorEnv`` with 2
+workers adds to a step of 2 ``CartPole-v1`` (whose own step takes microseconds): pipes,
+shared memory and waking processes. Random actions; the workers are spawned (forking a process that has used OpenGL
 can deadlock in Mesa). Needs ``gymnasium[mujoco]`` for Ant-v5.
 
 Run: ``python -m benchmarks.envs``
