@@ -102,7 +102,7 @@ class Renderer:
         self._option.geomgroup[:] = [int(g in groups) for g in range(6)]
         self._option.sitegroup[:] = 0
         self._option.flags[mujoco.mjtVisFlag.mjVIS_RANGEFINDER] = 0
-        self._cullable_key = None
+        self._cullable_key = self._frustum_key = None
         self._hidden_group = next((g for g in range(mujoco.mjNGROUP) if g not in groups), None) if cull else None
         self._camera = mujoco.MjvCamera()
         self._rect = mujoco.MjrRect(0, 0, width, height)
@@ -145,22 +145,32 @@ class Renderer:
         eye = mujoco.mjv_averageCamera(*self._scene.camera)  # the two stereo eyes sit ipd apart; mono draws their mean
         if eye.orthographic:  # a box, not a frustum: draw everything
             return np.empty(0, np.intp)
+        normals, offsets = self._frustum_planes(eye)
+        # In world axes: the camera's right, up and forward axes times the camera-axes normals
+        # (right = forward x up in Python floats: np.cross costs more than the arithmetic).
+        f, u = eye.forward.tolist(), eye.up.tolist()
+        r = [f[1] * u[2] - f[2] * u[1], f[2] * u[0] - f[0] * u[2], f[0] * u[1] - f[1] * u[0]]
+        world_normals = np.array([r, u, f]).T @ normals
+        distance = (data.geom_xpos[shown] - eye.pos) @ world_normals + offsets
+        return shown[(distance < minus_radius).any(axis=1)]
+
+    def _frustum_planes(self, eye: mujoco.MjvGLCamera) -> tuple[np.ndarray, np.ndarray]:
+        """Inward unit normals (columns, in the camera's right-up-forward axes) and offsets of
+        the view frustum's left, right, bottom, top, near and far planes: a point p (relative
+        to the eye, in those axes) is inside when ``p @ normals + offsets >= 0`` everywhere.
+        Cached while the frustum keeps its shape."""
         near, far, centre = eye.frustum_near, eye.frustum_far, eye.frustum_center
         half_width = eye.frustum_width or 0.5 * (eye.frustum_top - eye.frustum_bottom) * self.width / self.height
-        # Inward unit normals of the OpenGL frustum's planes (in Python floats: numpy's
-        # per-call overhead would cost more than the arithmetic): left, right, bottom, top,
-        # each from the tangent of its angle at the eye, then near and far.
-        f, u, eye_pos = eye.forward.tolist(), eye.up.tolist(), eye.pos.tolist()
-        r = [f[1] * u[2] - f[2] * u[1], f[2] * u[0] - f[0] * u[2], f[0] * u[1] - f[1] * u[0]]
-        sides = (((centre - half_width) / near, r), (-(centre + half_width) / near, [-c for c in r]),
-                 (eye.frustum_bottom / near, u), (-eye.frustum_top / near, [-c for c in u]))
-        normals = [[(a - t * fc) / math.hypot(1, t) for a, fc in zip(axis, f)] for t, axis in sides]
-        normals += [f, [-c for c in f]]
-        offsets = [sum(n * p for n, p in zip(normal, eye_pos)) for normal in normals]
-        offsets[4] += near
-        offsets[5] -= far
-        distance = data.geom_xpos[shown] @ np.array(normals).T - offsets
-        return shown[(distance < minus_radius).any(axis=1)]
+        key = (near, far, centre, half_width, eye.frustum_bottom, eye.frustum_top)
+        if self._frustum_key != key:
+            # Each side plane passes through the eye, its slope the tangent of the edge's angle.
+            left, right = (centre - half_width) / near, (centre + half_width) / near
+            bottom, top = eye.frustum_bottom / near, eye.frustum_top / near
+            normals = [(1, 0, -left), (-1, 0, right), (0, 1, -bottom), (0, -1, top)]
+            normals = [[c / math.hypot(1, slope) for c in n] for n, slope in zip(normals, (left, right, bottom, top))]
+            self._frustum = np.array([*normals, (0, 0, 1), (0, 0, -1)]).T, np.array([0, 0, 0, 0, -near, far])
+            self._frustum_key = key
+        return self._frustum
 
     def _cullable_geoms(self) -> tuple[np.ndarray, np.ndarray]:
         """Ids of the geoms in the shown groups with a finite bounding sphere (planes have

@@ -8,6 +8,7 @@ simulated time reaches the next multiple of 1/30 s.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from pathlib import Path
 
 import mujoco
@@ -108,6 +109,25 @@ class Servos:
         self._speed[arrived] = 0
         return self.command
 
+    def advance_frames(self, frames: int, dt: float) -> np.ndarray:
+        """The set-points of the next ``frames`` frames, one row each: what as many calls of
+        ``advance`` return, bit for bit, computed in one pass when no joint has an
+        acceleration limit (each moving joint then steps by the same amount every frame
+        until it arrives; numpy's cumulative sum adds the steps in order, as frame after
+        frame does)."""
+        error = self.target - self.command
+        if not error.any() or not np.isinf(self.acceleration).all():
+            return np.array([self.advance(dt) for _ in range(frames)])
+        speed = np.copysign(np.minimum(self.velocity, self.max_velocity), error)
+        step = speed * dt
+        path = np.cumsum(np.vstack([self.command, np.broadcast_to(step, (frames, len(step)))]), axis=0)
+        # Arrived in a frame: the step covers what was left before it; set-points stay there.
+        arrived = np.logical_or.accumulate(np.abs(step) >= np.abs(self.target - path[:-1]), axis=0)
+        commands = np.where(arrived, self.target, path[1:])
+        self.command = commands[-1].copy()
+        self._speed = np.where(arrived[-1], 0.0, speed)
+        return commands
+
 
 class Simulation:
     """One ERS-7 in a scene, advanced in 8 ms frames, with its head camera."""
@@ -181,34 +201,53 @@ class Simulation:
         return self.frame * FRAME_MS
 
     def step_frame(self, sensors: bool = True) -> None:
-        """Advance one 8 ms joint frame; raises SimulationDiverged on NaN physics.
+        """Advance one 8 ms joint frame; raises SimulationDiverged on NaN physics. See
+        ``step_frames``."""
+        self.step_frames(1, sensors=sensors)
 
-        Sensors are read once a frame, so MuJoCo computes them only in the frame's last
-        step, and in none with ``sensors=False`` (for a caller that reads no sensor after
-        this frame): they do not feed back into the dynamics, so the trajectory and the
-        readings are those of plain stepping, and each step without them saves the ~9 us
-        (of ~30 us) that the IR rays, touch sensors and accelerometer cost.
+    def step_frames(self, frames: int, before_frame: Callable[[], None] | None = None, sensors: bool = True) -> None:
+        """Advance ``frames`` 8 ms joint frames, calling ``before_frame()`` (which must leave
+        the servos alone: their set-points are planned for all the frames at once) before
+        each; raises SimulationDiverged if the physics went NaN or unbounded.
+
+        Sensors are read after the frames, so MuJoCo computes them only in the last step,
+        and in none with ``sensors=False`` (for a caller that reads no sensor now): they do
+        not feed back into the dynamics, so the trajectory and the readings are those of
+        plain stepping, and each step without them saves the ~9 us (of ~30 us) that the IR
+        rays, touch sensors and accelerometer cost.
         """
-        self.data.ctrl[:] = self.servos.advance(FRAME_MS / 1000)
-        options = self.model.opt
-        steps_without_sensors = self.steps_per_frame - 1 if sensors else self.steps_per_frame
-        if steps_without_sensors:
-            flags = options.disableflags
-            options.disableflags = flags | mujoco.mjtDisableBit.mjDSBL_SENSOR
-            try:
-                mujoco.mj_step(self.model, self.data, nstep=steps_without_sensors)
-            finally:
-                options.disableflags = flags
+        commands = self.servos.advance_frames(frames, FRAME_MS / 1000)
+        model, data, options = self.model, self.data, self.model.opt
+        steps = [self.steps_per_frame] * frames
+        steps[-1] -= sensors  # the last step, with sensors, after the loop
+        flags = options.disableflags
+        options.disableflags = flags | mujoco.mjtDisableBit.mjDSBL_SENSOR
+        try:
+            for command, nstep in zip(commands, steps):
+                if before_frame is not None:
+                    before_frame()
+                data.ctrl[:] = command
+                if nstep:
+                    mujoco.mj_step(model, data, nstep=nstep)
+                self.frame += 1
+        finally:
+            options.disableflags = flags
         if sensors:
-            mujoco.mj_step(self.model, self.data)
-        self.frame += 1
-        if any(w.number for w in self._divergence_warnings) or not np.isfinite(self.data.qpos).all():
-            raise SimulationDiverged(f"physics diverged at t = {self.data.time:.3f} s (frame {self.frame})")
+            mujoco.mj_step(model, data)
+        if any(w.number for w in self._divergence_warnings) or not np.isfinite(data.qpos).all():
+            raise SimulationDiverged(f"physics diverged at t = {data.time:.3f} s (by frame {self.frame})")
 
     def camera_frame_index(self, frame: int | None = None) -> int:
         """Index of the newest 30 fps camera frame (frame k at k/30 s) now, or after the 8 ms
         joint frame ``frame``."""
         return (self.frame if frame is None else frame) * FRAME_MS * FRAME_RATE_HZ // 1000
+
+    def frames_to_camera_frame(self) -> int:
+        """8 ms joint frames until the camera's next frame is due (4 or 5 at 30 fps)."""
+        now, frames = self.camera_frame_index(), 1
+        while self.camera_frame_index(self.frame + frames) == now:
+            frames += 1
+        return frames
 
     def camera_due(self) -> bool:
         """True when the camera has a frame newer than the last one rendered."""

@@ -121,18 +121,23 @@ def test_same_seed_gives_the_same_episode_bit_for_bit(env_id):
     assert not np.array_equal(first[-1][0]["image"], other[-1][0]["image"])
 
 
-def test_a_step_computes_sensors_in_its_last_joint_frame_only(monkeypatch):
+def test_a_step_runs_the_joint_frames_up_to_the_next_camera_frame_at_once(monkeypatch):
+    """One step_frames call per step (sensors computed in its last MuJoCo step only), as many
+    8 ms frames as reach the camera's next 30 fps frame."""
     env = gym.make(HEAD_TRACK, camera=None)
     env.reset(seed=0)
     sim = env.unwrapped.sim
-    step_frame, flags = sim.step_frame, []
-    monkeypatch.setattr(sim, "step_frame", lambda sensors=True: (flags.append(sensors), step_frame(sensors)))
+    step_frames, calls = sim.step_frames, []
+    monkeypatch.setattr(sim, "step_frames", lambda frames, before_frame=None, sensors=True: (
+        calls.append((frames, sensors)), step_frames(frames, before_frame, sensors)))
     lengths = set()
     for _ in range(12):
-        flags.clear()
+        calls.clear()
+        camera_frame = sim.camera_frame_index()
         env.step(env.action_space.sample())
-        assert flags[-1] and not any(flags[:-1])
-        lengths.add(len(flags))
+        assert len(calls) == 1 and calls[0][1]
+        assert sim.camera_frame_index() == camera_frame + 1 == sim.camera_frame_index(sim.frame - 1) + 1
+        lengths.add(calls[0][0])
     assert lengths == {4, 5}  # 8 ms joint frames per 1/30 s camera frame
     env.close()
 

@@ -134,6 +134,44 @@ def test_frames_step_like_plain_mujoco_with_sensors_read_at_the_end():
     assert not sim.model.opt.disableflags & mujoco.mjtDisableBit.mjDSBL_SENSOR  # restored after each frame
 
 
+def test_servo_set_points_planned_for_several_frames_equal_frame_by_frame_ones():
+    """advance_frames(n) returns, and leaves behind, bit for bit what n advance() calls do:
+    joints arriving mid-way, at rest, stopped (velocity 0), slowed, and with an acceleration
+    limit (planned frame by frame)."""
+    rng = np.random.default_rng(7)
+    batched, single = Simulation().servos, Simulation().servos
+    for round_ in range(60):
+        joints = rng.choice(len(ers7.JOINTS), rng.integers(0, 6), replace=False)
+        targets = single.command[joints] + rng.uniform(-0.05, 0.05, len(joints))
+        velocity = single.max_velocity * rng.choice([1.0, 0.3, 0.0], len(ers7.JOINTS), p=[0.6, 0.3, 0.1])
+        acceleration = np.where(rng.random(len(ers7.JOINTS)) < 0.2, 30.0, np.inf) if round_ % 3 == 2 else np.inf
+        for servos in (batched, single):
+            servos.set_target(joints, targets)
+            servos.velocity[:], servos.acceleration[:] = velocity, acceleration
+        frames = int(rng.integers(1, 7))
+        planned = batched.advance_frames(frames, 0.008)
+        one_by_one = np.array([single.advance(0.008).copy() for _ in range(frames)])
+        assert planned.shape == (frames, len(ers7.JOINTS)) and np.array_equal(planned, one_by_one)
+        assert np.array_equal(batched.command, single.command) and np.array_equal(batched._speed, single._speed)
+
+
+def test_several_frames_at_once_step_like_one_frame_at_a_time():
+    """step_frames(n, before_frame): the states, sensor readings and frame count of n
+    step_frame calls (sensors in the last only), before_frame called before each frame."""
+    at_once, one_by_one = Simulation(), Simulation()
+    calls = []
+    for sim in (at_once, one_by_one):
+        sim.servos.set_target(slice(None), sim.servos.low + 0.3 * (sim.servos.high - sim.servos.low))
+    for frames in (4, 5, 1, 4, 5, 3):
+        at_once.step_frames(frames, lambda: calls.append(at_once.frame))
+        for frame in range(frames):
+            one_by_one.step_frame(sensors=frame == frames - 1)
+        assert calls[-frames:] == list(range(at_once.frame - frames, at_once.frame))
+        assert at_once.frame == one_by_one.frame
+        for field in ("qpos", "qvel", "ctrl", "sensordata"):
+            assert np.array_equal(getattr(at_once.data, field), getattr(one_by_one.data, field)), field
+
+
 def test_sit_keyframe_rests_nose_up_on_its_paws_and_rump():
     sim = Simulation(keyframe="sit")
     start = sim.data.qpos[2]

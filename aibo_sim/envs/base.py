@@ -103,7 +103,8 @@ class AiboEnv(gym.Env):
         """Place the ball and draw the task's random parameters (from ``self.np_random``)."""
 
     def _before_frame(self) -> None:
-        """Called before each 8 ms joint frame (e.g. to move the ball kinematically)."""
+        """Called before each 8 ms joint frame (e.g. to move the ball kinematically; not to
+        command the servos, whose set-points for the step are planned before its first frame)."""
 
     def _evaluate(self) -> tuple[float, bool]:
         """Reward and termination for the state after a step."""
@@ -125,11 +126,7 @@ class AiboEnv(gym.Env):
     def step(self, action):
         targets = self.action_to_targets(action)
         self.sim.servos.set_target(self._actuated, targets)
-        camera_frame = self.sim.camera_frame_index()
-        while self.sim.camera_frame_index() == camera_frame:
-            self._before_frame()
-            # The observation reads the sensors after the last frame only.
-            self.sim.step_frame(sensors=self.sim.camera_frame_index(self.sim.frame + 1) != camera_frame)
+        self.sim.step_frames(self.sim.frames_to_camera_frame(), self._before_frame)
         observation = self._observation()
         reward, terminated = self._evaluate()
         return observation, reward, terminated, False, self._info()
@@ -190,12 +187,15 @@ class AiboEnv(gym.Env):
         image. Uses the camera's pose and its focal length over its sensor size.
         """
         model, data, cam = self.sim.model, self.sim.data, self._head_camera
-        local = data.cam_xmat[cam].reshape(3, 3).T @ (np.asarray(point) - data.cam_xpos[cam])
-        depth = -local[2]  # MuJoCo cameras look along -z, with y up
-        half_fov = model.cam_sensorsize[cam] / 2 / model.cam_intrinsic[cam][:2]  # tan of the half angles
-        offset = np.array([local[0], -local[1]]) / max(abs(depth), 1e-9) / half_fov
-        offset = np.minimum(np.maximum(offset, -2.0), 2.0)
-        return offset, bool(depth > 0 and (np.abs(offset) <= 1).all())
+        # In Python floats: a 3x3 rotation costs less than numpy's per-call overhead.
+        x, y, z = (p - c for p, c in zip(np.asarray(point, dtype=np.float64).tolist(), data.cam_xpos[cam].tolist()))
+        m = data.cam_xmat[cam].tolist()  # row-major: its columns are the camera's axes
+        right, up, back = (m[i] * x + m[3 + i] * y + m[6 + i] * z for i in range(3))  # MuJoCo cameras look along -z
+        depth = -back
+        (width, height), (fx, fy) = model.cam_sensorsize[cam].tolist(), model.cam_intrinsic[cam][:2].tolist()
+        scale = max(abs(depth), 1e-9)
+        offset = [min(max(v, -2.0), 2.0) for v in (right / scale / (width / 2 / fx), -up / scale / (height / 2 / fy))]
+        return np.array(offset), depth > 0 and abs(offset[0]) <= 1 and abs(offset[1]) <= 1
 
     # ---------------------------------------------------------------- observations
 
