@@ -120,7 +120,9 @@ class Servos:
             return np.array([self.advance(dt) for _ in range(frames)])
         speed = np.copysign(np.minimum(self.velocity, self.max_velocity), error)
         step = speed * dt
-        path = np.cumsum(np.vstack([self.command, np.broadcast_to(step, (frames, len(step)))]), axis=0)
+        path = np.empty((frames + 1, len(step)))  # the set-points before each frame and after the last
+        path[0], path[1:] = self.command, step
+        path.cumsum(axis=0, out=path)
         # Arrived in a frame: the step covers what was left before it; set-points stay there.
         arrived = np.logical_or.accumulate(np.abs(step) >= np.abs(self.target - path[:-1]), axis=0)
         commands = np.where(arrived, self.target, path[1:])
@@ -156,6 +158,7 @@ class Simulation:
         self._divergence_warnings = [self.data.warning[w] for w in (mujoco.mjtWarning.mjWARN_BADQACC,
                                                                     mujoco.mjtWarning.mjWARN_BADCTRL)]
         self._ball_body = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_BODY, "ball")  # -1: no ball
+        self._head_camera = self.model.camera(HEAD_CAMERA).id
         self.reset(seed)
 
     # ---------------------------------------------------------------- time and state
@@ -310,7 +313,7 @@ class Simulation:
         if self._renderer is None:
             self._renderer = Renderer(self.model, *self.camera_size, groups=HEAD_CAMERA_GROUPS)
         if self.camera_due():
-            self._camera_image = self._renderer.render(self.data, HEAD_CAMERA)
+            self._camera_image = self._renderer.render(self.data, self._head_camera)
             self._camera_image.flags.writeable = False
             self._rendered_camera_frame = self.camera_frame_index()
         return self._camera_image

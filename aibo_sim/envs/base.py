@@ -78,7 +78,8 @@ class AiboEnv(gym.Env):
         self._openr = OpenRCamera(self.sim) if camera == "openr" else None
         model = self.sim.model
         self._actuated = np.array([JOINT_INDEX[name] for name in self.actuated_joints])
-        self._target_low, self._target_high = model.actuator_ctrlrange[self._actuated].T
+        self._target_low, target_high = model.actuator_ctrlrange[self._actuated].T
+        self._target_span = target_high - self._target_low
         self._nominal_lights = (model.light_diffuse.copy(), model.vis.headlight.diffuse.copy())
         self.camera_gains = np.ones(3)  # R, G, B gains of this episode
         self._renderer: Renderer | None = None
@@ -94,7 +95,7 @@ class AiboEnv(gym.Env):
             width, height = openr_bridge.LAYER_SIZE[LAYERS[camera_layer]]
             spaces["image"] = gym.spaces.Box(0, 255, (height, width, 3), np.uint8)
         self.observation_space = gym.spaces.Dict(spaces)
-        self._distance_high = spaces["distance_mm"].high
+        self._distance_high = spaces["distance_mm"].high.tolist()
         self._head_camera = model.camera(HEAD_CAMERA).id
 
     # ---------------------------------------------------------------- task hooks
@@ -155,12 +156,11 @@ class AiboEnv(gym.Env):
             i = np.flatnonzero(~np.isfinite(action))[0]
             raise ValueError(f"action[{i}] ({self.actuated_joints[i]}) is {action[i]}: actions must be finite")
         action = np.minimum(np.maximum(action, -1.0), 1.0)
-        return self._target_low + (action + 1) / 2 * (self._target_high - self._target_low)
+        return self._target_low + (action + 1) / 2 * self._target_span
 
     def targets_to_action(self, targets) -> np.ndarray:
         """The normalised action that commands ``targets`` (rad, clipped to the joint ranges)."""
-        span = self._target_high - self._target_low
-        scaled = 2 * (np.asarray(targets, dtype=np.float64) - self._target_low) / span - 1
+        scaled = 2 * (np.asarray(targets, dtype=np.float64) - self._target_low) / self._target_span - 1
         return np.clip(scaled, -1, 1).astype(np.float32)
 
     # ---------------------------------------------------------------- scene
@@ -201,11 +201,12 @@ class AiboEnv(gym.Env):
 
     def _observation(self) -> dict:
         sim = self.sim
-        distances = np.array(sim.distances_mm(), np.float32)
+        # Noise can overshoot the range; clamped in Python floats (the bounds are float32 values).
+        distances = [min(max(d, 0.0), high) for d, high in zip(sim.distances_mm(), self._distance_high)]
         observation = {
             "joint_positions": sim.joint_positions().astype(np.float32),
             "acceleration": sim.acceleration().astype(np.float32),
-            "distance_mm": np.minimum(np.maximum(distances, 0), self._distance_high),  # noise can overshoot
+            "distance_mm": np.array(distances, np.float32),
             "touch": sim.touches().astype(np.int8),
         }
         if self.camera is not None:

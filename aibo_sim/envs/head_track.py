@@ -33,8 +33,9 @@ class HeadTrackBallEnv(AiboEnv):
 
     def __init__(self, **options):
         super().__init__(**options)
-        ball = self.sim.model.joint("ball")
-        self._ball_qpos, self._ball_qvel = ball.qposadr[0], ball.dofadr[0]
+        ball, data = self.sim.model.joint("ball"), self.sim.data
+        self._ball_qpos = data.qpos[ball.qposadr[0]:ball.qposadr[0] + 7]  # views into MjData
+        self._ball_qvel = data.qvel[ball.dofadr[0]:ball.dofadr[0] + 6]
 
     def _reset_task(self) -> None:
         rng = self.np_random
@@ -53,8 +54,8 @@ class HeadTrackBallEnv(AiboEnv):
                             for s, a, w, p in self._paths)
         if x < NEAREST_X:
             x, vx = NEAREST_X, 0.0
-        self.sim.data.qpos[self._ball_qpos:self._ball_qpos + 7] = (x, y, BALL_RADIUS, 1.0, 0.0, 0.0, 0.0)
-        self.sim.data.qvel[self._ball_qvel:self._ball_qvel + 6] = (vx, vy, 0.0, 0.0, 0.0, 0.0)
+        self._ball_qpos[:] = (x, y, BALL_RADIUS, 1.0, 0.0, 0.0, 0.0)
+        self._ball_qvel[:] = (vx, vy, 0.0, 0.0, 0.0, 0.0)
 
     def _ball_in_image(self) -> tuple[np.ndarray, bool]:
         """The ball's projected offset and visibility, computed once per joint frame."""
