@@ -20,6 +20,7 @@ a frame instead of ~0.67 ms). The image is the same, bit for bit (tested).
 
 from __future__ import annotations
 
+import ctypes
 import math
 import os
 
@@ -56,6 +57,20 @@ def _context_class(backend: str):
     return GLContext
 
 
+def _current_context_query(backend: str, gl) -> tuple:
+    """(a ctypes function returning the address of the calling thread's current OpenGL
+    context, the address of ``gl``'s context) for EGL, to skip making a context current
+    that already is; (None, None) for the other backends or if EGL's library is not found."""
+    if backend != "egl":
+        return None, None
+    try:
+        query = ctypes.CDLL("libEGL.so.1").eglGetCurrentContext
+        query.restype, query.argtypes = ctypes.c_void_p, []
+        return query, gl._context.address  # what mujoco.egl's own as_current compares
+    except (OSError, AttributeError):
+        return None, None
+
+
 class Renderer:
     """Renders RGB (and optionally depth) images of one camera of a model, offscreen.
 
@@ -75,6 +90,7 @@ class Renderer:
         try:
             self._gl = _context_class(backend)(width, height)
             self._gl.make_current()
+            self._current_context, self._context_address = _current_context_query(backend, self._gl)
         except RenderingUnavailable:
             raise
         except Exception as exc:  # EGL/OSMesa report failures with their own exception types
@@ -116,7 +132,9 @@ class Renderer:
             cam = self._camera
             cam.type = mujoco.mjtCamera.mjCAMERA_FIXED
             cam.fixedcamid = camera if isinstance(camera, int) else self.model.camera(camera).id
-        self._gl.make_current()
+        # eglMakeCurrent through PyOpenGL: ~5 us, ~20 us right after a physics step; the check ~0.4 us.
+        if self._current_context is None or self._current_context() != self._context_address:
+            self._gl.make_current()
         culled = self._outside_view(data, cam)
         group = self.model.geom_group
         saved = group[culled]
@@ -226,6 +244,7 @@ class Renderer:
 
     def close(self) -> None:
         if self._gl is not None:
+            self._gl.make_current()  # the GL objects freed are this context's
             self._context.free()
             self._gl.free()
             self._gl = None

@@ -311,6 +311,26 @@ def test_culling_geoms_out_of_view_changes_no_pixel():
     assert sum(drawn) < 0.5 * sum(total)
 
 
+def test_renderers_taking_turns_each_draw_in_their_own_context():
+    """Renderers skip making their OpenGL context current when it already is: interleaved
+    with another renderer (another size, scene and camera), each one's frames equal those it
+    draws alone."""
+    from aibo_sim.render import Renderer
+    from aibo_sim.sim import HEAD_CAMERA_GROUPS
+
+    sim, other = Simulation(), Simulation(models_dir() / "scene_webots.xml")
+    head = Renderer(sim.model, 208, 160, groups=HEAD_CAMERA_GROUPS)
+    alone = [head.render(sim.data, "camera") for _ in range(2)]
+    third_person = Renderer(other.model, 320, 240)
+    view = third_person.render(other.data, "tracking")
+    for _ in range(2):
+        assert np.array_equal(head.render(sim.data, "camera"), alone[0])
+        assert np.array_equal(third_person.render(other.data, "tracking"), view)
+    assert np.array_equal(alone[0], alone[1]) and view.shape == (240, 320, 3)
+    head.close()
+    third_person.close()
+
+
 def test_culling_with_a_free_camera_changes_no_pixel():
     """A third-person free camera close to the robot, so that some geoms fall outside the
     picture and others cross its edges."""
