@@ -119,6 +119,7 @@ class Renderer:
         self._option.sitegroup[:] = 0
         self._option.flags[mujoco.mjtVisFlag.mjVIS_RANGEFINDER] = 0
         self._cullable_key = self._frustum_key = None
+        self._cull_inputs = model.geom_group, self._option.geomgroup, model.geom_rbound  # views, read each frame
         self._hidden_group = next((g for g in range(mujoco.mjNGROUP) if g not in groups), None) if cull else None
         self._camera = mujoco.MjvCamera()
         self._rect = mujoco.MjrRect(0, 0, width, height)
@@ -193,11 +194,10 @@ class Renderer:
     def _cullable_geoms(self) -> tuple[np.ndarray, np.ndarray]:
         """Ids of the geoms in the shown groups with a finite bounding sphere (planes have
         radius 0), and minus their radii as a column; cached while groups and radii stay the same."""
-        model = self.model
-        key = model.geom_group.tobytes() + self._option.geomgroup.tobytes() + model.geom_rbound.tobytes()
+        group, shown_groups, radius = self._cull_inputs
+        key = group.tobytes() + shown_groups.tobytes() + radius.tobytes()
         if self._cullable_key != key:
-            radius = model.geom_rbound
-            shown = np.flatnonzero(self._option.geomgroup[model.geom_group] & (radius > 0))
+            shown = np.flatnonzero(shown_groups[group] & (radius > 0))
             self._cullable = shown, -radius[shown, None]
             self._cullable_key = key
         return self._cullable

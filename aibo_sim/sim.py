@@ -151,6 +151,7 @@ class Simulation:
         }
         self._distance_adr = np.array([self._sensor_slices[s.name].start for s in DISTANCE_SENSORS])
         self._distance_index = {s.name: i for i, s in enumerate(DISTANCE_SENSORS)}
+        self._distance_ranges_mm = [s.range_mm for s in DISTANCE_SENSORS]
         self._touch_adr = np.array([self._sensor_slices[s.name].start for s in TOUCH_SENSORS])
         self._touch_threshold = np.array([s.threshold for s in TOUCH_SENSORS])
         self._joint_qpos = np.array([self.model.joint(j.name).qposadr[0] for j in JOINTS])
@@ -269,9 +270,8 @@ class Simulation:
         clamped to the sensor's range, 10 % noise mid-range (one draw per sensor, in order)."""
         metres = self.data.sensordata[self._distance_adr[which]].tolist()
         noise = self.rng.standard_normal(len(metres)).tolist()
-        ranges_mm = [s.range_mm for s in DISTANCE_SENSORS[which]]
         values = []
-        for reading, (low, high), draw in zip(metres, ranges_mm, noise):  # a few sensors: scalar math is cheapest
+        for reading, (low, high), draw in zip(metres, self._distance_ranges_mm[which], noise):  # a few sensors: scalar math is cheapest
             mm = high if reading < 0 else min(max(reading * 1000, low), high)  # < 0: no hit
             values.append(mm * (1 + IR_NOISE * (1 - abs(2 * (mm - low) / (high - low) - 1)) * draw))
         return values
