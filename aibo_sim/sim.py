@@ -115,6 +115,8 @@ class Servos:
         acceleration limit (each moving joint then steps by the same amount every frame
         until it arrives; numpy's cumulative sum adds the steps in order, as frame after
         frame does)."""
+        if frames == 1:
+            return self.advance(dt)[np.newaxis]
         error = self.target - self.command
         if not error.any() or not np.isinf(self.acceleration).all():
             return np.array([self.advance(dt) for _ in range(frames)])

@@ -14,8 +14,9 @@ core, which renders its 208x160 frames with shadows ~1.4x faster here than 0 doe
 peak RSS of a process running one environment (RGB observations; OPEN-R observations, which
 add the colour tables), and, to show what a worker costs, the time ``AsyncVectorEnv`` with 2
 workers adds to a step of 2 ``CartPole-v1`` (whose own step takes microseconds): pipes,
-shared memory and waking processes. Random actions; the workers are spawned (forking a process that has used OpenGL
-can deadlock in Mesa). Needs ``gymnasium[mujoco]`` for Ant-v5.
+shared memory and waking processes. Random actions, drawn before each block is timed; the
+workers are spawned (forking a process that has used OpenGL can deadlock in Mesa). Needs
+``gymnasium[mujoco]`` for Ant-v5.
 
 Run: ``python -m benchmarks.envs``
 """
@@ -63,12 +64,18 @@ def _make(env_id: str, vector_kwargs: dict | None):
     return gym.make_vec(env_id, 2, "async", vector_kwargs=vector_kwargs, **kwargs)
 
 
-def _random_steps(env, steps: int) -> None:
-    """``steps`` random actions, rendering each step where the env renders; a single env is
+def _random_actions(env, steps: int) -> list:
+    """``steps`` random actions, drawn before a block is timed: Gymnasium's ``Box.sample``
+    takes ~30 us, ~3 % of one of our steps, and is the benchmark's policy, not the env."""
+    return [env.action_space.sample() for _ in range(steps)]
+
+
+def _step(env, actions: list) -> None:
+    """Step through ``actions``, rendering each step where the env renders; a single env is
     reset at the end of an episode (vector envs reset themselves)."""
     render = env.render_mode is not None
-    for _ in range(steps):
-        _, _, terminated, truncated, _ = env.step(env.action_space.sample())
+    for action in actions:
+        _, _, terminated, truncated, _ = env.step(action)
         if render:
             env.render()
         if np.ndim(terminated) == 0 and (terminated or truncated):
@@ -81,11 +88,12 @@ def serve_blocks(env_id: str, vector_kwargs: dict | None) -> None:
     env = _make(env_id, vector_kwargs)
     env.action_space.seed(0)
     env.reset(seed=0)
-    _random_steps(env, 1)
+    _step(env, _random_actions(env, 1))
     print("ready", flush=True)
     for _ in sys.stdin:
+        actions = _random_actions(env, STEPS[env_id])
         start = time.perf_counter()
-        _random_steps(env, STEPS[env_id])
+        _step(env, actions)
         print(STEPS[env_id] * getattr(env, "num_envs", 1) / (time.perf_counter() - start), flush=True)
     env.close()
 
@@ -94,7 +102,7 @@ def peak_rss_mib(env_id: str, camera: str | None) -> float:
     """Peak RSS (VmHWM, Linux) of this process after 100 random steps of one environment."""
     env = gym.make(env_id, **(ANT_KWARGS if env_id == ANT else {"camera": camera}))
     env.reset(seed=0)
-    _random_steps(env, 100)
+    _step(env, _random_actions(env, 100))
     return int(re.search(r"VmHWM:\s*(\d+) kB", Path("/proc/self/status").read_text()).group(1)) / 1024
 
 
