@@ -161,7 +161,7 @@ class Simulation:
         self._divergence_warnings = [self.data.warning[w] for w in (mujoco.mjtWarning.mjWARN_BADQACC,
                                                                     mujoco.mjtWarning.mjWARN_BADCTRL)]
         self._ball_body = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_BODY, "ball")  # -1: no ball
-        self._head_camera = self.model.camera(HEAD_CAMERA).id
+        self.head_camera_id = self.model.camera(HEAD_CAMERA).id
         self.reset(seed)
 
     # ---------------------------------------------------------------- time and state
@@ -222,6 +222,8 @@ class Simulation:
         plain stepping, and each step without them saves the ~9 us (of ~30 us) that the IR
         rays, touch sensors and accelerometer cost.
         """
+        if not isinstance(frames, int) or frames < 1:
+            raise ValueError(f"frames must be a whole number >= 1, not {frames!r}")
         commands = self.servos.advance_frames(frames, FRAME_MS / 1000)
         model, data, options = self.model, self.data, self.model.opt
         steps = [self.steps_per_frame] * frames
@@ -315,7 +317,7 @@ class Simulation:
         if self._renderer is None:
             self._renderer = Renderer(self.model, *self.camera_size, groups=HEAD_CAMERA_GROUPS)
         if self.camera_due():
-            self._camera_image = self._renderer.render(self.data, self._head_camera)
+            self._camera_image = self._renderer.render(self.data, self.head_camera_id)
             self._camera_image.flags.writeable = False
             self._rendered_camera_frame = self.camera_frame_index()
         return self._camera_image

@@ -170,6 +170,9 @@ def test_several_frames_at_once_step_like_one_frame_at_a_time():
         assert at_once.frame == one_by_one.frame
         for field in ("qpos", "qvel", "ctrl", "sensordata"):
             assert np.array_equal(getattr(at_once.data, field), getattr(one_by_one.data, field)), field
+    for bad in (0, -1, 2.5):
+        with pytest.raises(ValueError, match="frames must be a whole number >= 1"):
+            at_once.step_frames(bad)
 
 
 def test_sit_keyframe_rests_nose_up_on_its_paws_and_rump():

@@ -37,7 +37,7 @@ import mujoco
 import numpy as np
 import openr_bridge
 
-from ..ers7 import DISTANCE_SENSORS, HEAD_CAMERA, JOINT_INDEX, JOINTS, LEGS, TOUCH_SENSORS
+from ..ers7 import DISTANCE_SENSORS, JOINT_INDEX, JOINTS, LEGS, TOUCH_SENSORS
 from ..camera import OpenRCamera
 from ..render import Renderer
 from ..sim import ACCEL_RANGE, Simulation
@@ -96,7 +96,6 @@ class AiboEnv(gym.Env):
             spaces["image"] = gym.spaces.Box(0, 255, (height, width, 3), np.uint8)
         self.observation_space = gym.spaces.Dict(spaces)
         self._distance_high = spaces["distance_mm"].high.tolist()
-        self._head_camera = model.camera(HEAD_CAMERA).id
 
     # ---------------------------------------------------------------- task hooks
 
@@ -186,7 +185,7 @@ class AiboEnv(gym.Env):
         edges, clipped to +-2) and whether the point is in front of the camera and inside the
         image. Uses the camera's pose and its focal length over its sensor size.
         """
-        model, data, cam = self.sim.model, self.sim.data, self._head_camera
+        model, data, cam = self.sim.model, self.sim.data, self.sim.head_camera_id
         # In Python floats: a 3x3 rotation costs less than numpy's per-call overhead.
         x, y, z = (p - c for p, c in zip(np.asarray(point, dtype=np.float64).tolist(), data.cam_xpos[cam].tolist()))
         m = data.cam_xmat[cam].tolist()  # row-major: its columns are the camera's axes
