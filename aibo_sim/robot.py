@@ -216,7 +216,7 @@ class Robot:
         self.sim = sim or Simulation()
         self.backend, self.mtn_mode = backend, mtn_mode
         self.search_dirs = tuple(search_dirs)
-        from .camera import OpenRCamera, SimCamera
+        from .camera.backends import OpenRCamera, SimCamera
 
         self.camera_source = OpenRCamera(self.sim, memory_stick) if backend == "openr" else SimCamera(self.sim)
         self.devices: dict[str, Device] = {}

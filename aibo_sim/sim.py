@@ -14,16 +14,15 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
-from openr_bridge import FRAME_RATE_HZ, FRAME_TICK_MS, FULL_HEIGHT, FULL_WIDTH, LAYER_SIZE, OFbkImageVectorData, encode_frame
+from openr_bridge import FRAME_RATE_HZ, FRAME_TICK_MS
 
+from .camera import CameraProfile, CameraSettings, HeadCamera, camera_size
 from .field import BALL_RADIUS
-from .ers7 import DISTANCE_SENSORS, HEAD_CAMERA, JOINTS, LED_BY_NAME, LED_OFF_RGBA, SENSORS, TOUCH_SENSORS
-from .render import Renderer
+from .ers7 import DISTANCE_SENSORS, JOINTS, LED_BY_NAME, LED_OFF_RGBA, SENSORS, TOUCH_SENSORS
 
 FRAME_MS = FRAME_TICK_MS  # OPEN-R joint frame, 8 ms
 GRAVITY = 9.80665
 ACCEL_RANGE = 2 * GRAVITY  # Sony: +-19 613 300 um/s^2
-HEAD_CAMERA_GROUPS = (0, 2)  # group 1 holds the robot's geoms behind the head camera
 IR_NOISE = 0.1  # Webots lookup tables: 10 % noise at mid-range, none at the ends
 
 
@@ -53,11 +52,6 @@ def load_model(scene: str | Path | None = None) -> mujoco.MjModel:
         return mujoco.MjModel.from_xml_path(str(path))
     except ValueError as exc:
         raise ModelError(f"{path}: {exc}") from None
-
-
-def camera_size(camera_full: bool) -> tuple[int, int]:
-    """(width, height) the head camera renders: the sensor's 416x320, or layer H's 208x160."""
-    return (FULL_WIDTH, FULL_HEIGHT) if camera_full else LAYER_SIZE[0]
 
 
 class Servos:
@@ -134,9 +128,11 @@ class Servos:
 
 
 class Simulation:
-    """One ERS-7 in a scene, advanced in 8 ms frames, with its head camera."""
+    """One ERS-7 in a scene, advanced in 8 ms frames, with its head camera (``camera``, see
+    ``aibo_sim.camera``: profile ``ers7`` or ``ideal``, settings by name)."""
 
-    def __init__(self, scene=None, *, seed: int = 0, keyframe: str = "stand", camera_full: bool = False):
+    def __init__(self, scene=None, *, seed: int = 0, keyframe: str = "stand", camera_full: bool = False,
+                 camera_profile: str | CameraProfile = "ers7", camera_settings: CameraSettings | None = None):
         self.model = load_model(scene)
         self.data = mujoco.MjData(self.model)
         self.keyframe = keyframe
@@ -145,8 +141,6 @@ class Simulation:
             raise ModelError(f"timestep {self.model.opt.timestep} does not divide the 8 ms joint frame")
         self.steps_per_frame = round(steps)
         self.servos = Servos(self.model)
-        self.camera_size = camera_size(camera_full)
-        self._renderer: Renderer | None = None
         self._sensor_slices = {
             s.name: slice(self.model.sensor(s.name).adr[0], self.model.sensor(s.name).adr[0] + self.model.sensor(s.name).dim[0])
             for s in SENSORS if s.kind != "camera"
@@ -161,20 +155,21 @@ class Simulation:
         self._divergence_warnings = [self.data.warning[w] for w in (mujoco.mjtWarning.mjWARN_BADQACC,
                                                                     mujoco.mjtWarning.mjWARN_BADCTRL)]
         self._ball_body = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_BODY, "ball")  # -1: no ball
-        self.head_camera_id = self.model.camera(HEAD_CAMERA).id
+        self.camera = HeadCamera(self, camera_size(camera_full), camera_profile, camera_settings)
         self.reset(seed)
 
     # ---------------------------------------------------------------- time and state
 
     def reset(self, seed: int | None = None, keyframe: str | None = None) -> None:
         if seed is not None:
-            self.rng = np.random.default_rng(seed)
+            self.rng = np.random.default_rng(seed)  # IR noise; the camera's noise has its own stream
+            self.seed = seed
         key = self.model.key(keyframe or self.keyframe).id
         mujoco.mj_resetDataKeyframe(self.model, self.data, key)
         mujoco.mj_forward(self.model, self.data)
         self.servos.reset(self.joint_positions())
         self.frame = 0  # 8 ms frames since reset
-        self._rendered_camera_frame = -1
+        self.camera.reset(self.seed)
 
     def place_robot(self, x: float, y: float, yaw: float) -> None:
         """Put the robot at (x, y) on the field heading ``yaw`` (rad), keeping its height and pitch."""
@@ -225,23 +220,31 @@ class Simulation:
         if not isinstance(frames, int) or frames < 1:
             raise ValueError(f"frames must be a whole number >= 1, not {frames!r}")
         commands = self.servos.advance_frames(frames, FRAME_MS / 1000)
-        model, data, options = self.model, self.data, self.model.opt
+        model, data, options, camera = self.model, self.data, self.model.opt, self.camera
         steps = [self.steps_per_frame] * frames
         steps[-1] -= sensors  # the last step, with sensors, after the loop
+        # Camera ticks within these frames: after frame k (counted from 1) when the index moves.
+        ticks = [k for k in range(1, frames + 1) if self.camera_frame_index(self.frame + k) != self.camera_frame_index(self.frame + k - 1)]
         flags = options.disableflags
         options.disableflags = flags | mujoco.mjtDisableBit.mjDSBL_SENSOR
         try:
-            for command, nstep in zip(commands, steps):
+            for k, (command, nstep) in enumerate(zip(commands, steps), start=1):
+                if camera.live:
+                    camera.freeze()
                 if before_frame is not None:
                     before_frame()
                 data.ctrl[:] = command
                 if nstep:
                     mujoco.mj_step(model, data, nstep=nstep)
                 self.frame += 1
+                if k < frames and k in ticks:
+                    camera.tick()
         finally:
             options.disableflags = flags
         if sensors:
             mujoco.mj_step(model, data)
+        if frames in ticks:
+            camera.tick()
         if any(w.number for w in self._divergence_warnings) or not np.isfinite(data.qpos).all():
             raise SimulationDiverged(f"physics diverged at t = {data.time:.3f} s (by frame {self.frame})")
 
@@ -256,10 +259,6 @@ class Simulation:
         while self.camera_frame_index(self.frame + frames) == now:
             frames += 1
         return frames
-
-    def camera_due(self) -> bool:
-        """True when the camera has a frame newer than the last one rendered."""
-        return self.camera_frame_index() != self._rendered_camera_frame
 
     # ---------------------------------------------------------------- readings
 
@@ -306,26 +305,7 @@ class Simulation:
     def fallen(self) -> bool:
         return self.body_pose()[2] > math.radians(60)
 
-    # ---------------------------------------------------------------- camera
-
-    def render_camera(self) -> np.ndarray:
-        """The head camera's RGB frame for the current 30 fps camera frame, (h, w, 3) uint8.
-
-        Rendered at the first call once the frame is due and shared (read-only) by every
-        caller until the next one: the camera exposes one picture per frame.
-        """
-        if self._renderer is None:
-            self._renderer = Renderer(self.model, *self.camera_size, groups=HEAD_CAMERA_GROUPS)
-        if self.camera_due():
-            self._camera_image = self._renderer.render(self.data, self.head_camera_id)
-            self._camera_image.flags.writeable = False
-            self._rendered_camera_frame = self.camera_frame_index()
-        return self._camera_image
-
-    def openr_message(self, rgb: np.ndarray) -> OFbkImageVectorData:
-        """``rgb`` as the robot delivers it now: frameNumber = this 8 ms tick, field counter =
-        the 30 fps camera frame index."""
-        return encode_frame(rgb, frame_number=self.frame, field_counter=self.camera_frame_index())
+    # ---------------------------------------------------------------- LEDs
 
     def set_led(self, name: str, level: float) -> None:
         """Light an LED geom at ``level`` in 0..1 of its colour (0: the unlit material)."""
@@ -333,6 +313,4 @@ class Simulation:
         self.model.geom_rgba[self.model.geom(name).id] = off + level * (lit - off)
 
     def close(self) -> None:
-        if self._renderer is not None:
-            self._renderer.close()
-            self._renderer = None
+        self.camera.close()

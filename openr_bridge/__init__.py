@@ -40,7 +40,7 @@ from .config import (
     parse_connect_cfg,
     parse_stub_cfg,
 )
-from .encoder import encode_frame, haar_analysis, reconstruct_luma
+from .encoder import encode_frame, encode_ycrcb, haar_analysis, reconstruct_luma
 from .errors import (
     CdtError,
     ConfigError,
@@ -52,7 +52,9 @@ from .errors import (
     OpenRError,
 )
 from .ers7_camera import (
+    CAMERA_DEFAULTS,
     CAMERA_LOCATOR,
+    CAMERA_SETTINGS,
     FIELD_OF_VIEW,
     FRAME_RATE_HZ,
     FRAME_TICK_MS,
@@ -64,6 +66,18 @@ from .ers7_camera import (
     LAYER_TYPE,
     VERTICAL_FOV_DEG,
     frame_number_for_image,
+    ocamparamGAIN_HIGH,
+    ocamparamGAIN_LOW,
+    ocamparamGAIN_MID,
+    ocamparamSHUTTER_FAST,
+    ocamparamSHUTTER_MID,
+    ocamparamSHUTTER_SLOW,
+    ocamparamWB_FL_MODE,
+    ocamparamWB_INDOOR_MODE,
+    ocamparamWB_OUTDOOR_MODE,
+    oprmreqCAM_SET_GAIN,
+    oprmreqCAM_SET_SHUTTER_SPEED,
+    oprmreqCAM_SET_WHITE_BALANCE,
 )
 from .image import (
     TAG_LENGTH,

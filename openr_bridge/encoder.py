@@ -96,7 +96,25 @@ def encode_frame(
     primitive_id: int = 0,
 ) -> OFbkImageVectorData:
     """The message for a (320, 416, 3) or (160, 208, 3) uint8 RGB frame."""
-    rgb = _checked_frame(rgb)
+    return _encode(_checked_frame(rgb, "RGB"), _layer_h, frame_number, field_counter, cdt, primitive_id)
+
+
+def encode_ycrcb(
+    ycrcb: np.ndarray,
+    *,
+    frame_number: int = 0,
+    field_counter: int = 0,
+    cdt: OCdtVectorData | None = None,
+    primitive_id: int = 0,
+) -> OFbkImageVectorData:
+    """The message for a (320, 416, 3) or (160, 208, 3) uint8 frame of Y, Cr, Cb per pixel
+    (what the sensor delivers): H's bands are its bytes (208x160) or, from 416x320, the
+    Haar bands of its Y and the 2x2 means of its Cr and Cb, rounded half up."""
+    return _encode(_checked_frame(ycrcb, "Y, Cr, Cb"), _layer_h_from_ycrcb, frame_number, field_counter, cdt,
+                   primitive_id)
+
+
+def _encode(frame, fill_h, frame_number, field_counter, cdt, primitive_id) -> OFbkImageVectorData:
     message = bytearray(_OFFSETS[-1] + _SIZES[-1])
     message[: _OFFSETS[0]] = _PREAMBLE
     for index in range(len(_SIZES)):
@@ -107,7 +125,7 @@ def encode_frame(
         data[offset : offset + size].reshape(height, -1, width)
         for (width, height), offset, size in zip(LAYER_SIZE, _OFFSETS, _SIZES)
     )
-    _layer_h(rgb, h_layer)
+    fill_h(frame, h_layer)
     _next_level(h_layer, m_layer)
     _next_level(m_layer, l_layer)
     cdt_bits = cdt_layer(m_layer[:, 0], m_layer[:, 1], m_layer[:, 2], cdt)
@@ -142,15 +160,15 @@ def reconstruct_luma(message: OFbkImageVectorData, layer: int = ofbkimageLAYER_H
     return np.clip(luma, 0, 255).astype(np.uint8)
 
 
-def _checked_frame(rgb) -> np.ndarray:
-    rgb = np.asarray(rgb)
+def _checked_frame(frame, what: str) -> np.ndarray:
+    frame = np.asarray(frame)
     width, height = LAYER_SIZE[ofbkimageLAYER_H]
-    if rgb.dtype != np.uint8 or rgb.shape not in [(FULL_HEIGHT, FULL_WIDTH, 3), (height, width, 3)]:
+    if frame.dtype != np.uint8 or frame.shape not in [(FULL_HEIGHT, FULL_WIDTH, 3), (height, width, 3)]:
         raise FrameError(
-            f"frame of shape {rgb.shape} and dtype {rgb.dtype}, expected uint8 RGB "
+            f"frame of shape {frame.shape} and dtype {frame.dtype}, expected uint8 {what} "
             f"({FULL_HEIGHT}, {FULL_WIDTH}, 3) or ({height}, {width}, 3)"
         )
-    return rgb
+    return frame
 
 
 def _layer_h(rgb: np.ndarray, layer: np.ndarray) -> None:
@@ -162,6 +180,18 @@ def _layer_h(rgb: np.ndarray, layer: np.ndarray) -> None:
         return
     _haar(cv2.extractChannel(ycrcb, 0), [layer[:, 0], layer[:, 3], layer[:, 4], layer[:, 5]])
     _, layer[:, 1], layer[:, 2] = rgb_to_ycrcb(_sum2x2(rgb), pixels=4)
+
+
+def _layer_h_from_ycrcb(ycrcb: np.ndarray, layer: np.ndarray) -> None:
+    """Fill H from a frame of Y, Cr, Cb bytes."""
+    if ycrcb.shape[0] == layer.shape[0]:
+        cv2.split(ycrcb, [layer[:, 0], layer[:, 1], layer[:, 2]])
+        layer[:, 3:] = 128
+        return
+    _haar(np.ascontiguousarray(ycrcb[..., 0]), [layer[:, 0], layer[:, 3], layer[:, 4], layer[:, 5]])
+    for band, channel in ((1, 1), (2, 2)):
+        cv2.resize(np.ascontiguousarray(ycrcb[..., channel]), layer[:, band].shape[::-1], dst=layer[:, band],
+                   interpolation=cv2.INTER_AREA)
 
 
 def _next_level(src: np.ndarray, dst: np.ndarray) -> None:

@@ -38,7 +38,7 @@ import numpy as np
 import openr_bridge
 
 from ..ers7 import DISTANCE_SENSORS, JOINT_INDEX, JOINTS, LEGS, TOUCH_SENSORS
-from ..camera import OpenRCamera
+from ..camera.backends import OpenRCamera
 from ..render import Renderer
 from ..sim import ACCEL_RANGE, Simulation
 

@@ -1,0 +1,276 @@
+"""The head camera: the one place that turns the simulation's state into camera frames.
+
+Timing: camera frame k is exposed at its tick, the first 8 ms joint frame at or after k / 30 s
+(``Simulation`` calls ``tick`` there, and ``freeze`` before the state moves on). Its picture,
+labels and OPEN-R message are made from the state at that tick, whoever asks and whenever
+(until the next tick, or ``latency_frames`` later): ``run``, ``dump`` and the environments
+see the same frames, bit for bit. Settings changed during a frame apply from the next tick.
+
+A frame (``CameraFrame``) holds the picture as RGB and as Sony's Y, Cr, Cb (one is made from
+the other on first use: the ``ideal`` profile renders RGB; the ``ers7`` sensor delivers
+Y, Cr, Cb and its RGB is Sony's ``YCrCb2RGB`` of them, what the wrapper serves), the camera's
+pose at the exposure, and the OPEN-R message, encoded once.
+"""
+
+from __future__ import annotations
+
+import math
+
+import cv2
+import mujoco
+import numpy as np
+
+import openr_bridge
+from openr_bridge import FULL_HEIGHT, FULL_WIDTH, LAYER_SIZE, encode_frame, encode_ycrcb
+
+from ..ers7 import HEAD_CAMERA
+from ..render import Renderer
+from .lens import LENSES, Lens
+from .sensor import CameraProfile, CameraSettings, RobotColour, Sensor, camera_profile
+
+HEAD_CAMERA_GROUPS = (0, 2)  # group 1 holds the robot's geoms behind the head camera
+DEFAULT_LIGHT_TEMPERATURE_K = 5000.0  # a scene without the custom numeric ``light_temperature_K``
+# MuJoCo camera axes (x right, y up, z backwards) to OpenCV's (x right, y down, z forward).
+_MUJOCO_TO_OPENCV = np.diag([1.0, -1.0, -1.0])
+
+
+def camera_size(camera_full: bool) -> tuple[int, int]:
+    """(width, height) the head camera delivers: the sensor's 416x320, or layer H's 208x160."""
+    return (FULL_WIDTH, FULL_HEIGHT) if camera_full else LAYER_SIZE[0]
+
+
+def scene_light_temperature(model: mujoco.MjModel) -> float:
+    """The scene's light colour temperature (K): custom numeric ``light_temperature_K``."""
+    index = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_NUMERIC, "light_temperature_K")
+    if index < 0:
+        return DEFAULT_LIGHT_TEMPERATURE_K
+    return float(model.numeric_data[model.numeric_adr[index]])
+
+
+class CameraFrame:
+    """One 30 fps frame of the head camera; see the module docstring."""
+
+    def __init__(self, index: int, frame_number: int, settings: CameraSettings, pose: tuple[np.ndarray, np.ndarray],
+                 rgb: np.ndarray | None = None, ycrcb: np.ndarray | None = None):
+        self.index, self.frame_number, self.settings = index, frame_number, settings
+        self.position, self.xmat = pose  # camera position and MuJoCo rotation matrix (3, 3) at the exposure
+        self._rgb, self._ycrcb, self._message = rgb, ycrcb, None
+        for picture in (rgb, ycrcb):
+            if picture is not None:
+                picture.flags.writeable = False
+
+    @property
+    def rgb(self) -> np.ndarray:
+        """(h, w, 3) uint8 RGB, read-only."""
+        if self._rgb is None:
+            self._rgb = openr_bridge.ycrcb_to_rgb(self._ycrcb[..., 0], self._ycrcb[..., 1], self._ycrcb[..., 2])
+            self._rgb.flags.writeable = False
+        return self._rgb
+
+    @property
+    def ycrcb(self) -> np.ndarray:
+        """(h, w, 3) uint8 Y, Cr, Cb, read-only."""
+        if self._ycrcb is None:
+            self._ycrcb = np.ascontiguousarray(openr_bridge.colour.rgb_to_ycrcb_packed(self._rgb)[..., :3])
+            self._ycrcb.flags.writeable = False
+        return self._ycrcb
+
+    @property
+    def message(self) -> openr_bridge.OFbkImageVectorData:
+        """The OFbkImageVectorData of this frame: frameNumber the exposure's 8 ms tick, field
+        counter the frame index."""
+        if self._message is None:
+            if self._ycrcb is not None:
+                self._message = encode_ycrcb(self._ycrcb, frame_number=self.frame_number, field_counter=self.index)
+            else:
+                self._message = encode_frame(self._rgb, frame_number=self.frame_number, field_counter=self.index)
+        return self._message
+
+
+class _Exposure:
+    """The state a frame is made from: the live MjData until ``freeze`` copies it."""
+
+    __slots__ = ("index", "frame_number", "settings", "data", "frame")
+
+    def __init__(self, index, frame_number, settings, data):
+        self.index, self.frame_number, self.settings, self.data = index, frame_number, settings, data
+        self.frame: CameraFrame | None = None
+
+
+class HeadCamera:
+    """The ERS-7's head camera on one simulation: renderer, lens, sensor, frames and labels."""
+
+    def __init__(self, sim, size: tuple[int, int], profile: str | CameraProfile = "ers7",
+                 settings: CameraSettings | None = None, light_temperature_k: float | None = None):
+        self.sim, self.model = sim, sim.model
+        self.width, self.height = size
+        self.profile = camera_profile(profile)
+        self.camera_id = self.model.camera(HEAD_CAMERA).id
+        self.light_temperature_k = light_temperature_k or scene_light_temperature(self.model)
+        self.lens: Lens = LENSES[self.profile.lens].scaled(self.width, self.height)
+        self._settings = settings or CameraSettings()
+        self.sensor = (Sensor(self.profile, self.width, self.height, self._settings, self.light_temperature_k)
+                       if self.profile.sensor else None)
+        if self.lens.distorted or self.profile.lens != "pinhole":
+            self._render_width, self._render_height, self._render_focal = self.lens.render_pinhole()
+            self._remap = self.lens.remap_tables(self._render_width, self._render_height, self._render_focal)
+        else:
+            self._render_width, self._render_height, self._render_focal, self._remap = self.width, self.height, None, None
+        self._renderer: Renderer | None = None
+        self._spare: list[mujoco.MjData] = []
+        self._exposures: list[_Exposure] = []
+        self._velocity = np.zeros(6)
+        self.seed = 0
+
+    # ---------------------------------------------------------------- settings
+
+    @property
+    def settings(self) -> CameraSettings:
+        """The settings the next frame is exposed with."""
+        return self._settings
+
+    def set_settings(self, settings: CameraSettings | None = None, **changes) -> None:
+        """Change white balance, gain or shutter (names, see ``CameraSettings``) from the next frame."""
+        base = settings or self._settings
+        self._settings = CameraSettings(**{**base.as_dict(), **changes})
+
+    def set_robot(self, robot: RobotColour) -> None:
+        """This robot's colour deviation, for the frames made from now on."""
+        if self.sensor is not None:
+            self.sensor.configure(self.sensor.settings, robot)
+
+    def describe(self) -> dict:
+        """Profile, lens and settings, as run.json and meta.json record them."""
+        lens = self.lens
+        return {"profile": self.profile.name, "lens": lens.name, "width": self.width, "height": self.height,
+                "fx": lens.fx, "fy": lens.fy, "cx": lens.cx, "cy": lens.cy, "distortion": list(lens.distortion),
+                "distortion_model": "opencv k1 k2 p1 p2 k3", **self._settings.as_dict(),
+                "light_temperature_K": self.light_temperature_k}
+
+    # ---------------------------------------------------------------- timing (called by Simulation)
+
+    def reset(self, seed: int) -> None:
+        self.seed = seed
+        self._spare.extend(e.data for e in self._exposures if e.data is not self.sim.data)
+        self._exposures.clear()
+        self.tick()
+
+    def tick(self) -> None:
+        """A frame's exposure ends now, in the live state."""
+        self._exposures.append(_Exposure(self.sim.camera_frame_index(), self.sim.frame, self._settings, self.sim.data))
+        while len(self._exposures) > self.profile.latency_frames + 1:
+            old = self._exposures.pop(0)
+            if old.data is not self.sim.data:
+                self._spare.append(old.data)
+
+    def freeze(self) -> None:
+        """The live state is about to change: keep a copy for the newest exposure."""
+        exposure = self._exposures[-1]
+        if exposure.data is self.sim.data:
+            copy = self._spare.pop() if self._spare else mujoco.MjData(self.model)
+            mujoco.mj_copyData(copy, self.model, self.sim.data)
+            exposure.data = copy
+
+    @property
+    def live(self) -> bool:
+        return bool(self._exposures) and self._exposures[-1].data is self.sim.data
+
+    # ---------------------------------------------------------------- frames
+
+    def frame(self) -> CameraFrame:
+        """The frame the camera delivers now (the newest, or ``latency_frames`` older)."""
+        exposure = self._exposures[0]
+        if exposure.frame is None:
+            exposure.frame = self._make_frame(exposure)
+        return exposure.frame
+
+    def _make_frame(self, exposure: _Exposure) -> CameraFrame:
+        data = exposure.data
+        pose = (data.cam_xpos[self.camera_id].copy(), data.cam_xmat[self.camera_id].reshape(3, 3).copy())
+        rendered = self._render(data, "rgb")
+        if self.sensor is None:
+            picture = rendered if self._remap is None else cv2.remap(rendered, *self._remap, cv2.INTER_LINEAR,
+                                                                      borderMode=cv2.BORDER_REPLICATE)
+            return CameraFrame(exposure.index, exposure.frame_number, exposure.settings, pose, rgb=picture)
+        if self.sensor.settings != exposure.settings:
+            self.sensor.configure(exposure.settings, self.sensor.robot)
+        motion = self.image_motion(data, exposure.settings.exposure_s)
+        lensed = self._lens_remap(rendered, motion, cv2.INTER_LINEAR)
+        ycrcb = self.sensor.expose(lensed, motion, self.seed, exposure.index)
+        return CameraFrame(exposure.index, exposure.frame_number, exposure.settings, pose, ycrcb=ycrcb)
+
+    def image_motion(self, data: mujoco.MjData, seconds: float) -> tuple[float, float]:
+        """How far (du, dv pixels) the image moves in ``seconds`` at the camera's angular velocity
+        in ``data`` (rotation only: what turns the head and the body)."""
+        mujoco.mj_objectVelocity(self.model, data, mujoco.mjtObj.mjOBJ_CAMERA, self.camera_id, self._velocity, 1)
+        wx, wy = self._velocity[0], self._velocity[1]  # about the camera's right and up axes
+        return float(self.lens.fx * wy * seconds), float(self.lens.fy * wx * seconds)
+
+    def _lens_remap(self, image: np.ndarray, motion: tuple[float, float], interpolation: int) -> np.ndarray:
+        """The render as the lens draws it; with a rolling shutter, each row where it was when read."""
+        readout = self.profile.readout_ms / 1000
+        if readout > 0 and self.sensor is not None and any(motion):
+            exposure = self.sensor.settings.exposure_s
+            map_x, map_y = cv2.convertMaps(*self._remap, cv2.CV_32FC1)
+            delay = (self.height - 1 - np.arange(self.height, dtype=np.float32)) / (self.height - 1) * readout
+            scale = self._render_focal / self.lens.fx / exposure
+            map_x += (motion[0] * scale * delay)[:, np.newaxis]
+            map_y += (motion[1] * scale * delay)[:, np.newaxis]
+            return cv2.remap(image, map_x, map_y, interpolation, borderMode=cv2.BORDER_REPLICATE)
+        return cv2.remap(image, *self._remap, interpolation, borderMode=cv2.BORDER_REPLICATE)
+
+    def _render(self, data: mujoco.MjData, kind: str) -> np.ndarray:
+        if self._renderer is None:
+            self._renderer = Renderer(self.model, self._render_width, self._render_height, groups=HEAD_CAMERA_GROUPS)
+        render = {"rgb": self._renderer.render, "depth": self._renderer.render_depth,
+                  "segmentation": self._renderer.render_segmentation}[kind]
+        if self._render_focal is None:
+            return render(data, self.camera_id)
+        model, cam = self.model, self.camera_id
+        saved = model.cam_intrinsic[cam].copy(), model.cam_sensorsize[cam].copy(), model.cam_resolution[cam].copy()
+        pitch = 1e-5  # metres per render pixel: any value, as long as the three agree
+        model.cam_intrinsic[cam] = (self._render_focal * pitch, self._render_focal * pitch, 0, 0)
+        model.cam_sensorsize[cam] = (self._render_width * pitch, self._render_height * pitch)
+        model.cam_resolution[cam] = (self._render_width, self._render_height)
+        try:
+            return render(data, cam)
+        finally:
+            model.cam_intrinsic[cam], model.cam_sensorsize[cam], model.cam_resolution[cam] = saved
+
+    # ---------------------------------------------------------------- labels
+
+    def _exposure_data(self) -> mujoco.MjData:
+        return self._exposures[0].data
+
+    def depth(self) -> np.ndarray:
+        """Metres along the optical axis at each pixel of the current frame, float32 (h, w)."""
+        depth = self._render(self._exposure_data(), "depth")
+        return depth if self._remap is None else self._lens_remap(depth, (0.0, 0.0), cv2.INTER_NEAREST)
+
+    def segmentation(self) -> np.ndarray:
+        """Geom id at each pixel of the current frame, int32 (h, w); -1 where nothing is drawn."""
+        ids = self._render(self._exposure_data(), "segmentation")
+        if self._remap is None:
+            return ids
+        return self._lens_remap(ids.astype(np.float32), (0.0, 0.0), cv2.INTER_NEAREST).astype(np.int32)
+
+    def project(self, points_world, frame: CameraFrame | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """Pixels (n, 2) (x right, y down, pixel centres at integers; NaN behind the camera) and
+        depths (n,) of world points in a frame (default: the current one), through the lens."""
+        frame = frame or self.frame()
+        relative = np.asarray(points_world, dtype=np.float64).reshape(-1, 3) - frame.position
+        return self.lens.project(relative @ frame.xmat @ _MUJOCO_TO_OPENCV)
+
+    def image_offset(self, point_world) -> tuple[tuple[float, float], bool]:
+        """A world point's offset from the image centre in half-widths and half-heights (x right,
+        y down) and whether it is in front of the camera and inside the image."""
+        (u, v), depth = (a[0] for a in self.project(point_world))
+        if not depth > 0:
+            return (0.0, 0.0), False
+        x, y = (u + 0.5) / (self.width / 2) - 1, (v + 0.5) / (self.height / 2) - 1
+        return (x, y), abs(x) <= 1 and abs(y) <= 1
+
+    def close(self) -> None:
+        if self._renderer is not None:
+            self._renderer.close()
+            self._renderer = None

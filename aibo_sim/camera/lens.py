@@ -1,0 +1,139 @@
+"""The head camera's lens: intrinsics, radial-tangential distortion, projection and the
+remap that turns a wider pinhole render into the distorted picture.
+
+Coordinates follow OpenCV (and Bouguet's toolbox, which Tekkotsu's calibration used): pixel
+centres at integers, (0, 0) the centre of the top-left pixel, x right, y down, z forward;
+distortion on normalised coordinates (x, y) = (X / Z, Y / Z) with r^2 = x^2 + y^2:
+
+    x_d = x (1 + k1 r^2 + k2 r^4 + k3 r^6) + 2 p1 x y + p2 (r^2 + 2 x^2)
+    y_d = y (1 + k1 r^2 + k2 r^4 + k3 r^6) + p1 (r^2 + 2 y^2) + 2 p2 x y
+    u = fx x_d + cx,  v = fy y_d + cy
+
+Lenses (``LENSES``), all at layer H's 208 x 160 and scaled for 416 x 320:
+- ``tekkotsu`` (the ``ers7`` profile's default): Tekkotsu's Bouguet calibration of a real
+  ERS-7 (fx 198.807, fy 200.333, principal point 102.689, 85.0399, k1 -0.147005, k2 0.38485,
+  p1 -0.00347777, p2 0.00012873): the only measured lens of the robot. Its field of view is
+  55.2 x 43.5 deg, 3.6 % narrower than Sony's 56.9 x 45.2 deg (a nominal figure).
+- ``sony``: Sony's field of view (fx 191.9, fy 192.2, centred) with Tekkotsu's distortion.
+- ``pinhole``: Sony's field of view without distortion, the ``ideal`` profile's lens (what
+  the model's camera renders directly).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+import cv2
+import numpy as np
+
+from openr_bridge import HORIZONTAL_FOV_DEG, LAYER_SIZE, VERTICAL_FOV_DEG
+
+LAYER_WIDTH, LAYER_HEIGHT = LAYER_SIZE[0]
+
+
+@dataclass(frozen=True)
+class Lens:
+    """Pinhole intrinsics and OpenCV distortion (k1, k2, p1, p2, k3) at ``width`` x ``height``."""
+
+    name: str
+    fx: float
+    fy: float
+    cx: float
+    cy: float
+    distortion: tuple[float, float, float, float, float] = (0.0, 0.0, 0.0, 0.0, 0.0)
+    width: int = LAYER_WIDTH
+    height: int = LAYER_HEIGHT
+
+    @property
+    def distorted(self) -> bool:
+        return any(self.distortion)
+
+    def scaled(self, width: int, height: int) -> "Lens":
+        """The same lens on an image of another size (pixel edges, not centres, scale)."""
+        sx, sy = width / self.width, height / self.height
+        return replace(self, fx=self.fx * sx, fy=self.fy * sy, cx=(self.cx + 0.5) * sx - 0.5,
+                       cy=(self.cy + 0.5) * sy - 0.5, width=width, height=height)
+
+    def camera_matrix(self) -> np.ndarray:
+        return np.array([[self.fx, 0, self.cx], [0, self.fy, self.cy], [0, 0, 1.0]])
+
+    def field_of_view_deg(self) -> tuple[float, float]:
+        """Angles between the outer pixel edges through the principal point's row and column."""
+        left, right = self.undistort([[-0.5, self.cy], [self.width - 0.5, self.cy]])[:, 0]
+        top, bottom = self.undistort([[self.cx, -0.5], [self.cx, self.height - 0.5]])[:, 1]
+        return (math.degrees(math.atan(right) - math.atan(left)), math.degrees(math.atan(bottom) - math.atan(top)))
+
+    def distort(self, normalised) -> np.ndarray:
+        """Pixels (n, 2) of ideal normalised coordinates (n, 2)."""
+        x, y = np.asarray(normalised, dtype=np.float64).reshape(-1, 2).T
+        k1, k2, p1, p2, k3 = self.distortion
+        r2 = x * x + y * y
+        radial = 1 + r2 * (k1 + r2 * (k2 + r2 * k3))
+        xd = x * radial + 2 * p1 * x * y + p2 * (r2 + 2 * x * x)
+        yd = y * radial + p1 * (r2 + 2 * y * y) + 2 * p2 * x * y
+        return np.stack([self.fx * xd + self.cx, self.fy * yd + self.cy], axis=-1)
+
+    def undistort(self, pixels, iterations: int = 100) -> np.ndarray:
+        """Ideal normalised coordinates (n, 2) of pixels (n, 2): the fixed-point iteration of
+        OpenCV's ``undistortPoints``, run until it settles (to ~1e-12 on this lens's image)."""
+        points = np.asarray(pixels, dtype=np.float64).reshape(-1, 2)
+        xd, yd = (points[:, 0] - self.cx) / self.fx, (points[:, 1] - self.cy) / self.fy
+        if not self.distorted:
+            return np.stack([xd, yd], axis=-1)
+        k1, k2, p1, p2, k3 = self.distortion
+        x, y = xd.copy(), yd.copy()
+        for _ in range(iterations):
+            r2 = x * x + y * y
+            radial = 1 + r2 * (k1 + r2 * (k2 + r2 * k3))
+            x_new = (xd - 2 * p1 * x * y - p2 * (r2 + 2 * x * x)) / radial
+            y_new = (yd - p1 * (r2 + 2 * y * y) - 2 * p2 * x * y) / radial
+            settled = max(np.abs(x_new - x).max(initial=0), np.abs(y_new - y).max(initial=0)) < 1e-13
+            x, y = x_new, y_new
+            if settled:
+                break
+        return np.stack([x, y], axis=-1)
+
+    def project(self, points_camera) -> tuple[np.ndarray, np.ndarray]:
+        """Pixels (n, 2) and depths (n,) of points (n, 3) in the camera frame (x right, y
+        down, z forward); pixels of points behind the camera are NaN."""
+        points = np.asarray(points_camera, dtype=np.float64).reshape(-1, 3)
+        depth = points[:, 2]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            normalised = points[:, :2] / depth[:, np.newaxis]
+        pixels = self.distort(normalised)
+        pixels[depth <= 0] = np.nan
+        return pixels, depth
+
+    def render_pinhole(self, margin: float = 1.5) -> tuple[int, int, float]:
+        """(width, height, focal length in px) of a centred square-pixel pinhole render that
+        covers every pixel of this lens's image with ``margin`` pixels to spare, at the
+        lens's own pixel density (fx)."""
+        u, v = np.meshgrid(np.arange(-0.5, self.width, 0.5), np.arange(-0.5, self.height, 0.5))
+        border = (u == -0.5) | (v == -0.5) | (u >= self.width - 0.5) | (v >= self.height - 0.5)
+        extent = np.abs(self.undistort(np.stack([u[border], v[border]], axis=-1))).max(axis=0)
+        focal = self.fx
+        width, height = (2 * math.ceil(focal * e + margin) for e in extent)
+        return width, height, focal
+
+    def remap_tables(self, render_width: int, render_height: int, focal: float) -> tuple[np.ndarray, np.ndarray]:
+        """OpenCV fixed-point maps from this lens's pixels into the centred pinhole render."""
+        u, v = np.meshgrid(np.arange(self.width, dtype=np.float64), np.arange(self.height, dtype=np.float64))
+        ideal = self.undistort(np.stack([u.ravel(), v.ravel()], axis=-1))
+        map_x = (ideal[:, 0] * focal + (render_width - 1) / 2).reshape(self.height, self.width).astype(np.float32)
+        map_y = (ideal[:, 1] * focal + (render_height - 1) / 2).reshape(self.height, self.width).astype(np.float32)
+        return cv2.convertMaps(map_x, map_y, cv2.CV_16SC2)
+
+
+def _sony_focal(size: int, fov_deg: float) -> float:
+    return size / 2 / math.tan(math.radians(fov_deg) / 2)
+
+
+TEKKOTSU_DISTORTION = (-0.147005, 0.38485, -0.00347777, 0.00012873, 0.0)
+LENSES = {
+    "tekkotsu": Lens("tekkotsu", 198.807, 200.333, 102.689, 85.0399, TEKKOTSU_DISTORTION),
+    "sony": Lens("sony", _sony_focal(LAYER_WIDTH, HORIZONTAL_FOV_DEG), _sony_focal(LAYER_HEIGHT, VERTICAL_FOV_DEG),
+                 (LAYER_WIDTH - 1) / 2, (LAYER_HEIGHT - 1) / 2, TEKKOTSU_DISTORTION),
+    "pinhole": Lens("pinhole", _sony_focal(LAYER_WIDTH, HORIZONTAL_FOV_DEG), _sony_focal(LAYER_HEIGHT, VERTICAL_FOV_DEG),
+                    (LAYER_WIDTH - 1) / 2, (LAYER_HEIGHT - 1) / 2),
+}

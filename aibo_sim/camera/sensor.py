@@ -1,0 +1,337 @@
+"""The ERS-7's CMOS sensor as a chain of small stages, in the order light goes through it.
+
+Numbers and sources: ``specs/ers7-camera.md`` (section numbers below refer to it). The
+rendered frame is read as sRGB-encoded scene radiance under a neutral light (so ``ers7`` at
+neutral settings keeps the ``ideal`` picture's tones). Then, per frame:
+
+1. optics: the lens (``lens.py``, applied by ``HeadCamera`` as a remap of a wider render) and
+   a slight softness (3x3 Gaussian, sigma ``softness_px``);
+2. exposure and colour, one per-channel table from rendered byte to sensor RGB: linear
+   light x scene light colour (a Planckian of the scene's ``light_temperature_K``) x white
+   balance gains (von Kries against the preset's Planckian, section 6) x exposure (each gain
+   step and each shutter step doubles the signal, section 1) x ``sensitivity``, then the
+   on-chip gamma (sRGB's curve) with clipping at full scale; then motion blur: the average
+   along the image motion during the exposure that the camera's angular velocity at the
+   frame's tick gives (``omega x exposure x focal length`` px, section 7);
+3. Sony's YCrCb (``openr_bridge.colour``'s forward model) with the black level: Y spans
+   ``black_level`` .. ``white_level`` (section 4: Y never below 16-19, white 250-254);
+4. vignetting with the blue cast, as measured on output bytes (rUNSWift 2005's table,
+   section 3): per channel an affine map ``a(r) v + b(r)`` fitted at each tabulated radius
+   from the channel's own ring centre, linear in r between the radii;
+5. per-robot colour: ``v' = pivot + gain (v - pivot) + offset`` per channel (section 4);
+6. noise: Gaussian, sigma per channel at MID gain times sqrt(gain factor) (section 4), from
+   a fixed pool of normal numbers at an offset drawn from (seed, frame index): the same
+   frame of the same seed gets the same noise whoever asks and in whatever order;
+7. rounding and clipping to bytes (Y floor ``black_level``).
+
+UNCONFIRMED in the spec, chosen here and configurable: rolling shutter (``readout_ms``,
+default 0: off, no source gives the ERS-7's readout time; the last row ends its exposure at
+the frame's tick), frame latency (``latency_frames``, default 0), the gamma curve, the
+vignetting's dependence on settings (the measured table, FL / HIGH / FAST, is used for all).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+from functools import cache
+
+import cv2
+import numpy as np
+
+from openr_bridge import CAMERA_DEFAULTS, CAMERA_SETTINGS
+
+PROFILES_DOC = "ideal: the rendered picture unchanged; ers7: the calibrated ERS-7 sensor"
+GAIN_STEPS = {"low": -1, "mid": 0, "high": 1}  # -6, 0, +6 dB: each step doubles the signal
+SHUTTER_S = {"slow": 1 / 50, "mid": 1 / 100, "fast": 1 / 200}
+WHITE_BALANCE_K = {"indoor": 2856.0, "fl": 5000.0, "outdoor": 6500.0}
+REFERENCE_WHITE_K = 6504.0  # the render's neutral light: sRGB's D65 white
+# Section 3: rUNSWift 2005's vignetting, raw value at radius r for a centre value, per channel.
+VIGNETTING_RADII = (0, 40, 80, 100, 120, 130)
+VIGNETTING_TABLE = {  # channel: (centre values, raw values at each radius)
+    "Y": ((60, 120, 150, 210), ((60, 120, 150, 210), (58, 116, 146, 206), (52, 104, 133, 192), (48, 95, 123, 182),
+                                (42, 84, 110, 167), (38, 77, 102, 160))),
+    "Cr": ((64, 192), ((64, 192), (68, 188), (79, 177), (88, 168), (100, 157), (107, 150))),
+    "Cb": ((64, 128, 192), ((64, 128, 192), (68, 130, 190), (81, 135, 184), (91, 139, 180), (105, 145, 174),
+                            (113, 149, 171))),
+}
+RING_CENTRES = ((110.0, 79.5), (105.0, 79.5), (97.0, 79.5))  # Y, Cr, Cb, layer-H pixels
+# Section 4: robot-to-robot spread of one target's mean (levels, 1 sigma), as per-channel gain
+# (about the pivot) and offset; white (Y ~150) spreads by sigma Y 5, Cr 4, Cb 3.
+ROBOT_PIVOT = (0.0, 128.0, 128.0)
+ROBOT_GAIN_SIGMA = (0.03, 0.15, 0.10)
+ROBOT_OFFSET_SIGMA = (1.5, 1.5, 1.5)
+NOISE_POOL_FRAMES = 8
+MIN_BLUR_PX = 0.25  # image motion below this is left sharp
+
+
+@dataclass(frozen=True)
+class CameraSettings:
+    """What a program sets with ControlPrimitive: white balance, gain, shutter (by name)."""
+
+    white_balance: str = CAMERA_DEFAULTS["white_balance"]
+    gain: str = CAMERA_DEFAULTS["gain"]
+    shutter: str = CAMERA_DEFAULTS["shutter"]
+
+    def __post_init__(self):
+        for name, (_, values) in CAMERA_SETTINGS.items():
+            value = getattr(self, name)
+            if value not in values:
+                raise ValueError(f"camera {name.replace('_', ' ')} must be one of {', '.join(values)}, not {value!r}")
+
+    @property
+    def exposure_s(self) -> float:
+        return SHUTTER_S[self.shutter]
+
+    @property
+    def exposure_factor(self) -> float:
+        """Signal relative to MID gain and MID shutter (the nine combinations span 16x)."""
+        return 2.0 ** (GAIN_STEPS[self.gain] + round(math.log2(SHUTTER_S[self.shutter] / SHUTTER_S["mid"])))
+
+    def as_dict(self) -> dict:
+        return {"white_balance": self.white_balance, "gain": self.gain, "shutter": self.shutter}
+
+
+@dataclass(frozen=True)
+class RobotColour:
+    """One robot's colour deviation: per channel (Y, Cr, Cb) gain about the pivot and offset."""
+
+    gain: tuple[float, float, float] = (1.0, 1.0, 1.0)
+    offset: tuple[float, float, float] = (0.0, 0.0, 0.0)
+
+    def __post_init__(self):
+        values = (*self.gain, *self.offset)
+        if len(self.gain) != 3 or len(self.offset) != 3 or not all(math.isfinite(v) for v in values):
+            raise ValueError(f"robot colour needs 3 finite gains and 3 finite offsets, not {self.gain}, {self.offset}")
+
+    @classmethod
+    def draw(cls, rng: np.random.Generator, scale: float = 1.0) -> "RobotColour":
+        """A robot drawn from the measured spread (``scale`` 1) or a multiple of it."""
+        gain = 1 + scale * np.asarray(ROBOT_GAIN_SIGMA) * rng.standard_normal(3)
+        offset = scale * np.asarray(ROBOT_OFFSET_SIGMA) * rng.standard_normal(3)
+        return cls(tuple(gain.tolist()), tuple(offset.tolist()))
+
+
+@dataclass(frozen=True)
+class CameraProfile:
+    """The head camera's model: ``ideal`` (no effect at all) or a sensor."""
+
+    name: str
+    lens: str = "pinhole"  # a key of lens.LENSES
+    sensor: bool = False  # False: the rendered RGB is the picture, untouched
+    sensitivity: float = 1.0  # signal at MID / MID relative to the render's light
+    black_level: float = 16.0
+    white_level: float = 252.0
+    vignetting: bool = True
+    noise_sigma: tuple[float, float, float] = (1.2, 1.5, 2.1)  # Y, Cr, Cb at MID gain
+    softness_px: float = 0.5  # Gaussian sigma at 208 x 160
+    motion_blur: bool = True
+    readout_ms: float = 0.0  # rolling shutter: time from the first row's exposure end to the last's
+    latency_frames: int = 0  # a frame is delivered this many camera frames after its exposure
+    robot: RobotColour = field(default_factory=RobotColour)
+
+    def __post_init__(self):
+        numbers = (self.sensitivity, self.black_level, self.white_level, *self.noise_sigma, self.softness_px,
+                   self.readout_ms)
+        if not all(math.isfinite(v) for v in numbers) or self.sensitivity <= 0 or min(self.noise_sigma) < 0 \
+                or self.softness_px < 0 or self.readout_ms < 0 or not 0 <= self.black_level < self.white_level <= 255:
+            raise ValueError(f"camera profile {self.name!r}: parameters out of range or not finite")
+        if not isinstance(self.latency_frames, int) or self.latency_frames < 0:
+            raise ValueError(f"camera profile {self.name!r}: latency_frames must be a whole number >= 0")
+
+    def with_options(self, **options) -> "CameraProfile":
+        return replace(self, **options)
+
+
+PROFILES = {
+    "ideal": CameraProfile("ideal"),
+    "ers7": CameraProfile("ers7", lens="tekkotsu", sensor=True),
+}
+
+
+def camera_profile(profile: str | CameraProfile) -> CameraProfile:
+    """A profile by name (``PROFILES``), or the profile itself."""
+    if isinstance(profile, CameraProfile):
+        return profile
+    if profile not in PROFILES:
+        raise ValueError(f"camera profile must be one of {', '.join(PROFILES)}, not {profile!r}")
+    return PROFILES[profile]
+
+
+# ---------------------------------------------------------------- colour of light
+
+
+def planckian_rgb(kelvin: float) -> np.ndarray:
+    """Linear sRGB of a Planckian light (Kim et al. 2002 cubic fit of the locus, 1667-25000
+    K), scaled to green 1."""
+    if not 1667 <= kelvin <= 25000:
+        raise ValueError(f"colour temperature must be within 1667..25000 K, not {kelvin}")
+    t = float(kelvin)
+    if t <= 4000:
+        x = -0.2661239e9 / t**3 - 0.2343589e6 / t**2 + 0.8776956e3 / t + 0.179910
+    else:
+        x = -3.0258469e9 / t**3 + 2.1070379e6 / t**2 + 0.2226347e3 / t + 0.240390
+    if t <= 2222:
+        y = -1.1063814 * x**3 - 1.34811020 * x**2 + 2.18555832 * x - 0.20219683
+    elif t <= 4000:
+        y = -0.9549476 * x**3 - 1.37418593 * x**2 + 2.09137015 * x - 0.16748867
+    else:
+        y = 3.0817580 * x**3 - 5.87338670 * x**2 + 3.75112997 * x - 0.37001483
+    xyz = np.array([x / y, 1.0, (1 - x - y) / y])
+    rgb = np.array([[3.2406, -1.5372, -0.4986], [-0.9689, 1.8758, 0.0415], [0.0557, -0.2040, 1.0570]]) @ xyz
+    return rgb / rgb[1]
+
+
+def light_gains(scene_kelvin: float, white_balance: str) -> np.ndarray:
+    """Per-channel factor on linear R, G, B: the scene light's colour relative to the render's
+    neutral light, times the white balance preset's von Kries gains (green 1)."""
+    light = planckian_rgb(scene_kelvin) / planckian_rgb(REFERENCE_WHITE_K)
+    preset = planckian_rgb(WHITE_BALANCE_K[white_balance]) / planckian_rgb(REFERENCE_WHITE_K)
+    return light / preset
+
+
+def srgb_to_linear(v: np.ndarray) -> np.ndarray:
+    return np.where(v <= 0.04045, v / 12.92, ((v + 0.055) / 1.055) ** 2.4)
+
+
+def linear_to_srgb(v: np.ndarray) -> np.ndarray:
+    v = np.clip(v, 0.0, 1.0)
+    return np.where(v <= 0.0031308, 12.92 * v, 1.055 * v ** (1 / 2.4) - 0.055)
+
+
+# ---------------------------------------------------------------- vignetting
+
+
+@cache
+def vignetting_fit() -> tuple[np.ndarray, np.ndarray]:
+    """(slopes, intercepts), each (3 channels, radii): least-squares lines through the table."""
+    slopes, intercepts = np.empty((3, len(VIGNETTING_RADII))), np.empty((3, len(VIGNETTING_RADII)))
+    for c, (centre, rows) in enumerate(VIGNETTING_TABLE.values()):
+        for i, raw in enumerate(rows):
+            slopes[c, i], intercepts[c, i] = np.polyfit(centre, raw, 1)
+    return slopes, intercepts
+
+
+def _along_radius(values: np.ndarray, r: np.ndarray) -> np.ndarray:
+    """Linear in r between the tabulated radii, the last segment extended beyond them."""
+    radii = np.asarray(VIGNETTING_RADII, dtype=np.float64)
+    inside = np.interp(r, radii, values)
+    slope = (values[-1] - values[-2]) / (radii[-1] - radii[-2])
+    return np.where(r > radii[-1], values[-1] + slope * (r - radii[-1]), inside)
+
+
+def vignetting_maps(width: int, height: int) -> tuple[np.ndarray, np.ndarray]:
+    """Per-pixel (slope, intercept) maps, (h, w, 3) float64, of an image of this size."""
+    scale = 208 / width  # radii and ring centres are in layer-H pixels
+    v, u = np.mgrid[0:height, 0:width].astype(np.float64)
+    slopes, intercepts = vignetting_fit()
+    a, b = np.empty((height, width, 3)), np.empty((height, width, 3))
+    for c, (x0, y0) in enumerate(RING_CENTRES):
+        r = np.hypot((u + 0.5) * scale - 0.5 - x0, (v + 0.5) * scale - 0.5 - y0)
+        a[..., c], b[..., c] = _along_radius(slopes[c], r), _along_radius(intercepts[c], r)
+    return a, b
+
+
+# ---------------------------------------------------------------- motion
+
+
+def motion_taps(motion_px: tuple[float, float]) -> list[tuple[int, int, float]]:
+    """(dx, dy, weight) of the integer shifts whose weighted sum averages a picture along the
+    image motion over the exposure, ``motion_px`` = (du, dv): what each pixel saw during the
+    exposure lies at +t (du, dv), t in 0..1 (samples every quarter pixel, spread bilinearly)."""
+    du, dv = motion_px
+    samples = max(2, math.ceil(4 * math.hypot(du, dv)) + 1)
+    t = np.linspace(0.0, 1.0, samples)
+    x, y = t * du, t * dv
+    x0, y0 = np.floor(x), np.floor(y)
+    fx, fy = x - x0, y - y0
+    weights = {}
+    for ox, oy, w in ((0, 0, (1 - fx) * (1 - fy)), (1, 0, fx * (1 - fy)), (0, 1, (1 - fx) * fy), (1, 1, fx * fy)):
+        for key, value in zip(zip((x0 + ox).astype(int).tolist(), (y0 + oy).astype(int).tolist()), w.tolist()):
+            weights[key] = weights.get(key, 0.0) + value
+    return [(dx, dy, w / samples) for (dx, dy), w in weights.items() if w > 1e-6]
+
+
+def motion_blur(image: np.ndarray, motion_px: tuple[float, float]) -> np.ndarray:
+    """``image`` (h, w, 3) float32 averaged along the motion (``motion_taps``), edges repeated."""
+    taps = motion_taps(motion_px)
+    reach = max(max(abs(dx), abs(dy)) for dx, dy, _ in taps)
+    height, width = image.shape[:2]
+    padded = cv2.copyMakeBorder(image, reach, reach, reach, reach, cv2.BORDER_REPLICATE)
+    out = np.zeros_like(image)
+    for dx, dy, weight in taps:
+        out += weight * padded[reach + dy:reach + dy + height, reach + dx:reach + dx + width]
+    return out
+
+
+# ---------------------------------------------------------------- the sensor
+
+
+@cache
+def _unit_noise(length: int) -> np.ndarray:
+    """A fixed pool of standard normal float32 numbers (the same on every run)."""
+    return np.random.default_rng(0x45525337).standard_normal(length, dtype=np.float32)
+
+
+def noise_offset(seed: int, index: int, choices: int) -> int:
+    """Where frame ``index`` of ``seed`` starts in the noise pool (splitmix64 of both)."""
+    z = (seed * 0x9E3779B97F4A7C15 + index * 0xBF58476D1CE4E5B9 + 0x94D049BB133111EB) & (2**64 - 1)
+    z = ((z ^ (z >> 30)) * 0xBF58476D1CE4E5B9) & (2**64 - 1)
+    z = ((z ^ (z >> 27)) * 0x94D049BB133111EB) & (2**64 - 1)
+    return (z ^ (z >> 31)) % choices
+
+
+class Sensor:
+    """Stages 1-7 for one image size: ``expose`` turns the lens's RGB picture into Y, Cr, Cb."""
+
+    def __init__(self, profile: CameraProfile, width: int, height: int, settings: CameraSettings,
+                 light_temperature_k: float):
+        self.profile, self.width, self.height = profile, width, height
+        self.light_temperature_k = light_temperature_k
+        self.softness_px = profile.softness_px * width / 208
+        self._vignetting = vignetting_maps(width, height) if profile.vignetting else None
+        pixels = width * height
+        self._pool = _unit_noise(NOISE_POOL_FRAMES * pixels * 3).reshape(-1, 3)
+        self._choices = (NOISE_POOL_FRAMES - 1) * pixels
+        self.configure(settings, profile.robot)
+
+    def configure(self, settings: CameraSettings, robot: RobotColour) -> None:
+        """Take new settings or a new robot: rebuild the colour table, maps and noise scale."""
+        self.settings, self.robot = settings, robot
+        p = self.profile
+        levels = srgb_to_linear(np.arange(256) / 255.0)
+        gains = light_gains(self.light_temperature_k, settings.white_balance) * settings.exposure_factor * p.sensitivity
+        self._table = (255 * linear_to_srgb(levels[:, np.newaxis] * gains)).astype(np.float32).reshape(1, 256, 3)
+        # Sony's forward model with the black level on Y; rows Y, Cr, Cb; columns R, G, B, 1.
+        luma = np.array([0.299, 0.587, 0.114])
+        y_scale = (p.white_level - p.black_level) / 255
+        matrix = np.array([[*(y_scale * luma), p.black_level],
+                           [*(128 / 255 * (np.array([1.0, 0, 0]) - luma)), 128.0],
+                           [*(128 / 255 * (np.array([0, 0, 1.0]) - luma)), 128.0]])
+        slope, intercept = self._vignetting if self._vignetting is not None else (1.0, 0.0)
+        gain, pivot = np.asarray(robot.gain), np.asarray(ROBOT_PIVOT)
+        # Robot after vignetting: gain (a v + b - pivot) + pivot + offset.
+        self._matrix = matrix.astype(np.float32)
+        self._slope = np.broadcast_to(gain * slope, (self.height, self.width, 3)).astype(np.float32)
+        self._intercept = np.broadcast_to(gain * (intercept - pivot) + pivot + np.asarray(robot.offset),
+                                          (self.height, self.width, 3)).astype(np.float32)
+        sigma = np.asarray(p.noise_sigma) * math.sqrt(2.0 ** GAIN_STEPS[settings.gain])
+        self._noise = (self._pool * sigma.astype(np.float32)) if sigma.any() else None
+        self._low = (p.black_level, 0.0, 0.0, 0.0)
+
+    def expose(self, rgb: np.ndarray, motion_px: tuple[float, float], seed: int, index: int) -> np.ndarray:
+        """Y, Cr, Cb (h, w, 3) uint8 of an (h, w, 3) uint8 RGB picture through the lens, with
+        ``motion_px`` the image motion during the exposure."""
+        if self.softness_px >= 0.05:
+            rgb = cv2.GaussianBlur(rgb, (3, 3), self.softness_px, borderType=cv2.BORDER_REPLICATE)
+        signal = cv2.LUT(rgb, self._table)
+        if self.profile.motion_blur and math.hypot(*motion_px) >= MIN_BLUR_PX:
+            signal = motion_blur(signal, motion_px)
+        ycrcb = cv2.transform(signal, self._matrix)
+        ycrcb *= self._slope
+        ycrcb += self._intercept
+        if self._noise is not None:
+            start = noise_offset(seed, index, self._choices)
+            ycrcb += self._noise[start:start + self.width * self.height].reshape(self.height, self.width, 3)
+        # Y's floor, then bytes rounded to nearest and saturated at 255.
+        return cv2.convertScaleAbs(cv2.max(ycrcb, self._low))
