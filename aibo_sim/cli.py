@@ -7,7 +7,10 @@ import json
 import sys
 from pathlib import Path
 
+import numpy as np
+
 from .mtn import MODES as MTN_MODES
+from .options import ArgumentParser, add_world_options, camera_options, finite_float, place, world_options
 from .robot import BACKENDS
 
 EXIT_BAD_INPUT, EXIT_CONTROLLER, EXIT_DIVERGED, EXIT_INTERRUPTED = 2, 1, 3, 130
@@ -17,9 +20,8 @@ def _run(args) -> int:
     from .runner import run_controller
 
     summary = run_controller(
-        args.controller, backend=args.backend, duration=args.duration, scene=args.scene, seed=args.seed,
-        out=args.out, mtn_mode=args.mtn_mode, memory_stick=args.memory_stick, camera_full=args.camera_full,
-        ball=args.ball,
+        args.controller, backend=args.backend, duration=args.duration, out=args.out, mtn_mode=args.mtn_mode,
+        memory_stick=args.memory_stick, **world_options(args), **camera_options(args),
     )
     print(f"ran {Path(summary.controller).name} on the {summary.backend} backend: {summary.simulated_s:.2f} s simulated "
           f"in {summary.wall_s:.2f} s (real-time factor {summary.real_time_factor:.1f}), "
@@ -28,28 +30,36 @@ def _run(args) -> int:
 
 
 def _render(args) -> int:
-    import math
-
     import cv2
 
     from .render import Renderer
-    from .sim import Simulation
+    from .sim import FRAME_MS, Simulation
 
+    if args.settle < 0:
+        raise ValueError(f"--settle must be at least 0 seconds, not {args.settle}")
+    world = world_options(args)
     out = Path(args.out)
+    try:
+        sim = Simulation(world["scene"], seed=world["seed"], keyframe=args.keyframe, **camera_options(args))
+    except KeyError as exc:  # MuJoCo's: no keyframe of that name; the message lists the valid ones
+        raise ValueError(f"--keyframe {args.keyframe!r}: {exc.args[0] if exc.args else exc}") from None
+    try:
+        place(sim, world["pose"], world["ball"])
+        frames = round(args.settle * 1000 / FRAME_MS)
+        if frames:
+            sim.step_frames(frames)
+        images = {"head_camera.png": sim.camera.frame().rgb}
+        third = Renderer(sim.model, 640, 480, quality="high")
+        try:
+            images["tracking.png"] = third.render(sim.data, "tracking")
+        finally:
+            third.close()
+    finally:
+        sim.close()
     out.mkdir(parents=True, exist_ok=True)
-    sim = Simulation(args.scene, keyframe=args.keyframe, camera_full=True)
-    sim.place_robot(*args.pose[:2], math.radians(args.pose[2]))
-    if args.ball is not None:
-        sim.place_ball(*args.ball)
-    for _ in range(int(args.settle * 125)):
-        sim.step_frame()
-    images = {"head_camera.png": sim.render_camera()}
-    third = Renderer(sim.model, 640, 480, quality="high")
-    images["tracking.png"] = third.render(sim.data, "tracking")
-    third.close()
-    sim.close()
     for name, rgb in images.items():
-        cv2.imwrite(str(out / name), rgb[:, :, ::-1])
+        if not cv2.imwrite(str(out / name), np.ascontiguousarray(rgb[:, :, ::-1])):
+            raise OSError(f"could not write {out / name}")
         print(f"wrote {out / name} ({rgb.shape[1]}x{rgb.shape[0]})")
     return 0
 
@@ -75,43 +85,39 @@ def _mtn_play(args) -> int:
 
     if args.repeat < 1:
         raise ValueError(f"--repeat must be at least 1, not {args.repeat}")
-    result = play_motion(_motion_file(args.file), repeat=args.repeat, mode=args.mode)
+    result = play_motion(_motion_file(args.file), repeat=args.repeat, mode=args.mode, **world_options(args),
+                         **camera_options(args))
     if args.json:
         print(json.dumps(result, indent=2))
     else:
         dx, dy = result["displacement_m"]
+        x, y, yaw = result["end_pose"]
         print(f"displacement {dx:+.3f} m forward, {dy:+.3f} m left ({result['distance_m']:.3f} m), "
               f"heading {result['heading_change_deg']:+.1f} deg, {'FELL' if result['fell'] else 'did not fall'}, "
-              f"{result['duration_s']:.2f} s")
+              f"{result['duration_s']:.2f} s; ended at x {x:+.3f} m, y {y:+.3f} m, yaw {yaw:+.1f} deg")
     return 0
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="aibo-sim", description="Sony Aibo ERS-7 simulator: run controllers, render the camera, inspect and play MTN files, dump camera frames.")
+    parser = ArgumentParser(prog="aibo-sim", description="Sony Aibo ERS-7 simulator: run controllers, render the camera, inspect and play MTN files, dump camera frames.")
     commands = parser.add_subparsers(dest="command", required=True)
 
     run = commands.add_parser("run", help="run a controller headless")
     run.add_argument("controller", help="controller file (Python, Webots-era Aibo API)")
     run.add_argument("--backend", choices=BACKENDS, default="sim")
-    run.add_argument("--duration", type=float, default=10.0, help="simulated seconds (default 10)")
-    run.add_argument("--scene", help="MJCF scene file (default: the RoboCup 2005 field)")
-    run.add_argument("--seed", type=int, default=0)
-    run.add_argument("--out", help="folder for camera frames and the controller's files")
+    run.add_argument("--duration", type=finite_float, default=10.0, help="simulated seconds (default 10)")
+    run.add_argument("--out", help="folder for camera frames, the controller's files and run.json")
     run.add_argument("--mtn-mode", choices=MTN_MODES, default="openr",
                      help="MTN playback: OPEN-R interpolation (default) or Webots keyframe stepping")
     run.add_argument("--memory-stick", help="OPEN-R memory stick folder for the openr backend")
-    run.add_argument("--camera-full", action="store_true", help="render 416x320 (else the 208x160 layer)")
-    run.add_argument("--ball", type=float, nargs=2, metavar=("X", "Y"), help="ball position on the field (m)")
+    add_world_options(run)
     run.set_defaults(handler=_run)
 
     render = commands.add_parser("render", help="render the head camera and a third-person view")
-    render.add_argument("--scene")
-    render.add_argument("--keyframe", default="stand")
-    render.add_argument("--settle", type=float, default=0.5, help="seconds to simulate first")
-    render.add_argument("--pose", type=float, nargs=3, default=(0.0, 0.0, 0.0), metavar=("X", "Y", "YAW_DEG"),
-                        help="robot position on the field (m) and heading")
-    render.add_argument("--ball", type=float, nargs=2, metavar=("X", "Y"), help="ball position on the field (m)")
-    render.add_argument("--out", default="renders")
+    render.add_argument("--keyframe", default="stand", help="the scene's keyframe to start from (default stand)")
+    render.add_argument("--settle", type=finite_float, default=0.5, help="seconds to simulate first (default 0.5)")
+    render.add_argument("--out", default="renders", help="folder for head_camera.png and tracking.png")
+    add_world_options(render)
     render.set_defaults(handler=_render)
 
     mtn = commands.add_parser("mtn", help="OPEN-R motion files").add_subparsers(dest="mtn_command", required=True)
@@ -124,6 +130,7 @@ def build_parser() -> argparse.ArgumentParser:
     play.add_argument("--repeat", type=int, default=1)
     play.add_argument("--mode", choices=MTN_MODES, default="openr")
     play.add_argument("--json", action="store_true")
+    add_world_options(play)  # the camera options too, so that one option set works with every command
     play.set_defaults(handler=_mtn_play)
 
     from .dump import add_dump_parser

@@ -10,6 +10,15 @@ floats; ``camera_get_image`` returns the RGB bytes (3 per pixel, row-major from 
 left) that the OPEN-R wrapper's ``camera_get_image`` fills, on both backends; ``led_set``
 takes 0 (off), 1 (on) or a Sony intensity 2..255; ``robot_step`` returns 0, and both it and
 ``robot_run`` end the controller with ``SimulationEnd`` when the run's duration is over.
+
+Extension (not in Webots): ``camera_set_white_balance``, ``camera_set_gain`` and
+``camera_set_shutter_speed`` (camera tag, Sony's value 1..3: the ``CAMERA_WB_*``,
+``CAMERA_GAIN_*``, ``CAMERA_SHUTTER_*`` constants, equal to OPEN-R's ``ocamparam*``, also
+exported) change the camera's settings from its next frame on; the picture already taken
+keeps its settings. On the ``openr`` backend they go through the wrapper's
+``OPENR::ControlPrimitive`` with ``oprmreqCAM_SET_*``, as on the robot; on ``sim`` they set
+the simulated camera directly. They need no ``camera_enable``. Another value raises
+``DeviceError`` naming the function and the allowed values.
 """
 
 from __future__ import annotations
@@ -17,6 +26,17 @@ from __future__ import annotations
 import sys
 
 import numpy as np
+from openr_bridge.ers7_camera import (
+    ocamparamGAIN_HIGH,
+    ocamparamGAIN_LOW,
+    ocamparamGAIN_MID,
+    ocamparamSHUTTER_FAST,
+    ocamparamSHUTTER_MID,
+    ocamparamSHUTTER_SLOW,
+    ocamparamWB_FL_MODE,
+    ocamparamWB_INDOOR_MODE,
+    ocamparamWB_OUTDOOR_MODE,
+)
 from openr_bridge.wrapper import camera_image_get_blue, camera_image_get_green, camera_image_get_red
 
 from .mtn import MtnError, format_motion_info, motion_info, mtn_get_error
@@ -171,6 +191,31 @@ def camera_get_fov(tag) -> float:
     return _device(tag, Camera).fov
 
 
+# Sony's camera settings values (OPrimitiveControl.h's ocamparam*), by Webots-style names.
+CAMERA_WB_INDOOR, CAMERA_WB_OUTDOOR, CAMERA_WB_FL = ocamparamWB_INDOOR_MODE, ocamparamWB_OUTDOOR_MODE, ocamparamWB_FL_MODE
+CAMERA_GAIN_LOW, CAMERA_GAIN_MID, CAMERA_GAIN_HIGH = ocamparamGAIN_LOW, ocamparamGAIN_MID, ocamparamGAIN_HIGH
+CAMERA_SHUTTER_SLOW, CAMERA_SHUTTER_MID, CAMERA_SHUTTER_FAST = (ocamparamSHUTTER_SLOW, ocamparamSHUTTER_MID,
+                                                                ocamparamSHUTTER_FAST)
+
+
+def camera_set_white_balance(tag, value: int) -> None:
+    """CAMERA_WB_INDOOR (1, 2856 K), CAMERA_WB_OUTDOOR (2, 6500 K) or CAMERA_WB_FL (3, 5000 K,
+    the default), from the next camera frame."""
+    _device(tag, Camera).set_white_balance(value)
+
+
+def camera_set_gain(tag, value: int) -> None:
+    """CAMERA_GAIN_LOW (1, -6 dB), CAMERA_GAIN_MID (2, 0 dB, the default) or CAMERA_GAIN_HIGH
+    (3, +6 dB), from the next camera frame."""
+    _device(tag, Camera).set_gain(value)
+
+
+def camera_set_shutter_speed(tag, value: int) -> None:
+    """CAMERA_SHUTTER_SLOW (1, 1/50 s), CAMERA_SHUTTER_MID (2, 1/100 s, the default) or
+    CAMERA_SHUTTER_FAST (3, 1/200 s), from the next camera frame."""
+    _device(tag, Camera).set_shutter_speed(value)
+
+
 def camera_image_get_grey(image, width: int, x: int, y: int) -> int:
     """Mean of the three channels, as Webots' camera_image_get_grey."""
     red, green = camera_image_get_red(image, width, x, y), camera_image_get_green(image, width, x, y)
@@ -284,4 +329,4 @@ def _motion(motion):
 
 __all__ = [name for name in dir() if name.split("_")[0] in {
     "robot", "servo", "camera", "distance", "touch", "accelerometer", "led", "mtn"}] + [
-    "SimulationEnd", "DeviceError"]
+    name for name in dir() if name.startswith(("CAMERA_", "ocamparam"))] + ["SimulationEnd", "DeviceError"]

@@ -3,7 +3,9 @@
 Usage::
 
     aibo-sim dump (CONTROLLER | --env ENV_ID [--policy random|scripted|zero]) --out DIR
-                  [--duration S | --steps N] [--backend sim|openr] [--seed N] [--ball X Y]
+                  [--duration S | --steps N] [--backend sim|openr]
+                  [--scene FILE] [--pose X Y YAW_DEG] [--ball X Y] [--seed N]
+                  [--camera-profile ers7|ideal] [--camera-wb W] [--camera-gain G] [--camera-shutter S]
                   [--formats rgb,yuv444,yuv420,annex,openr,bands,luma,depth,seg,mp4 | all]
                   [--camera-full] [--resume] [--workers N]
 
@@ -15,7 +17,8 @@ openr, mp4 (a viewable picture, a video tool's YUV, the robot's bytes, a video).
 Layout of ``DIR`` (frame files are named by the frame's index in the dump, which for a
 controller is the camera frame index, k / 30 s)::
 
-    meta.json            run parameters, camera intrinsics, every file's path and layout
+    meta.json            run parameters, the camera (profile, settings, OpenCV intrinsics and
+                         distortion), every file's path and layout
     frames.jsonl         one line per complete frame (see ``frame_metadata``)
     rgb/000123.png       8-bit RGB
     yuv444/000123.yuv    I444 planar: Y, then U (Cb), then V (Cr), each w x h
@@ -25,8 +28,8 @@ controller is the camera frame index, k / 30 s)::
     bands/000123_H.raw   each layer's data as Sony's sample writes it: 6 w h bytes for
                          H, M, L (rows of Y, Cr, Cb, Y_LH, Y_HL, Y_HH), w h for C
     luma/000123.png      the 416x320 luma reconstructed from layer H (reconstruct_luma)
-    depth/000123.npy     float32 metres along the optical axis
-    seg/000123.png       uint8 class ids, names in meta.json (field.SEGMENTATION_CLASSES)
+    depth/000123.npy     float32 metres along the optical axis, through the same lens
+    seg/000123.png       uint8 class ids, names in meta.json (field.SEGMENTATION_CLASSES), same lens
     video.mp4            30 fps, codec mp4v (MPEG-4 part 2: OpenCV's wheels lack H.264)
 
 Colour: the yuv444 and yuv420 files are BT.601 limited range (Y 16-235, Cb/Cr 16-240), what
@@ -34,8 +37,9 @@ ffmpeg, ffplay and OpenCV's ``COLOR_YUV2RGB_I420`` assume for raw yuv420p; 4:2:0
 the mean of each 2x2 block. The Annex I file uses the report's own formulas (Y = 0.299 R +
 0.587 G + 0.114 B, U = 0.492 (B - Y) + 128, V = 0.5 (R - Y) + 128, truncated as C casts).
 The OPEN-R message and bands hold Sony's YCrCb (Cr before Cb), as ``encode_frame`` makes it.
-All are computed from the rendered frame; ``--backend`` only chooses what the controller
-(or an environment, as ``camera="openr"``) sees.
+All are the head camera's frame (``aibo_sim.camera``: the picture exposed at the frame's tick,
+the same frames ``aibo-sim run`` shows) and its one OPEN-R message; ``--backend`` only
+chooses what the controller (or an environment, as ``camera="openr"``) sees.
 
 Writes are atomic: each file is written under a ``.tmp.`` name and renamed, and a frame's
 line goes into frames.jsonl after all its files. A frame is complete when its line is
@@ -71,12 +75,13 @@ import openr_bridge
 from openr_bridge import FRAME_RATE_HZ
 from openr_bridge.image import BAND_RUNS
 
-from .ers7 import HEAD_CAMERA, JOINTS
+from .camera import HEAD_CAMERA_GROUPS, CameraSettings, camera_size, describe_camera, scene_light_temperature
+from .ers7 import JOINTS
 from .field import SEGMENTATION_CLASSES
-from .render import Renderer
+from .options import add_world_options, camera_options
 from .robot import BACKENDS, SimulationEnd
 from .runner import Progress, run_controller
-from .sim import HEAD_CAMERA_GROUPS, Simulation, camera_size, load_model
+from .sim import Simulation, load_model
 
 FORMATS = ("rgb", "yuv444", "yuv420", "annex", "openr", "bands", "luma", "depth", "seg", "mp4")
 DEFAULT_FORMATS = ("rgb", "yuv420", "openr", "mp4")
@@ -149,49 +154,40 @@ def geom_classes(model: mujoco.MjModel) -> np.ndarray:
 # ---------------------------------------------------------------- metadata
 
 
-def camera_intrinsics(model: mujoco.MjModel, width: int, height: int) -> dict:
-    """Pinhole intrinsics of the head camera at a render size, pixel centres at integers."""
-    cam = model.camera(HEAD_CAMERA).id
-    focal, sensor = model.cam_intrinsic[cam][:2], model.cam_sensorsize[cam]
-    return {"width": width, "height": height, "fx": float(focal[0] / sensor[0] * width),
-            "fy": float(focal[1] / sensor[1] * height), "cx": (width - 1) / 2, "cy": (height - 1) / 2}
-
-
-def ball_in_image(sim: Simulation, intrinsics: dict) -> dict:
-    """The ball centre's pixel (x right, y down; None behind the camera), visibility, distance.
+def ball_in_image(sim: Simulation) -> dict:
+    """The ball centre's pixel in the current frame (x right, y down, through the lens; None
+    behind the camera), visibility, distance.
 
     Visible: in front of the camera, projected inside the image, and the line of sight to
     the centre hits the ball first (the head camera's geom groups).
     """
-    model, data = sim.model, sim.data
-    cam = model.camera(HEAD_CAMERA).id
-    ball = sim.ball_position()
-    offset = ball - data.cam_xpos[cam]
-    x, y, z = data.cam_xmat[cam].reshape(3, 3).T @ offset  # camera frame: looks along -z, y up
+    camera, model, data = sim.camera, sim.model, sim.data
+    frame, ball = camera.frame(), sim.ball_position()
+    offset = ball - frame.position
     distance = float(np.linalg.norm(offset))
-    if z >= 0:
+    (u, v), depth = (a[0] for a in camera.project(ball, frame))
+    if not depth > 0:
         return {"pixel": None, "visible": False, "distance_m": distance}
-    u = intrinsics["cx"] + intrinsics["fx"] * x / -z
-    v = intrinsics["cy"] - intrinsics["fy"] * y / -z
-    inside = -0.5 <= u <= intrinsics["width"] - 0.5 and -0.5 <= v <= intrinsics["height"] - 0.5
+    inside = -0.5 <= u <= camera.width - 0.5 and -0.5 <= v <= camera.height - 0.5
     groups = np.array([g in HEAD_CAMERA_GROUPS for g in range(6)], np.uint8)
     hit = np.array([-1], np.int32)
-    mujoco.mj_ray(model, data, data.cam_xpos[cam], offset, groups, 1, -1, hit)
+    mujoco.mj_ray(model, data, frame.position, offset, groups, 1, -1, hit)
     return {"pixel": [float(u), float(v)], "visible": bool(inside and hit[0] == model.geom("ball").id),
             "distance_m": distance}
 
 
-def frame_metadata(sim: Simulation, index: int, intrinsics: dict) -> dict:
-    """A frames.jsonl record: time, OPEN-R counters, camera pose, joints (rad), the ball."""
-    cam = sim.model.camera(HEAD_CAMERA).id
+def frame_metadata(sim: Simulation, index: int) -> dict:
+    """A frames.jsonl record: time, OPEN-R counters, camera pose and settings, joints (rad), the ball."""
+    frame = sim.camera.frame()
     return {
         "index": index,
         "time_s": sim.time_ms / 1000,
-        "frame_number": sim.frame,  # 8 ms ticks, the message's frameNumber
-        "field_counter": sim.camera_frame_index(),
-        "camera": {"position": sim.data.cam_xpos[cam].tolist(), "xmat": sim.data.cam_xmat[cam].tolist()},
+        "frame_number": frame.frame_number,  # 8 ms ticks, the message's frameNumber
+        "field_counter": frame.index,
+        "camera": {"position": frame.position.tolist(), "xmat": frame.xmat.reshape(-1).tolist(),
+                   **frame.settings.as_dict()},
         "joints": dict(zip((j.name for j in JOINTS), sim.joint_positions().tolist())),
-        "ball": ball_in_image(sim, intrinsics),
+        "ball": ball_in_image(sim),
     }
 
 
@@ -244,17 +240,15 @@ def _png(image: np.ndarray) -> bytes:
 class DumpWriter:
     """Writes the chosen formats of each camera frame into a dump folder, atomically."""
 
-    def __init__(self, out: Path, formats, parameters: dict, *, resume: bool, width: int, height: int,
-                 model: mujoco.MjModel):
+    def __init__(self, out: Path, formats, parameters: dict, *, resume: bool, camera: dict, model: mujoco.MjModel):
         self.out, self.formats = out, tuple(formats)
-        self.intrinsics = camera_intrinsics(model, width, height)
+        width, height = camera["width"], camera["height"]
         self.layouts = file_layouts(self.formats, width, height)
-        meta = {"format": DUMP_FORMAT, "parameters": parameters, "camera": self.intrinsics, "files": self.layouts,
+        meta = {"format": DUMP_FORMAT, "parameters": parameters, "camera": camera, "files": self.layouts,
                 "segmentation_classes": list(SEGMENTATION_CLASSES)}
         self.complete = _prepare_folder(out, meta, resume)
         self.new_frames = self.bytes_written = 0
         self._classes = geom_classes(model) if "seg" in self.formats else None
-        self._renderer: Renderer | None = None  # for depth and seg, made on first use
         for name in self.formats:
             (out / self.layouts[name]["path"]).parent.mkdir(exist_ok=True)
         self._lines = _open_for_append(out / "frames.jsonl")
@@ -272,7 +266,7 @@ class DumpWriter:
 
     def write(self, sim: Simulation, index: int, extra: dict | None = None) -> None:
         """Dump the current camera frame as frame ``index``; ``extra`` joins its metadata."""
-        rgb = sim.render_camera()
+        rgb = sim.camera.frame().rgb
         if self._video is not None:
             self._video.write(np.ascontiguousarray(rgb[..., ::-1]))
         if index in self.complete:
@@ -280,7 +274,7 @@ class DumpWriter:
         for path, data in self._encode(sim, rgb, index):
             write_atomic(path, data)
             self.bytes_written += len(data)
-        line = json.dumps({**frame_metadata(sim, index, self.intrinsics), **(extra or {})}) + "\n"
+        line = json.dumps({**frame_metadata(sim, index), **(extra or {})}) + "\n"
         try:
             self._lines.write(line.encode())
             self._lines.flush()
@@ -305,7 +299,7 @@ class DumpWriter:
         if "annex" in wants:
             yield path("annex"), annex_yuv(rgb).tobytes()
         if wants & {"openr", "bands", "luma"}:
-            message = sim.openr_message(rgb)
+            message = sim.camera.frame().message
             if "openr" in wants:
                 yield path("openr"), bytes(message)
             if "bands" in wants:
@@ -313,14 +307,12 @@ class DumpWriter:
                     yield path("bands", name), message.GetData(layer).tobytes()
             if "luma" in wants:
                 yield path("luma"), _png(openr_bridge.reconstruct_luma(message))
-        if wants & {"depth", "seg"} and self._renderer is None:
-            self._renderer = Renderer(sim.model, *rgb.shape[1::-1], groups=HEAD_CAMERA_GROUPS)
         if "depth" in wants:
             buffer = io.BytesIO()
-            np.save(buffer, self._renderer.render_depth(sim.data, HEAD_CAMERA))
+            np.save(buffer, sim.camera.depth())
             yield path("depth"), buffer.getvalue()
         if "seg" in wants:
-            yield path("seg"), _png(self._classes[self._renderer.render_segmentation(sim.data, HEAD_CAMERA)])
+            yield path("seg"), _png(self._classes[sim.camera.segmentation()])
 
     def __enter__(self) -> "DumpWriter":
         return self
@@ -351,8 +343,6 @@ class DumpWriter:
         self._lines.close()
         if self._video is not None:
             self._video.release()
-        if self._renderer is not None:
-            self._renderer.close()
 
 
 def _prepare_folder(out: Path, meta: dict, resume: bool) -> set[int]:
@@ -444,13 +434,16 @@ class _CameraFrames:
 
 def _dump_controller(parameters: dict, out: Path, resume: bool) -> DumpWriter:
     frames, camera_full = parameters["frames"], parameters["camera_full"]
-    width, height = camera_size(camera_full)
-    with DumpWriter(out, parameters["formats"], parameters, resume=resume, width=width, height=height,
-                    model=load_model()) as writer:
+    settings = CameraSettings(**parameters["camera_settings"])
+    model = load_model(parameters["scene"])
+    camera = describe_camera(parameters["camera_profile"], settings, camera_size(camera_full),
+                             scene_light_temperature(model))
+    with DumpWriter(out, parameters["formats"], parameters, resume=resume, camera=camera, model=model) as writer:
         listener = _CameraFrames(writer, frames)
         run_controller(parameters["controller"], backend=parameters["backend"], duration=frames / FRAME_RATE_HZ,
-                       seed=parameters["seed"], camera_full=camera_full, ball=parameters["ball"],
-                       frame_listeners=[listener], progress=parameters.get("progress", True))
+                       scene=parameters["scene"], seed=parameters["seed"], pose=parameters["pose"],
+                       ball=parameters["ball"], camera_full=camera_full, camera_profile=parameters["camera_profile"],
+                       camera_settings=settings, frame_listeners=[listener], progress=parameters.get("progress", True))
         if listener.error is not None:
             raise listener.error
     return writer
@@ -468,17 +461,19 @@ def _policy(name: str, action_space, seed: int):
 
 
 def _dump_env(parameters: dict, out: Path, resume: bool) -> DumpWriter:
-    camera = "openr" if parameters["backend"] == "openr" else "rgb"
+    camera, settings = "openr" if parameters["backend"] == "openr" else "rgb", parameters["camera_settings"]
     try:
-        env = gymnasium.make(parameters["env"], camera=camera)
+        env = gymnasium.make(parameters["env"], camera=camera, scene=parameters["scene"],
+                             camera_profile=parameters["camera_profile"], camera_wb=settings["white_balance"],
+                             camera_gain=settings["gain"], camera_shutter=settings["shutter"])
     except gymnasium.error.Error as exc:
         raise ValueError(f"environment {parameters['env']!r}: {exc}") from None
     steps, seed = parameters["frames"], parameters["seed"]
     progress = Progress(steps / FRAME_RATE_HZ)
     try:
         sim = env.unwrapped.sim
-        with DumpWriter(out, parameters["formats"], parameters, resume=resume, width=sim.camera_size[0],
-                        height=sim.camera_size[1], model=sim.model) as writer:
+        with DumpWriter(out, parameters["formats"], parameters, resume=resume, camera=sim.camera.describe(),
+                        model=sim.model) as writer:
             policy = _policy(parameters["policy"], env.action_space, seed)
             env.reset(seed=seed)
             index, episode = 0, 0
@@ -509,9 +504,12 @@ def _dump_one(parameters: dict, out: Path, resume: bool) -> DumpSummary:
 
 
 def dump(out, *, controller: str | Path | None = None, env: str | None = None, policy: str = "random",
-         frames: int = 300, backend: str = "sim", seed: int = 0, formats=DEFAULT_FORMATS, camera_full: bool = False,
-         ball: tuple[float, float] | None = None, resume: bool = False, workers: int = 1) -> DumpSummary:
-    """Dump a controller run (``frames`` camera frames) or an env run (``frames`` steps) to ``out``."""
+         frames: int = 300, backend: str = "sim", scene: str | Path | None = None, seed: int = 0,
+         pose: tuple[float, float, float] | None = None, ball: tuple[float, float] | None = None,
+         formats=DEFAULT_FORMATS, camera_full: bool = False, camera_profile: str = "ers7",
+         camera_settings: CameraSettings | None = None, resume: bool = False, workers: int = 1) -> DumpSummary:
+    """Dump a controller run (``frames`` camera frames) or an env run (``frames`` steps) to ``out``;
+    ``pose`` (x, y, yaw in degrees) and ``ball`` apply to controller dumps."""
     if (controller is None) == (env is None):
         raise ValueError("dump a controller file or an environment (--env), not both or neither")
     unknown = sorted(set(formats) - set(FORMATS))
@@ -527,16 +525,18 @@ def dump(out, *, controller: str | Path | None = None, env: str | None = None, p
         raise ValueError(f"--workers must be between 1 and the number of frames ({frames}), not {workers}")
     if env is not None and camera_full:
         raise ValueError("--camera-full applies to controller dumps; environments render their own layer")
-    if env is not None and ball is not None:
-        raise ValueError("--ball applies to controller dumps; environments place the ball themselves")
+    if env is not None and (ball is not None or pose is not None):
+        raise ValueError("--ball and --pose apply to controller dumps; environments place the robot and ball themselves")
     if controller is not None:
         controller = Path(controller).resolve()
         if not controller.is_file():
             raise FileNotFoundError(f"{controller}: no such controller file")
     out = Path(out).resolve()
     parameters = {"controller": controller and str(controller), "env": env, "policy": env and policy,
-                  "frames": frames, "backend": backend, "seed": seed, "formats": [f for f in FORMATS if f in formats],
-                  "camera_full": camera_full, "ball": ball and list(ball)}
+                  "frames": frames, "backend": backend, "scene": scene and str(Path(scene).resolve()), "seed": seed,
+                  "pose": pose and list(pose), "ball": ball and list(ball),
+                  "formats": [f for f in FORMATS if f in formats], "camera_full": camera_full,
+                  "camera_profile": camera_profile, "camera_settings": (camera_settings or CameraSettings()).as_dict()}
     if workers == 1:
         return _dump_one(parameters, out, resume)
     return _dump_sharded(parameters, out, resume, workers)
@@ -675,8 +675,9 @@ def _dump_command(args) -> int:
         raise ValueError("--steps and --duration must be positive")
     frames = args.steps if args.steps is not None else round((args.duration or 10.0) * FRAME_RATE_HZ)
     summary = dump(args.out, controller=args.controller, env=args.env, policy=args.policy, frames=frames,
-                   backend=args.backend, seed=args.seed, formats=formats, camera_full=args.camera_full,
-                   ball=args.ball and tuple(args.ball), resume=args.resume, workers=args.workers)
+                   backend=args.backend, scene=args.scene, seed=args.seed, pose=args.pose and tuple(args.pose),
+                   ball=args.ball and tuple(args.ball), formats=formats, resume=args.resume, workers=args.workers,
+                   **camera_options(args))
     print(f"dumped {summary.frames} frames to {summary.out} ({summary.new_frames} written now) in "
           f"{summary.wall_s:.1f} s: {summary.frames_per_s:.1f} frames/s, "
           f"{summary.bytes_written / 1e6 / max(summary.wall_s, 1e-9):.2f} MB/s")
@@ -695,11 +696,9 @@ def add_dump_parser(subcommands) -> argparse.ArgumentParser:
     length.add_argument("--duration", type=float, help="simulated seconds, 30 frames each (default 10)")
     length.add_argument("--steps", type=int, help="camera frames (controller) or environment steps")
     parser.add_argument("--backend", choices=BACKENDS, default="sim", help="what the controller sees")
-    parser.add_argument("--seed", type=int, default=0, help="shard k of --workers uses seed + k")
-    parser.add_argument("--ball", type=float, nargs=2, metavar=("X", "Y"), help="ball position on the field (m)")
+    add_world_options(parser)  # --scene, --pose, --ball, --seed (shard k of --workers: seed + k), camera
     parser.add_argument("--formats", default=",".join(DEFAULT_FORMATS),
                         help=f"comma-separated from {','.join(FORMATS)}, or all (default {','.join(DEFAULT_FORMATS)})")
-    parser.add_argument("--camera-full", action="store_true", help="render 416x320 (else the 208x160 layer)")
     parser.add_argument("--resume", action="store_true", help="continue an interrupted dump in --out")
     parser.add_argument("--workers", type=int, default=1, help="processes; the frames are split into shards")
     parser.set_defaults(handler=_dump_command)

@@ -20,6 +20,7 @@ import numpy as np
 from .ers7 import JOINT_BY_LOCATOR, JOINT_INDEX, JOINTS, LEGS, joint_indices
 from .mjcf import HIP_OFFSET, KNEE_OFFSET, PAW_OFFSET, POSES
 from .mtn import Motion, MotionPlayer, read_mtn, write_mtn
+from .options import place, start_values
 from .sim import FRAME_MS, Simulation, models_dir
 
 KEYFRAME_MS = 16  # Sony's walks: pre-sampled 16 ms keyframes, numInterpolate 0
@@ -239,9 +240,13 @@ def _webots_frames(player: MotionPlayer, repeat: int, step_ms: int):
 
 
 def play_motion(motion_or_path, repeat: int = 1, sim: Simulation | None = None, mode: str = "openr",
-                step_ms: int = 16) -> dict:
-    """Play a motion (or MTN file) ``repeat`` times on ``sim`` (default: a new robot standing on
-    the field) and say where it went.
+                step_ms: int = 16, *, scene=None, seed: int = 0, pose: tuple[float, float, float] | None = None,
+                ball: tuple[float, float] | None = None, camera_profile: str = "ers7", camera_full: bool = False,
+                camera_settings=None) -> dict:
+    """Play a motion (or MTN file) ``repeat`` times on ``sim`` (default: a new robot standing in
+    ``scene``, the RoboCup field by default, made with ``seed`` and the camera options, which
+    ``mtn play`` takes like every ``aibo-sim`` command) and say where it went. ``pose`` (x, y
+    in metres, yaw in degrees) and ``ball`` (x, y) place the robot and the ball first.
 
     The set-points first blend from their current values to the motion's first keyframe over
     ``BLEND_MS`` when they differ. ``mode="openr"``: every 8 ms frame the player's targets are
@@ -257,7 +262,23 @@ def play_motion(motion_or_path, repeat: int = 1, sim: Simulation | None = None, 
     if unknown:
         source = motion.name if isinstance(motion_or_path, Motion) else os.fspath(motion_or_path)
         raise ValueError(f"{source}: no joint for locator(s) {', '.join(unknown)}")
-    sim = sim or Simulation()
+    pose, ball = start_values("--pose", pose, 3), start_values("--ball", ball, 2)
+    if sim is not None:
+        if scene is not None:
+            raise ValueError("play_motion: give a scene or a simulation, not both")
+        place(sim, pose, ball)
+        return _play(sim, motion, player, repeat, mode, step_ms)
+    sim = Simulation(scene, seed=seed, camera_full=camera_full, camera_profile=camera_profile,
+                     camera_settings=camera_settings)
+    try:
+        place(sim, pose, ball)
+        return _play(sim, motion, player, repeat, mode, step_ms)
+    finally:
+        sim.close()
+
+
+def _play(sim: Simulation, motion: Motion, player: MotionPlayer, repeat: int, mode: str, step_ms: int) -> dict:
+    """``play_motion`` on ``sim``, its arguments checked."""
     idx = joint_indices(motion.locators)
 
     start = sim.servos.command[idx].copy()
@@ -280,7 +301,8 @@ def play_motion(motion_or_path, repeat: int = 1, sim: Simulation | None = None, 
         yaw = new_yaw
         if fell := sim.fallen():
             break
-    dx, dy = sim.body_pose()[0][:2] - position[:2]
+    end, yaw_end, _ = sim.body_pose()
+    dx, dy = end[:2] - position[:2]
     c, s = math.cos(yaw0), math.sin(yaw0)
     forward, left = float(c * dx + s * dy), float(-s * dx + c * dy)
     return {
@@ -289,6 +311,9 @@ def play_motion(motion_or_path, repeat: int = 1, sim: Simulation | None = None, 
         "heading_change_deg": math.degrees(turned),
         "fell": fell,
         "duration_s": (sim.frame - start_frame) * FRAME_MS / 1000,
+        # On the field, as ``--pose`` takes them: x, y (m), yaw (deg).
+        "start_pose": [float(position[0]), float(position[1]), math.degrees(yaw0)],
+        "end_pose": [float(end[0]), float(end[1]), math.degrees(yaw_end)],
     }
 
 

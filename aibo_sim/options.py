@@ -1,7 +1,13 @@
 """The command-line options that ``run``, ``render``, ``dump`` and ``mtn play`` share, with the
-same names and meanings: the world (``--scene``, ``--pose``, ``--ball``, ``--seed``) and the
-head camera (``--camera-profile``, ``--camera-wb``, ``--camera-gain``, ``--camera-shutter``,
-``--camera-full``)."""
+same names, defaults and meanings: the world (``--scene``, ``--pose``, ``--ball``, ``--seed``)
+and the head camera (``--camera-profile``, ``--camera-wb``, ``--camera-gain``,
+``--camera-shutter``, ``--camera-full``).
+
+A bad value (an unknown profile or setting, a pose or ball that is not a finite number, a
+negative seed) stops the command with exit status 2 and one line that names the option:
+``ArgumentParser`` below is the parser class of ``aibo-sim`` and, through ``add_subparsers``,
+of every subcommand.
+"""
 
 from __future__ import annotations
 
@@ -12,36 +18,97 @@ from openr_bridge import CAMERA_DEFAULTS, CAMERA_SETTINGS
 
 from .camera import PROFILES, CameraSettings
 
+MAX_MAGNITUDE = 1e6  # |value| beyond this is a typo, not a position (metres) or an angle (degrees)
+CAMERA_SETTING_OPTIONS = (("white_balance", "--camera-wb"), ("gain", "--camera-gain"), ("shutter", "--camera-shutter"))
+WORLD_DESTS = ("scene", "pose", "ball", "seed")
+CAMERA_DESTS = ("camera_profile", "camera_wb", "camera_gain", "camera_shutter", "camera_full")
+
+
+class ArgumentParser(argparse.ArgumentParser):
+    """argparse's parser, except that a usage error is one line on stderr (exit status 2):
+    ``aibo-sim run: error: argument --ball: 'nan' is not a finite number (see aibo-sim run --help)``."""
+
+    def error(self, message: str):
+        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
 
 def finite_float(text: str) -> float:
-    """argparse type: a finite number (NaN and infinities are refused, naming the value)."""
+    """argparse type: a finite number (NaN, infinities and magnitudes beyond 1e6 are refused,
+    naming the value; argparse adds the option's name)."""
     try:
         value = float(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
-    if not math.isfinite(value) or abs(value) > 1e6:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a finite number of reasonable size")
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"{text!r} is not a finite number")
+    if abs(value) > MAX_MAGNITUDE:
+        raise argparse.ArgumentTypeError(f"{text!r} is out of range (at most {MAX_MAGNITUDE:g} in magnitude)")
+    return value
+
+
+def non_negative_int(text: str) -> int:
+    """argparse type: a whole number >= 0 (a seed)."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"{text!r} is negative (a seed is a whole number >= 0)")
     return value
 
 
 def add_world_options(parser: argparse.ArgumentParser, camera: bool = True) -> None:
-    """--scene, --pose, --ball, --seed and (with ``camera``) the camera options."""
-    parser.add_argument("--scene", help="MJCF scene file (default: the RoboCup 2005 field)")
+    """--scene, --pose, --ball, --seed and (with ``camera``) the camera options; see
+    ``world_options`` and ``camera_options`` for what they become."""
+    parser.add_argument("--scene", metavar="FILE", help="MJCF scene file (default: the RoboCup 2005 field)")
     parser.add_argument("--pose", type=finite_float, nargs=3, metavar=("X", "Y", "YAW_DEG"),
                         help="robot position on the field (m) and heading (deg); default: the scene's start")
-    parser.add_argument("--ball", type=finite_float, nargs=2, metavar=("X", "Y"), help="ball position on the field (m)")
-    parser.add_argument("--seed", type=int, default=0, help="random seed (IR and camera noise, randomised choices)")
+    parser.add_argument("--ball", type=finite_float, nargs=2, metavar=("X", "Y"),
+                        help="ball position on the field (m); default: the scene's")
+    parser.add_argument("--seed", type=non_negative_int, default=0, metavar="N",
+                        help="random seed (IR and camera noise, randomised choices; default 0)")
     if not camera:
         return
     parser.add_argument("--camera-profile", choices=tuple(PROFILES), default="ers7",
                         help="head camera model: ers7 (the calibrated sensor, default) or ideal (the rendered picture)")
-    for name, option in (("white_balance", "--camera-wb"), ("gain", "--camera-gain"), ("shutter", "--camera-shutter")):
+    for name, option in CAMERA_SETTING_OPTIONS:
         parser.add_argument(option, choices=tuple(CAMERA_SETTINGS[name][1]), default=CAMERA_DEFAULTS[name],
                             help=f"camera {name.replace('_', ' ')} at the start (default {CAMERA_DEFAULTS[name]})")
     parser.add_argument("--camera-full", action="store_true", help="render 416x320 (else the 208x160 layer)")
+
+
+def world_options(args: argparse.Namespace) -> dict:
+    """Keyword arguments ``scene``, ``seed``, ``pose`` (x, y, yaw in degrees, or None) and
+    ``ball`` (x, y, or None) from the world options."""
+    return {"scene": args.scene, "seed": args.seed, "pose": None if args.pose is None else tuple(args.pose),
+            "ball": None if args.ball is None else tuple(args.ball)}
 
 
 def camera_options(args: argparse.Namespace) -> dict:
     """Keyword arguments for ``Simulation`` (and ``run_controller``) from the camera options."""
     return {"camera_profile": args.camera_profile, "camera_full": args.camera_full,
             "camera_settings": CameraSettings(args.camera_wb, args.camera_gain, args.camera_shutter)}
+
+
+def start_values(name: str, values, count: int) -> tuple[float, ...] | None:
+    """``values`` (a pose or ball position given to a function, not through argparse) as a tuple
+    of ``count`` finite floats, or None; a ValueError naming the option ``name`` otherwise."""
+    if values is None:
+        return None
+    try:
+        numbers = tuple(float(v) for v in values)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be {count} numbers, not {values!r}") from None
+    if len(numbers) != count or not all(math.isfinite(v) for v in numbers):
+        raise ValueError(f"{name} must be {count} finite numbers, not {' '.join(map(str, numbers))}")
+    return numbers
+
+
+def place(sim, pose: tuple[float, float, float] | None = None, ball: tuple[float, float] | None = None) -> None:
+    """Put the robot at ``pose`` (x, y in metres, yaw in degrees) and the ball at ``ball`` (x, y),
+    each when given; the scene's start otherwise."""
+    if pose is not None:
+        x, y, yaw_deg = pose
+        sim.place_robot(x, y, math.radians(yaw_deg))
+    if ball is not None:
+        sim.place_ball(*ball)

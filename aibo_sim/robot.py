@@ -178,6 +178,32 @@ class Camera(Device):
     def fov(self) -> float:
         return self.robot.camera_source.fov
 
+    # Settings (an extension of the Webots API): Sony's values 1..3, from the next camera frame.
+
+    def set_white_balance(self, value: int) -> None:
+        """1 indoor (2856 K), 2 outdoor (6500 K), 3 fluorescent (5000 K, the default)."""
+        self._set_setting("camera_set_white_balance", "white_balance", value)
+
+    def set_gain(self, value: int) -> None:
+        """1 low (-6 dB), 2 mid (0 dB, the default), 3 high (+6 dB)."""
+        self._set_setting("camera_set_gain", "gain", value)
+
+    def set_shutter_speed(self, value: int) -> None:
+        """1 slow (1/50 s), 2 mid (1/100 s, the default), 3 fast (1/200 s)."""
+        self._set_setting("camera_set_shutter_speed", "shutter", value)
+
+    @property
+    def settings(self):
+        """The settings the next frame is exposed with (``aibo_sim.camera.CameraSettings``)."""
+        return self.robot.sim.camera.settings
+
+    def _set_setting(self, function: str, setting: str, value) -> None:
+        # sim: straight to sim.camera; openr: the wrapper's OPENR::ControlPrimitive.
+        try:
+            self.robot.camera_source.set_setting(setting, value)
+        except ValueError as error:
+            raise DeviceError(f"{self.locator}: {function}({value!r}): {error}") from error
+
 
 class Led(Device):
     """LED: 0 switches it off, 1 on at full intensity, 2..255 Sony intensities (value/255)."""

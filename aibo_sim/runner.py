@@ -4,18 +4,21 @@ from __future__ import annotations
 
 import contextlib
 import json
+import math
 import os
 import runpy
 import sys
 import time
 import traceback
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 import cv2
 import numpy as np
 
 from . import controller
+from .camera import CameraSettings
+from .options import place, start_values
 from .robot import Robot, SimulationEnd
 from .sim import Simulation, SimulationDiverged, models_dir
 
@@ -33,7 +36,15 @@ class RunSummary:
     real_time_factor: float
     camera_frames: int
     robot_xy_yaw: tuple[float, float, float]  # at the end: metres, metres, radians
-    ball_xy: tuple[float, float] | None  # None in a scene without a ball
+    ball_xy: tuple[float, float] | None  # at the end; None in a scene without a ball
+    # What the run started from, as given (run.json records these too): the options
+    # ``--scene`` (resolved path; None: the RoboCup field), ``--seed``, ``--pose`` (x, y in
+    # metres, yaw in degrees; None: the scene's start) and ``--ball`` (None: the scene's).
+    scene: str | None = None
+    seed: int = 0
+    pose: tuple[float, float, float] | None = None
+    ball: tuple[float, float] | None = None
+    camera: dict = field(default_factory=dict)  # ``HeadCamera.describe()`` at the start: profile, lens, settings
 
 
 def motion_dirs(controller_path: Path) -> tuple[Path, ...]:
@@ -99,22 +110,33 @@ class Progress:
 
 def run_controller(path: str | Path, *, backend: str = "sim", duration: float = 10.0, scene=None, seed: int = 0,
                    out: str | Path | None = None, mtn_mode: str = "openr", memory_stick=None,
-                   camera_full: bool = False, ball: tuple[float, float] | None = None,
-                   frame_listeners=(), progress: bool = True) -> RunSummary:
-    """Run a controller file for ``duration`` simulated seconds; frames and its files go to ``out``.
+                   camera_full: bool = False, camera_profile: str = "ers7",
+                   camera_settings: CameraSettings | None = None, pose: tuple[float, float, float] | None = None,
+                   ball: tuple[float, float] | None = None, frame_listeners=(), progress: bool = True) -> RunSummary:
+    """Run a controller file for ``duration`` simulated seconds; frames, its files and
+    ``run.json`` (the summary) go to ``out``.
 
-    ``frame_listeners`` are called with the robot after every 8 ms frame; ``progress=False``
-    silences the progress bar (worker processes).
+    The robot starts at ``pose`` (x, y in metres, yaw in degrees; default the scene's start),
+    the ball at ``ball``; the head camera is ``camera_profile`` (``ers7`` or ``ideal``) with
+    ``camera_settings`` at the start. ``frame_listeners`` are called with the robot after every
+    8 ms frame; ``progress=False`` silences the progress bar (worker processes).
     """
     path = Path(path).resolve()
     if not path.is_file():
         raise FileNotFoundError(f"{path}: no such controller file")
-    if duration <= 0:
-        raise ValueError(f"--duration must be positive, not {duration}")
-    sim = Simulation(scene, seed=seed, camera_full=camera_full)
-    if ball is not None:
-        sim.place_ball(*ball)
-    robot = Robot(sim, backend=backend, mtn_mode=mtn_mode, memory_stick=memory_stick, search_dirs=motion_dirs(path))
+    if not (math.isfinite(duration) and duration > 0):
+        raise ValueError(f"--duration must be positive and finite, not {duration}")
+    pose, ball = start_values("--pose", pose, 3), start_values("--ball", ball, 2)
+    sim = Simulation(scene, seed=seed, camera_full=camera_full, camera_profile=camera_profile,
+                     camera_settings=camera_settings)
+    try:
+        place(sim, pose, ball)
+        camera = sim.camera.describe()
+        robot = Robot(sim, backend=backend, mtn_mode=mtn_mode, memory_stick=memory_stick,
+                      search_dirs=motion_dirs(path))
+    except BaseException:
+        sim.close()
+        raise
     robot.end_ms = int(round(duration * 1000))
     writer = None
     if out is not None:
@@ -148,10 +170,12 @@ def run_controller(path: str | Path, *, backend: str = "sim", duration: float = 
         sim.close()
     wall = time.perf_counter() - start
     position, yaw, _ = sim.body_pose()
-    ball = sim.ball_position()
+    ball_end = sim.ball_position()
     summary = RunSummary(str(path), backend, robot.time_ms / 1000, wall, robot.time_ms / 1000 / max(wall, 1e-9),
                          writer.count if writer else 0, (float(position[0]), float(position[1]), yaw),
-                         None if ball is None else (float(ball[0]), float(ball[1])))
+                         None if ball_end is None else (float(ball_end[0]), float(ball_end[1])),
+                         scene=None if scene is None else str(Path(scene).resolve()), seed=seed, pose=pose, ball=ball,
+                         camera=camera)
     if out is not None:
         (out / "run.json").write_text(json.dumps(asdict(summary), indent=2) + "\n")
     return summary

@@ -179,6 +179,7 @@ class Simulation:
         qpos[0:2] = x, y
         mujoco.mju_mulQuat(qpos[3:7], yaw_quat, pitch_quat)
         mujoco.mj_forward(self.model, self.data)
+        self.camera.moved()
 
     @property
     def has_ball(self) -> bool:
@@ -192,6 +193,7 @@ class Simulation:
         self.data.qpos[joint.qposadr[0]:joint.qposadr[0] + 7] = (x, y, BALL_RADIUS, 1, 0, 0, 0)
         self.data.qvel[joint.dofadr[0]:joint.dofadr[0] + 6] = 0
         mujoco.mj_forward(self.model, self.data)
+        self.camera.moved()
 
     def ball_position(self) -> np.ndarray | None:
         """The ball's centre, or None in a scene without a ball."""

@@ -50,6 +50,7 @@ from .errors import (
     NoImageError,
     NotConnectedError,
     OpenRError,
+    PrimitiveError,
 )
 from .ers7_camera import (
     CAMERA_DEFAULTS,
@@ -104,10 +105,35 @@ from .image import (
     ofbkimageLAYER_M,
     restore_tag_pixels,
 )
+from .primitive import (
+    OPENR,
+    OCameraPrimitive,
+    OPrimitive,
+    OPrimitiveControl_CameraParam,
+    check,
+    oFAIL,
+    oINVALID_ARG,
+    oINVALID_PRIMITIVE_ID,
+    oINVALID_REQUEST,
+    oNOT_FOUND,
+    oNOT_SUPPORTED,
+    oOUT_OF_RANGE,
+    oSUCCESS,
+    ocamparamUNDEF,
+    oprimitiveID_UNDEF,
+    oprmreqCAM_AE_OFF,
+    oprmreqCAM_AE_ON,
+    oprmreqCAM_AWB_OFF,
+    oprmreqCAM_AWB_ON,
+    oprmreqCAM_GET_CDT_TABLE,
+    sizeof,
+    status_name,
+)
 from .system import DEFAULT_MEMORY_STICK, OpenRSystem
 from .wiring import ONotifyEvent, OObject, OObserver, OSubject, OVirtualRobotComm
 from .wrapper import (
     CAMERA_CONNECTION,
+    CAMERA_SETTING_FUNCTIONS,
     Controller,
     camera_image_get_blue,
     camera_image_get_green,

@@ -32,8 +32,18 @@ class ConfigError(OpenRError):
 
 
 class NotConnectedError(OpenRError):
-    """An observer that no CONNECT.CFG line connects to a subject."""
+    """An observer that no CONNECT.CFG line connects to a subject, or a wrapper used outside an
+    OpenRSystem (no OPENR to open primitives with)."""
 
 
 class NoImageError(OpenRError):
     """A camera function called before the first image arrived."""
+
+
+class PrimitiveError(OpenRError):
+    """An OPEN-R primitive call (``OPENR.OpenPrimitive``, ``ControlPrimitive``, ...) that did not
+    return ``oSUCCESS``; ``status`` is the OStatus it returned."""
+
+    def __init__(self, message: str, status: int):
+        self.status = status
+        super().__init__(message)

@@ -5,12 +5,19 @@ wrapper ``Controller``, both shipped in ``data/``); the memory stick only brings
 CONNECT.CFG. Every connection must name a service of a known object, or ``ConfigError``
 names the line: object names are case-sensitive in OPEN-R, so the report's spelling
 ``OvirtualRobotComm`` (a typo for ``OVirtualRobotComm``) is rejected with a hint.
+
+The system also owns the primitives its objects open through ``OPENR::`` (``primitive.py``):
+the head camera's, ``system.camera`` (an ``OCameraPrimitive``: white balance, gain and shutter,
+with listeners told of each change). ``system.OPENR`` is the ``OPENR::`` API over them; every
+object gets it as its ``OPENR`` attribute before ``DoStart``, as an OPEN-R object links
+against libOPENR.
 """
 
 from pathlib import Path
 
 from .config import Connection, ServiceName, find_connect_cfg, load_connect_cfg
 from .errors import ConfigError
+from .primitive import OPENR, OCameraPrimitive
 from .wiring import DATA_DIR, OObject, OVirtualRobotComm
 from .wrapper import Controller
 
@@ -18,8 +25,12 @@ DEFAULT_MEMORY_STICK = DATA_DIR / "ms"
 
 
 class OpenRSystem:
-    def __init__(self, connections: list[Connection], objects: list[OObject] | None = None):
-        """Connect ``objects`` (default: OVirtualRobotComm and Controller), then start them."""
+    def __init__(self, connections: list[Connection], objects: list[OObject] | None = None, *,
+                 camera: OCameraPrimitive | None = None):
+        """Connect ``objects`` (default: OVirtualRobotComm and Controller), then start them.
+        ``camera``: the camera primitive (default: one at Sony's settings FL, MID, MID)."""
+        self.camera = camera if camera is not None else OCameraPrimitive()
+        self.OPENR = OPENR([self.camera])
         objects = objects if objects is not None else [OVirtualRobotComm(), Controller()]
         self.objects = {obj.stub.object_name: obj for obj in objects}
         self._gates = {str(gate.service.name): gate for obj in objects for gate in (*obj.subject, *obj.observer)}
@@ -27,13 +38,16 @@ class OpenRSystem:
             subject = self._gate(connection.subject, connection)
             subject.connect(self._gate(connection.observer, connection))
         for obj in objects:
+            obj.OPENR = self.OPENR
+        for obj in objects:
             obj.DoStart()
 
     @classmethod
     def from_memory_stick(
-        cls, memory_stick: str | Path = DEFAULT_MEMORY_STICK, objects: list[OObject] | None = None
+        cls, memory_stick: str | Path = DEFAULT_MEMORY_STICK, objects: list[OObject] | None = None, *,
+        camera: OCameraPrimitive | None = None,
     ) -> "OpenRSystem":
-        return cls(load_connect_cfg(find_connect_cfg(memory_stick)), objects)
+        return cls(load_connect_cfg(find_connect_cfg(memory_stick)), objects, camera=camera)
 
     @property
     def robot_comm(self) -> OVirtualRobotComm:

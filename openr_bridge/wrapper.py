@@ -10,23 +10,63 @@ The camera functions read layer H of that message, as the report's do (each band
 (no connection, or no image yet) they raise ``NotConnectedError`` or ``NoImageError``.
 ``camera_get_fov`` needs no image and returns the report's constant (see
 ``ers7_camera.FIELD_OF_VIEW``).
+
+The camera settings functions (not in the report; what a wrapper would add with Sony's API)
+``camera_set_white_balance``, ``camera_set_gain`` and ``camera_set_shutter_speed`` take
+Sony's values (1..3: ``ocamparamWB_INDOOR_MODE``/``OUTDOOR``/``FL``, ``ocamparamGAIN_LOW``/
+``MID``/``HIGH``, ``ocamparamSHUTTER_SLOW``/``MID``/``FAST``) and do what the C would::
+
+    OPENR::OpenPrimitive("PRM:/r1/c1/c2/c3/i1-FbkImageSensor:F1", &fbkID);  // once
+    OPrimitiveControl_CameraParam param(value);
+    OPENR::ControlPrimitive(fbkID, oprmreqCAM_SET_GAIN, &param, sizeof(param), 0, 0);
+
+through the ``OPENR`` the ``OpenRSystem`` gave the object; a status other than ``oSUCCESS``
+raises ``PrimitiveError`` (its ``status``; the message names the call and, for a bad value,
+the allowed ones). The camera exposes its next frame with the new setting.
 """
 
 import numpy as np
 
 from .colour import ycrcb_to_rgb
 from .config import load_stub_cfg
-from .errors import ImageAccessError, NoImageError, NotConnectedError
-from .ers7_camera import FIELD_OF_VIEW
+from .errors import ImageAccessError, NoImageError, NotConnectedError, PrimitiveError
+from .ers7_camera import (
+    CAMERA_LOCATOR,
+    FIELD_OF_VIEW,
+    oprmreqCAM_SET_GAIN,
+    oprmreqCAM_SET_SHUTTER_SPEED,
+    oprmreqCAM_SET_WHITE_BALANCE,
+)
 from .image import OFbkImage, ofbkimageBAND_Cb, ofbkimageBAND_Cr, ofbkimageBAND_Y, ofbkimageLAYER_H, restore_tag_pixels
+from .primitive import (
+    REQUEST_NAMES,
+    OPrimitiveControl_CameraParam,
+    allowed_values,
+    check,
+    oINVALID_ARG,
+    oOUT_OF_RANGE,
+    oSUCCESS,
+    sizeof,
+    status_name,
+)
 from .wiring import DATA_DIR, OObject
 
 IMAGE_SERVICE = "Controller.Image.OFbkImageVectorData.O"
 CAMERA_CONNECTION = f"OVirtualRobotComm.FbkImageSensor.OFbkImageVectorData.S {IMAGE_SERVICE}"
 
 
+# Each settings function: its request and the setting it changes (a key of CAMERA_SETTINGS).
+CAMERA_SETTING_FUNCTIONS = {
+    "camera_set_white_balance": (oprmreqCAM_SET_WHITE_BALANCE, "white_balance"),
+    "camera_set_gain": (oprmreqCAM_SET_GAIN, "gain"),
+    "camera_set_shutter_speed": (oprmreqCAM_SET_SHUTTER_SPEED, "shutter"),
+}
+
+
 class Controller(OObject):
     """The wrapper object; ``restore_tag=True`` hides the tag pixels in camera_get_image."""
+
+    OPENR = None  # the OPENR:: API (primitive.OPENR) the OpenRSystem gives the object before DoStart
 
     def __init__(self, *, restore_tag: bool = False):
         super().__init__(load_stub_cfg(DATA_DIR / "Controller" / "stub.cfg"))
@@ -34,6 +74,7 @@ class Controller(OObject):
         self._image_observer = next(o for o in self.observer if str(o.service.name) == IMAGE_SERVICE)
         self._image = None
         self._bands = {}  # the OFbkImage of each band of _image's layer H read so far
+        self._camera_id = None  # fbkID, once opened
 
     def DoStart(self) -> None:
         for observer in self.observer:
@@ -60,6 +101,34 @@ class Controller(OObject):
 
     def camera_get_fov(self) -> float:
         return FIELD_OF_VIEW
+
+    def camera_set_white_balance(self, value: int) -> None:
+        """1 ocamparamWB_INDOOR_MODE, 2 ocamparamWB_OUTDOOR_MODE, 3 ocamparamWB_FL_MODE."""
+        self._camera_control("camera_set_white_balance", value)
+
+    def camera_set_gain(self, value: int) -> None:
+        """1 ocamparamGAIN_LOW, 2 ocamparamGAIN_MID, 3 ocamparamGAIN_HIGH."""
+        self._camera_control("camera_set_gain", value)
+
+    def camera_set_shutter_speed(self, value: int) -> None:
+        """1 ocamparamSHUTTER_SLOW, 2 ocamparamSHUTTER_MID, 3 ocamparamSHUTTER_FAST."""
+        self._camera_control("camera_set_shutter_speed", value)
+
+    def _camera_control(self, function: str, value) -> None:
+        request, setting = CAMERA_SETTING_FUNCTIONS[function]
+        if self.OPENR is None:
+            raise NotConnectedError(f"{function}: this Controller was not started by an OpenRSystem, "
+                                    "so it has no OPENR to open the camera primitive with")
+        if self._camera_id is None:
+            status, camera_id = self.OPENR.OpenPrimitive(CAMERA_LOCATOR)
+            check(status, f"{function}: OPENR::OpenPrimitive(\"{CAMERA_LOCATOR}\")")
+            self._camera_id = camera_id
+        param = OPrimitiveControl_CameraParam(value)
+        status = self.OPENR.ControlPrimitive(self._camera_id, request, param, sizeof(param), 0, 0)
+        if status != oSUCCESS:
+            hint = f"; the value must be {allowed_values(setting)}" if status in (oOUT_OF_RANGE, oINVALID_ARG) else ""
+            raise PrimitiveError(f"{function}({value!r}): OPENR::ControlPrimitive(fbkID, {REQUEST_NAMES[request]}, "
+                                 f"...) returned {status_name(status)} ({status}){hint}", status)
 
     def _band(self, band: int) -> OFbkImage:
         if not self._image_observer.is_connected():

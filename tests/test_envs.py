@@ -18,7 +18,7 @@ from aibo_sim.ers7 import JOINT_BY_NAME, JOINTS
 ROOT = Path(__file__).resolve().parents[1]
 HEAD_TRACK, REACH = "aibo_sim/HeadTrackBall-v0", "aibo_sim/ReachBall-v0"
 AIBO_IDS = sorted(env_id for env_id in gym.registry if env_id.startswith("aibo_sim/"))
-RANDOMIZE = {"lighting": 0.3, "ball_start": 0.2, "camera_gain": 0.2}
+RANDOMIZE = {"lighting": 0.3, "ball_start": 0.2, "camera_robot": 1.0}
 
 
 def orange_offset(image):
@@ -178,9 +178,10 @@ def test_scripted_policy_scores_clearly_above_random():
 
 
 def test_ball_offset_in_info_is_where_the_ball_is_in_the_image():
-    env = gym.make(HEAD_TRACK, randomize={"ball_start": 0.3})
+    # Found by colour in the ideal picture (the ers7 lens is checked against segmentation in test_camera).
+    env = gym.make(HEAD_TRACK, randomize={"ball_start": 0.3}, camera_profile="ideal")
     inside = outside = 0
-    for seed in range(8):
+    for seed in range(12):
         obs, info = env.reset(seed=seed)
         env.action_space.seed(seed)  # the test must not depend on unseeded draws
         for _ in range(3):
@@ -260,7 +261,8 @@ def test_randomisation_varies_the_scene_between_seeds_and_only_then():
         env.close()
         return obs["image"], info["ball_offset"]
 
-    assert np.array_equal(reset(0)[0], reset(1)[0])
+    assert np.array_equal(reset(0, camera_profile="ideal")[0], reset(1, camera_profile="ideal")[0])
+    assert np.array_equal(reset(0)[1], reset(1)[1]) and not np.array_equal(reset(0)[0], reset(1)[0])  # ers7: noise
     (image_0, ball_0), (image_1, ball_1) = reset(0, randomize=RANDOMIZE), reset(1, randomize=RANDOMIZE)
     assert not np.array_equal(image_0, image_1) and not np.array_equal(ball_0, ball_1)
 

@@ -286,7 +286,7 @@ def test_culling_geoms_out_of_view_changes_no_pixel():
     poses that see the front legs: RGB, depth and segmentation from the culling renderer
     equal those drawn with every geom."""
     from aibo_sim.render import Renderer
-    from aibo_sim.sim import HEAD_CAMERA_GROUPS
+    from aibo_sim.camera import HEAD_CAMERA_GROUPS
 
     sim = Simulation()
     sim.place_ball(0.35, 0.05)
@@ -319,7 +319,7 @@ def test_renderers_taking_turns_each_draw_in_their_own_context():
     with another renderer (another size, scene and camera), each one's frames equal those it
     draws alone."""
     from aibo_sim.render import Renderer
-    from aibo_sim.sim import HEAD_CAMERA_GROUPS
+    from aibo_sim.camera import HEAD_CAMERA_GROUPS
 
     sim, other = Simulation(), Simulation(models_dir() / "scene_webots.xml")
     head = Renderer(sim.model, 208, 160, groups=HEAD_CAMERA_GROUPS)

@@ -6,6 +6,16 @@ frame index at 30 fps) is published by ``OVirtualRobotComm``, routed by the memo
 CONNECT.CFG to the wrapper object, and read back through the wrapper's
 ``camera_get_image``. Both return row-major RGB, 3 bytes a pixel, as a flat uint8 array.
 Listeners are called with ``(camera frame index, (h, w, 3) RGB)`` for every capture.
+
+Camera settings: ``set_setting(setting, value)`` takes a setting of
+``openr_bridge.CAMERA_SETTINGS`` ("white_balance", "gain", "shutter") and Sony's value for it
+(1..3, the ``ocamparam*`` constants); the camera (``sim.camera``) exposes its next frame with
+it, a frame already exposed keeps its settings. ``SimCamera`` sets ``sim.camera`` directly
+directly. ``OpenRCamera`` does it the robot's way: the wrapper's ``camera_set_*`` calls
+``OPENR::ControlPrimitive`` on the system's camera primitive, whose listener (connected here)
+passes the change on to ``sim.camera.set_settings``; the primitive starts at ``sim.camera``'s
+settings. A bad value raises ``ValueError`` naming the allowed ones on both (on openr it is
+ControlPrimitive that refuses it, ``oOUT_OF_RANGE`` or ``oINVALID_ARG``) and changes nothing.
 """
 
 from __future__ import annotations
@@ -13,8 +23,16 @@ from __future__ import annotations
 import numpy as np
 
 import openr_bridge
+from openr_bridge.primitive import allowed_values
 
 from .head import CameraFrame
+
+
+# Each setting's values by Sony's number: {"gain": {1: "low", 2: "mid", 3: "high"}, ...}.
+SETTING_VALUES = {setting: {number: name for name, number in values.items()}
+                  for setting, (_, values) in openr_bridge.CAMERA_SETTINGS.items()}
+# The wrapper function that sets each setting.
+WRAPPER_FUNCTIONS = {setting: function for function, (_, setting) in openr_bridge.CAMERA_SETTING_FUNCTIONS.items()}
 
 
 class SimCamera:
@@ -23,6 +41,13 @@ class SimCamera:
         self.width, self.height = sim.camera.width, sim.camera.height
         self.fov = openr_bridge.FIELD_OF_VIEW
         self.listeners = []
+
+    def set_setting(self, setting: str, value: int) -> None:
+        """Sony's ``value`` (1..3) for ``setting``, from the next camera frame on."""
+        values = SETTING_VALUES[setting]
+        if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or int(value) not in values:
+            raise ValueError(f"the value must be {allowed_values(setting)}")
+        self.sim.camera.set_settings(**{setting: values[int(value)]})
 
     def capture(self) -> np.ndarray:
         frame = self.sim.camera.frame()
@@ -38,8 +63,25 @@ class OpenRCamera(SimCamera):
     def __init__(self, sim, memory_stick=None):
         super().__init__(sim)
         self.width, self.height = openr_bridge.LAYER_SIZE[openr_bridge.ofbkimageLAYER_H]
-        self.system = openr_bridge.OpenRSystem.from_memory_stick(memory_stick or openr_bridge.DEFAULT_MEMORY_STICK)
+        primitive = openr_bridge.OCameraPrimitive(sim.camera.settings.as_dict())
+        self.system = openr_bridge.OpenRSystem.from_memory_stick(memory_stick or openr_bridge.DEFAULT_MEMORY_STICK,
+                                                                 camera=primitive)
         self.wrapper = self.system.controller
+        primitive.listeners.append(self._apply_settings)
+
+    def set_setting(self, setting: str, value: int) -> None:
+        """Through the wrapper: ``OPENR::ControlPrimitive`` on the camera primitive."""
+        try:
+            getattr(self.wrapper, WRAPPER_FUNCTIONS[setting])(value)
+        except openr_bridge.PrimitiveError as error:
+            if error.status not in (openr_bridge.oOUT_OF_RANGE, openr_bridge.oINVALID_ARG):
+                raise
+            raise ValueError(f"the value must be {allowed_values(setting)} (OPENR::ControlPrimitive returned "
+                             f"{openr_bridge.status_name(error.status)})") from error
+
+    def _apply_settings(self, change: dict[str, str]) -> None:
+        """The camera primitive's listener: its change, for the next frame."""
+        self.sim.camera.set_settings(**change)
 
     def serve(self, frame: CameraFrame) -> np.ndarray:
         """Deliver the frame's message to the wrapper; what its ``camera_get_image`` then

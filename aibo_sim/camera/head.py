@@ -47,6 +47,18 @@ def scene_light_temperature(model: mujoco.MjModel) -> float:
     return float(model.numeric_data[model.numeric_adr[index]])
 
 
+def describe_camera(profile: str | CameraProfile, settings: CameraSettings, size: tuple[int, int],
+                    light_temperature_k: float) -> dict:
+    """The head camera's profile, lens (OpenCV intrinsics and distortion at ``size``) and
+    settings, as run.json and a dump's meta.json record them."""
+    profile = camera_profile(profile)
+    lens = LENSES[profile.lens].scaled(*size)
+    return {"profile": profile.name, "lens": lens.name, "width": lens.width, "height": lens.height,
+            "fx": lens.fx, "fy": lens.fy, "cx": lens.cx, "cy": lens.cy, "distortion": list(lens.distortion),
+            "distortion_model": "OpenCV k1, k2, p1, p2, k3", **settings.as_dict(),
+            "light_temperature_K": light_temperature_k}
+
+
 class CameraFrame:
     """One 30 fps frame of the head camera; see the module docstring."""
 
@@ -141,11 +153,7 @@ class HeadCamera:
 
     def describe(self) -> dict:
         """Profile, lens and settings, as run.json and meta.json record them."""
-        lens = self.lens
-        return {"profile": self.profile.name, "lens": lens.name, "width": self.width, "height": self.height,
-                "fx": lens.fx, "fy": lens.fy, "cx": lens.cx, "cy": lens.cy, "distortion": list(lens.distortion),
-                "distortion_model": "opencv k1 k2 p1 p2 k3", **self._settings.as_dict(),
-                "light_temperature_K": self.light_temperature_k}
+        return describe_camera(self.profile, self._settings, (self.width, self.height), self.light_temperature_k)
 
     # ---------------------------------------------------------------- timing (called by Simulation)
 
@@ -170,6 +178,11 @@ class HeadCamera:
             copy = self._spare.pop() if self._spare else mujoco.MjData(self.model)
             mujoco.mj_copyData(copy, self.model, self.sim.data)
             exposure.data = copy
+
+    def moved(self) -> None:
+        """Something was placed by hand in the live state: its frame is made again."""
+        if self.live:
+            self._exposures[-1].frame = None
 
     @property
     def live(self) -> bool:
@@ -207,15 +220,20 @@ class HeadCamera:
         return float(self.lens.fx * wy * seconds), float(self.lens.fy * wx * seconds)
 
     def _lens_remap(self, image: np.ndarray, motion: tuple[float, float], interpolation: int) -> np.ndarray:
-        """The render as the lens draws it; with a rolling shutter, each row where it was when read."""
+        """The render as the lens draws it; with a rolling shutter, each row where it was when
+        read. Nearest-neighbour lookups (labels) use float maps: OpenCV's fixed-point maps
+        would round down."""
         readout = self.profile.readout_ms / 1000
-        if readout > 0 and self.sensor is not None and any(motion):
-            exposure = self.sensor.settings.exposure_s
+        moving = readout > 0 and self.sensor is not None and any(motion)
+        if moving or interpolation == cv2.INTER_NEAREST:
             map_x, map_y = cv2.convertMaps(*self._remap, cv2.CV_32FC1)
+        if moving:
+            exposure = self.sensor.settings.exposure_s
             delay = (self.height - 1 - np.arange(self.height, dtype=np.float32)) / (self.height - 1) * readout
             scale = self._render_focal / self.lens.fx / exposure
             map_x += (motion[0] * scale * delay)[:, np.newaxis]
             map_y += (motion[1] * scale * delay)[:, np.newaxis]
+        if moving or interpolation == cv2.INTER_NEAREST:
             return cv2.remap(image, map_x, map_y, interpolation, borderMode=cv2.BORDER_REPLICATE)
         return cv2.remap(image, *self._remap, interpolation, borderMode=cv2.BORDER_REPLICATE)
 

@@ -19,11 +19,16 @@ Observations (a ``Dict``):
 Actions: one number in [-1, 1] per actuated joint, mapped affinely onto the actuator's
 control range, and given to the servos as targets.
 
+The head camera (``aibo_sim.camera``): ``camera_profile`` ``"ers7"`` (the calibrated sensor,
+default) or ``"ideal"``; ``camera_wb``, ``camera_gain``, ``camera_shutter`` its settings by
+name, as on the command line; ``scene`` an MJCF scene file.
+
 Domain randomisation, drawn at each reset from the environment's RNG:
-``randomize={"lighting": m, "ball_start": r, "camera_gain": g}`` (any subset) scales each
-light's intensity by a factor in [1-m, 1+m], moves the ball's start by up to r metres in
-each horizontal direction, and multiplies the camera's R, G, B by gains in [1-g, 1+g]
-(a simple camera model of white balance and gain, applied to the RGB frame before encoding).
+``randomize={"lighting": m, "ball_start": r, "camera_robot": s}`` (any subset, each a finite
+number >= 0; m at most 1) scales each light's intensity by a factor in [1-m, 1+m], moves the
+ball's start by up to r metres in each horizontal direction, and draws the camera's per-robot
+colour deviation (per-channel gain and offset of Y, Cr, Cb) from s times the spread measured
+over real robots.
 
 ``render_mode="rgb_array"``: the ``tracking`` camera at 480x360 with shadows and reflections
 (``quality="high"``): about 68 ms a frame in Mesa's software OpenGL on one thread (54 ms with
@@ -38,6 +43,7 @@ import numpy as np
 import openr_bridge
 
 from ..ers7 import DISTANCE_SENSORS, JOINT_INDEX, JOINTS, LEGS, TOUCH_SENSORS
+from ..camera import CameraSettings, RobotColour
 from ..camera.backends import OpenRCamera
 from ..render import Renderer
 from ..sim import ACCEL_RANGE, Simulation
@@ -45,7 +51,7 @@ from ..sim import ACCEL_RANGE, Simulation
 CAMERA_MODES = ("rgb", "ycrcb", "openr", None)
 LAYERS = {name: layer for layer, name in enumerate(openr_bridge.LAYER_NAMES[:3])}  # the YCrCb layers H, M, L
 YCRCB_BANDS = (openr_bridge.ofbkimageBAND_Y, openr_bridge.ofbkimageBAND_Cr, openr_bridge.ofbkimageBAND_Cb)
-RANDOMIZATIONS = ("lighting", "ball_start", "camera_gain")
+RANDOMIZATIONS = ("lighting", "ball_start", "camera_robot")
 RENDER_SIZE = (480, 360)  # third-person view, width x height
 HEAD_JOINTS = ("neck_tilt", "head_pan", "head_tilt")
 LEG_JOINTS = tuple(j.name for j in JOINTS if j.name.split("_")[0] in LEGS)
@@ -58,7 +64,8 @@ class AiboEnv(gym.Env):
     actuated_joints: tuple[str, ...] = ()
 
     def __init__(self, camera: str | None = "rgb", camera_layer: str = "H", render_mode: str | None = None,
-                 randomize: dict[str, float] | None = None):
+                 randomize: dict[str, float] | None = None, *, scene=None, camera_profile: str = "ers7",
+                 camera_wb: str = "fl", camera_gain: str = "mid", camera_shutter: str = "mid"):
         if camera not in CAMERA_MODES:
             raise ValueError(f"camera must be one of {CAMERA_MODES}, not {camera!r}")
         if camera_layer not in LAYERS:
@@ -69,19 +76,24 @@ class AiboEnv(gym.Env):
         unknown = set(self.randomize) - set(RANDOMIZATIONS)
         if unknown:
             raise ValueError(f"unknown randomisations {sorted(unknown)}; known: {RANDOMIZATIONS}")
+        for name, value in self.randomize.items():
+            if not isinstance(value, (int, float)) or not 0 <= value < float("inf") or name == "lighting" and value > 1:
+                raise ValueError(f"randomize[{name!r}] = {value!r}: must be a finite number >= 0"
+                                 + (" and at most 1" if name == "lighting" else ""))
         if camera == "openr" and camera_layer != "H":
             raise ValueError("camera='openr' serves layer H, as the wrapper's camera_get_image does; "
                              "use camera='ycrcb' or 'rgb' for layers M and L")
         self.camera, self.camera_layer, self.render_mode = camera, camera_layer, render_mode
         self.camera_message: openr_bridge.OFbkImageVectorData | None = None  # the last one encoded
-        self.sim = Simulation()
+        self.sim = Simulation(scene, camera_profile=camera_profile,
+                              camera_settings=CameraSettings(camera_wb, camera_gain, camera_shutter))
         self._openr = OpenRCamera(self.sim) if camera == "openr" else None
         model = self.sim.model
         self._actuated = np.array([JOINT_INDEX[name] for name in self.actuated_joints])
         self._target_low, target_high = model.actuator_ctrlrange[self._actuated].T
         self._target_span = target_high - self._target_low
         self._nominal_lights = (model.light_diffuse.copy(), model.vis.headlight.diffuse.copy())
-        self.camera_gains = np.ones(3)  # R, G, B gains of this episode
+        self.camera_robot = RobotColour()  # this episode's camera colour deviation
         self._renderer: Renderer | None = None
 
         self.action_space = gym.spaces.Box(-1.0, 1.0, (len(self._actuated),), np.float32)
@@ -170,8 +182,9 @@ class AiboEnv(gym.Env):
         spread = self.randomize.get("lighting", 0.0)
         model.light_diffuse[:] = lights * rng.uniform(1 - spread, 1 + spread, (len(lights), 1))
         model.vis.headlight.diffuse[:] = headlight * rng.uniform(1 - spread, 1 + spread)
-        gain = self.randomize.get("camera_gain", 0.0)
-        self.camera_gains = rng.uniform(1 - gain, 1 + gain, 3)
+        spread = self.randomize.get("camera_robot", 0.0)
+        self.camera_robot = RobotColour.draw(rng, spread) if spread else RobotColour()
+        self.sim.camera.set_robot(self.camera_robot)
 
     def ball_start(self, nominal_xy) -> np.ndarray:
         """The ball's start on the ground: ``nominal_xy`` moved by the ``ball_start`` randomisation."""
@@ -179,22 +192,15 @@ class AiboEnv(gym.Env):
         return np.asarray(nominal_xy, dtype=np.float64) + self.np_random.uniform(-reach, reach, 2)
 
     def image_position(self, point) -> tuple[np.ndarray, bool]:
-        """Where a world point lies in the head camera's image, by projection (not from pixels).
+        """Where a world point lies in the head camera's current frame, by projection through
+        the camera's lens (not from pixels).
 
-        Returns the normalised offset from the image centre (x right, y down; -1 and 1 at the
-        edges, clipped to +-2) and whether the point is in front of the camera and inside the
-        image. Uses the camera's pose and its focal length over its sensor size.
+        Returns the offset from the image centre in half-widths and half-heights (x right,
+        y down; -1 and 1 at the edges, clipped to +-2) and whether the point is in front of
+        the camera and inside the image.
         """
-        model, data, cam = self.sim.model, self.sim.data, self.sim.head_camera_id
-        # In Python floats: a 3x3 rotation costs less than numpy's per-call overhead.
-        x, y, z = (p - c for p, c in zip(np.asarray(point, dtype=np.float64).tolist(), data.cam_xpos[cam].tolist()))
-        m = data.cam_xmat[cam].tolist()  # row-major: its columns are the camera's axes
-        right, up, back = (m[i] * x + m[3 + i] * y + m[6 + i] * z for i in range(3))  # MuJoCo cameras look along -z
-        depth = -back
-        (width, height), (fx, fy) = model.cam_sensorsize[cam].tolist(), model.cam_intrinsic[cam][:2].tolist()
-        scale = max(abs(depth), 1e-9)
-        offset = [min(max(v, -2.0), 2.0) for v in (right / scale / (width / 2 / fx), -up / scale / (height / 2 / fy))]
-        return np.array(offset), depth > 0 and abs(offset[0]) <= 1 and abs(offset[1]) <= 1
+        offset, visible = self.sim.camera.image_offset(point)
+        return np.array([min(max(v, -2.0), 2.0) for v in offset]), visible
 
     # ---------------------------------------------------------------- observations
 
@@ -213,19 +219,16 @@ class AiboEnv(gym.Env):
         return observation
 
     def _camera_image(self) -> np.ndarray:
-        rgb = self.sim.render_camera().copy()  # the simulation's frame is shared and read-only
-        if (self.camera_gains != 1).any():
-            rgb = np.clip(rgb * self.camera_gains + 0.5, 0, 255).astype(np.uint8)
+        frame = self.sim.camera.frame()
         if self.camera == "rgb":
+            rgb = frame.rgb
             height, width, _ = self.observation_space["image"].shape
             if rgb.shape[0] == height:
-                return rgb
+                return rgb.copy()  # the frame's picture is shared and read-only
             scale = rgb.shape[0] // height
             return (rgb.reshape(height, scale, width, scale, 3).mean(axis=(1, 3)) + 0.5).astype(np.uint8)
+        self.camera_message = frame.message
         if self.camera == "openr":
-            image = self._openr.serve(rgb)
-            self.camera_message = self._openr.last_message
-            return image
-        self.camera_message = self.sim.openr_message(rgb)
+            return self._openr.serve(frame)
         layer = LAYERS[self.camera_layer]
         return np.stack([self.camera_message.band(layer, band) for band in YCRCB_BANDS], axis=-1)

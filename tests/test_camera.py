@@ -1,0 +1,325 @@
+"""The head camera as the ERS-7's sensor (issue 14): each effect measured on rendered targets
+against the numbers of specs/ers7-camera.md, the ideal profile unchanged, one frame per tick."""
+
+import math
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+
+import openr_bridge
+from aibo_sim.camera import HEAD_CAMERA_GROUPS, LENSES, CameraProfile, CameraSettings, RobotColour
+from aibo_sim.camera.sensor import planckian_rgb, light_gains
+from aibo_sim.render import Renderer
+from aibo_sim.sim import Simulation, models_dir
+
+ROOT = Path(__file__).resolve().parents[1]
+REAL_FRAMES = ROOT.parent / "shared" / "data" / "ers7-camera" / "frames"
+QUIET = CameraProfile("ers7-quiet", lens="tekkotsu", sensor=True, noise_sigma=(0.0, 0.0, 0.0), softness_px=0.0)
+
+
+def target_scene(tmp_path, bodies: str, temperature: float = 5000.0) -> Path:
+    """The robot, floating still (no gravity), before emissive targets (``emissive``) and no
+    other light: what is drawn is the targets' colour."""
+    colours = sorted(set(s.split('"')[0] for s in bodies.split('material="e')[1:]))
+    materials = "".join(f'<material name="e{c}" rgba="{c.replace("_", " ")} 1" emission="1" specular="0"/>'
+                        for c in colours)
+    scene = tmp_path / "target.xml"
+    scene.write_text(f"""<mujoco>
+  <include file="{models_dir() / 'ers7.xml'}"/>
+  <visual><headlight diffuse="0 0 0" ambient="0 0 0" specular="0 0 0"/></visual>
+  <custom><numeric name="light_temperature_K" data="{temperature}"/></custom>
+  <asset>{materials}</asset>
+  <option gravity="0 0 0"/>
+  <statistic extent="1" center="0 0 0.2"/>
+  <worldbody>{bodies}</worldbody>
+</mujoco>""")
+    return scene
+
+
+def emissive(kind: str, pos, size, rgb) -> str:
+    colour = "_".join(f"{c:g}" for c in rgb)
+    return (f'<geom type="{kind}" pos="{" ".join(map(str, pos))}" size="{" ".join(map(str, size))}" '
+            f'material="e{colour}" contype="0" conaffinity="0"/>')
+
+
+def wall(grey: float) -> str:
+    return emissive("box", (0.5, 0, 0.2), (0.01, 2, 2), (grey, grey, grey))
+
+
+def centre(image: np.ndarray, half: int = 5) -> np.ndarray:
+    h, w = image.shape[:2]
+    return image[h // 2 - half:h // 2 + half + 1, w // 2 - half:w // 2 + half + 1].reshape(-1, image.shape[-1]).mean(0)
+
+
+def corners(image: np.ndarray, size: int = 3) -> np.ndarray:
+    return np.mean([image[:size, :size], image[:size, -size:], image[-size:, :size], image[-size:, -size:]], axis=(0, 1, 2))
+
+
+def test_ideal_profile_is_the_render_bit_for_bit():
+    sim = Simulation(camera_profile="ideal")
+    renderer = Renderer(sim.model, 208, 160, groups=HEAD_CAMERA_GROUPS)
+    try:
+        for _ in range(3):
+            assert np.array_equal(sim.camera.frame().rgb, renderer.render(sim.data, sim.camera.camera_id))
+            sim.step_frames(sim.frames_to_camera_frame())
+    finally:
+        renderer.close()
+        sim.close()
+
+
+def test_vignetting_on_a_uniform_grey_wall(tmp_path):
+    sim = Simulation(target_scene(tmp_path, wall(0.6)), camera_profile=QUIET)
+    ycrcb = sim.camera.frame().ycrcb.astype(float)
+    middle, corner = centre(ycrcb), corners(ycrcb)
+    assert 130 <= middle[0] <= 170 and abs(middle[1] - 128) <= 2 and abs(middle[2] - 128) <= 2  # neutral at 5000 K, FL
+    # rUNSWift's ring centre for Y is right of the image centre: the left corners (r ~ 136) are
+    # the darkest, the right ones (r ~ 125) lighter; spec: corner / centre 0.67 +- 0.05.
+    left = np.mean([ycrcb[:3, :3, 0], ycrcb[-3:, :3, 0]])
+    assert left / middle[0] == pytest.approx(0.67, abs=0.05) and corner[0] / middle[0] <= 0.73  # measured 0.70, 0.72
+    assert corner[2] - middle[2] == pytest.approx(16, abs=5)
+    assert abs(corner[1] - middle[1]) <= 5
+    # The ring: Y falls monotonically from its centre (110, 79.5) outwards along the middle row.
+    row = ycrcb[80, 110:, 0]
+    assert np.all(np.diff(row) <= 0.5) and row[0] - row[-1] > 20
+
+
+@pytest.mark.parametrize("colour, low, high", [((0.9, 0.1, 0.1), 0.3, 0.6), ((0.1, 0.2, 0.9), 0.5, 0.7),
+                                                ((0.9, 0.85, 0.1), 0.2, 0.4)])
+def test_saturated_colours_keep_30_to_60_percent_of_their_chroma_in_the_corners(tmp_path, colour, low, high):
+    """rUNSWift's table keeps Cb's distance from ~160, not 128: blue keeps a little more than
+    60 %, yellow a little less than 30 % (measured 0.64 and 0.28), red within."""
+    body = emissive("box", (0.5, 0, 0.2), (0.01, 2, 2), colour)
+    sim = Simulation(target_scene(tmp_path, body), camera_profile=QUIET)
+    ycrcb = sim.camera.frame().ycrcb.astype(float)
+    kept = np.hypot(*(corners(ycrcb)[1:] - 128)) / np.hypot(*(centre(ycrcb)[1:] - 128))
+    assert low <= kept <= high
+
+
+def test_noise_per_channel_in_the_measured_bands_and_rising_with_gain(tmp_path):
+    sigmas = {}
+    for gain in ("low", "mid", "high"):
+        sim = Simulation(target_scene(tmp_path, wall(0.5)), camera_settings=CameraSettings(gain=gain, shutter="fast"))
+        stack = []
+        for _ in range(20):
+            stack.append(sim.camera.frame().ycrcb[60:100, 84:124].astype(float))
+            sim.step_frames(sim.frames_to_camera_frame())
+        sigmas[gain] = np.std(np.array(stack), axis=0).mean(axis=(0, 1))  # temporal sigma per pixel, averaged
+        sim.close()
+    y, cr, cb = sigmas["high"]
+    assert 0.9 <= y <= 2.6 and 1.5 <= cr <= 2.2 and 2.0 <= cb <= 4.5  # rUNSWift, FL / HIGH / FAST
+    assert cb > cr >= y * 0.95
+    assert np.all(sigmas["low"] < sigmas["mid"]) and np.all(sigmas["mid"] < sigmas["high"])
+
+
+def test_same_seed_same_noise_and_ir_untouched_by_rendering():
+    def run(seed, render):
+        sim = Simulation(seed=seed)
+        frames, ir = [], []
+        for _ in range(4):
+            sim.step_frames(sim.frames_to_camera_frame())
+            if render:
+                frames.append(sim.camera.frame().ycrcb.copy())
+            ir.append(sim.distances_mm())
+        sim.close()
+        return frames, ir
+
+    frames_a, ir_a = run(5, True)
+    frames_b, ir_b = run(5, True)
+    _, ir_silent = run(5, False)
+    frames_c, _ = run(6, True)
+    assert all(np.array_equal(a, b) for a, b in zip(frames_a, frames_b))
+    assert ir_a == ir_b == ir_silent
+    assert not np.array_equal(frames_a[0], frames_c[0])
+
+
+def dot_grid(spacing=0.05, columns=11, rows=9) -> tuple[str, np.ndarray]:
+    points = np.array([(0.45, (c - columns // 2) * spacing, 0.17 + (r - rows // 2) * spacing)
+                       for r in range(rows) for c in range(columns)])
+    geoms = "".join(emissive("sphere", p, (0.006,), (1, 1, 1)) for p in points)
+    return geoms, points
+
+
+@pytest.mark.parametrize("lens", ["tekkotsu", "sony"])
+def test_dots_appear_where_the_calibrated_lens_projects_them(tmp_path, lens):
+    geoms, points = dot_grid()
+    profile = QUIET.with_options(lens=lens, vignetting=False)
+    sim = Simulation(target_scene(tmp_path, geoms), camera_profile=profile)
+    sim.step_frame()  # settle nothing: the robot stands; the frame is the one at this tick
+    y = sim.camera.frame().ycrcb[..., 0]
+    count, _, stats, centroids = cv2.connectedComponentsWithStats((y > 60).astype(np.uint8))
+    pixels, _ = sim.camera.project(points)
+    pinhole = LENSES["pinhole"] if lens == "sony" else LENSES["tekkotsu"].__class__(
+        "p", *(getattr(LENSES["tekkotsu"], k) for k in ("fx", "fy", "cx", "cy")))
+    inside = (pixels[:, 0] > 4) & (pixels[:, 0] < 203) & (pixels[:, 1] > 4) & (pixels[:, 1] < 155)
+    found = centroids[1:][stats[1:, cv2.CC_STAT_AREA] >= 3]
+    errors = [np.min(np.linalg.norm(found - p, axis=1)) for p in pixels[inside]]
+    assert len(errors) >= 25 and np.max(errors) < 0.5
+    # The distortion is really there: a pinhole puts the outer dots more than a pixel away.
+    frame = sim.camera.frame()
+    camera_points = (points - frame.position) @ frame.xmat @ np.diag([1.0, -1.0, -1.0])
+    straight, _ = pinhole.project(camera_points)
+    assert np.max(np.linalg.norm(straight[inside] - pixels[inside], axis=1)) > 1.0
+    sim.close()
+
+
+def test_segmentation_and_projection_follow_the_lens():
+    sim = Simulation()
+    ball = sim.model.geom("ball").id
+    for x, y in ((0.6, 0.0), (0.7, 0.2), (0.9, 0.3), (1.5, 0.5)):
+        sim.place_ball(x, y)
+        ys, xs = np.nonzero(sim.camera.segmentation() == ball)
+        (u, v), depth = (a[0] for a in sim.camera.project(sim.ball_position()))
+        assert depth > 0 and math.dist((xs.mean(), ys.mean()), (u, v)) < 1.0
+    sim.close()
+
+
+def smear_px(still: np.ndarray, moving: np.ndarray) -> float:
+    """Length (px) of the box blur that turned ``still`` into ``moving`` across a vertical
+    bright-to-dark edge: a box of L px moves L / 2 of the step's area across the edge."""
+    still, moving = (image[70:90].astype(float).mean(axis=0) for image in (still, moving))
+    edge = int(np.argmax(np.abs(np.diff(still))))
+    window = slice(edge - 20, edge + 21)
+    step = still[edge - 3] - still[edge + 4]
+    return float(2 * np.abs(np.sum(still[window] - moving[window])) / abs(step))
+
+
+@pytest.mark.parametrize("shutter, expected", [("fast", 3.47), ("mid", 6.94), ("slow", 13.9)])
+def test_a_200_deg_per_s_pan_smears_as_the_formula_says(tmp_path, shutter, expected):
+    body = (emissive("box", (0.5, -1, 0.2), (0.01, 1, 2), (0.05, 0.05, 0.05))
+            + emissive("box", (0.5, 1, 0.2), (0.01, 1, 2), (0.9, 0.9, 0.9)))
+    sim = Simulation(target_scene(tmp_path, body), camera_profile=QUIET,
+                     camera_settings=CameraSettings(shutter=shutter, gain="low"))
+    still = sim.camera.frame().ycrcb[..., 0]
+    pan = sim.model.joint("head_pan")
+    sim.data.qvel[pan.dofadr[0]] = math.radians(200)
+    import mujoco
+    mujoco.mj_forward(sim.model, sim.data)
+    sim.camera.moved()
+    du, dv = sim.camera.image_motion(sim.data, CameraSettings(shutter=shutter).exposure_s)
+    # The standing head is tilted: the camera turns at 200 deg/s times the cosine of its tilt.
+    assert abs(du) == pytest.approx(expected, rel=0.05) and abs(dv) < 0.3
+    assert smear_px(still, sim.camera.frame().ycrcb[..., 0]) == pytest.approx(abs(du), rel=0.15)
+    sim.close()
+
+
+def test_brightness_follows_gain_and_shutter(tmp_path):
+    scene = target_scene(tmp_path, wall(0.25))
+    def luma(gain, shutter):
+        sim = Simulation(scene, camera_profile=QUIET, camera_settings=CameraSettings(gain=gain, shutter=shutter))
+        value = centre(sim.camera.frame().ycrcb.astype(float))[0]
+        sim.close()
+        return value
+    assert luma("low", "fast") < luma("mid", "fast") < luma("high", "fast") < luma("high", "mid") < luma("high", "slow")
+    assert luma("low", "slow") == pytest.approx(luma("high", "fast"), abs=1)  # each step doubles: the same exposure
+
+
+@pytest.mark.parametrize("kelvin, preset, cr, cb", [(3000, "fl", +18, -25), (3000, "indoor", -2, +4),
+                                                    (5000, "indoor", -19, +40), (4000, "outdoor", +13, -18)])
+def test_white_balance_against_the_scene_light(tmp_path, kelvin, preset, cr, cb):
+    """Spec section 6: directions are facts, magnitudes indicative (within half, or 6 levels)."""
+    sim = Simulation(target_scene(tmp_path, wall(0.45), kelvin), camera_profile=QUIET.with_options(vignetting=False),
+                     camera_settings=CameraSettings(white_balance=preset))
+    _, got_cr, got_cb = centre(sim.camera.frame().ycrcb.astype(float)) - (0, 128, 128)
+    for got, want in ((got_cr, cr), (got_cb, cb)):
+        assert abs(got - want) <= max(6, abs(want) / 2)
+    sim.close()
+
+
+def test_planckian_lights_run_from_warm_to_cold():
+    warm, cold = planckian_rgb(2856), planckian_rgb(6500)
+    assert warm[0] > 1 > warm[2] and cold[2] > warm[2]
+    assert np.allclose(light_gains(5000, "fl"), 1)
+    with pytest.raises(ValueError, match="1667"):
+        planckian_rgb(1000)
+
+
+def test_settings_and_profiles_reject_bad_values():
+    with pytest.raises(ValueError, match="gain must be one of low, mid, high"):
+        CameraSettings(gain="max")
+    with pytest.raises(ValueError, match="profile must be one of"):
+        Simulation(camera_profile="fisheye")
+    with pytest.raises(ValueError, match="not finite"):
+        CameraProfile("x", sensitivity=float("nan"))
+    with pytest.raises(ValueError, match="finite"):
+        RobotColour(gain=(1.0, float("inf"), 1.0))
+
+
+def test_a_robot_colour_shifts_the_picture_linearly(tmp_path):
+    scene = target_scene(tmp_path, wall(0.5))
+    plain = Simulation(scene, camera_profile=QUIET)
+    shifted = Simulation(scene, camera_profile=QUIET)
+    shifted.camera.set_robot(RobotColour(gain=(1.1, 1.0, 1.0), offset=(0.0, 4.0, -3.0)))
+    a, b = (centre(s.camera.frame().ycrcb.astype(float)) for s in (plain, shifted))
+    assert b[0] == pytest.approx(1.1 * a[0], abs=1) and b[1] - a[1] == pytest.approx(4, abs=1)
+    assert b[2] - a[2] == pytest.approx(-3, abs=1)
+
+
+def test_one_frame_per_tick_whoever_asks_and_whenever():
+    """Frame k is exposed at its tick: asking later (another 8 ms on) gives the same picture."""
+    early, late = Simulation(seed=2), Simulation(seed=2)
+    for _ in range(6):
+        early.step_frames(early.frames_to_camera_frame())
+        picture = early.camera.frame().ycrcb.copy()
+        late.step_frames(late.frames_to_camera_frame())
+        late.step_frame()  # the controller samples one joint frame later: same camera frame
+        assert late.camera_frame_index() == early.camera_frame_index()
+        assert np.array_equal(late.camera.frame().ycrcb, picture)
+        late.step_frames(late.frames_to_camera_frame())  # catch up to the next tick
+        early.step_frames(early.frames_to_camera_frame())
+        assert late.frame == early.frame
+    early.close()
+    late.close()
+
+
+def test_settings_apply_from_the_next_frame():
+    sim = Simulation()
+    before = sim.camera.frame().ycrcb.copy()
+    sim.camera.set_settings(gain="high", shutter="slow")
+    assert np.array_equal(sim.camera.frame().ycrcb, before) and sim.camera.frame().settings.gain == "mid"
+    sim.step_frames(sim.frames_to_camera_frame())
+    frame = sim.camera.frame()
+    assert frame.settings.gain == "high" and frame.ycrcb[..., 0].mean() > before[..., 0].mean() + 20
+    sim.close()
+
+
+def test_the_message_carries_the_sensor_bytes():
+    sim = Simulation()
+    frame = sim.camera.frame()
+    bands = [frame.message.band(openr_bridge.ofbkimageLAYER_H, b) for b in
+             (openr_bridge.ofbkimageBAND_Y, openr_bridge.ofbkimageBAND_Cr, openr_bridge.ofbkimageBAND_Cb)]
+    ycrcb = np.stack(bands, axis=-1)
+    ycrcb[-1, :openr_bridge.TAG_LENGTH, 0] = frame.ycrcb[-1, :openr_bridge.TAG_LENGTH, 0]  # OPEN-R's tag
+    assert np.array_equal(ycrcb, frame.ycrcb)
+    assert np.array_equal(openr_bridge.ycrcb_to_rgb(*np.moveaxis(frame.ycrcb, -1, 0)), frame.rgb)
+    sim.close()
+
+
+def noise_sigma(ycrcb: np.ndarray) -> np.ndarray:
+    """Per-channel noise estimate: the spread of the difference of horizontal neighbours / sqrt 2,
+    over pixels where the smoothed picture is flat, outliers cut."""
+    planes = ycrcb.astype(float)
+    difference = planes[:, 1:] - planes[:, :-1]
+    smooth = cv2.GaussianBlur(planes, (0, 0), 2)
+    flat = np.abs(smooth[:, 1:] - smooth[:, :-1]).max(axis=-1) < 0.5
+    sigmas = []
+    for c in range(3):
+        d = difference[..., c][flat]
+        d = d[np.abs(d) < 4 * max(d.std(), 0.5)]  # edges and specks out
+        sigmas.append(d.std() / math.sqrt(2))
+    return np.array(sigmas)
+
+
+@pytest.mark.skipif(not REAL_FRAMES.is_dir(), reason="real ERS-7 frames not present (../shared/data)")
+def test_noise_statistics_resemble_real_ers7_frames():
+    real = []
+    for path in sorted(REAL_FRAMES.glob("*.png")):
+        cr, cb, y = cv2.split(cv2.imread(str(path)))  # EasyTrain: R, G, B = Y, Cb, Cr
+        real.append(noise_sigma(np.dstack([y, cr, cb])))
+    real = np.median(real, axis=0)
+    sim = Simulation()  # ers7 at Sony's defaults (FL / MID / MID), like the real frames' likely settings
+    ours = noise_sigma(sim.camera.frame().ycrcb)
+    sim.close()
+    assert ours[2] == max(ours) and real[2] >= real[0]  # Cb the noisiest in both
+    assert np.all(ours / real > 0.5) and np.all(ours / real < 2.0)

@@ -1,0 +1,192 @@
+"""One option family for ``run``, ``render``, ``dump`` and ``mtn play``: the world (--scene,
+--pose, --ball, --seed) and the head camera (--camera-profile, --camera-wb, --camera-gain,
+--camera-shutter, --camera-full), with the same defaults, meanings and errors."""
+
+import json
+import math
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+
+from aibo_sim.cli import build_parser, main
+from aibo_sim.options import CAMERA_DESTS, WORLD_DESTS
+from aibo_sim.runner import run_controller
+
+ROOT = Path(__file__).resolve().parents[1]
+SCRIPTED = Path(__file__).parent / "controllers" / "scripted_head.py"
+ROBOT_ONLY = ROOT / "models" / "ers7.xml"  # a scene without a ball
+SHARED = ("--scene", "--pose", "--ball", "--seed", "--camera-profile", "--camera-wb", "--camera-gain",
+          "--camera-shutter", "--camera-full")
+# Each command with the arguments it needs besides the shared options (argparse stops first).
+COMMANDS = {
+    "run": ["run", str(SCRIPTED)],
+    "render": ["render"],
+    "dump": ["dump", str(SCRIPTED), "--out", "unused"],
+    "mtn play": ["mtn", "play", "SIT.MTN"],
+}
+
+
+def _subparsers(parser):
+    return next(a for a in parser._actions if a.__class__.__name__ == "_SubParsersAction").choices
+
+
+def _command_parsers():
+    commands = _subparsers(build_parser())
+    return {"run": commands["run"], "render": commands["render"], "dump": commands["dump"],
+            "mtn play": _subparsers(commands["mtn"])["play"]}
+
+
+def _shared_actions(parser):
+    """option string -> what defines its meaning: destination, default, type, choices, nargs, action."""
+    actions = {}
+    for action in parser._actions:
+        for option in action.option_strings:
+            if option in SHARED:
+                actions[option] = (action.dest, action.default, action.type, action.choices and tuple(action.choices),
+                                   action.nargs, type(action).__name__, action.metavar)
+    return actions
+
+
+def test_every_command_takes_the_same_world_and_camera_options():
+    parsers = _command_parsers()
+    options = {name: _shared_actions(parser) for name, parser in parsers.items()}
+    for name, actions in options.items():
+        assert sorted(actions) == sorted(SHARED), name
+        assert actions == options["run"], f"{name} differs from run"
+    defaults = {name: vars(parser.parse_args(COMMANDS[name][2 if name == "mtn play" else 1:]))
+                for name, parser in parsers.items()}
+    expected = {"scene": None, "pose": None, "ball": None, "seed": 0, "camera_profile": "ers7", "camera_wb": "fl",
+                "camera_gain": "mid", "camera_shutter": "mid", "camera_full": False}
+    assert set(expected) == set(WORLD_DESTS + CAMERA_DESTS)
+    for name, values in defaults.items():
+        assert {k: values[k] for k in expected} == expected, name
+
+
+def test_shared_options_parse_to_the_same_values_everywhere():
+    given = ["--scene", "x.xml", "--pose", "-1", "0.5", "90", "--ball", "0.2", "-0.3", "--seed", "7",
+             "--camera-profile", "ideal", "--camera-wb", "outdoor", "--camera-gain", "high",
+             "--camera-shutter", "fast", "--camera-full"]
+    parsed = {}
+    for name, argv in COMMANDS.items():
+        args = build_parser().parse_args(argv + given)
+        parsed[name] = {k: getattr(args, k) for k in WORLD_DESTS + CAMERA_DESTS}
+    assert parsed["run"]["pose"] == [-1.0, 0.5, 90.0] and parsed["run"]["ball"] == [0.2, -0.3]
+    assert all(values == parsed["run"] for values in parsed.values())
+
+
+BAD = [
+    (["--ball", "nan", "nan"], "--ball"),
+    (["--ball", "1", "inf"], "--ball"),
+    (["--ball", "one", "0"], "--ball"),
+    (["--pose", "0", "0", "-inf"], "--pose"),
+    (["--pose", "1e9", "0", "0"], "--pose"),
+    (["--seed", "-1"], "--seed"),
+    (["--seed", "1.5"], "--seed"),
+    (["--camera-profile", "fancy"], "--camera-profile"),
+    (["--camera-wb", "sunny"], "--camera-wb"),
+    (["--camera-gain", "max"], "--camera-gain"),
+    (["--camera-shutter", "1"], "--camera-shutter"),
+]
+
+
+@pytest.mark.parametrize("command", COMMANDS)
+@pytest.mark.parametrize("bad, option", BAD, ids=[" ".join(b) for b, _ in BAD])
+def test_bad_values_exit_2_with_one_line_naming_the_option(command, bad, option, capsys):
+    with pytest.raises(SystemExit) as exit_info:
+        main(COMMANDS[command] + bad)
+    assert exit_info.value.code == 2
+    captured = capsys.readouterr()
+    assert captured.out == ""
+    lines = captured.err.splitlines()
+    assert len(lines) == 1, captured.err
+    assert f"argument {option}" in lines[0] and "error" in lines[0] and "Traceback" not in captured.err
+
+
+def test_runtime_bad_input_exits_2_with_one_line(tmp_path, capsys):
+    assert main(["mtn", "play", "SIT.MTN", "--scene", str(ROBOT_ONLY), "--ball", "0", "0"]) == 2
+    assert "no body named 'ball'" in capsys.readouterr().err
+    assert main(["render", "--out", str(tmp_path), "--keyframe", "lying"]) == 2
+    err = capsys.readouterr().err
+    assert "--keyframe 'lying'" in err and len(err.splitlines()) == 1
+    assert main(["render", "--out", str(tmp_path), "--settle", "-1"]) == 2
+    assert "--settle" in capsys.readouterr().err
+
+
+def test_run_controller_refuses_non_finite_pose_and_ball():
+    with pytest.raises(ValueError, match="--pose"):
+        run_controller(SCRIPTED, duration=0.2, pose=(0.0, math.nan, 0.0))
+    with pytest.raises(ValueError, match="--ball"):
+        run_controller(SCRIPTED, duration=0.2, ball=(math.inf, 0.0))
+    with pytest.raises(ValueError, match="--pose"):
+        run_controller(SCRIPTED, duration=0.2, pose=(1.0, 2.0))
+
+
+def _run(tmp_path, name, *options):
+    out = tmp_path / name
+    assert main(["run", str(SCRIPTED), "--duration", "0.2", "--out", str(out), *options]) == 0
+    return out, json.loads((out / "run.json").read_text())
+
+
+def test_run_camera_profile_changes_the_frames_and_run_json_records_it(tmp_path):
+    frames, records = {}, {}
+    for profile in ("ideal", "ers7"):
+        out, record = _run(tmp_path, profile, "--camera-profile", profile, "--camera-wb", "outdoor",
+                           "--camera-gain", "high", "--camera-shutter", "fast")
+        frames[profile] = cv2.imread(str(out / "frames" / "000003.png"))
+        records[profile] = record
+    assert frames["ideal"].shape == frames["ers7"].shape == (160, 208, 3)
+    assert np.abs(frames["ideal"].astype(int) - frames["ers7"].astype(int)).mean() > 2
+    for profile, record in records.items():
+        camera = record["camera"]
+        assert camera["profile"] == profile and (camera["width"], camera["height"]) == (208, 160)
+        assert (camera["white_balance"], camera["gain"], camera["shutter"]) == ("outdoor", "high", "fast")
+        assert record["seed"] == 0 and record["pose"] is None and record["ball"] is None and record["scene"] is None
+        for key in ("controller", "backend", "simulated_s", "wall_s", "real_time_factor", "camera_frames",
+                    "robot_xy_yaw", "ball_xy"):  # the summary's fields are all still there
+            assert key in record
+    assert records["ers7"]["camera"]["lens"] != records["ideal"]["camera"]["lens"]
+
+
+def test_run_pose_ball_and_seed_are_applied_and_recorded(tmp_path):
+    out, default = _run(tmp_path, "default")
+    out, placed = _run(tmp_path, "placed", "--pose", "1.0", "-0.5", "90", "--ball", "-0.3", "0.4", "--seed", "5",
+                       "--camera-full")
+    # The controller's leg motion shifts the robot a little; the same shift, turned by the pose,
+    # from where --pose put it (the carpet is flat and uniform).
+    dx, dy, dyaw = default["robot_xy_yaw"]
+    assert math.hypot(dx, dy) < 0.05 and abs(dyaw) < 0.3  # the field's start: the centre, heading +x
+    x, y, yaw = placed["robot_xy_yaw"]
+    assert x == pytest.approx(1.0 - dy, abs=0.02) and y == pytest.approx(-0.5 + dx, abs=0.02)
+    assert abs(math.remainder(yaw - math.pi / 2 - dyaw, math.tau)) < 0.05
+    assert placed["ball_xy"] == pytest.approx([-0.3, 0.4], abs=0.02)
+    assert placed["pose"] == [1.0, -0.5, 90.0] and placed["ball"] == [-0.3, 0.4] and placed["seed"] == 5
+    assert (placed["camera"]["width"], placed["camera"]["height"]) == (416, 320)
+    assert cv2.imread(str(out / "frames" / "000000.png")).shape == (320, 416, 3)
+
+
+def test_mtn_play_takes_the_world_and_camera_options(capsys):
+    argv = ["mtn", "play", "SIT.MTN", "--json", "--camera-profile", "ideal", "--camera-wb", "indoor", "--seed", "3"]
+    assert main(argv + ["--pose", "-0.5", "0.75", "-45", "--ball", "0", "0"]) == 0
+    result = json.loads(capsys.readouterr().out)
+    assert not result["fell"]
+    assert result["start_pose"] == pytest.approx([-0.5, 0.75, -45.0], abs=0.01)
+    assert result["end_pose"][:2] == pytest.approx([-0.5, 0.75], abs=0.05)
+    assert main(argv) == 0
+    assert json.loads(capsys.readouterr().out)["start_pose"] == pytest.approx([0.0, 0.0, 0.0], abs=0.01)
+
+
+def test_render_takes_the_camera_and_world_options(tmp_path, capsys):
+    pictures = {}
+    for profile in ("ideal", "ers7"):
+        out = tmp_path / profile
+        assert main(["render", "--out", str(out), "--settle", "0.1", "--camera-profile", profile,
+                     "--pose", "-0.8", "-1.0", "-5", "--ball", "-0.2", "-0.97"]) == 0
+        pictures[profile] = cv2.imread(str(out / "head_camera.png"))
+        assert cv2.imread(str(out / "tracking.png")).shape == (480, 640, 3)
+    assert pictures["ideal"].shape == pictures["ers7"].shape == (160, 208, 3)
+    assert np.abs(pictures["ideal"].astype(int) - pictures["ers7"].astype(int)).mean() > 2
+    assert main(["render", "--out", str(tmp_path / "full"), "--settle", "0", "--camera-full"]) == 0
+    assert cv2.imread(str(tmp_path / "full" / "head_camera.png")).shape == (320, 416, 3)
+    assert "head_camera.png (416x320)" in capsys.readouterr().out
