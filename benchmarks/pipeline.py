@@ -56,7 +56,8 @@ def _run_seconds(backend: str, camera: bool) -> float:
 
 def measure() -> list[dict]:
     sim = Simulation()
-    render_s = best_mean_seconds(lambda: sim._renderer.render(sim.data, "camera") if sim._renderer else sim.render_camera(), 50)
+    sim.camera.frame()  # the camera's renderer exists from here on
+    render_s = best_mean_seconds(lambda: sim.camera._render(sim.data, "rgb"), 50)
     floor_s = _floor_seconds_per_frame(sim)
     sim.close()
     floor = "bare MuJoCo: steps for 1/30 s + Renderer 208x160 + readback"

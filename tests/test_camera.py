@@ -323,3 +323,27 @@ def test_noise_statistics_resemble_real_ers7_frames():
     sim.close()
     assert ours[2] == max(ours) and real[2] >= real[0]  # Cb the noisiest in both
     assert np.all(ours / real > 0.5) and np.all(ours / real < 2.0)
+
+
+def test_dump_shows_the_frames_run_shows_and_resumes_byte_identically_without_mp4(tmp_path):
+    from aibo_sim.dump import dump
+    from aibo_sim.runner import run_controller
+
+    tracker = ROOT / "controllers" / "ball_tracker.py"
+    run_controller(tracker, duration=0.5, seed=4, out=tmp_path / "run")
+    dump(tmp_path / "dump", controller=tracker, frames=15, seed=4, formats=("rgb", "openr"))
+    shown = sorted((tmp_path / "run" / "frames").iterdir())
+    assert len(shown) >= 5
+    for path in shown:
+        assert np.array_equal(cv2.imread(str(path)), cv2.imread(str(tmp_path / "dump" / "rgb" / path.name)))
+    # Resume after losing the last frames: the same bytes as the uninterrupted dump.
+    resumed = tmp_path / "resumed"
+    dump(resumed, controller=tracker, frames=15, seed=4, formats=("rgb", "openr"))
+    lines = (resumed / "frames.jsonl").read_bytes().splitlines(keepends=True)
+    (resumed / "frames.jsonl").write_bytes(b"".join(lines[:10]))
+    for index in range(10, 15):
+        (resumed / "rgb" / f"{index:06d}.png").unlink()
+    assert dump(resumed, controller=tracker, frames=15, seed=4, formats=("rgb", "openr"), resume=True).new_frames == 5
+    for name in ("rgb", "openr"):
+        for path in sorted((tmp_path / "dump" / name).iterdir()):
+            assert path.read_bytes() == (resumed / name / path.name).read_bytes()

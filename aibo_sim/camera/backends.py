@@ -10,8 +10,8 @@ Listeners are called with ``(camera frame index, (h, w, 3) RGB)`` for every capt
 Camera settings: ``set_setting(setting, value)`` takes a setting of
 ``openr_bridge.CAMERA_SETTINGS`` ("white_balance", "gain", "shutter") and Sony's value for it
 (1..3, the ``ocamparam*`` constants); the camera (``sim.camera``) exposes its next frame with
-it, a frame already exposed keeps its settings. ``SimCamera`` sets ``sim.camera`` directly
-directly. ``OpenRCamera`` does it the robot's way: the wrapper's ``camera_set_*`` calls
+it, a frame already exposed keeps its settings. ``SimCamera`` sets ``sim.camera`` directly.
+``OpenRCamera`` does it the robot's way: the wrapper's ``camera_set_*`` calls
 ``OPENR::ControlPrimitive`` on the system's camera primitive, whose listener (connected here)
 passes the change on to ``sim.camera.set_settings``; the primitive starts at ``sim.camera``'s
 settings. A bad value raises ``ValueError`` naming the allowed ones on both (on openr it is
