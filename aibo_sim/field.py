@@ -32,16 +32,19 @@ BEACON_X = 1.35
 BEACON_Y = FIELD_WIDTH / 2 + 0.15
 BEACON_PART_HEIGHT = 0.10  # parts A (top) and B (middle) around 0.30 m; part C white below
 
+# Albedos as MuJoCo multiplies them with the light: with the venue's light (mjcf.py) the ers7
+# camera at FL / HIGH / FAST reads them as real ERS-7s read the field (models/README.md).
 COLOURS = {
-    "carpet": (0.12, 0.45, 0.16, 1.0),
-    "line": (0.95, 0.95, 0.95, 1.0),
-    "wall": (0.92, 0.92, 0.90, 1.0),
-    "yellow": (0.95, 0.80, 0.10, 1.0),
-    "skyblue": (0.35, 0.70, 0.95, 1.0),
-    "pink": (1.0, 0.45, 0.70, 1.0),
-    "white": (0.95, 0.95, 0.95, 1.0),
+    "carpet": (0.0, 0.225, 0.145, 1.0),
+    "line": (0.65, 0.65, 0.65, 1.0),
+    "wall": (0.65, 0.65, 0.65, 1.0),
+    "yellow": (0.79, 0.59, 0.0, 1.0),
+    "skyblue": (0.0, 0.43, 0.75, 1.0),
+    "pink": (0.98, 0.17, 0.59, 1.0),
+    "white": (0.65, 0.65, 0.65, 1.0),
     "orange": (1.0, 0.45, 0.05, 1.0),
 }
+SPECULAR = {"orange": 0.1}  # the plastic ball; carpet and paint are matte (0)
 
 
 def _line_segments() -> tuple[tuple[float, float, float, float], ...]:

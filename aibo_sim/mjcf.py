@@ -525,6 +525,30 @@ def _hall(half_x: float, half_y: float, height: float = 4.0) -> list[StaticPart]
 HALL_MATERIAL = dict(name="hall", rgba=(0.72, 0.72, 0.70, 1), specular=0)
 
 
+# The venue's light (models/README.md, "Light and colours of the default field"): tungsten-
+# halogen lamps, one bank above each corner of the field aimed across it 40 deg below the horizon,
+# plus the light the pale hall scatters back (MuJoCo's ambient: the headlight's, with no
+# diffuse part: the robot carries no lamp). Lamps and ambient are neutral in the render; their
+# colour is the scene's light_temperature_K, which the ers7 camera profile applies.
+VENUE_LIGHT_TEMPERATURE_K = 3200.0  # halogen: white reads warm at FL white balance (spec section 5)
+VENUE_AMBIENT = 0.63
+VENUE_LAMP_DIFFUSE = 0.2  # each of the four banks
+VENUE_LAMP_ELEVATION_DEG = 40.0
+
+
+def _venue_lights() -> list[ET.Element]:
+    """Four directional lamp banks, one from above each corner of the field towards its centre;
+    the first casts the shadows (where a renderer draws them)."""
+    e = math.radians(VENUE_LAMP_ELEVATION_DEG)
+    lights = []
+    for i, (sx, sy) in enumerate(((1, 1), (-1, 1), (-1, -1), (1, -1))):
+        towards = np.array([-sx * math.cos(e) / math.sqrt(2), -sy * math.cos(e) / math.sqrt(2), -math.sin(e)])
+        lights.append(E("light", name=f"lamps_{i + 1}", type="directional", pos=-4.0 * towards, dir=towards,
+                        diffuse=(VENUE_LAMP_DIFFUSE,) * 3, specular=(0.2, 0.2, 0.2),
+                        castshadow="true" if i == 0 else "false"))
+    return lights
+
+
 def scene_xml() -> ET.Element:
     cl, cw, h = F.CARPET_LENGTH / 2, F.CARPET_WIDTH / 2, F.WALL_HEIGHT
     walls = [
@@ -545,22 +569,22 @@ def scene_xml() -> ET.Element:
         E("statistic", center=(0, 0, 0.2), extent=1.5),
         E(
             "visual",
-            E("headlight", diffuse=(0.45, 0.45, 0.45), ambient=(0.3, 0.3, 0.3), specular=(0, 0, 0)),
+            E("headlight", diffuse=(0, 0, 0), ambient=(VENUE_AMBIENT,) * 3, specular=(0, 0, 0)),
             E("quality", shadowsize=2048),
             E("map", znear=0.002, zfar=20),
             E("global", azimuth=150, elevation=-25, offwidth=640, offheight=480),
         ),
+        E("custom", E("numeric", name="light_temperature_K", data=VENUE_LIGHT_TEMPERATURE_K)),
         E(
             "asset",
-            *(E("material", name=n, rgba=c, specular=0.1) for n, c in F.COLOURS.items()),
+            *(E("material", name=n, rgba=c, specular=F.SPECULAR.get(n, 0)) for n, c in F.COLOURS.items()),
             E("material", **HALL_MATERIAL),
             _line_mesh(),
             *meshes,
         ),
         E(
             "worldbody",
-            E("light", name="ceiling_1", pos=(-1.2, 0, 3), dir=(0, 0, -1), directional="false", diffuse=(0.45, 0.45, 0.43), castshadow="false"),
-            E("light", name="ceiling_2", pos=(1.2, 0, 3), dir=(0, 0, -1), directional="false", diffuse=(0.45, 0.45, 0.43), castshadow="true"),
+            *_venue_lights(),
             E("geom", name="field_carpet", type="plane", size=(cl + 0.5, cw + 0.5, 1.0), material="carpet", friction=(0.9, 0.005, 0.0001)),
             E("geom", name="field_lines", type="mesh", mesh="field_lines", material="line", contype=0, conaffinity=0),
             *fixed,
