@@ -33,21 +33,12 @@ def _render(args) -> int:
     import cv2
 
     from .render import Renderer
-    from .sim import FRAME_MS, Simulation
 
     if args.settle < 0:
         raise ValueError(f"--settle must be at least 0 seconds, not {args.settle}")
-    world = world_options(args)
     out = Path(args.out)
+    sim = _settled_simulation(args, args.camera_profile)
     try:
-        sim = Simulation(world["scene"], seed=world["seed"], keyframe=args.keyframe, **camera_options(args))
-    except KeyError as exc:  # MuJoCo's: no keyframe of that name; the message lists the valid ones
-        raise ValueError(f"--keyframe {args.keyframe!r}: {exc.args[0] if exc.args else exc}") from None
-    try:
-        place(sim, world["pose"], world["ball"])
-        frames = round(args.settle * 1000 / FRAME_MS)
-        if frames:
-            sim.step_frames(frames)
         images = {"head_camera.png": sim.camera.frame().rgb}
         third = Renderer(sim.model, 640, 480, quality="high")
         try:
@@ -56,12 +47,57 @@ def _render(args) -> int:
             third.close()
     finally:
         sim.close()
+    if args.side_by_side is not None:
+        images["side_by_side.png"] = _side_by_side(args)
     out.mkdir(parents=True, exist_ok=True)
     for name, rgb in images.items():
         if not cv2.imwrite(str(out / name), np.ascontiguousarray(rgb[:, :, ::-1])):
             raise OSError(f"could not write {out / name}")
         print(f"wrote {out / name} ({rgb.shape[1]}x{rgb.shape[0]})")
     return 0
+
+
+def _settled_simulation(args, profile: str):
+    """The render command's simulation: its world, camera options (with ``profile``), settled."""
+    from .sim import FRAME_MS, Simulation
+
+    world = world_options(args)
+    try:
+        sim = Simulation(world["scene"], seed=world["seed"], keyframe=args.keyframe,
+                         **{**camera_options(args), "camera_profile": profile})
+    except KeyError as exc:  # MuJoCo's: no keyframe of that name; the message lists the valid ones
+        raise ValueError(f"--keyframe {args.keyframe!r}: {exc.args[0] if exc.args else exc}") from None
+    try:
+        place(sim, world["pose"], world["ball"])
+        frames = round(args.settle * 1000 / FRAME_MS)
+        if frames:
+            sim.step_frames(frames)
+    except BaseException:
+        sim.close()
+        raise
+    return sim
+
+
+def _side_by_side(args) -> np.ndarray:
+    """[a real ERS-7 frame |] the ers7 profile's picture | the ideal one, each shown at 416x320."""
+    import cv2
+
+    import openr_bridge
+
+    pictures = []
+    if args.side_by_side:  # a real layer-H frame as Tekkotsu's EasyTrain stores it: R, G, B = Y, Cb, Cr
+        real = cv2.imread(args.side_by_side, cv2.IMREAD_COLOR)
+        if real is None or real.shape != (160, 208, 3):
+            raise ValueError(f"--side-by-side {args.side_by_side}: not a 208x160 EasyTrain PNG (R, G, B = Y, Cb, Cr)")
+        cr, cb, y = cv2.split(real)
+        pictures.append(openr_bridge.ycrcb_to_rgb(y, cr, cb))  # as the wrapper's camera_get_image shows it
+    for profile in ("ers7", "ideal"):
+        sim = _settled_simulation(args, profile)
+        try:
+            pictures.append(sim.camera.frame().rgb)
+        finally:
+            sim.close()
+    return np.hstack([cv2.resize(p, (416, 320), interpolation=cv2.INTER_NEAREST) for p in pictures])
 
 
 def _motion_file(name: str) -> Path:
@@ -117,6 +153,9 @@ def build_parser() -> argparse.ArgumentParser:
     render.add_argument("--keyframe", default="stand", help="the scene's keyframe to start from (default stand)")
     render.add_argument("--settle", type=finite_float, default=0.5, help="seconds to simulate first (default 0.5)")
     render.add_argument("--out", default="renders", help="folder for head_camera.png and tracking.png")
+    render.add_argument("--side-by-side", nargs="?", const="", metavar="EASYTRAIN_PNG",
+                        help="also write side_by_side.png: the ers7 and ideal pictures of the view, after a real "
+                             "ERS-7 frame when one is given (Tekkotsu EasyTrain PNG, R, G, B = Y, Cb, Cr)")
     add_world_options(render)
     render.set_defaults(handler=_render)
 

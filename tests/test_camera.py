@@ -347,3 +347,32 @@ def test_dump_shows_the_frames_run_shows_and_resumes_byte_identically_without_mp
     for name in ("rgb", "openr"):
         for path in sorted((tmp_path / "dump" / name).iterdir()):
             assert path.read_bytes() == (resumed / name / path.name).read_bytes()
+
+
+@pytest.mark.parametrize("motion", [(0.3, 0.0), (14.0, -9.0), (-5.0, 0.0), (0.0, 0.6), (2.5, 7.2), (-13.4, 2.2)])
+def test_motion_taps_average_along_the_motion(motion):
+    from aibo_sim.camera.sensor import motion_taps
+
+    taps = motion_taps(motion)
+    weights = np.array([w for _, _, w in taps])
+    centroid = np.array([[dx, dy] for dx, dy, _ in taps]).T @ weights
+    longer = max(abs(motion[0]), abs(motion[1]))
+    assert weights.sum() == pytest.approx(1) and weights.min() > 0 and len(taps) <= math.ceil(longer) + 1
+    assert centroid == pytest.approx(np.array(motion) / 2, abs=0.5)  # the other axis is rounded to pixels
+    major = int(abs(motion[1]) > abs(motion[0]))
+    assert centroid[major] == pytest.approx(motion[major] / 2, abs=1e-9)
+
+
+def test_render_side_by_side_shows_both_profiles_and_a_real_frame(tmp_path):
+    from aibo_sim.cli import main
+
+    assert main(["render", "--out", str(tmp_path), "--settle", "0", "--side-by-side"]) == 0
+    both = cv2.imread(str(tmp_path / "side_by_side.png"))
+    assert both.shape == (320, 832, 3) and not np.array_equal(both[:, :416], both[:, 416:])
+    fake = np.dstack([np.full((160, 208), 128, np.uint8), np.full((160, 208), 128, np.uint8),
+                      np.full((160, 208), 90, np.uint8)])  # B, G, R = Cr, Cb, Y: a grey frame
+    cv2.imwrite(str(tmp_path / "real.png"), fake)
+    assert main(["render", "--out", str(tmp_path), "--settle", "0", "--side-by-side", str(tmp_path / "real.png")]) == 0
+    three = cv2.imread(str(tmp_path / "side_by_side.png"))
+    assert three.shape == (320, 1248, 3) and np.all(three[:, :416] == 90)
+    assert main(["render", "--out", str(tmp_path), "--side-by-side", str(tmp_path / "missing.png")]) == 2
