@@ -187,6 +187,9 @@ def main(argv: list[str] | None = None) -> int:
     from .runner import ControllerFailed
     from .sim import ModelError, SimulationDiverged
 
+    # Exit status: 0 done; 1 the controller failed (it raised, its robot_die function raised, or
+    # it called sys.exit with a status other than 0); 2 bad input (one line naming it); 3 the
+    # physics diverged; 130 interrupted (Ctrl-C).
     args = build_parser().parse_args(argv)
     try:
         return args.handler(args)
@@ -199,8 +202,9 @@ def main(argv: list[str] | None = None) -> int:
     except (ModelError, MtnError, OpenRError, DeviceError, RenderingUnavailable, OSError, ValueError) as exc:
         print(f"aibo-sim: error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
-    except KeyboardInterrupt:
-        print("\naibo-sim: interrupted (a dump can continue with --resume)", file=sys.stderr)
+    except KeyboardInterrupt:  # Ctrl-C: 130, as a shell reports a process ended by SIGINT (128 + 2)
+        hint = " (the dump can continue with --resume)" if args.command == "dump" else ""
+        print(f"\naibo-sim: interrupted{hint}", file=sys.stderr)
         return EXIT_INTERRUPTED
 
 

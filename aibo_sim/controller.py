@@ -39,7 +39,7 @@ from openr_bridge.ers7_camera import (
 )
 from openr_bridge.wrapper import camera_image_get_blue, camera_image_get_green, camera_image_get_red
 
-from .mtn import MtnError, format_motion_info, motion_info, mtn_get_error
+from .mtn import Motion, MtnError, format_motion_info, motion_info, mtn_get_error
 from .robot import (Accelerometer, Camera, Device, DeviceError, DistanceSensor, Led, Robot, Servo,
                     SimulationEnd, TouchSensor)
 
@@ -85,13 +85,32 @@ def robot_live(reset_fn=None) -> None:
 
 
 def robot_die(exit_fn) -> None:
-    """Register a function called when the controller quits."""
+    """Register a function called when the controller quits (after its run ends, it raised,
+    it called ``sys.exit`` or it was interrupted)."""
+    if not callable(exit_fn):
+        raise TypeError(f"robot_die({exit_fn!r}): the exit function must be callable")
     _die_fns.append(exit_fn)
 
 
-def call_die_functions() -> None:
-    for fn in _die_fns:
-        fn()
+def call_die_functions() -> list[tuple[object, BaseException]]:
+    """Call each registered exit function once, in order, even when an earlier one raised;
+    returns ``(function, exception)`` for those that raised (the runner reports them beside the
+    controller's own exception rather than instead of it). ``SimulationEnd`` (an exit function
+    that steps past the run's end) and ``sys.exit(0)`` are not errors; KeyboardInterrupt
+    propagates."""
+    functions, failures = list(_die_fns), []
+    _die_fns.clear()
+    for fn in functions:
+        try:
+            fn()
+        except SimulationEnd:
+            pass
+        except SystemExit as exc:
+            if exc.code not in (None, 0):
+                failures.append((fn, exc))
+        except Exception as exc:
+            failures.append((fn, exc))
+    return failures
 
 
 def robot_run(run_fn) -> None:
@@ -281,6 +300,13 @@ def led_set(tag, value: int) -> None:
 
 
 # ------------------------------------------------------------------------- MTN
+#
+# An MTN argument is what mtn_new returned: None (a failed mtn_new) raises MtnError quoting
+# mtn_get_error(), anything else that is not a motion raises MtnError naming the function and
+# the argument. mtn_new itself returns None on any failure, a file name that is not a str or
+# path included, with the reason in mtn_get_error() (names cut to 200 characters, control
+# characters escaped). mtn_play on a motion that is playing restarts it from its start.
+
 
 def mtn_new(filename: str):
     """Load a motion file; returns None and sets ``mtn_get_error()`` on failure, as Webots."""
@@ -291,40 +317,44 @@ def mtn_new(filename: str):
 
 
 def mtn_delete(motion) -> None:
-    robot = current_robot()
-    robot.playing = [p for p in robot.playing if p.motion is not motion]
+    """Stop ``motion`` if it plays; ``mtn_delete(None)`` does nothing, as in Webots."""
+    if motion is not None:
+        current_robot().mtn_stop(_motion(motion, "mtn_delete"))
 
 
 def mtn_play(motion) -> None:
-    current_robot().mtn_play(_motion(motion))
+    """Play ``motion`` from its start (again from its start if it is playing)."""
+    current_robot().mtn_play(_motion(motion, "mtn_play"))
 
 
 def mtn_is_over(motion) -> bool:
-    return current_robot().mtn_is_over(_motion(motion))
+    return current_robot().mtn_is_over(_motion(motion, "mtn_is_over"))
 
 
 def mtn_get_length(motion) -> int:
-    return int(_motion(motion).length_ms)
+    return int(_motion(motion, "mtn_get_length").length_ms)
 
 
 def mtn_get_time(motion) -> int:
-    return current_robot().mtn_get_time(_motion(motion))
+    return current_robot().mtn_get_time(_motion(motion, "mtn_get_time"))
 
 
 def mtn_fprint(file, motion) -> None:
-    """Webots' debug dump of a motion: name, creator, design, frames, length, locators."""
-    file.write(format_motion_info(motion_info(_motion(motion))) + "\n")
+    """Webots' debug dump of a motion: name, creator, design, frames, length, locators (control
+    characters in them escaped)."""
+    file.write(format_motion_info(motion_info(_motion(motion, "mtn_fprint"))) + "\n")
 
 
 def mtn_get_name(motion) -> str:
     """Not in Webots (spec: no such function found); the name is in the file's section 1."""
-    return _motion(motion).name
+    return _motion(motion, "mtn_get_name").name
 
 
-def _motion(motion):
+def _motion(motion, function: str = "mtn") -> Motion:
     if motion is None:
-        raise ValueError("MTN is NULL: mtn_new failed (" + (mtn_get_error() or "no error recorded") + ")")
-    return motion
+        raise MtnError(None, None, f"{function}: MTN is NULL: mtn_new failed ("
+                       + (mtn_get_error() or "no error recorded") + ")")
+    return Robot._motion(function, motion)  # MtnError naming the function and the argument unless a motion
 
 
 __all__ = [name for name in dir() if name.split("_")[0] in {

@@ -53,11 +53,12 @@ _S32_MIN, _S32_MAX = -(2**31), 2**31 - 1
 class MtnError(ValueError):
     """A malformed or unusable motion. ``str()`` names the file and, for parse errors, the byte
     offset; ``message`` is the bare text. With neither source nor offset, ``str()`` is the bare
-    text (used for Webots' own messages, e.g. "Missing device in model: <locator>")."""
+    text (used for Webots' own messages, e.g. "Missing device in model: <locator>"). The source
+    is shown as :func:`printable` shows it (a motion's name may hold control characters)."""
 
     def __init__(self, source: str | None, offset: int | None, message: str):
         self.source, self.offset, self.message = source, offset, message
-        where = [] if source is None else [str(source)]
+        where = [] if source is None else [printable(source, NAME_LIMIT)]
         if offset is not None:
             where.append(f"byte {offset} (0x{offset:x})")
         super().__init__(": ".join(where + [message]))
@@ -481,19 +482,25 @@ def mtn_new(path: str | os.PathLike, available_locators: Iterable[str] | None = 
     """Webots ``mtn_new``: read ``path`` and check every locator names a device of the robot
     (default: ``ers7.all_locators()``). Failures raise :class:`MtnError` and are remembered for
     :func:`mtn_get_error`; Webots' own texts are used ("File not found: <path>",
-    "Missing device in model: <locator>", without Webots' trailing newline)."""
+    "Missing device in model: <locator>", without Webots' trailing newline), with the path or
+    locator as :func:`printable` shows it (a path cut to ``NAME_LIMIT`` characters). A
+    ``path`` that is not a str or path-like is an MtnError naming it."""
     global _last_error
     try:
+        if not isinstance(path, (str, os.PathLike)):
+            text = repr(path)
+            raise MtnError(None, None, f"mtn_new({printable(text, 60)}): the file name must be a str or a path, "
+                                       f"not {type(path).__name__}")
         try:
             motion = read_mtn(path)
         except OSError as exc:
-            raise MtnError(None, None, f"File not found: {os.fspath(path)}") from exc
+            raise MtnError(None, None, f"File not found: {printable(os.fspath(path), NAME_LIMIT)}") from exc
         if available_locators is None:
             available_locators = ers7.all_locators()
         available = set(available_locators)
         for loc in motion.locators:
             if loc not in available:
-                raise MtnError(None, None, f"Missing device in model: {loc}")
+                raise MtnError(None, None, f"Missing device in model: {printable(loc)}")
     except MtnError as exc:
         _last_error = str(exc)
         raise
@@ -521,16 +528,31 @@ def motion_info(motion: Motion) -> dict:
     }
 
 
+def printable(text: str, limit: int | None = None) -> str:
+    """``text`` safe to print on a terminal: control and other non-printable characters (an
+    MTN's latin-1 strings may hold any byte) escaped as Python escapes them (ESC as ``\\x1b``,
+    a newline as ``\\n``); cut to ``limit`` characters with a note of the full length."""
+    text = str(text)
+    cut = limit is not None and len(text) > limit
+    shown = text[:limit] if cut else text
+    if not shown.isprintable():
+        shown = "".join(c if c.isprintable() else c.encode("unicode_escape").decode("ascii") for c in shown)
+    return f"{shown}... ({len(text)} characters)" if cut else shown
+
+
+NAME_LIMIT = 200  # characters of a file name quoted in an mtn_new error
+
+
 def format_motion_info(info: dict) -> str:
-    """Human-readable form of :func:`motion_info`."""
+    """Human-readable form of :func:`motion_info`; the strings as :func:`printable` shows them."""
     lines = [
-        f"name:        {info['name']}",
-        f"creator:     {info['creator']}",
-        f"design:      {info['design']}",
+        f"name:        {printable(info['name'])}",
+        f"creator:     {printable(info['creator'])}",
+        f"design:      {printable(info['design'])}",
         f"frame time:  {info['frame_time_ms']} ms",
         f"keyframes:   {info['num_keyframes']}",
         f"length:      {info['length_ms']} ms ({info['length_ms'] / 1000:.3f} s)",
         f"joints:      {len(info['locators'])}",
     ]
-    lines += [f"  {i:2d} {loc}" for i, loc in enumerate(info["locators"])]
+    lines += [f"  {i:2d} {printable(loc)}" for i, loc in enumerate(info["locators"])]
     return "\n".join(lines)

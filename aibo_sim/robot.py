@@ -16,6 +16,8 @@ from __future__ import annotations
 
 import difflib
 import math
+import numbers
+import os
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -23,7 +25,7 @@ import numpy as np
 
 from . import ers7
 from .mtn import MODES as MTN_MODES
-from .mtn import MotionPlayer, mtn_new
+from .mtn import Motion, MotionPlayer, MtnError, mtn_new
 from .sim import FRAME_MS, Simulation
 
 BACKENDS = ("sim", "openr")
@@ -35,6 +37,17 @@ class DeviceError(RuntimeError):
 
 class SimulationEnd(Exception):
     """Raised inside the controller when the run's duration is over (Webots ends it too)."""
+
+
+def whole_ms(value) -> int | None:
+    """``value`` as an int when it is a whole number (an int, or a float such as 16.0), else
+    None: 8.9 ms is not silently 8 ms, nor a bool or a string a duration."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        return None
+    if isinstance(value, numbers.Integral):
+        return int(value)
+    value = float(value)
+    return int(value) if value.is_integer() else None
 
 
 class Device:
@@ -50,9 +63,10 @@ class Device:
         self._value = None
 
     def enable(self, ms: int) -> None:
-        ms = int(ms)
-        if ms <= 0:
-            raise DeviceError(f"{self.locator}: sampling period must be a positive number of ms, not {ms}")
+        period = whole_ms(ms)
+        if period is None or period <= 0:
+            raise DeviceError(f"{self.locator}: sampling period must be a positive whole number of ms, not {ms!r}")
+        ms = period
         self.period, self._value = ms, None
         self._next_sample_ms = self.robot.time_ms + ms
         self.robot.enabled_devices[self.locator] = self
@@ -219,11 +233,23 @@ class Led(Device):
 _DEVICE_CLASSES = {"distance": DistanceSensor, "touch": TouchSensor, "accelerometer": Accelerometer, "camera": Camera}
 
 
+def _short_repr(value, limit: int = 60) -> str:
+    text = repr(value)
+    return text if len(text) <= limit else f"{text[:limit]}... ({len(text)} characters)"
+
+
+def _is_file(path: Path) -> bool:
+    try:
+        return path.is_file()
+    except OSError:  # a name too long for the file system, ...: not a file here
+        return False
+
+
 def find_file(path: str | Path, search_dirs) -> Path:
     """``path`` itself if it exists, else the same name in the first search folder that has
     it, ignoring case as OPEN-R's memory stick does; ``path`` unchanged when none has it."""
     candidates = [Path(path)] + [Path(d) / path for d in search_dirs]
-    found = next((c for c in candidates if c.is_file()), None)
+    found = next((c for c in candidates if _is_file(c)), None)
     if found is None:
         name = Path(path).name.lower()
         found = next((f for d in map(Path, search_dirs) if d.is_dir() for f in d.iterdir() if f.name.lower() == name), None)
@@ -277,9 +303,10 @@ class Robot:
         Webots-mode motions advance once per call, as Webots' ``mtn_step(ms)`` does once
         per control step; OPEN-R-mode motions write every 8 ms joint frame.
         """
-        ms = int(ms)
-        if ms <= 0 or ms % FRAME_MS:
-            raise ValueError(f"step of {ms} ms: must be a positive multiple of the {FRAME_MS} ms joint frame")
+        whole = whole_ms(ms)
+        if whole is None or whole <= 0 or whole % FRAME_MS:
+            raise ValueError(f"step of {ms!r} ms: must be a positive whole multiple of the {FRAME_MS} ms joint frame")
+        ms = whole
         if self.mtn_mode == "webots":
             self._step_webots_motions(ms)
         for _ in range(ms // FRAME_MS):
@@ -297,22 +324,40 @@ class Robot:
     # ---------------------------------------------------------------- MTN
 
     def mtn_new(self, path: str | Path):
-        """Load a motion, resolving relative names in the search folders; MtnError if not found."""
+        """Load a motion, resolving relative names in the search folders; MtnError if not found
+        (also for a name that is not a str or path, naming it)."""
+        if not isinstance(path, (str, os.PathLike)):
+            return mtn_new(path)  # raises the MtnError naming the argument, remembered for mtn_get_error
         return mtn_new(find_file(path, self.search_dirs), ers7.all_locators())
 
     def mtn_play(self, motion) -> None:
+        """Start ``motion``; one that is already playing restarts from its start (a motion has one
+        playback, as in OPEN-R's MTN object and Webots' MTN struct: never two at once)."""
+        motion = self._motion("mtn_play", motion)
         player = MotionPlayer(motion, mode=self.mtn_mode)
+        self.playing = [p for p in self.playing if p.motion is not motion]
         self.playing.append(_Playing(motion, player, ers7.joint_indices(motion.locators), self.time_ms))
+
+    def mtn_stop(self, motion) -> None:
+        """Take ``motion`` off the play list (``mtn_delete``)."""
+        motion = self._motion("mtn_delete", motion)
+        self.playing = [p for p in self.playing if p.motion is not motion]
+
+    @staticmethod
+    def _motion(function: str, motion) -> Motion:
+        if not isinstance(motion, Motion):
+            raise MtnError(None, None, f"{function}({_short_repr(motion)}): not an MTN (use the value mtn_new returned)")
+        return motion
 
     def _playing(self, motion) -> "_Playing | None":
         return next((p for p in self.playing if p.motion is motion), None)
 
     def mtn_is_over(self, motion) -> bool:
-        return self._playing(motion) is None
+        return self._playing(self._motion("mtn_is_over", motion)) is None
 
     def mtn_get_time(self, motion) -> int:
         """Milliseconds played (0 when not playing); Webots mode counts as Webots does."""
-        playing = self._playing(motion)
+        playing = self._playing(self._motion("mtn_get_time", motion))
         if playing is None:
             return 0
         return playing.player.time_ms if self.mtn_mode == "webots" else self.time_ms - playing.start_ms

@@ -6,6 +6,7 @@ import contextlib
 import json
 import math
 import os
+import re
 import runpy
 import sys
 import time
@@ -52,21 +53,111 @@ def motion_dirs(controller_path: Path) -> tuple[Path, ...]:
     return (controller_path.parent, models_dir() / "motions")
 
 
-class FrameWriter:
-    """Writes each camera frame the controller's camera captured as ``frames/NNNNNN.png``."""
+RUN_FILE = "run.json"
+# What a run's frames/ may hold: its frames, their temporary names (".NNNNNN.png.tmp": no
+# "*.png" pattern matches them) and the temporary names of earlier versions ("NNNNNN.partial.png").
+RUN_FRAME_NAMES = re.compile(r"\d{6,}\.png|\.\d{6,}\.png\.tmp|\d{6,}\.partial\.png")
 
-    def __init__(self, directory: Path):
-        self.directory = directory / "frames"
-        self.directory.mkdir(parents=True, exist_ok=True)
+
+def write_file_atomic(path: Path, data: bytes) -> None:
+    """Write ``path`` whole or not at all: as ``.NAME.tmp`` in the same folder (a name no
+    pattern of the final files matches), then renamed. An OSError names ``path`` and leaves
+    no temporary file (a full disk: "cannot write PATH: No space left on device")."""
+    temp = path.with_name(f".{path.name}.tmp")
+    try:
+        with open(temp, "wb") as file:
+            file.write(data)
+        os.replace(temp, path)
+    except OSError as exc:
+        with contextlib.suppress(OSError):
+            temp.unlink()
+        error = OSError(f"cannot write {path}: {exc.strerror or exc}")
+        error.errno = exc.errno
+        raise error from exc
+
+
+class FrameWriter:
+    """Writes each camera frame the controller's camera captured as ``frames/NNNNNN.png``
+    in ``run --out``, atomically (see ``write_file_atomic``), and ``run.json``.
+
+    One run per folder: ``out`` may be new, hold no ``frames/`` and no ``run.json`` (the
+    controller's files go there too), or hold an earlier aibo-sim run, whose ``frames/``
+    files and ``run.json`` are then removed first (the controller's own files are left: it
+    rewrites them). Anything else is refused with an OSError (exit status 2), nothing
+    changed: a ``run.json`` that is not aibo-sim's, a non-empty ``frames/`` beside no
+    ``run.json``, a ``frames/`` holding files that are not a run's frames. ``run.json`` is
+    written at the start with ``"status": "incomplete"`` and replaced by the summary at the
+    end, so that a killed run's folder is still recognised.
+
+    A write that fails (a full disk) ends the run: the error is kept and ``check`` raises it
+    after the run, as the OSError naming the file rather than as the controller's exception.
+    """
+
+    def __init__(self, directory: Path, controller: Path | None = None, backend: str | None = None):
+        self.out, self.directory = directory, directory / "frames"
         self.count = 0
+        self.error: OSError | None = None
+        self._prepare({"controller": controller and str(controller), "backend": backend, "status": "incomplete"})
+
+    def _prepare(self, marker: dict) -> None:
+        run_json, frames = self.out / RUN_FILE, self.directory
+        earlier_run = run_json.exists() or run_json.is_symlink()
+        if earlier_run:
+            try:
+                previous = json.loads(run_json.read_bytes())
+            except (OSError, ValueError):
+                previous = None
+            if not (isinstance(previous, dict) and {"controller", "backend"} <= previous.keys()):
+                raise OSError(f"{run_json} is not an aibo-sim run's run.json: refusing to replace it; "
+                              "choose another --out")
+        try:
+            names = os.listdir(frames)
+        except FileNotFoundError:
+            names = []
+        except OSError as exc:
+            raise OSError(f"cannot use {frames} for the frames: {exc.strerror or exc}") from exc
+        if names and not earlier_run:
+            raise OSError(f"{frames} holds files but {self.out} holds no aibo-sim run ({RUN_FILE}): refusing to mix "
+                          "them with this run's frames; choose another --out")
+        foreign = sorted(name for name in names if not RUN_FRAME_NAMES.fullmatch(name))
+        if foreign:
+            raise OSError(f"{frames} holds files that are not a run's frames ({foreign[0]!r}"
+                          f"{f' and {len(foreign) - 1} more' if len(foreign) > 1 else ''}): refusing to remove them; "
+                          "choose another --out")
+        for name in names:  # the earlier run's frames
+            try:
+                (frames / name).unlink()
+            except FileNotFoundError:
+                pass
+            except OSError as exc:
+                raise OSError(f"cannot remove the earlier run's {frames / name}: {exc.strerror or exc}") from exc
+        try:
+            frames.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise OSError(f"cannot create {frames}: {exc.strerror or exc}") from exc
+        self.write_run_json(marker)
+
+    def write_run_json(self, content: dict) -> None:
+        write_file_atomic(self.out / RUN_FILE, (json.dumps(content, indent=2) + "\n").encode())
 
     def __call__(self, index: int, rgb: np.ndarray) -> None:
+        if self.error is not None:
+            raise SimulationEnd()
         path = self.directory / f"{index:06d}.png"
-        partial = path.with_suffix(".partial.png")
-        if not cv2.imwrite(str(partial), np.ascontiguousarray(rgb[:, :, ::-1])):
-            raise OSError(f"could not write {partial}")
-        os.replace(partial, path)
+        ok, encoded = cv2.imencode(".png", np.ascontiguousarray(rgb[:, :, ::-1]))
+        if not ok:
+            raise ValueError(f"PNG encoding of a {rgb.shape} {rgb.dtype} frame failed")
+        try:
+            write_file_atomic(path, encoded.tobytes())
+        except OSError as exc:
+            self.error = exc
+            raise SimulationEnd() from exc  # raised in the controller's call: ends the run
         self.count += 1
+
+    def check(self) -> None:
+        """Raise the write error that ended the run, if one did."""
+        if self.error is not None:
+            raise self.error
 
 
 @contextlib.contextmanager
@@ -124,6 +215,8 @@ def run_controller(path: str | Path, *, backend: str = "sim", duration: float = 
     path = Path(path).resolve()
     if not path.is_file():
         raise FileNotFoundError(f"{path}: no such controller file")
+    if isinstance(duration, (str, bytes, bool)) or not isinstance(duration, (int, float, np.integer, np.floating)):
+        raise ValueError(f"--duration must be a number of seconds, not {duration!r}")
     if not (math.isfinite(duration) and duration > 0):
         raise ValueError(f"--duration must be positive and finite, not {duration}")
     pose, ball = start_values("--pose", pose, 3), start_values("--ball", ball, 2)
@@ -141,34 +234,62 @@ def run_controller(path: str | Path, *, backend: str = "sim", duration: float = 
     writer = None
     if out is not None:
         out = Path(out).resolve()
-        out.mkdir(parents=True, exist_ok=True)
-        writer = FrameWriter(out)
+        try:
+            out.mkdir(parents=True, exist_ok=True)
+            writer = FrameWriter(out, controller=path, backend=backend)
+        except BaseException:
+            sim.close()
+            raise
         robot.camera_source.listeners.append(writer)
     robot.frame_listeners.extend(frame_listeners)
     progress_bar = Progress(duration, enabled=progress)
     robot.frame_listeners.append(progress_bar)
     controller.install(robot)
     start = time.perf_counter()
+    # How a controller ends: its run is over (SimulationEnd) or it calls sys.exit(0) or
+    # sys.exit(): a normal end. It raises, or calls sys.exit with another status: exit status
+    # 1, ControllerFailed quoting its traceback or its status (never read as a divergence).
+    # The physics diverges: SimulationDiverged (exit status 3). Its robot_die functions run in
+    # every case (Ctrl-C too); one that raises is reported after the controller's own error.
     try:
         with _controller_context(path.parent, out):
+            error: BaseException | None = None
             try:
                 runpy.run_path(str(path), run_name="__main__")
             except SimulationEnd:
                 pass
-            except SimulationDiverged:
-                raise
+            except SystemExit as exc:
+                error = None if exc.code in (None, 0) else exc
             except Exception as exc:
-                raise ControllerFailed(
-                    f"controller {path.name} raised at simulated t = {robot.time_ms / 1000:.3f} s:\n"
-                    + "".join(traceback.format_exception(exc))
-                ) from exc
+                error = exc
             finally:
-                controller.call_die_functions()
+                ended_ms = robot.time_ms
+                die_failures = controller.call_die_functions()
+            where = f"at simulated t = {ended_ms / 1000:.3f} s"
+            die_report = "".join(
+                f"\n{'then ' if error is not None or k else ''}its robot_die function "
+                f"{getattr(fn, '__qualname__', repr(fn))} raised:\n" + "".join(traceback.format_exception(exc)).rstrip()
+                for k, (fn, exc) in enumerate(die_failures))
+            if isinstance(error, SimulationDiverged):
+                if die_report:
+                    raise SimulationDiverged(f"{error}{die_report}") from error
+                raise error
+            if isinstance(error, SystemExit):
+                status = error.code if isinstance(error.code, int) else repr(error.code)
+                raise ControllerFailed(f"controller {path.name} exited with sys.exit({status}) {where}"
+                                       f"{die_report}") from error
+            if error is not None:
+                raise ControllerFailed(f"controller {path.name} raised {where}:\n"
+                                       + "".join(traceback.format_exception(error)) + die_report) from error
+            if die_report:
+                raise ControllerFailed(f"controller {path.name} ended {where};{die_report}")
     finally:
         progress_bar.close()
         controller.install(None)
         sim.close()
     wall = time.perf_counter() - start
+    if writer is not None:
+        writer.check()  # a frame that could not be written ended the run
     position, yaw, _ = sim.body_pose()
     ball_end = sim.ball_position()
     summary = RunSummary(str(path), backend, robot.time_ms / 1000, wall, robot.time_ms / 1000 / max(wall, 1e-9),
@@ -177,5 +298,5 @@ def run_controller(path: str | Path, *, backend: str = "sim", duration: float = 
                          scene=None if scene is None else str(Path(scene).resolve()), seed=seed, pose=pose, ball=ball,
                          camera=camera)
     if out is not None:
-        (out / "run.json").write_text(json.dumps(asdict(summary), indent=2) + "\n")
+        writer.write_run_json(asdict(summary))
     return summary

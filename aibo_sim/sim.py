@@ -18,7 +18,7 @@ from openr_bridge import FRAME_RATE_HZ, FRAME_TICK_MS
 
 from .camera import CameraProfile, CameraSettings, HeadCamera, camera_size
 from .field import BALL_RADIUS
-from .ers7 import DISTANCE_SENSORS, JOINTS, LED_BY_NAME, LED_OFF_RGBA, SENSORS, TOUCH_SENSORS
+from .ers7 import DISTANCE_SENSORS, HEAD_CAMERA, JOINTS, LED_BY_NAME, LED_OFF_RGBA, SENSORS, TOUCH_SENSORS
 
 FRAME_MS = FRAME_TICK_MS  # OPEN-R joint frame, 8 ms
 GRAVITY = 9.80665
@@ -46,12 +46,64 @@ def models_dir() -> Path:
 def load_model(scene: str | Path | None = None) -> mujoco.MjModel:
     """Compile a scene file (default: the RoboCup field), with an error that names the file."""
     path = Path(scene) if scene is not None else models_dir() / "scene.xml"
-    if not path.is_file():
-        raise ModelError(f"{path}: no such model file")
+    try:
+        if not path.is_file():
+            raise ModelError(f"{path}: " + ("not a regular file" if path.exists() else "no such model file"))
+    except OSError as exc:  # a name too long, a folder without permission
+        raise ModelError(f"{path}: cannot read: {exc.strerror or exc}") from None
     try:
         return mujoco.MjModel.from_xml_path(str(path))
     except ValueError as exc:
         raise ModelError(f"{path}: {exc}") from None
+
+
+def check_robot(model: mujoco.MjModel, path, keyframe: str = "stand") -> None:
+    """ModelError naming ``path`` unless ``model`` holds the ERS-7 (``models/ers7.xml``: its
+    body, joints, actuators, sensors and head camera) and, when ``keyframe`` is ``"stand"``
+    (the start pose every command uses), a keyframe of that name. Another keyframe a caller
+    asks for is looked up when it is used (``reset``), whose KeyError lists the scene's."""
+    def missing(kind: mujoco.mjtObj, names) -> list[str]:
+        return [name for name in names if mujoco.mj_name2id(model, kind, name) < 0]
+
+    absent = {
+        "body": missing(mujoco.mjtObj.mjOBJ_BODY, ["body"]),
+        "joints": missing(mujoco.mjtObj.mjOBJ_JOINT, [j.name for j in JOINTS]),
+        "actuators": missing(mujoco.mjtObj.mjOBJ_ACTUATOR, [j.name for j in JOINTS]),
+        "sensors": missing(mujoco.mjtObj.mjOBJ_SENSOR, [s.name for s in SENSORS if s.kind != "camera"]),
+        "camera": missing(mujoco.mjtObj.mjOBJ_CAMERA, [HEAD_CAMERA]),
+        "LED geoms": missing(mujoco.mjtObj.mjOBJ_GEOM, list(LED_BY_NAME)),
+    }
+    absent = {kind: names for kind, names in absent.items() if names}
+    if absent:
+        listed = "; ".join(f"{kind} {', '.join(map(repr, names[:3]))}" + (f" and {len(names) - 3} more" if len(names) > 3 else "")
+                           for kind, names in absent.items())
+        raise ModelError(f"{path}: no ERS-7 robot in this scene (missing {listed}); "
+                         "a scene must <include file=\"ers7.xml\"/> (see models/scene.xml)")
+    if keyframe == "stand" and mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_KEY, keyframe) < 0:
+        keys = [model.key(i).name for i in range(model.nkey)]
+        raise ModelError(f"{path}: no keyframe 'stand' (the robot's start pose, in models/ers7.xml); the scene's "
+                         f"keyframes: {', '.join(repr(k) for k in keys) if keys else 'none'}")
+
+
+MAX_PLACEMENT = 1e6  # metres (or radians of yaw): beyond this a placement is a typo, as on the command line
+
+
+def _placement(function: str, **values) -> list[float]:
+    """The values as floats; ValueError naming the argument when one is not a finite number of
+    magnitude at most MAX_PLACEMENT."""
+    numbers = []
+    for name, value in values.items():
+        try:
+            if isinstance(value, (str, bytes)):
+                raise TypeError
+            number = float(value)
+        except (TypeError, ValueError):
+            raise ValueError(f"{function}: {name} must be a number, not {value!r}") from None
+        if not math.isfinite(number) or abs(number) > MAX_PLACEMENT:
+            raise ValueError(f"{function}: {name} = {value!r} must be a finite number of magnitude at most "
+                             f"{MAX_PLACEMENT:g}")
+        numbers.append(number)
+    return numbers
 
 
 class Servos:
@@ -134,6 +186,7 @@ class Simulation:
     def __init__(self, scene=None, *, seed: int = 0, keyframe: str = "stand", camera_full: bool = False,
                  camera_profile: str | CameraProfile = "ers7", camera_settings: CameraSettings | None = None):
         self.model = load_model(scene)
+        check_robot(self.model, scene if scene is not None else models_dir() / "scene.xml", keyframe)
         self.data = mujoco.MjData(self.model)
         self.keyframe = keyframe
         steps = FRAME_MS / 1000 / self.model.opt.timestep
@@ -172,7 +225,10 @@ class Simulation:
         self.camera.reset(self.seed)
 
     def place_robot(self, x: float, y: float, yaw: float) -> None:
-        """Put the robot at (x, y) on the field heading ``yaw`` (rad), keeping its height and pitch."""
+        """Put the robot at (x, y) on the field heading ``yaw`` (rad), keeping its height and pitch.
+        Each must be a finite number of magnitude at most ``MAX_PLACEMENT`` (else ValueError
+        naming it, nothing moved): MuJoCo would otherwise silently reset the whole state."""
+        x, y, yaw = _placement("place_robot", x=x, y=y, yaw=yaw)
         qpos = self.data.qpos
         pitch_quat = qpos[3:7].copy()
         yaw_quat = np.array([math.cos(yaw / 2), 0, 0, math.sin(yaw / 2)])
@@ -186,7 +242,9 @@ class Simulation:
         return self._ball_body >= 0
 
     def place_ball(self, x: float, y: float) -> None:
-        """Put the ball at rest on the carpet at (x, y)."""
+        """Put the ball at rest on the carpet at (x, y); finite numbers of magnitude at most
+        ``MAX_PLACEMENT`` metres, as for ``place_robot``."""
+        x, y = _placement("place_ball", x=x, y=y)
         if not self.has_ball:
             raise ModelError("this scene has no body named 'ball' to place")
         joint = self.model.joint("ball")

@@ -17,10 +17,15 @@ memory stick, found in any letter case (``find_connect_cfg``).
 
 Files are ASCII; blank lines, CRLF and ``//`` comment lines (stub.cfg, as in Sony's samples)
 or ``#`` comments (CONNECT.CFG) are accepted. Names are case-sensitive, as in OPEN-R. Every
-problem raises ``ConfigError`` with the file and line.
+problem raises ``ConfigError`` with the file and line: the first one, found in one pass over
+the file (parsing takes time linear in its size), quoting at most ``QUOTE_LIMIT`` characters
+of the offending text (a longer one is cut, with its length noted). Only regular files are
+read: a FIFO, a device or a folder in a file's place is refused, not waited on.
 """
 
+import os
 import re
+import stat
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -29,10 +34,24 @@ from .errors import ConfigError
 _NAME = r"[A-Za-z_][A-Za-z0-9_]*"
 _SERVICE_NAME = re.compile(rf"({_NAME})\.({_NAME})\.({_NAME})\.({_NAME})")
 _MEMBER = rf"null|{_NAME}\(\)"
-_STUB_LINE = re.compile(r"[ \t]*([A-Za-z]+)[ \t]*:[ \t]*(.*?)[ \t]*")
+_STUB_LINE = re.compile(r"[ \t]*([A-Za-z]+)[ \t]*:(.*)")  # the value is stripped after (a lazy group would backtrack quadratically)
 _SERVICE_LINE = re.compile(rf'"([^"]*)"[ \t]*,[ \t]*({_MEMBER})[ \t]*,[ \t]*({_MEMBER})')
 _COUNT_KEYS = {"NumOfOSubject": "S", "NumOfOObserver": "O"}
 KINDS = {"S": "subject", "O": "observer"}
+QUOTE_LIMIT = 80  # characters of an offending line or field quoted in a ConfigError
+
+
+def _quote(text: str) -> str:
+    """``repr(text)``, cut to QUOTE_LIMIT characters with a note of the full length."""
+    if len(text) <= QUOTE_LIMIT:
+        return repr(text)
+    return f"{text[:QUOTE_LIMIT]!r}... ({len(text)} characters in all)"
+
+
+def _cut(text) -> str:
+    """``str(text)`` cut to QUOTE_LIMIT characters with a note of the full length."""
+    text = str(text)
+    return text if len(text) <= QUOTE_LIMIT else f"{text[:QUOTE_LIMIT]}... ({len(text)} characters in all)"
 
 
 @dataclass(frozen=True)
@@ -79,22 +98,23 @@ class Connection:
 def parse_stub_cfg(source: bytes | str, path: str = "stub.cfg") -> StubConfig:
     values: dict[str, tuple[str, int]] = {}
     services: list[Service] = []
+    first_line: dict[ServiceName, int] = {}  # each service's line, for the repeat check
     for number, line in _lines(source, path):
         if not line.strip() or line.lstrip().startswith("//"):
             continue
         match = _STUB_LINE.fullmatch(line)
         if not match:
-            raise ConfigError(f"expected 'Key : value', got {line!r}", path, number)
-        key, value = match.groups()
+            raise ConfigError(f"expected 'Key : value', got {_quote(line)}", path, number)
+        key, value = match[1], match[2].strip(" \t")
         if key == "Service":
-            services.append(_parse_service(value, path, number, services))
+            services.append(_parse_service(value, path, number, first_line))
         elif key in ("ObjectName", *_COUNT_KEYS):
             if key in values:
                 raise ConfigError(f"{key} given twice (first on line {values[key][1]})", path, number)
             values[key] = (value, number)
         else:
             raise ConfigError(
-                f"unknown item {key!r} (ObjectName, NumOfOSubject, NumOfOObserver, Service)", path, number
+                f"unknown item {_quote(key)} (ObjectName, NumOfOSubject, NumOfOObserver, Service)", path, number
             )
 
     missing = [key for key in ("ObjectName", *_COUNT_KEYS) if key not in values]
@@ -102,40 +122,44 @@ def parse_stub_cfg(source: bytes | str, path: str = "stub.cfg") -> StubConfig:
         raise ConfigError(f"no {' and no '.join(missing)} line", path)
     object_name, number = values["ObjectName"]
     if not re.fullmatch(_NAME, object_name):
-        raise ConfigError(f"ObjectName {object_name!r} is not a name", path, number)
+        raise ConfigError(f"ObjectName {_quote(object_name)} is not a name", path, number)
     for key, kind in _COUNT_KEYS.items():
         count, number = values[key]
         if not re.fullmatch(r"[0-9]+", count):
-            raise ConfigError(f"{key} {count!r} is not a number", path, number)
+            raise ConfigError(f"{key} {_quote(count)} is not a number", path, number)
         listed = [service.line for service in services if service.name.kind == kind]
         if int(count) < 1:
             raise ConfigError(f"{key} must be at least 1 (register a dummy {KINDS[kind]})", path, number)
         if int(count) != len(listed):
             raise ConfigError(
-                f"{key} is {int(count)} but {len(listed)} {KINDS[kind]} services are listed {listed}", path, number
+                f"{key} is {int(count)} but {len(listed)} {KINDS[kind]} services are listed {_cut(listed)}", path, number
             )
     return StubConfig(path, object_name, tuple(services))
 
 
 def parse_connect_cfg(source: bytes | str, path: str = "CONNECT.CFG") -> list[Connection]:
     connections: list[Connection] = []
+    first_line: dict[tuple[ServiceName, ServiceName], int] = {}  # each connection's line, for the repeat check
+    names: dict[str, ServiceName] = {}  # each service name's text parsed once
     for number, line in _lines(source, path):
         fields = line.split("#", 1)[0].split()
         if not fields:
             continue
         if len(fields) != 2:
-            raise ConfigError(f"expected 'subject-service observer-service', got {line.strip()!r}", path, number)
-        subject, observer = (_service_name(field, path, number) for field in fields)
+            raise ConfigError(f"expected 'subject-service observer-service', got {_quote(line.strip())}", path, number)
+        subject, observer = (names.get(field) or names.setdefault(field, _service_name(field, path, number))
+                             for field in fields)
         for name, kind in ((subject, "S"), (observer, "O")):
             if name.kind != kind:
                 raise ConfigError(
-                    f"{name} should be {KINDS[kind]} ('.{kind}'), the line being subject then observer", path, number
+                    f"{_cut(name)} should be {KINDS[kind]} ('.{kind}'), the line being subject then observer", path, number
                 )
         if subject.data != observer.data:
-            raise ConfigError(f"data names differ: {subject.data!r} is sent, {observer.data!r} expected", path, number)
-        for earlier in connections:
-            if (earlier.subject, earlier.observer) == (subject, observer):
-                raise ConfigError(f"connection repeated from line {earlier.line}", path, number)
+            raise ConfigError(f"data names differ: {_quote(subject.data)} is sent, {_quote(observer.data)} expected",
+                              path, number)
+        if (subject, observer) in first_line:
+            raise ConfigError(f"connection repeated from line {first_line[subject, observer]}", path, number)
+        first_line[subject, observer] = number
         connections.append(Connection(subject, observer, path, number))
     return connections
 
@@ -163,16 +187,16 @@ def find_connect_cfg(memory_stick) -> Path:
     return found
 
 
-def _parse_service(value: str, path: str, number: int, earlier: list[Service]) -> Service:
+def _parse_service(value: str, path: str, number: int, first_line: dict[ServiceName, int]) -> Service:
     match = _SERVICE_LINE.fullmatch(value)
     if not match:
-        raise ConfigError(f"expected '\"Object.Sub.Data.S|O\", member, member', got {value!r}", path, number)
+        raise ConfigError(f"expected '\"Object.Sub.Data.S|O\", member, member', got {_quote(value)}", path, number)
     name = _service_name(match[1], path, number)
     if name.kind not in KINDS:
-        raise ConfigError(f"service type {name.kind!r} of {name} is neither S nor O", path, number)
-    for service in earlier:
-        if service.name == name:
-            raise ConfigError(f"service {name} listed twice (first on line {service.line})", path, number)
+        raise ConfigError(f"service type {_quote(name.kind)} of {_cut(name)} is neither S nor O", path, number)
+    if name in first_line:
+        raise ConfigError(f"service {_cut(name)} listed twice (first on line {first_line[name]})", path, number)
+    first_line[name] = number
     connect, notify = (None if member == "null" else member[:-2] for member in match.groups()[1:])
     return Service(name, connect, notify, number)
 
@@ -180,7 +204,7 @@ def _parse_service(value: str, path: str, number: int, earlier: list[Service]) -
 def _service_name(text: str, path: str, number: int) -> ServiceName:
     match = _SERVICE_NAME.fullmatch(text)
     if not match:
-        raise ConfigError(f"{text!r} is not a service name Object.Subname.Data.S|O", path, number)
+        raise ConfigError(f"{_quote(text)} is not a service name Object.Subname.Data.S|O", path, number)
     return ServiceName(*match.groups())
 
 
@@ -192,14 +216,30 @@ def _lines(source: bytes | str, path: str):
             raise ConfigError(
                 f"byte {source[error.start]:#04x} is not ASCII", path, source.count(b"\n", 0, error.start) + 1
             ) from None
+    ascii_text = source.isascii()  # one check for the whole text; line by line only to name the line
     for number, line in enumerate(source.split("\n"), start=1):
-        if not line.isascii():
+        if not ascii_text and not line.isascii():
             raise ConfigError("non-ASCII text", path, number)
         yield number, line.removesuffix("\r")
 
 
 def _read(path) -> bytes:
+    """The bytes of a regular file. Opened without blocking, so that a FIFO in its place (which
+    a plain open would wait on for a writer) is refused at once, as is any other non-regular file."""
     try:
-        return Path(path).read_bytes()
+        fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_BINARY", 0))
     except OSError as error:
         raise ConfigError(f"cannot read: {error.strerror}", path) from None
+    try:
+        mode = os.fstat(fd).st_mode
+        if not stat.S_ISREG(mode):
+            kind = ("a FIFO" if stat.S_ISFIFO(mode) else "a folder" if stat.S_ISDIR(mode)
+                    else "a device" if stat.S_ISCHR(mode) or stat.S_ISBLK(mode)
+                    else "a socket" if stat.S_ISSOCK(mode) else "not a regular file")
+            raise ConfigError(f"cannot read: {kind}, not a regular file", path)
+        with os.fdopen(fd, "rb", closefd=False) as file:
+            return file.read()
+    except OSError as error:
+        raise ConfigError(f"cannot read: {error.strerror or error}", path) from None
+    finally:
+        os.close(fd)

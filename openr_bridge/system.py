@@ -15,11 +15,11 @@ against libOPENR.
 
 from pathlib import Path
 
-from .config import Connection, ServiceName, find_connect_cfg, load_connect_cfg
+from .config import Connection, ServiceName, _cut, find_connect_cfg, load_connect_cfg
 from .errors import ConfigError
 from .primitive import OPENR, OCameraPrimitive
 from .wiring import DATA_DIR, OObject, OVirtualRobotComm
-from .wrapper import Controller
+from .wrapper import CAMERA_CONNECTION, IMAGE_SERVICE, Controller
 
 DEFAULT_MEMORY_STICK = DATA_DIR / "ms"
 
@@ -47,7 +47,16 @@ class OpenRSystem:
         cls, memory_stick: str | Path = DEFAULT_MEMORY_STICK, objects: list[OObject] | None = None, *,
         camera: OCameraPrimitive | None = None,
     ) -> "OpenRSystem":
-        return cls(load_connect_cfg(find_connect_cfg(memory_stick)), objects, camera=camera)
+        path = find_connect_cfg(memory_stick)
+        connections = load_connect_cfg(path)
+        system = cls(connections, objects, camera=camera)
+        controller = system.objects.get("Controller")
+        if isinstance(controller, Controller):
+            image = next(o for o in controller.observer if str(o.service.name) == IMAGE_SERVICE)
+            if not image.is_connected():
+                what = "has no connection" if not connections else f"does not connect {IMAGE_SERVICE}"
+                raise ConfigError(f"{what}: the camera needs the line '{CAMERA_CONNECTION}'", path)
+        return system
 
     @property
     def robot_comm(self) -> OVirtualRobotComm:
@@ -63,9 +72,9 @@ class OpenRSystem:
         known = sorted({gate.service.name.object for gate in self._gates.values()})
         if name.object in known:
             services = sorted(key for key in self._gates if key.startswith(name.object + "."))
-            problem = f"{name.object} has no service {name} (it has {', '.join(services)})"
+            problem = f"{name.object} has no service {_cut(name)} (it has {', '.join(services)})"
         else:
-            problem = f"unknown object {name.object!r} (known: {', '.join(known)})"
+            problem = f"unknown object {_cut(repr(name.object))} (known: {', '.join(known)})"
             problem += "".join(
                 f"; object names are case-sensitive: did you mean {candidate!r}?"
                 for candidate in known

@@ -136,6 +136,8 @@ class AiboEnv(gym.Env):
         return self._observation(), self._info()
 
     def step(self, action):
+        if getattr(self, "_closed", False):
+            raise gym.error.ClosedEnvironmentError(f"{type(self).__name__}.step after close(): make a new environment")
         targets = self.action_to_targets(action)
         self.sim.servos.set_target(self._actuated, targets)
         self.sim.step_frames(self.sim.frames_to_camera_frame(), self._before_frame)
@@ -151,10 +153,16 @@ class AiboEnv(gym.Env):
         return self._renderer.render(self.sim.data, "tracking")
 
     def close(self):
+        """Free the renderers; the environment is then spent: ``step``, ``reset`` and ``render``
+        raise ``gymnasium.error.ClosedEnvironmentError``. Closing again does nothing."""
+        if getattr(self, "_closed", False):
+            return
         if self._renderer is not None:
             self._renderer.close()
             self._renderer = None
         self.sim.close()
+        self._closed = True
+        self.sim = _ClosedSimulation(type(self).__name__)
 
     # ---------------------------------------------------------------- actions
 
@@ -232,3 +240,17 @@ class AiboEnv(gym.Env):
             return self._openr.serve(frame)
         layer = LAYERS[self.camera_layer]
         return np.stack([self.camera_message.band(layer, band) for band in YCRCB_BANDS], axis=-1)
+
+
+class _ClosedSimulation:
+    """What a closed environment's ``sim`` becomes: any use (``reset``, ``render``, the task's
+    hooks) raises ClosedEnvironmentError, instead of stepping a simulation whose renderer is freed."""
+
+    def __init__(self, env_name: str):
+        self._env_name = env_name
+
+    def __getattr__(self, name):
+        if name.startswith("__") or name == "_env_name":  # copy, pickle and repr probe for these
+            raise AttributeError(name)
+        raise gym.error.ClosedEnvironmentError(f"{self._env_name} is closed (its simulation's {name!r} was used after "
+                                               "close()): make a new environment")

@@ -1,0 +1,80 @@
+"""Frame dumps: every head-camera frame of a headless run, in the formats vision code reads.
+
+Usage::
+
+    aibo-sim dump (CONTROLLER | --env ENV_ID [--policy random|scripted|zero]) --out DIR
+                  [--duration S | --steps N] [--backend sim|openr]
+                  [--scene FILE] [--pose X Y YAW_DEG] [--ball X Y] [--seed N]
+                  [--camera-profile ers7|ideal] [--camera-wb W] [--camera-gain G] [--camera-shutter S]
+                  [--formats rgb,yuv444,yuv420,annex,openr,bands,luma,depth,seg,mp4 | all]
+                  [--camera-full] [--resume] [--workers N]
+
+A controller dump holds camera frames 0 .. 30 S - 1 (``--steps N``: frames 0 .. N - 1); an
+environment dump runs N ``env.step`` calls (``--duration S``: 30 S) and holds the frame of
+every observation, each episode's reset frame included. Default formats: rgb, yuv420,
+openr, mp4 (a viewable picture, a video tool's YUV, the robot's bytes, a video).
+
+Layout of ``DIR`` (frame files are named by the frame's index in the dump, which for a
+controller is the camera frame index, k / 30 s)::
+
+    meta.json            run parameters, the camera (profile, settings, OpenCV intrinsics and
+                         distortion), every file's path and layout
+    frames.jsonl         one line per complete frame (see ``frame_metadata``)
+    .dump.lock           the writer's lock: pid, command and start time of the dump writing now
+    rgb/000123.png       8-bit RGB
+    yuv444/000123.yuv    I444 planar: Y, then U (Cb), then V (Cr), each w x h
+    yuv420/000123.yuv    I420 planar: Y (w x h), U, V (w/2 x h/2): ffmpeg -pix_fmt yuv420p
+    annex/000123.yuv     the report's Annex I: bytes Y, U, V per pixel, row-major
+    openr/000123.ofbk    the OFbkImageVectorData message, as bytes(message)
+    bands/000123_H.raw   each layer's data as Sony's sample writes it: 6 w h bytes for
+                         H, M, L (rows of Y, Cr, Cb, Y_LH, Y_HL, Y_HH), w h for C
+    luma/000123.png      the 416x320 luma reconstructed from layer H (reconstruct_luma)
+    depth/000123.npy     float32 metres along the optical axis, through the same lens
+    seg/000123.png       uint8 class ids, names in meta.json (field.SEGMENTATION_CLASSES), same lens
+    video.mp4            30 fps, codec mp4v (MPEG-4 part 2: OpenCV's wheels lack H.264)
+
+Colour: the yuv444 and yuv420 files are BT.601 limited range (Y 16-235, Cb/Cr 16-240), what
+ffmpeg, ffplay and OpenCV's ``COLOR_YUV2RGB_I420`` assume for raw yuv420p; 4:2:0 chroma is
+the mean of each 2x2 block. The Annex I file uses the report's own formulas (Y = 0.299 R +
+0.587 G + 0.114 B, U = 0.492 (B - Y) + 128, V = 0.5 (R - Y) + 128, truncated as C casts).
+The OPEN-R message and bands hold Sony's YCrCb (Cr before Cb), as ``encode_frame`` makes it.
+All are the head camera's frame (``aibo_sim.camera``: the picture exposed at the frame's tick,
+the same frames ``aibo-sim run`` shows) and its one OPEN-R message; ``--backend`` only
+chooses what the controller (or an environment, as ``camera="openr"``) sees.
+
+Writes are atomic: each file is written under a ``.tmp.`` name and renamed, and a frame's
+line goes into frames.jsonl after all its files. A frame is complete when its line is
+there; readers see only complete frames. ``--resume`` re-runs the same simulation from the
+start (it is deterministic for a seed: a resumed dump is byte-identical to an uninterrupted
+one, whatever the formats), drops a partial last line, writes the frames that are not
+complete, rewrites those listed whose files are missing, and rebuilds video.mp4 from every
+frame. It refuses a dump made with other parameters or from a controller file whose content
+changed since (meta.json records its SHA-256).
+
+One writer per folder: a dump holds an ``flock`` on ``DIR/.dump.lock`` (which names its
+pid, command and start time) while it writes; a second dump or ``--resume`` into the folder
+stops with exit status 2 and that holder's description, changing nothing. ``--out`` must be
+a new or empty folder, or a dump (with ``--resume``): any other folder is refused the same
+way. Only the dump's own temporary files (``.tmp.`` + its file names, in its folders) are
+ever removed. A corrupt meta.json or frames.jsonl is an error that names the file and line
+(``load_dump`` too).
+
+``--workers N`` splits the frames into N shards run in parallel processes, written to
+``DIR/shard_k/``; shard k uses seed ``seed + k`` and, in a controller dump without
+``--ball``, a ball position drawn from that seed. ``load_dump`` reads a sharded dump as
+the shards' frames one after the other. The workers end with the dump: killed with it
+(SIGKILL too: ``PR_SET_PDEATHSIG`` on Linux, and everywhere a watch on the parent), stopped when
+it fails. A SIGTERM stops a dump cleanly (workers stopped, temporary files removed, exit
+status 143); Ctrl-C the same way, with exit status 130. Either can continue with ``--resume``.
+"""
+
+from .command import add_dump_parser
+from .formats import (DEFAULT_FORMATS, DUMP_FORMAT, FORMATS, DumpError, annex_yuv, ball_in_image, file_layouts,
+                      frame_metadata, geom_classes, rgb_to_yuv_bt601, yuv420_bytes, yuv444_bytes)
+from .reading import Dump, DumpFrame, load_dump
+from .running import POLICIES, DumpSummary, dump
+from .writing import DumpWriter, write_atomic
+
+__all__ = ["DEFAULT_FORMATS", "DUMP_FORMAT", "FORMATS", "POLICIES", "Dump", "DumpError", "DumpFrame", "DumpSummary",
+           "DumpWriter", "add_dump_parser", "annex_yuv", "ball_in_image", "dump", "file_layouts", "frame_metadata",
+           "geom_classes", "load_dump", "rgb_to_yuv_bt601", "write_atomic", "yuv420_bytes", "yuv444_bytes"]

@@ -1,0 +1,84 @@
+"""The ``aibo-sim dump`` subcommand."""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import signal
+import sys
+import threading
+
+from openr_bridge import FRAME_RATE_HZ
+
+from ..options import add_world_options, camera_options, finite_float
+from ..robot import BACKENDS
+from .formats import DEFAULT_FORMATS, FORMATS
+from .running import POLICIES, dump
+
+EXIT_TERMINATED = 128 + signal.SIGTERM  # 143, as a shell reports a process that SIGTERM ended
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM, raised in the main thread so that a dump stops as after Ctrl-C: writers abort
+    (temporary files removed, locks released), workers are stopped. A KeyboardInterrupt so
+    that no ``except Exception`` (a controller's own) swallows it."""
+
+
+def _raise_terminated(signum, frame):
+    raise Terminated()
+
+
+@contextlib.contextmanager
+def _sigterm_stops_cleanly():
+    """SIGTERM raises ``Terminated`` while the dump runs (main thread only; restored after)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.signal(signal.SIGTERM, _raise_terminated)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+
+def _dump_command(args) -> int:
+    formats = FORMATS if args.formats == "all" else tuple(f.strip() for f in args.formats.split(",") if f.strip())
+    if args.steps is not None and args.steps <= 0 or args.duration is not None and args.duration <= 0:
+        raise ValueError("--steps and --duration must be positive")
+    frames = args.steps if args.steps is not None else round((args.duration or 10.0) * FRAME_RATE_HZ)
+    try:
+        with _sigterm_stops_cleanly():
+            summary = dump(args.out, controller=args.controller, env=args.env, policy=args.policy, frames=frames,
+                           backend=args.backend, scene=args.scene, seed=args.seed, pose=args.pose and tuple(args.pose),
+                           ball=args.ball and tuple(args.ball), formats=formats, resume=args.resume,
+                           workers=args.workers, **camera_options(args))
+    except Terminated:
+        print("aibo-sim: terminated (SIGTERM): the dump stopped cleanly; continue it with --resume", file=sys.stderr)
+        return EXIT_TERMINATED
+    repaired = f", {summary.repaired_frames} with missing files rewritten" if summary.repaired_frames else ""
+    print(f"dumped {summary.frames} frames to {summary.out} ({summary.new_frames} written now{repaired}) in "
+          f"{summary.wall_s:.1f} s: {summary.frames_per_s:.1f} frames/s, "
+          f"{summary.bytes_written / 1e6 / max(summary.wall_s, 1e-9):.2f} MB/s")
+    return 0
+
+
+def add_dump_parser(subcommands) -> argparse.ArgumentParser:
+    """Add the ``dump`` subcommand to the ``aibo-sim`` subparsers."""
+    parser = subcommands.add_parser("dump", help="write every camera frame of a headless run (images, YUV, OPEN-R)",
+                                    description=sys.modules[__package__].__doc__,
+                                    formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("controller", nargs="?", help="controller file (or use --env)")
+    parser.add_argument("--env", help="gymnasium environment id, e.g. aibo_sim/HeadTrackBall-v0")
+    parser.add_argument("--policy", choices=POLICIES, default="random", help="environment policy (default random)")
+    parser.add_argument("--out", required=True, help="dump folder: new, empty, or a dump to --resume")
+    length = parser.add_mutually_exclusive_group()
+    length.add_argument("--duration", type=finite_float, help="simulated seconds, 30 frames each (default 10)")
+    length.add_argument("--steps", type=int, help="camera frames (controller) or environment steps")
+    parser.add_argument("--backend", choices=BACKENDS, default="sim", help="what the controller sees")
+    add_world_options(parser)  # --scene, --pose, --ball, --seed (shard k of --workers: seed + k), camera
+    parser.add_argument("--formats", default=",".join(DEFAULT_FORMATS),
+                        help=f"comma-separated from {','.join(FORMATS)}, or all (default {','.join(DEFAULT_FORMATS)})")
+    parser.add_argument("--resume", action="store_true", help="continue an interrupted dump in --out")
+    parser.add_argument("--workers", type=int, default=1, help="processes; the frames are split into shards")
+    parser.set_defaults(handler=_dump_command)
+    return parser

@@ -1,0 +1,178 @@
+"""What a dump holds: the pixel formats, each format's files and layout, a frame's metadata."""
+
+from __future__ import annotations
+
+import cv2
+import mujoco
+import numpy as np
+
+import openr_bridge
+from openr_bridge.image import BAND_RUNS
+
+from ..camera import HEAD_CAMERA_GROUPS
+from ..ers7 import JOINTS
+from ..field import SEGMENTATION_CLASSES
+from ..sim import Simulation
+
+FORMATS = ("rgb", "yuv444", "yuv420", "annex", "openr", "bands", "luma", "depth", "seg", "mp4")
+DEFAULT_FORMATS = ("rgb", "yuv420", "openr", "mp4")
+DUMP_FORMAT = "aibo-sim dump 1"  # meta.json's "format"
+
+LAYERS = {name: layer for layer, name in enumerate(openr_bridge.LAYER_NAMES)}
+# Each format's file, relative to the dump folder ("mp4": one file for every frame).
+PATHS = {
+    "rgb": "rgb/{index:06d}.png",
+    "yuv444": "yuv444/{index:06d}.yuv",
+    "yuv420": "yuv420/{index:06d}.yuv",
+    "annex": "annex/{index:06d}.yuv",
+    "openr": "openr/{index:06d}.ofbk",
+    "bands": "bands/{index:06d}_{layer}.raw",
+    "luma": "luma/{index:06d}.png",
+    "depth": "depth/{index:06d}.npy",
+    "seg": "seg/{index:06d}.png",
+    "mp4": "video.mp4",
+}
+# Geoms by name prefix (first match wins); unnamed geoms of the robot's bodies are "robot".
+CLASS_PREFIXES = (("field_line", "line"), ("field", "field"), ("wall", "wall"), ("goal", "goal"),
+                  ("beacon", "beacon"), ("ball", "ball"))
+# Rows: Y, Cb, Cr from RGB / 255 (ITU-R BT.601, limited range), plus the offsets.
+BT601_LIMITED = np.array([[65.481, 128.553, 24.966], [-37.797, -74.203, 112.0], [112.0, -93.786, -18.214]])
+BT601_OFFSET = np.array([16.0, 128.0, 128.0])
+
+
+class DumpError(OSError):
+    """The destination cannot be written, is not a dump, is locked by another writer or holds
+    a corrupt dump; the message names the path (and the line, for a corrupt file)."""
+
+
+# ---------------------------------------------------------------- pixel formats
+
+
+def rgb_to_yuv_bt601(rgb: np.ndarray) -> np.ndarray:
+    """Unrounded (h, w, 3) Y, Cb, Cr of a uint8 RGB frame, BT.601 limited range."""
+    return rgb.astype(np.float64) / 255 @ BT601_LIMITED.T + BT601_OFFSET
+
+
+def _to_bytes(planes) -> bytes:
+    return b"".join(np.clip(np.floor(p + 0.5), 0, 255).astype(np.uint8).tobytes() for p in planes)
+
+
+def yuv444_bytes(rgb: np.ndarray) -> bytes:
+    """I444 planar: Y, Cb, Cr planes of w x h bytes each."""
+    yuv = rgb_to_yuv_bt601(rgb)
+    return _to_bytes(yuv[..., c] for c in range(3))
+
+
+def yuv420_bytes(rgb: np.ndarray) -> bytes:
+    """I420 planar: the Y plane, then Cb and Cr as means of 2x2 blocks (w/2 x h/2 each)."""
+    yuv = rgb_to_yuv_bt601(rgb)
+    chroma = (yuv[0::2, 0::2, 1:] + yuv[0::2, 1::2, 1:] + yuv[1::2, 0::2, 1:] + yuv[1::2, 1::2, 1:]) / 4
+    return _to_bytes([yuv[..., 0], chroma[..., 0], chroma[..., 1]])
+
+
+def annex_yuv(rgb: np.ndarray) -> np.ndarray:
+    """(h, w, 3) uint8 Y, U, V with the report's Annex I formulas and C truncation."""
+    r, g, b = (rgb[..., c].astype(np.float64) for c in range(3))
+    y = (0.299 * r + 0.587 * g + 0.114 * b).astype(np.uint8)
+    u = (0.492 * (b - y) + 128).astype(np.uint8)
+    v = (0.5 * (r - y) + 128).astype(np.uint8)
+    return np.stack([y, u, v], axis=-1)
+
+
+def png(image: np.ndarray) -> bytes:
+    """PNG bytes of an 8-bit image (BGR when it has three channels, as OpenCV writes)."""
+    ok, encoded = cv2.imencode(".png", image)
+    if not ok:
+        raise ValueError(f"PNG encoding of a {image.shape} {image.dtype} image failed")
+    return encoded.tobytes()
+
+
+def geom_classes(model: mujoco.MjModel) -> np.ndarray:
+    """Segmentation class id per geom id, plus a last entry (background) that id -1 selects."""
+    robot_root = model.body_rootid[model.body("body").id]
+    classes = np.zeros(model.ngeom + 1, np.uint8)
+    for geom in range(model.ngeom):
+        name = model.geom(geom).name
+        label = next((label for prefix, label in CLASS_PREFIXES if name.startswith(prefix)), None)
+        if label is None and model.body_rootid[model.geom_bodyid[geom]] == robot_root:
+            label = "robot"
+        classes[geom] = SEGMENTATION_CLASSES.index(label or "background")
+    return classes
+
+
+# ---------------------------------------------------------------- layouts
+
+
+def file_layouts(formats, width: int, height: int) -> dict:
+    """meta.json's "files": each format's path pattern, layout and size in bytes."""
+    size, full = f"{width}x{height}", f"{openr_bridge.FULL_WIDTH}x{openr_bridge.FULL_HEIGHT}"
+    layouts = {
+        "rgb": (f"PNG, 8-bit RGB, {size}", None),
+        "yuv444": (f"I444 planar, {size}, Y then U (Cb) then V (Cr), BT.601 limited range", 3 * width * height),
+        "yuv420": (f"I420 planar (ffmpeg yuv420p), {size}, Y then U (Cb) then V (Cr) at "
+                   f"{width // 2}x{height // 2}, BT.601 limited range", width * height * 3 // 2),
+        "annex": (f"Annex I: Y, U, V bytes per pixel, row-major, {size}", 3 * width * height),
+        "openr": ("OFbkImageVectorData message bytes", None),
+        "bands": ("a layer's GetData bytes: H, M, L rows of Y, Cr, Cb, Y_LH, Y_HL, Y_HH (6 w h bytes), C the CDT "
+                  "band (w h bytes)",
+                  {name: BAND_RUNS[layer_type][1] * w * h for name, (w, h), layer_type
+                   in zip(openr_bridge.LAYER_NAMES, openr_bridge.LAYER_SIZE, openr_bridge.LAYER_TYPE, strict=True)}),
+        "luma": (f"PNG, 8-bit grey, {full}, reconstruct_luma of layer H", None),
+        "depth": (f"NumPy float32 {size}, metres along the optical axis", None),
+        "seg": (f"PNG, 8-bit class ids (segmentation_classes), {size}", None),
+        "mp4": (f"MP4 (mp4v), 30 fps, {size}", None),
+    }
+    return {f: dict(zip(("path", "layout", "bytes"), (PATHS[f], *layouts[f]))) for f in formats}
+
+
+def frame_files(layouts: dict, index: int):
+    """(format, relative path, expected size or None) of each file of frame ``index`` (not the video)."""
+    for name, layout in layouts.items():
+        if "{index" not in layout["path"]:
+            continue
+        if "{layer}" in layout["path"]:
+            sizes = layout["bytes"] or {}
+            for layer in openr_bridge.LAYER_NAMES:
+                yield name, layout["path"].format(index=index, layer=layer), sizes.get(layer)
+        else:
+            yield name, layout["path"].format(index=index), layout["bytes"]
+
+
+# ---------------------------------------------------------------- metadata
+
+
+def ball_in_image(sim: Simulation) -> dict:
+    """The ball centre's pixel in the current frame (x right, y down, through the lens; None
+    behind the camera), visibility, distance.
+
+    Visible: in front of the camera, projected inside the image, and the line of sight to
+    the centre hits the ball first (the head camera's geom groups).
+    """
+    camera, model, data = sim.camera, sim.model, sim.data
+    frame, ball = camera.frame(), sim.ball_position()
+    offset = ball - frame.position
+    distance = float(np.linalg.norm(offset))
+    (u, v), depth = (a[0] for a in camera.project(ball, frame))
+    if not depth > 0:
+        return {"pixel": None, "visible": False, "distance_m": distance}
+    inside = -0.5 <= u <= camera.width - 0.5 and -0.5 <= v <= camera.height - 0.5
+    groups = np.array([g in HEAD_CAMERA_GROUPS for g in range(6)], np.uint8)
+    hit = np.array([-1], np.int32)
+    mujoco.mj_ray(model, data, frame.position, offset, groups, 1, -1, hit)
+    return {"pixel": [float(u), float(v)], "visible": bool(inside and hit[0] == model.geom("ball").id),
+            "distance_m": distance}
+
+
+def frame_metadata(sim: Simulation, index: int) -> dict:
+    """A frames.jsonl record: time, OPEN-R counters, camera pose and settings, joints (rad), the ball."""
+    frame = sim.camera.frame()
+    return {
+        "index": index,
+        "time_s": sim.time_ms / 1000,
+        "frame_number": frame.frame_number,  # 8 ms ticks, the message's frameNumber
+        "field_counter": frame.index,
+        "camera": {"position": frame.position.tolist(), "xmat": frame.xmat.reshape(-1).tolist(),
+                   **frame.settings.as_dict()},
+        "joints": dict(zip((j.name for j in JOINTS), sim.joint_positions().tolist())),
+        "ball": ball_in_image(sim),
+    }

@@ -1,0 +1,180 @@
+"""Reading a dump back: ``load_dump``, ``Dump``, ``DumpFrame``; meta.json and frames.jsonl
+parsed with errors that name the file and the line (the writer's resume uses them too)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+import openr_bridge
+from openr_bridge.image import BAND_RUNS
+
+from ..field import SEGMENTATION_CLASSES
+from .formats import DUMP_FORMAT, LAYERS, DumpError
+
+META, LINES = "meta.json", "frames.jsonl"
+
+
+def _json_error(path: Path, exc: json.JSONDecodeError, line: int | None = None) -> DumpError:
+    where = f"line {line}" if line is not None else f"line {exc.lineno} column {exc.colno}"
+    return DumpError(f"{path}: {where}: not valid JSON ({exc.msg}); the file is corrupt")
+
+
+def read_meta(path: Path) -> dict:
+    """A dump's meta.json; DumpError naming the file (and line) when it is not a dump's."""
+    try:
+        data = path.read_bytes()
+    except FileNotFoundError:
+        raise DumpError(f"{path}: not a dump (no {META})") from None
+    except OSError as exc:
+        raise DumpError(f"cannot read {path}: {exc.strerror or exc}") from exc
+    try:
+        meta = json.loads(data)
+    except UnicodeDecodeError as exc:
+        raise DumpError(f"{path}: not UTF-8 text ({exc.reason} at byte {exc.start}); the file is corrupt") from None
+    except json.JSONDecodeError as exc:
+        raise _json_error(path, exc) from None
+    if not isinstance(meta, dict) or meta.get("format") != DUMP_FORMAT:
+        raise DumpError(f"{path}: not an aibo-sim dump's {META} (no \"format\": {DUMP_FORMAT!r})")
+    return meta
+
+
+def split_lines(data: bytes) -> tuple[bytes, bytes]:
+    """frames.jsonl's complete lines and the partial last line (empty when the file ends in a newline)."""
+    end = data.rfind(b"\n") + 1
+    return data[:end], data[end:]
+
+
+def parse_records(path: Path, data: bytes) -> list[dict]:
+    """frames.jsonl's records, from complete lines only; DumpError naming the line of a bad one."""
+    records = []
+    for number, line in enumerate(data.splitlines(), 1):
+        try:
+            record = json.loads(line)
+        except UnicodeDecodeError as exc:
+            raise DumpError(f"{path}: line {number}: not UTF-8 text ({exc.reason}); the file is corrupt") from None
+        except json.JSONDecodeError as exc:
+            raise _json_error(path, exc, number) from None
+        index = record.get("index") if isinstance(record, dict) else None
+        if isinstance(index, bool) or not isinstance(index, int) or index < 0:
+            raise DumpError(f"{path}: line {number}: not a frame record (no \"index\" >= 0); the file is corrupt")
+        records.append(record)
+    return records
+
+
+def read_records(path: Path) -> list[dict]:
+    """The complete frames' records of a frames.jsonl (none when it does not exist)."""
+    try:
+        data = path.read_bytes()
+    except FileNotFoundError:
+        return []
+    except OSError as exc:
+        raise DumpError(f"cannot read {path}: {exc.strerror or exc}") from exc
+    return parse_records(path, split_lines(data)[0])
+
+
+class DumpFrame:
+    """One frame of a dump; each accessor reads its file when called."""
+
+    def __init__(self, folder: Path, meta: dict, dump_meta: dict):
+        self.folder, self.meta, self._dump_meta = folder, meta, dump_meta
+        self.width, self.height = dump_meta["camera"]["width"], dump_meta["camera"]["height"]
+
+    def path(self, name: str, layer: str = "") -> Path:
+        files = self._dump_meta["files"]
+        if name not in files:
+            raise FileNotFoundError(f"{self.folder}: the dump has no {name!r} files (its formats: {', '.join(files)})")
+        return self.folder / files[name]["path"].format(index=self.meta["index"], layer=layer)
+
+    def _raw(self, name: str) -> np.ndarray:
+        return np.fromfile(self.path(name), np.uint8)
+
+    @property
+    def rgb(self) -> np.ndarray:
+        return cv2.imread(str(self.path("rgb")), cv2.IMREAD_COLOR)[..., ::-1].copy()
+
+    @property
+    def yuv444(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(Y, U, V) planes, each (h, w)."""
+        return tuple(self._raw("yuv444").reshape(3, self.height, self.width))
+
+    @property
+    def yuv420(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(Y, U, V) planes: (h, w), (h/2, w/2), (h/2, w/2)."""
+        data, luma = self._raw("yuv420"), self.width * self.height
+        chroma = data[luma:].reshape(2, self.height // 2, self.width // 2)
+        return data[:luma].reshape(self.height, self.width), chroma[0], chroma[1]
+
+    @property
+    def annex(self) -> np.ndarray:
+        """(h, w, 3): Y, U, V per pixel."""
+        return self._raw("annex").reshape(self.height, self.width, 3)
+
+    @property
+    def message(self) -> openr_bridge.OFbkImageVectorData:
+        return openr_bridge.OFbkImageVectorData.from_bytes(self.path("openr").read_bytes())
+
+    def bands(self, layer: str | int) -> dict[int, np.ndarray]:
+        """The bands of a layer ("H", "M", "L", "C" or ofbkimageLAYER_*) keyed by ofbkimageBAND_*."""
+        index = LAYERS[layer] if isinstance(layer, str) else layer
+        data = np.fromfile(self.path("bands", openr_bridge.LAYER_NAMES[index]), np.uint8)
+        width, height = openr_bridge.LAYER_SIZE[index]
+        info = openr_bridge.OFbkImageInfo(openr_bridge.LAYER_TYPE[index], 0, 0, 0, data.size, width, height)
+        return {band: openr_bridge.OFbkImage(info, data, band).array for band in BAND_RUNS[info.type][0]}
+
+    @property
+    def luma(self) -> np.ndarray:
+        return cv2.imread(str(self.path("luma")), cv2.IMREAD_GRAYSCALE)
+
+    @property
+    def depth(self) -> np.ndarray:
+        return np.load(self.path("depth"))
+
+    @property
+    def seg(self) -> np.ndarray:
+        """Class ids (h, w) uint8; names in ``Dump.segmentation_classes``."""
+        return cv2.imread(str(self.path("seg")), cv2.IMREAD_GRAYSCALE)
+
+
+class Dump:
+    """A dump's complete frames (a sharded dump's shards one after the other; a shard that
+    has not started yet holds none)."""
+
+    def __init__(self, folder: str | Path):
+        self.folder = Path(folder)
+        meta_path = self.folder / META
+        self.meta = read_meta(meta_path)
+        shards = self.meta.get("shards", [])
+        if not isinstance(shards, list) or not all(isinstance(s, str) and s and Path(s).name == s for s in shards):
+            raise DumpError(f"{meta_path}: \"shards\" must list the shard folders' names; the file is corrupt")
+        for key in () if shards else ("camera", "files"):
+            if not isinstance(self.meta.get(key), dict):
+                raise DumpError(f"{meta_path}: no {key!r} object; the file is corrupt")
+        self.parts = [Dump(self.folder / shard) for shard in shards if (self.folder / shard / META).exists()]
+        if shards:
+            self.frames = [f for part in self.parts for f in part.frames]
+            self.videos = [v for part in self.parts for v in part.videos]
+        else:
+            records = {r["index"]: r for r in read_records(self.folder / LINES)}  # one frame per index
+            self.frames = [DumpFrame(self.folder, records[i], self.meta) for i in sorted(records)]
+            video = self.folder / "video.mp4"
+            self.videos = [video] if video.is_file() else []
+        self.segmentation_classes = tuple(self.meta.get("segmentation_classes", SEGMENTATION_CLASSES))
+
+    def __len__(self) -> int:
+        return len(self.frames)
+
+    def __getitem__(self, i: int) -> DumpFrame:
+        return self.frames[i]
+
+    def __iter__(self):
+        return iter(self.frames)
+
+
+def load_dump(folder: str | Path) -> Dump:
+    """Open a dump folder written by ``aibo-sim dump`` (or ``dump``); DumpError (an OSError)
+    when it is not one or its meta.json or frames.jsonl is corrupt (naming the file and line)."""
+    return Dump(folder)

@@ -1,0 +1,393 @@
+"""Writing a dump: the folder's checks and lock, atomic files, ``DumpWriter``, resuming."""
+
+from __future__ import annotations
+
+import contextlib
+import datetime
+import io
+import json
+import os
+import re
+import shlex
+import sys
+import time
+from pathlib import Path
+
+import cv2
+import mujoco
+import numpy as np
+
+import openr_bridge
+from openr_bridge import FRAME_RATE_HZ
+
+from ..field import SEGMENTATION_CLASSES
+from ..sim import Simulation
+from .formats import (DUMP_FORMAT, LAYERS, DumpError, annex_yuv, file_layouts, frame_files, frame_metadata,
+                      geom_classes, png, yuv420_bytes, yuv444_bytes)
+from .reading import LINES, META, parse_records, read_meta, split_lines
+
+try:
+    import fcntl
+except ImportError:  # not POSIX: dumps are not locked there
+    fcntl = None
+
+TEMP_PREFIX = ".tmp."  # a file being written: ".tmp." + its final name, in the same folder
+LOCK_NAME = ".dump.lock"  # flock()ed by the writer; holds its pid, command and start time
+VIDEO = "video.mp4"
+# What an empty destination may hold: the lock, or the temporary meta.json of a writer killed at once.
+OWN_TOP_FILES = frozenset({LOCK_NAME, TEMP_PREFIX + META, TEMP_PREFIX + VIDEO})
+HOLDER_COMMAND_CHARS = 300  # a holder's command line is cut to this in messages
+
+
+# ---------------------------------------------------------------- files
+
+
+def write_atomic(path: Path, data: bytes) -> None:
+    """Write ``path`` whole or not at all (temporary name in the same folder, then rename)."""
+    temp = path.with_name(TEMP_PREFIX + path.name)
+    try:
+        with open(temp, "wb") as file:
+            file.write(data)
+        os.replace(temp, path)
+    except OSError as exc:
+        with contextlib.suppress(OSError):
+            temp.unlink()
+        raise DumpError(f"cannot write {path}: {exc.strerror or exc}") from exc
+
+
+def _temporary_name(pattern: str) -> re.Pattern:
+    """The temporary names of a layout's file pattern ("rgb/{index:06d}.png" -> .tmp.NNNNNN.png)."""
+    parts = re.split(r"(\{index:06d\}|\{layer\})", pattern)
+    fields = {"{index:06d}": r"\d{6,}", "{layer}": "[A-Z]+"}
+    return re.compile(re.escape(TEMP_PREFIX) + "".join(fields.get(p, re.escape(p)) for p in parts))
+
+
+def remove_temporary_files(out: Path, layouts: dict) -> None:
+    """Remove the dump's own temporary files: its names, in its folders, nothing else."""
+    patterns: dict[str, list[re.Pattern]] = {}
+    for layout in layouts.values():
+        folder, name = os.path.split(layout["path"])
+        patterns.setdefault(folder, []).append(_temporary_name(name))
+    for name in OWN_TOP_FILES - {LOCK_NAME}:
+        with contextlib.suppress(OSError):
+            (out / name).unlink()
+    for folder, names in patterns.items():
+        if not folder:
+            continue
+        with contextlib.suppress(OSError), os.scandir(out / folder) as entries:
+            for entry in entries:
+                if any(p.fullmatch(entry.name) for p in names) and entry.is_file(follow_symlinks=False):
+                    with contextlib.suppress(OSError):
+                        os.unlink(entry.path)
+
+
+# ---------------------------------------------------------------- the lock
+
+
+def command_line() -> str:
+    """This process's command line, as a shell would take it."""
+    try:
+        arguments = Path("/proc/self/cmdline").read_bytes().rstrip(b"\0").split(b"\0")
+        return shlex.join(a.decode(errors="replace") for a in arguments)
+    except OSError:
+        return shlex.join([sys.executable, *sys.argv])
+
+
+class FolderLock:
+    """An exclusive ``flock`` on ``folder/.dump.lock`` for the life of a writer (the kernel
+    drops it when the process dies, however it dies); the file names the holder."""
+
+    def __init__(self, folder: Path, *, wait_s: float = 0.0, command: str | None = None):
+        self.path, self._fd = folder / LOCK_NAME, None
+        if fcntl is None:
+            return
+        try:
+            fd = os.open(self.path, os.O_RDWR | os.O_CREAT | getattr(os, "O_CLOEXEC", 0), 0o644)
+        except OSError as exc:
+            raise DumpError(f"cannot lock {self.path}: {exc.strerror or exc}") from exc
+        deadline = time.monotonic() + wait_s
+        while True:
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+                break
+            except BlockingIOError:
+                if time.monotonic() < deadline:
+                    time.sleep(0.05)
+                    continue
+                holder = self._holder(fd)
+                os.close(fd)
+                raise DumpError(f"{folder} is being written by another dump ({holder}): wait for it to end or "
+                                "stop it, then --resume; nothing was changed") from None
+            except OSError as exc:
+                os.close(fd)
+                raise DumpError(f"cannot lock {self.path}: {exc.strerror or exc}") from exc
+        started = datetime.datetime.now().astimezone().isoformat(timespec="seconds")
+        info = {"pid": os.getpid(), "command": command or command_line(), "started": started}
+        with contextlib.suppress(OSError):  # the lock holds without its description
+            os.ftruncate(fd, 0)
+            os.pwrite(fd, (json.dumps(info) + "\n").encode(), 0)
+        self._fd = fd
+
+    @staticmethod
+    def _holder(fd: int) -> str:
+        try:
+            info = json.loads(os.pread(fd, 65536, 0))
+            command = str(info["command"])
+            if len(command) > HOLDER_COMMAND_CHARS:
+                command = command[:HOLDER_COMMAND_CHARS] + "..."
+            return f"pid {info['pid']}, started {info['started']}, command: {command}"
+        except (OSError, ValueError, KeyError, TypeError):
+            return "a process that has just started"
+
+    def release(self) -> None:
+        if self._fd is not None:
+            with contextlib.suppress(OSError):
+                os.ftruncate(self._fd, 0)
+            os.close(self._fd)  # drops the flock
+            self._fd = None
+
+
+# ---------------------------------------------------------------- the folder
+
+
+def _check_destination(out: Path) -> None:
+    """Before anything is written: ``out`` is missing, empty (but for the dump's own files) or a dump."""
+    try:
+        entries = set(os.listdir(out))
+    except FileNotFoundError:
+        return
+    except OSError as exc:
+        raise DumpError(f"cannot create the dump folder {out}: {exc.strerror or exc}") from exc
+    if not entries - OWN_TOP_FILES:
+        return
+    if META in entries:
+        read_meta(out / META)  # a clear error when it is not a dump's
+        return
+    raise DumpError(f"{out} is not empty and is not a dump (no {META}): refusing to write into it; "
+                    "choose a new or empty folder for --out")
+
+
+def _changed_parameters(previous: dict, parameters: dict) -> list[str]:
+    return sorted(k for k in set(previous) | set(parameters) if previous.get(k) != parameters.get(k))
+
+
+def _frames_on_disk(out: Path, layouts: dict, truncate: bool) -> tuple[set[int], set[int]]:
+    """(frames listed in frames.jsonl, those of them with a file missing or of the wrong size);
+    a partial last line is cut off when ``truncate``."""
+    lines_path = out / LINES
+    try:
+        data = lines_path.read_bytes()
+    except FileNotFoundError:
+        return set(), set()
+    except OSError as exc:
+        raise DumpError(f"cannot read {lines_path}: {exc.strerror or exc}") from exc
+    complete_lines, partial = split_lines(data)
+    complete = {record["index"] for record in parse_records(lines_path, complete_lines)}
+    if partial and truncate:
+        try:
+            with open(lines_path, "r+b") as file:
+                file.truncate(len(complete_lines))
+        except OSError as exc:
+            raise DumpError(f"cannot write {lines_path}: {exc.strerror or exc}") from exc
+    sizes: dict[str, dict[str, int]] = {}
+    for layout in layouts.values():
+        folder = os.path.dirname(layout["path"])
+        if folder and folder not in sizes:
+            sizes[folder] = {}
+            with contextlib.suppress(FileNotFoundError), os.scandir(out / folder) as entries:
+                sizes[folder] = {e.name: e.stat().st_size for e in entries if e.is_file()}
+    missing = set()
+    for index in complete:
+        for _, path, expected in frame_files(layouts, index):
+            folder, name = os.path.split(path)
+            size = sizes.get(folder, {}).get(name)
+            if size is None or expected is not None and size != expected:
+                missing.add(index)
+                break
+    return complete, missing
+
+
+class Prepared:
+    """A locked, checked dump folder: the frames already complete, those whose files must be rewritten."""
+
+    def __init__(self, lock: FolderLock, complete: set[int], missing: set[int]):
+        self.lock, self.complete, self.missing = lock, complete, missing
+
+
+def prepare_folder(out: Path, meta: dict, resume: bool, *, lock_wait_s: float = 0.0,
+                   command: str | None = None) -> Prepared:
+    """Check, create and lock the folder, check a dump being resumed, write meta.json.
+
+    Refused (DumpError, nothing changed): a non-empty folder that is not a dump, a dump
+    without ``resume``, a dump made with other parameters (or another controller file), a
+    dump another process is writing. Frames listed in frames.jsonl whose files are missing
+    are rewritten (``Prepared.missing``); the simulation is deterministic.
+    """
+    _check_destination(out)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise DumpError(f"cannot create the dump folder {out}: {exc.strerror or exc}") from exc
+    lock = FolderLock(out, wait_s=lock_wait_s, command=command)
+    try:
+        meta_path, layouts = out / META, meta.get("files", {})
+        complete: set[int] = set()
+        missing: set[int] = set()
+        if meta_path.exists():
+            if not resume:
+                raise DumpError(f"{out} already holds a dump: pass --resume to continue it, or choose another --out")
+            previous = read_meta(meta_path).get("parameters")
+            previous = previous if isinstance(previous, dict) else {}
+            parameters = meta["parameters"]
+            if "controller_sha256" in parameters and parameters.get("controller") == previous.get("controller") \
+                    and previous.get("controller_sha256") != parameters["controller_sha256"]:
+                raise DumpError(f"{meta_path}: cannot resume, the controller file {parameters['controller']} changed "
+                                "since the dump began (another SHA-256); dump to another --out")
+            changed = _changed_parameters(previous, parameters)
+            if changed:
+                raise DumpError(f"{meta_path}: cannot resume, the dump was made with other parameters "
+                                f"({', '.join(changed)})")
+            complete, missing = _frames_on_disk(out, layouts, truncate=True)
+        remove_temporary_files(out, layouts)
+        write_atomic(meta_path, (json.dumps(meta, indent=2) + "\n").encode())
+    except BaseException:
+        lock.release()
+        raise
+    return Prepared(lock, complete, missing)
+
+
+# ---------------------------------------------------------------- the writer
+
+
+class DumpWriter:
+    """Writes the chosen formats of each camera frame into a dump folder, atomically; holds
+    the folder's lock until ``finish`` or ``abort``."""
+
+    def __init__(self, out: Path, formats, parameters: dict, *, resume: bool, camera: dict, model: mujoco.MjModel,
+                 lock_wait_s: float = 0.0, command: str | None = None):
+        self.out, self.formats = out, tuple(formats)
+        width, height = camera["width"], camera["height"]
+        self.layouts = file_layouts(self.formats, width, height)
+        meta = {"format": DUMP_FORMAT, "parameters": parameters, "camera": camera, "files": self.layouts,
+                "segmentation_classes": list(SEGMENTATION_CLASSES)}
+        prepared = prepare_folder(out, meta, resume, lock_wait_s=lock_wait_s, command=command)
+        self._lock, self.complete, self.missing = prepared.lock, prepared.complete, prepared.missing
+        self.new_frames = self.repaired_frames = self.bytes_written = 0
+        self._lines = self._video = self._video_path = None
+        try:
+            self._classes = geom_classes(model) if "seg" in self.formats else None
+            for name in self.formats:
+                path = out / self.layouts[name]["path"]
+                try:
+                    path.parent.mkdir(exist_ok=True)
+                except OSError as exc:
+                    raise DumpError(f"cannot create {path.parent}: {exc.strerror or exc}") from exc
+            try:
+                self._lines = open(out / LINES, "ab")
+            except OSError as exc:
+                raise DumpError(f"cannot write {out / LINES}: {exc.strerror or exc}") from exc
+            if "mp4" in self.formats:
+                self._video_path = out / (TEMP_PREFIX + VIDEO)
+                self._video = cv2.VideoWriter(str(self._video_path), cv2.VideoWriter_fourcc(*"mp4v"),
+                                              FRAME_RATE_HZ, (width, height))
+                if not self._video.isOpened():
+                    raise DumpError(f"cannot write {self._video_path}: OpenCV's mp4v video writer did not open")
+        except BaseException:
+            self.abort()
+            raise
+
+    def needs_frame(self, index: int) -> bool:
+        """Whether frame ``index`` must be rendered: not complete yet, a file of it missing, or
+        wanted by the video."""
+        return index not in self.complete or index in self.missing or self._video is not None
+
+    def write(self, sim: Simulation, index: int, extra: dict | None = None) -> None:
+        """Dump the current camera frame as frame ``index``; ``extra`` joins its metadata."""
+        rgb = sim.camera.frame().rgb
+        if self._video is not None:
+            self._video.write(np.ascontiguousarray(rgb[..., ::-1]))
+        if index in self.complete and index not in self.missing:
+            return
+        for path, data in self._encode(sim, rgb, index):
+            write_atomic(path, data)
+            self.bytes_written += len(data)
+        if index in self.missing:  # its line is there already
+            self.missing.discard(index)
+            self.repaired_frames += 1
+            return
+        line = json.dumps({**frame_metadata(sim, index), **(extra or {})}) + "\n"
+        try:
+            self._lines.write(line.encode())
+            self._lines.flush()
+        except OSError as exc:
+            raise DumpError(f"cannot write {self.out / LINES}: {exc.strerror or exc}") from exc
+        self.complete.add(index)
+        self.new_frames += 1
+
+    def _encode(self, sim: Simulation, rgb: np.ndarray, index: int):
+        """(path, bytes) of each file of a frame."""
+        wants = set(self.formats)
+
+        def path(name: str, layer: str = "") -> Path:
+            return self.out / self.layouts[name]["path"].format(index=index, layer=layer)
+
+        if "rgb" in wants:
+            yield path("rgb"), png(rgb[..., ::-1])
+        if "yuv444" in wants:
+            yield path("yuv444"), yuv444_bytes(rgb)
+        if "yuv420" in wants:
+            yield path("yuv420"), yuv420_bytes(rgb)
+        if "annex" in wants:
+            yield path("annex"), annex_yuv(rgb).tobytes()
+        if wants & {"openr", "bands", "luma"}:
+            message = sim.camera.frame().message
+            if "openr" in wants:
+                yield path("openr"), bytes(message)
+            if "bands" in wants:
+                for name, layer in LAYERS.items():
+                    yield path("bands", name), message.GetData(layer).tobytes()
+            if "luma" in wants:
+                yield path("luma"), png(openr_bridge.reconstruct_luma(message))
+        if "depth" in wants:
+            buffer = io.BytesIO()
+            np.save(buffer, sim.camera.depth())
+            yield path("depth"), buffer.getvalue()
+        if "seg" in wants:
+            yield path("seg"), png(self._classes[sim.camera.segmentation()])
+
+    def __enter__(self) -> "DumpWriter":
+        return self
+
+    def __exit__(self, kind, error, traceback) -> None:
+        if kind is None:
+            self.finish()
+        else:
+            self.abort()
+
+    def finish(self) -> None:
+        """Close the files; the video takes its final name only now."""
+        try:
+            self._close()
+            if self._video_path is not None:
+                final = self.out / VIDEO
+                try:
+                    os.replace(self._video_path, final)
+                except OSError as exc:
+                    remove_temporary_files(self.out, self.layouts)
+                    raise DumpError(f"cannot write {final}: {exc.strerror or exc}") from exc
+        finally:
+            self._lock.release()
+
+    def abort(self) -> None:
+        """Stop after a failure: complete frames stay, the dump's temporary files go."""
+        try:
+            self._close()
+            remove_temporary_files(self.out, self.layouts)
+        finally:
+            self._lock.release()
+
+    def _close(self) -> None:
+        if self._lines is not None:
+            self._lines.close()
+        if self._video is not None:
+            self._video.release()

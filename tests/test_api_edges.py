@@ -1,0 +1,183 @@
+"""Edges of the controller API and the environments: steps that are not whole frames, a motion
+played again while it plays, arguments that are not motions or file names, control characters
+in MTN strings, an environment used after close() (issue 15)."""
+
+import json
+import math
+import sys
+import time
+
+import gymnasium
+import numpy as np
+import pytest
+
+import aibo_sim.envs  # noqa: F401  (registers the environments)
+from aibo_sim import controller as api
+from aibo_sim.cli import main
+from aibo_sim.mtn import Motion, MtnError, write_mtn
+from aibo_sim.robot import DeviceError, Robot
+from aibo_sim.sim import Simulation
+
+LF_J1 = "PRM:/r2/c1-Joint2:21"
+HEAD_PAN = "PRM:/r1/c1/c2-Joint2:12"
+
+
+@pytest.fixture(params=["openr", "webots"])
+def robot(request):
+    robot = Robot(Simulation(), mtn_mode=request.param)
+    api.install(robot)
+    yield robot
+    api.install(None)
+    robot.sim.close()
+
+
+def ramp(name="a_test#ramp", frames=(0.0, 10.0, 20.0, 30.0)) -> Motion:
+    return Motion.from_poses(name, [LF_J1], np.radians([[f] for f in frames]), 16 * 4)
+
+
+# ----------------------------------------------------------------------------- robot_step
+
+
+@pytest.mark.parametrize("ms", [8.9, 7.999, 12, 0, -8, 16.5, math.nan, math.inf, "16", True, None])
+def test_robot_step_refuses_what_is_not_a_whole_multiple_of_8_ms(robot, ms):
+    with pytest.raises(ValueError, match=r"step of .* ms: must be a positive whole multiple of the 8 ms joint frame"):
+        api.robot_step(ms)
+    assert robot.time_ms == 0  # not silently 8 ms
+
+
+def test_robot_step_takes_whole_numbers_of_any_numeric_type(robot):
+    for ms in (8, 16.0, np.int64(24), np.float32(32.0)):
+        api.robot_step(ms)
+    assert robot.time_ms == 80
+
+
+@pytest.mark.parametrize("ms", [8.9, 0, "32", math.nan])
+def test_sampling_periods_must_be_whole_positive_ms(robot, ms):
+    with pytest.raises(DeviceError, match=r"sampling period must be a positive whole number of ms"):
+        api.servo_enable_position(api.robot_get_device(HEAD_PAN), ms)
+
+
+# ----------------------------------------------------------------------------- mtn_play
+
+
+def test_mtn_play_on_a_playing_motion_restarts_it_rather_than_stacking(robot):
+    motion = ramp()
+    api.mtn_play(motion)
+    for _ in range(8):
+        api.robot_step(8)
+    assert api.mtn_get_time(motion) == 64 and len(robot.playing) == 1
+    api.mtn_play(motion)  # again, while it plays: from its start
+    assert len(robot.playing) == 1 and api.mtn_get_time(motion) == 0
+    api.robot_step(8)
+    assert api.mtn_get_time(motion) == 8
+    # Webots mode commands keyframe 0 on the restart's first step; OPEN-R mode its frame 0.
+    assert robot.sim.servos.target[6] == pytest.approx(0.0, abs=1e-9)
+
+
+def test_a_controller_that_plays_every_step_keeps_one_playback_and_its_speed(robot):
+    """Was 1,876 playbacks after 60 s and a real-time factor of 0.9 instead of 100."""
+    motion = ramp()
+    start = time.perf_counter()
+    for _ in range(1250):  # 10 s of simulated time
+        api.mtn_play(motion)
+        api.robot_step(8)
+    wall = time.perf_counter() - start
+    assert len(robot.playing) == 1 and not api.mtn_is_over(motion)
+    assert 10.0 / wall > 5  # real-time factor; ~0.4 s of wall time here
+
+
+def test_other_motions_keep_playing_beside_a_restarted_one(robot):
+    first, second = ramp("first"), Motion.from_poses("second", [HEAD_PAN], np.radians([[0.0], [5.0]]), [512])
+    api.mtn_play(first)
+    api.mtn_play(second)
+    api.robot_step(64)
+    api.mtn_play(first)
+    assert [p.motion for p in robot.playing] == [second, first]
+    api.mtn_delete(first)
+    assert api.mtn_is_over(first) and not api.mtn_is_over(second)
+    api.mtn_delete(None)  # as in Webots: nothing
+
+
+# ----------------------------------------------------------------------------- arguments
+
+
+@pytest.mark.parametrize("function", ["mtn_is_over", "mtn_play", "mtn_get_time", "mtn_get_length", "mtn_get_name",
+                                      "mtn_delete"])
+@pytest.mark.parametrize("argument, shown", [(42, "42"), ("WALKFWD.MTN", "'WALKFWD.MTN'"), ("x" * 5000, "characters")])
+def test_mtn_functions_name_an_argument_that_is_not_a_motion(robot, function, argument, shown):
+    with pytest.raises(MtnError, match=rf"{function}\(.*{shown}.*\): not an MTN \(use the value mtn_new returned\)") as caught:
+        getattr(api, function)(argument)
+    assert len(str(caught.value)) < 200
+
+
+def test_a_null_mtn_quotes_the_mtn_new_error(robot):
+    assert api.mtn_new("NOSUCH.MTN") is None
+    with pytest.raises(MtnError, match=r"mtn_is_over: MTN is NULL: mtn_new failed \(File not found: NOSUCH.MTN\)"):
+        api.mtn_is_over(None)
+    with pytest.raises(ValueError):  # MtnError is a ValueError, as before
+        api.mtn_play(None)
+
+
+@pytest.mark.parametrize("argument, words", [(None, "mtn_new(None): the file name must be a str or a path, not NoneType"),
+                                             (42, "mtn_new(42): the file name must be a str or a path, not int"),
+                                             ("x" * 5000, "File not found: xxxx")])
+def test_mtn_new_of_what_is_not_a_file_name_returns_none_with_the_reason(robot, argument, words):
+    assert api.mtn_new(argument) is None  # the documented failure
+    error = api.mtn_get_error()
+    assert words in error and len(error) < 300
+    with pytest.raises(MtnError, match="the file name must be|File not found"):
+        robot.mtn_new(argument)  # the Pythonic API raises it
+
+
+def test_a_5000_character_name_says_how_long_it_was(robot):
+    assert api.mtn_new("x" * 5000) is None
+    assert api.mtn_get_error().endswith("... (5000 characters)")
+
+
+def test_robot_die_needs_a_function(robot):
+    with pytest.raises(TypeError, match="robot_die"):
+        api.robot_die(42)
+
+
+# ----------------------------------------------------------------------------- control characters
+
+EVIL = "walk\x1b[2J\x07\nnext\x85"
+
+
+def test_control_characters_in_mtn_strings_are_escaped_when_printed(robot, tmp_path, capsys):
+    motion = Motion.from_poses(EVIL, [LF_J1], np.radians([[0.0], [10.0]]), [16], creator="me\r", design="DRX\x00")
+    api.mtn_fprint(sys.stdout, motion)
+    out = capsys.readouterr().out
+    assert r"walk\x1b[2J\x07\nnext\x85" in out and r"me\r" in out and r"DRX\x00" in out
+    assert not any(c in out for c in "\x1b\x07\r\x00\x85") and "\nnext" not in out
+
+    path = tmp_path / "EVIL.MTN"
+    write_mtn(motion, path)
+    assert main(["mtn", "info", str(path)]) == 0
+    out = capsys.readouterr().out
+    assert r"walk\x1b[2J\x07\nnext\x85" in out and "\x1b" not in out and "\nnext" not in out
+    assert main(["mtn", "info", str(path), "--json"]) == 0
+    out = capsys.readouterr().out
+    assert json.loads(out)["name"] == EVIL and "\x1b" not in out  # JSON escapes them itself
+
+
+def test_a_missing_device_with_control_characters_is_escaped_in_the_error(robot, tmp_path):
+    path = tmp_path / "BAD.MTN"
+    write_mtn(Motion.from_poses("bad", ["PRM:\x1b[31m"], np.radians([[0.0], [1.0]]), [16]), path)
+    assert api.mtn_new(str(path)) is None
+    assert api.mtn_get_error() == r"Missing device in model: PRM:\x1b[31m"
+
+
+# ----------------------------------------------------------------------------- environments after close()
+
+
+def test_an_environment_keeps_no_stepping_after_close():
+    env = gymnasium.make("aibo_sim/HeadTrackBall-v0", camera=None)
+    env.reset(seed=0)
+    env.step(env.action_space.sample())
+    env.close()
+    env.close()  # closing twice is harmless
+    with pytest.raises(gymnasium.error.ClosedEnvironmentError, match="step after close"):
+        env.step(env.action_space.sample())
+    with pytest.raises(gymnasium.error.ClosedEnvironmentError, match="is closed"):
+        env.reset(seed=1)

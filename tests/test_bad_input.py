@@ -1,0 +1,277 @@
+"""Bad input gets exit status 2 and one line naming it, never a traceback; a controller's own
+end (an exception, sys.exit, Ctrl-C, a robot_die function that raises) is reported as such;
+CONNECT.CFG is parsed in linear time, quoted briefly and read only from a regular file (issue 15)."""
+
+import math
+import os
+import re
+import threading
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from aibo_sim.cli import main
+from aibo_sim.robot import Robot
+from aibo_sim.runner import ControllerFailed, run_controller
+from aibo_sim.sim import ModelError, Simulation
+from openr_bridge import ConfigError, OpenRSystem, parse_connect_cfg, parse_stub_cfg
+from openr_bridge.config import QUOTE_LIMIT, load_connect_cfg
+from openr_bridge.wrapper import CAMERA_CONNECTION
+
+ROOT = Path(__file__).resolve().parents[1]
+SCRIPTED = Path(__file__).parent / "controllers" / "scripted_head.py"
+DUMMY_LINE = "Controller.DummySubject.DontConnect.S OVirtualRobotComm.DummyObserver.DontConnect.O"
+
+
+def one_error_line(capsys, *words) -> str:
+    """The command's stderr: one line, no traceback, holding every one of ``words``."""
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "Traceback" not in err, err[:2000]
+    for word in words:
+        assert word in err, err
+    return err
+
+
+def controller(tmp_path, body: str, name: str = "ctl.py") -> Path:
+    path = tmp_path / name
+    path.write_text("from aibo_sim.controller import *\n" + body)
+    return path
+
+
+# ----------------------------------------------------------------------------- duration
+
+
+@pytest.mark.parametrize("value", ["inf", "nan", "-inf", "1e300"])
+def test_duration_that_is_not_a_finite_number_exits_2(value, capsys):
+    with pytest.raises(SystemExit) as caught:
+        main(["run", str(SCRIPTED), f"--duration={value}"])
+    assert caught.value.code == 2
+    one_error_line(capsys, "--duration", value)
+
+
+@pytest.mark.parametrize("value", [math.inf, math.nan, 0, -1.0, "10", None, True])
+def test_run_controller_refuses_a_bad_duration(value):
+    with pytest.raises(ValueError, match="--duration"):
+        run_controller(SCRIPTED, duration=value)
+
+
+# ----------------------------------------------------------------------------- scenes
+
+
+@pytest.fixture
+def scenes(tmp_path):
+    """A scene without the robot, and the robot without its keyframes."""
+    no_robot = tmp_path / "no_robot.xml"
+    no_robot.write_text('<mujoco><worldbody><body name="box"><freejoint/><geom size=".1"/></body></worldbody></mujoco>')
+    no_stand = tmp_path / "no_stand.xml"
+    no_stand.write_text(re.sub(r"<keyframe>.*?</keyframe>", "", (ROOT / "models" / "ers7.xml").read_text(), flags=re.S))
+    return no_robot, no_stand
+
+
+def test_a_scene_without_the_robot_or_its_stand_keyframe_is_a_model_error(scenes):
+    no_robot, no_stand = scenes
+    with pytest.raises(ModelError, match=rf"{re.escape(str(no_robot))}: no ERS-7 robot in this scene \(missing body"):
+        Simulation(no_robot)
+    with pytest.raises(ModelError, match=rf"{re.escape(str(no_stand))}: no keyframe 'stand'.*keyframes: none"):
+        Simulation(no_stand)
+    Simulation(ROOT / "models" / "ers7.xml").close()  # the robot alone is a scene
+
+
+@pytest.mark.parametrize("command", [["run", str(SCRIPTED), "--duration", "0.1"], ["render", "--settle", "0"],
+                                     ["mtn", "play", "WALKFWD.MTN"]])
+def test_cli_with_a_scene_without_the_robot_exits_2(scenes, command, tmp_path, capsys):
+    no_robot, no_stand = scenes
+    out = ["--out", str(tmp_path / "out")] if command[0] == "render" else []
+    assert main(command + out + ["--scene", str(no_robot)]) == 2
+    one_error_line(capsys, str(no_robot), "no ERS-7 robot")
+    assert main(command + out + ["--scene", str(no_stand)]) == 2
+    one_error_line(capsys, str(no_stand), "no keyframe 'stand'")
+
+
+def test_a_fifo_as_the_scene_is_refused(tmp_path, capsys):
+    fifo = tmp_path / "scene.xml"
+    os.mkfifo(fifo)
+    assert main(["run", str(SCRIPTED), "--scene", str(fifo)]) == 2
+    one_error_line(capsys, str(fifo), "not a regular file")
+
+
+# ----------------------------------------------------------------------------- dump of another env
+
+
+def test_dump_of_a_non_aibo_environment_exits_2(tmp_path, capsys):
+    out = tmp_path / "dump"
+    assert main(["dump", "--env", "CartPole-v1", "--out", str(out)]) == 2
+    one_error_line(capsys, "CartPole-v1", "not an aibo_sim environment")
+    assert not out.exists()
+
+
+# ----------------------------------------------------------------------------- placements
+
+
+@pytest.mark.parametrize("function, args, name", [
+    ("place_ball", (math.nan, 0.0), "x"), ("place_ball", (0.0, math.inf), "y"), ("place_ball", (1e300, 0.0), "x"),
+    ("place_ball", (0.0, "1"), "y"), ("place_robot", (math.nan, 0.0, 0.0), "x"), ("place_robot", (0.0, -math.inf, 0.0), "y"),
+    ("place_robot", (0.0, 0.0, 1e300), "yaw"), ("place_robot", (0.0, 0.0, None), "yaw"),
+])
+def test_placements_that_are_not_finite_are_refused_naming_the_argument(function, args, name):
+    sim = Simulation()
+    try:
+        before = sim.data.qpos.copy()
+        with pytest.raises(ValueError, match=rf"{function}: {name}\b"):
+            getattr(sim, function)(*args)
+        np.testing.assert_array_equal(sim.data.qpos, before)  # nothing moved, no MuJoCo reset
+        getattr(sim, function)(*[1.0] * len(args))  # finite values still work
+    finally:
+        sim.close()
+
+
+# ----------------------------------------------------------------------------- memory sticks
+
+
+def memory_stick(tmp_path, text) -> Path:
+    conf = tmp_path / "ms" / "OPEN-R" / "MW" / "CONF"
+    conf.mkdir(parents=True)
+    (conf / "CONNECT.CFG").write_text(text)
+    return tmp_path / "ms"
+
+
+@pytest.mark.parametrize("text, words", [
+    ("", "has no connection"),
+    ("# nothing here\n\n", "has no connection"),
+    (DUMMY_LINE + "\n", "does not connect Controller.Image.OFbkImageVectorData.O"),
+])
+def test_a_memory_stick_without_the_camera_line_is_refused_when_loaded(tmp_path, capsys, text, words):
+    stick = memory_stick(tmp_path, text)
+    cfg = str(stick / "OPEN-R" / "MW" / "CONF" / "CONNECT.CFG")
+    with pytest.raises(ConfigError, match=re.escape(f"{cfg}: {words}: the camera needs the line '{CAMERA_CONNECTION}'")):
+        OpenRSystem.from_memory_stick(stick)
+    sim = Simulation()
+    try:
+        with pytest.raises(ConfigError, match=words):
+            Robot(sim, backend="openr", memory_stick=stick)  # at the backend's creation, not at camera_get_image
+    finally:
+        sim.close()
+    assert main(["run", str(SCRIPTED), "--backend", "openr", "--memory-stick", str(stick), "--duration", "0.1"]) == 2
+    err = one_error_line(capsys, cfg, words)
+    assert "raised" not in err  # not reported as the controller's failure
+
+
+def test_connect_cfg_of_20000_lines_reports_the_first_error_at_once(tmp_path):
+    """Was quadratic: 45 s before the error on line 1."""
+    lines = [f"Obj{i}.Sub.Data.S Other.Sub.Data.O" for i in range(20_000)]
+    start = time.perf_counter()
+    connections = parse_connect_cfg("\n".join(lines))
+    assert len(connections) == 20_000 and time.perf_counter() - start < 1
+    stick = memory_stick(tmp_path, "\n".join(lines))
+    start = time.perf_counter()
+    with pytest.raises(ConfigError, match=r"CONNECT.CFG:1: unknown object 'Obj0'"):
+        OpenRSystem.from_memory_stick(stick)
+    assert time.perf_counter() - start < 1
+    start = time.perf_counter()
+    with pytest.raises(ConfigError, match="CONNECT.CFG:20001: connection repeated from line 1"):
+        parse_connect_cfg("\n".join(lines + lines[:1]))
+    assert time.perf_counter() - start < 1
+
+
+def test_stub_cfg_of_20000_services_and_long_blank_runs_parse_in_linear_time():
+    services = "".join(f'Service : "Obj.S{i}.Data.O", null, Notify()\n' for i in range(20_000))
+    start = time.perf_counter()
+    stub = parse_stub_cfg('ObjectName : Obj\nNumOfOSubject : 1\nNumOfOObserver : 20000\n'
+                          'Service : "Obj.Dummy.Data.S", null, null\n' + services)
+    assert len(stub.services) == 20_001 and time.perf_counter() - start < 1
+    start = time.perf_counter()  # a lazy regular expression backtracked quadratically over blanks
+    with pytest.raises(ConfigError, match="not a name"):
+        parse_stub_cfg("ObjectName : A" + " " * 1_000_000 + "B\nNumOfOSubject : 1\nNumOfOObserver : 1\n")
+    assert time.perf_counter() - start < 1
+
+
+def test_a_50_mb_line_is_quoted_briefly(tmp_path):
+    huge = "A" * 50_000_000
+    for text in (f"{huge} B.y.char.O", f"A.x.char.S B.y.char.O {huge}", f"A.x.{huge}.S B.y.char.O"):
+        start = time.perf_counter()
+        with pytest.raises(ConfigError) as caught:
+            parse_connect_cfg(text)
+        assert time.perf_counter() - start < 2
+        message = str(caught.value)
+        assert len(message) < 2 * QUOTE_LIMIT + 200 and "characters in all" in message, message[:500]
+    with pytest.raises(ConfigError) as caught:  # a valid line whose object no system has
+        OpenRSystem(parse_connect_cfg(f"{huge}.x.char.S B.y.char.O"))
+    assert len(str(caught.value)) < 2 * QUOTE_LIMIT + 200 and "characters in all" in str(caught.value)
+
+
+def test_a_fifo_in_place_of_connect_cfg_is_refused_without_waiting(tmp_path):
+    conf = tmp_path / "OPEN-R" / "MW" / "CONF"
+    conf.mkdir(parents=True)
+    fifo = conf / "CONNECT.CFG"
+    os.mkfifo(fifo)
+
+    def unblock():  # should the reader wait for a writer after all, release it so that the test fails, not hangs
+        try:
+            os.close(os.open(fifo, os.O_WRONLY | os.O_NONBLOCK))
+        except OSError:
+            pass
+
+    timer = threading.Timer(5, unblock)
+    timer.start()
+    try:
+        start = time.perf_counter()
+        with pytest.raises(ConfigError, match="cannot read: a FIFO, not a regular file"):
+            OpenRSystem.from_memory_stick(tmp_path)
+        assert time.perf_counter() - start < 1
+    finally:
+        timer.cancel()
+    folder = tmp_path / "other" / "CONNECT.CFG"
+    folder.mkdir(parents=True)
+    with pytest.raises(ConfigError, match="cannot read: a folder"):
+        load_connect_cfg(folder)
+
+
+# ----------------------------------------------------------------------------- how a controller ends
+
+
+def test_a_raising_robot_die_function_does_not_hide_the_controllers_exception(tmp_path, capsys):
+    bad = controller(tmp_path, "def cleanup():\n    raise OSError('cleanup failed')\n"
+                               "robot_die(cleanup)\nrobot_step(16)\nraise RuntimeError('boom')\n")
+    with pytest.raises(ControllerFailed) as caught:
+        run_controller(bad, duration=1.0)
+    message = str(caught.value)
+    assert "raised at simulated t = 0.016 s" in message and "RuntimeError: boom" in message
+    assert "then its robot_die function cleanup raised" in message and "OSError: cleanup failed" in message
+    assert message.index("RuntimeError: boom") < message.index("OSError: cleanup failed")
+    assert main(["run", str(bad), "--duration", "1"]) == 1
+    err = capsys.readouterr().err
+    assert "RuntimeError: boom" in err and "OSError: cleanup failed" in err
+
+
+def test_every_robot_die_function_runs_and_one_that_raises_fails_the_run(tmp_path):
+    ok = controller(tmp_path, "def first():\n    raise ValueError('first')\n"
+                              "def second():\n    open('second.txt', 'w').write('ran')\n"
+                              "robot_die(first)\nrobot_die(second)\nwhile True:\n    robot_step(32)\n")
+    with pytest.raises(ControllerFailed, match=r"ended at simulated t = 0\.200 s;\nits robot_die function first raised"):
+        run_controller(ok, duration=0.2, out=tmp_path / "out")
+    assert (tmp_path / "out" / "second.txt").read_text() == "ran"
+
+
+@pytest.mark.parametrize("code, status", [("3", 1), ("'stopped by the user'", 1), ("0", 0), ("", 0), ("None", 0)])
+def test_sys_exit_from_a_controller_is_its_exit_not_a_divergence(tmp_path, capsys, code, status):
+    ctl = controller(tmp_path, "import sys\nrobot_die(lambda: open('die.txt', 'w').write('ran'))\n"
+                               f"robot_step(64)\nsys.exit({code})\n")
+    out = tmp_path / "out"
+    assert main(["run", str(ctl), "--duration", "1", "--out", str(out)]) == status
+    err = capsys.readouterr().err
+    assert "diverged" not in err and (out / "die.txt").read_text() == "ran"
+    if status:
+        assert f"ctl.py exited with sys.exit({code}) at simulated t = 0.064 s" in err
+    else:
+        assert run_controller(ctl, duration=1.0, out=tmp_path / "again").simulated_s == pytest.approx(0.064)  # ends there
+
+
+def test_ctrl_c_in_a_controller_exits_130_after_its_robot_die_functions(tmp_path, capsys):
+    ctl = controller(tmp_path, "robot_die(lambda: open('die.txt', 'w').write('ran'))\n"
+                               "robot_step(8)\nraise KeyboardInterrupt\n")
+    out = tmp_path / "out"
+    assert main(["run", str(ctl), "--duration", "1", "--out", str(out)]) == 130
+    assert "interrupted" in capsys.readouterr().err
+    assert (out / "die.txt").read_text() == "ran"

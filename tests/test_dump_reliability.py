@@ -1,0 +1,370 @@
+"""Dumps and ``run --out`` that survive kills and concurrency (issue 15): workers die with a
+killed dump, one writer per folder, byte-identical resumes, folders that are not a dump left
+alone, corrupt files named with their line; ``run --out`` temporary names, reused folders and
+a full disk."""
+
+import fnmatch
+import json
+import os
+import resource
+import shutil
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+from pathlib import Path
+
+import pytest
+
+from aibo_sim.cli import main
+from aibo_sim.dump import FORMATS, DumpError, dump, load_dump
+from aibo_sim.dump.writing import LOCK_NAME, FolderLock
+from aibo_sim.runner import run_controller
+
+ROOT = Path(__file__).resolve().parents[1]
+TRACKER = ROOT / "controllers" / "ball_tracker.py"
+NO_VIDEO = tuple(f for f in FORMATS if f != "mp4")
+STARTUP_S = 30  # a subprocess's imports and first frames, on a loaded machine
+GONE_S = 5  # a killed dump's workers are gone within this
+
+
+def _cli(*args: str) -> list[str]:
+    return [sys.executable, "-m", "aibo_sim.cli", *args]
+
+
+def _snapshot(folder: Path, lock: bool = True) -> dict:
+    """Every entry below ``folder``: its bytes (files), with its modification time; without the
+    lock file unless ``lock`` (a writer refused after taking the lock has written its name there)."""
+    return {str(p.relative_to(folder)): (p.read_bytes() if p.is_file() else None, p.stat().st_mtime_ns)
+            for p in sorted(folder.rglob("*")) if lock or p.name != LOCK_NAME}
+
+
+def _alive(pid: int) -> bool:
+    """Any thread of the process still running (a zombie waiting for a reaper is not; a killed
+    process's other threads may outlive its main thread's turning zombie, holding its files)."""
+    try:
+        tasks = os.listdir(f"/proc/{pid}/task")
+    except OSError:
+        return False
+    for task in tasks:
+        try:
+            if Path(f"/proc/{pid}/task/{task}/stat").read_text().rsplit(")", 1)[1].split()[0] not in "ZX":
+                return True
+        except (OSError, IndexError):
+            pass
+    return False
+
+
+def _wait_for(predicate, timeout_s: float, what: str):
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        value = predicate()
+        if value:
+            return value
+        time.sleep(0.01)
+    raise AssertionError(f"timed out after {timeout_s} s waiting for {what}")
+
+
+def _holder_pid(folder: Path) -> int | None:
+    try:
+        return json.loads((folder / LOCK_NAME).read_text())["pid"]
+    except (OSError, ValueError, KeyError):
+        return None
+
+
+def _lines(folder: Path) -> int:
+    try:
+        return (folder / "frames.jsonl").read_bytes().count(b"\n")
+    except OSError:
+        return 0
+
+
+@pytest.fixture(scope="module")
+def small_dump(tmp_path_factory):
+    out = tmp_path_factory.mktemp("small") / "dump"
+    dump(out, controller=TRACKER, frames=4, formats=("rgb", "yuv420"))
+    return out
+
+
+# ---------------------------------------------------------------- workers die with the dump
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
+@pytest.mark.parametrize("sig", [signal.SIGKILL, signal.SIGTERM], ids=["SIGKILL", "SIGTERM"])
+def test_a_killed_sharded_dump_takes_its_workers_along(tmp_path, capsys, sig):
+    out = tmp_path / "dump"
+    command = [str(TRACKER), "--out", str(out), "--steps", "3000", "--workers", "2", "--formats", "rgb"]
+    parent = subprocess.Popen(_cli("dump", *command), cwd=ROOT, stderr=subprocess.PIPE, text=True)
+
+    def worker_pids():  # each worker names itself in its shard's lock file
+        pids = [_holder_pid(out / f"shard_{k}") for k in range(2)]
+        return all(pids) and pids
+
+    try:
+        workers = _wait_for(worker_pids, STARTUP_S, "both workers' locks")
+        for pid in workers:
+            assert Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[1] == str(parent.pid)
+        children = Path(f"/proc/{parent.pid}/task/{parent.pid}/children")  # multiprocessing's resource tracker too
+        workers += [int(pid) for pid in children.read_text().split()] if children.exists() else []
+        _wait_for(lambda: _lines(out / "shard_0") >= 2, STARTUP_S, "frames")
+        # One writer per folder: a second dump is refused, naming the holder.
+        capsys.readouterr()
+        assert main(["dump", *command, "--resume"]) == 2
+        error = capsys.readouterr().err
+        assert error.count("\n") == 1 and f"is being written by another dump (pid {parent.pid}, started " in error
+        assert "--workers 2" in error
+        parent.send_signal(sig)
+        status = parent.wait(GONE_S)
+    finally:
+        if parent.poll() is None:
+            parent.kill()
+            parent.wait()
+    _wait_for(lambda: not any(_alive(pid) for pid in workers), GONE_S, f"the dump's processes {workers} to end")
+    if sig == signal.SIGTERM:  # stopped cleanly: the message, no temporary files, the locks free
+        assert status == 143 and "terminated (SIGTERM)" in parent.stderr.read()
+        assert not list(out.rglob(".tmp.*"))
+    else:
+        assert status == -signal.SIGKILL
+    for folder in (out, out / "shard_0", out / "shard_1"):
+        FolderLock(folder).release()
+    frames = len(load_dump(out))
+    assert 2 <= frames < 3000
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
+def test_a_worker_without_prctl_watches_its_parent(tmp_path):
+    """The portable fallback alone (as on macOS): the worker ends once its parent is gone."""
+    child = textwrap.dedent("""
+        import os, sys, time
+        sys.platform = "darwin"  # no PR_SET_PDEATHSIG: the watchdog thread alone
+        from aibo_sim.dump.running import die_with_parent
+        die_with_parent(os.getppid())
+        print(os.getpid(), flush=True)
+        time.sleep(60)
+    """)
+    parent = textwrap.dedent(f"""
+        import subprocess, sys, time
+        subprocess.Popen([sys.executable, "-c", {child!r}])
+        time.sleep(60)
+    """)
+    process = subprocess.Popen([sys.executable, "-c", parent], cwd=ROOT, stdout=subprocess.PIPE, text=True)
+    try:
+        pid = int(process.stdout.readline())
+        assert _alive(pid)
+    finally:
+        process.kill()
+        process.wait()
+    _wait_for(lambda: not _alive(pid), GONE_S, "the orphaned worker to end")
+
+
+# ---------------------------------------------------------------- one writer per folder
+
+
+def test_a_locked_folder_is_refused_naming_the_holder_and_nothing_changes(small_dump, tmp_path, capsys):
+    out = tmp_path / "dump"
+    shutil.copytree(small_dump, out)
+    lock = FolderLock(out, command="aibo-sim dump elsewhere --out somewhere")
+    try:
+        before = _snapshot(out)
+        assert main(["dump", str(TRACKER), "--out", str(out), "--steps", "4", "--formats", "rgb,yuv420",
+                     "--resume"]) == 2
+        error = capsys.readouterr().err
+        assert error.count("\n") == 1
+        assert f"(pid {os.getpid()}, started " in error and "command: aibo-sim dump elsewhere --out somewhere" in error
+        assert _snapshot(out) == before
+    finally:
+        lock.release()
+    assert dump(out, controller=TRACKER, frames=4, formats=("rgb", "yuv420"), resume=True).new_frames == 0
+
+
+# ---------------------------------------------------------------- resume
+
+
+@pytest.fixture(scope="module")
+def uninterrupted(tmp_path_factory):
+    """The reference: every format but the video (a resume renders only the frames it writes), ers7 camera."""
+    out = tmp_path_factory.mktemp("reference") / "dump"
+    dump(out, controller=TRACKER, frames=30, seed=2, formats=NO_VIDEO)
+    return out
+
+
+def test_resume_after_a_kill_is_byte_identical_whatever_the_formats(uninterrupted, tmp_path):
+    out = tmp_path / "dump"
+    process = subprocess.Popen(_cli("dump", str(TRACKER), "--out", str(out), "--steps", "30", "--seed", "2",
+                                    "--formats", ",".join(NO_VIDEO)), cwd=ROOT, stderr=subprocess.DEVNULL)
+    try:
+        _wait_for(lambda: _lines(out) >= 6 or process.poll() is not None, STARTUP_S, "six frames")
+        process.kill()
+    finally:
+        process.wait()
+    assert process.returncode == -signal.SIGKILL, "the dump ended before it could be killed"
+    complete = len(load_dump(out))
+    assert 6 <= complete < 30
+    (out / "seg" / "000003.png").unlink()  # a listed frame's file lost: rewritten, its line kept
+    summary = dump(out, controller=TRACKER, frames=30, seed=2, formats=NO_VIDEO, resume=True)
+    assert (summary.frames, summary.new_frames, summary.repaired_frames) == (30, 30 - complete, 1)
+    reference = _snapshot(uninterrupted)
+    resumed = _snapshot(out)
+    assert sorted(resumed) == sorted(reference)
+    for name, (data, _) in reference.items():
+        assert resumed[name][0] == data, name
+
+
+def test_resume_refuses_a_changed_controller_file(tmp_path):
+    for name in ("ball_tracker.py", "ball_vision.py"):
+        shutil.copy(ROOT / "controllers" / name, tmp_path / name)
+    controller, out = tmp_path / "ball_tracker.py", tmp_path / "dump"
+    dump(out, controller=controller, frames=2, formats=("rgb",))
+    assert len(json.loads((out / "meta.json").read_text())["parameters"]["controller_sha256"]) == 64
+    assert dump(out, controller=controller, frames=2, formats=("rgb",), resume=True).new_frames == 0
+    before = _snapshot(out, lock=False)
+    with pytest.raises(DumpError, match=r"other parameters \(formats\)"):
+        dump(out, controller=controller, frames=2, formats=("rgb", "seg"), resume=True)
+    controller.write_text(controller.read_text() + "\nGAIN = 0.7\n")
+    with pytest.raises(DumpError, match=r"cannot resume, the controller file .*ball_tracker\.py changed"):
+        dump(out, controller=controller, frames=2, formats=("rgb",), resume=True)
+    assert _snapshot(out, lock=False) == before
+
+
+# ---------------------------------------------------------------- folders that are not a dump
+
+
+@pytest.mark.parametrize("resume", [False, True], ids=["new", "resume"])
+def test_a_folder_that_is_not_a_dump_is_refused_and_untouched(tmp_path, capsys, resume):
+    out = tmp_path / "mine"
+    (out / "notes" / "deep").mkdir(parents=True)
+    (out / "frames.jsonl").write_text('{"a user\'s": "lines"}\n')
+    (out / "notes" / "deep" / ".tmp.keep").write_text("mine")
+    (out / "rgb").mkdir()
+    (out / "rgb" / ".tmp.000001.png").write_text("also mine")
+    before = _snapshot(out)
+    argv = ["dump", str(TRACKER), "--out", str(out), "--steps", "2"] + ["--resume"] * resume
+    assert main(argv) == 2
+    error = capsys.readouterr().err
+    assert error == f"aibo-sim: error: {out} is not empty and is not a dump (no meta.json): refusing to write into " \
+                    "it; choose a new or empty folder for --out\n"
+    (out / "meta.json").write_text('{"not": "a dump"}')
+    before = _snapshot(out)
+    assert main(argv) == 2
+    assert "meta.json: not an aibo-sim dump's meta.json" in capsys.readouterr().err
+    assert _snapshot(out) == before
+
+
+def test_only_the_dumps_own_temporary_files_are_removed(small_dump, tmp_path):
+    out = tmp_path / "dump"
+    shutil.copytree(small_dump, out)
+    own = [out / ".tmp.video.mp4", out / ".tmp.meta.json", out / "rgb" / ".tmp.000002.png",
+           out / "yuv420" / ".tmp.000009.yuv"]
+    others = [out / ".tmp.notes", out / "rgb" / ".tmp.notes.txt", out / "rgb" / ".tmp.000002.jpg",
+              out / "extra" / ".tmp.000001.png", out / "extra" / "rgb" / ".tmp.000001.png"]
+    for path in own + others:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text("partial")
+    assert dump(out, controller=TRACKER, frames=4, formats=("rgb", "yuv420"), resume=True).new_frames == 0
+    assert [p for p in own if p.exists()] == [] and all(p.read_text() == "partial" for p in others)
+
+
+# ---------------------------------------------------------------- corrupt files
+
+
+def test_corrupt_meta_and_frames_name_the_file_and_line(small_dump, tmp_path, capsys):
+    out = tmp_path / "dump"
+    shutil.copytree(small_dump, out)
+    lines = (out / "frames.jsonl").read_bytes().splitlines(keepends=True)
+    lines[2] = lines[2][:30] + b"\x00garbage\n"
+    (out / "frames.jsonl").write_bytes(b"".join(lines))
+    with pytest.raises(DumpError, match=r"frames\.jsonl: line 3: not valid JSON"):
+        load_dump(out)
+    argv = ["dump", str(TRACKER), "--out", str(out), "--steps", "4", "--formats", "rgb,yuv420", "--resume"]
+    before = _snapshot(out, lock=False)
+    assert main(argv) == 2
+    error = capsys.readouterr().err
+    assert error.count("\n") == 1 and f"{out / 'frames.jsonl'}: line 3: not valid JSON" in error
+    assert _snapshot(out, lock=False) == before
+    lines[2] = b'{"no index": 1}\n'
+    (out / "frames.jsonl").write_bytes(b"".join(lines))
+    with pytest.raises(DumpError, match=r"frames\.jsonl: line 3: not a frame record"):
+        load_dump(out)
+    meta = (out / "meta.json").read_text().splitlines(keepends=True)
+    (out / "meta.json").write_text("".join(meta[:3]) + "  oops\n" + "".join(meta[3:]))
+    with pytest.raises(DumpError, match=r"meta\.json: line 4 column 3: not valid JSON"):
+        load_dump(out)
+    assert main(argv) == 2
+    assert f"{out / 'meta.json'}: line 4 column 3: not valid JSON" in capsys.readouterr().err
+    (out / "meta.json").write_bytes(b'{"format": "\xff"}')
+    with pytest.raises(DumpError, match=r"meta\.json: not UTF-8"):
+        load_dump(out)
+
+
+# ---------------------------------------------------------------- run --out
+
+
+def test_run_frames_are_written_under_names_no_frame_pattern_matches(tmp_path, monkeypatch):
+    renamed = []
+    real_replace = os.replace
+
+    def replace(source, target):
+        renamed.append((Path(source), Path(target)))
+        real_replace(source, target)
+
+    monkeypatch.setattr(os, "replace", replace)
+    summary = run_controller(TRACKER, duration=0.2, out=tmp_path)
+    frames = [(s, t) for s, t in renamed if t.parent == tmp_path / "frames"]
+    assert len(frames) == summary.camera_frames >= 3
+    for source, target in frames:
+        assert source.parent == target.parent and fnmatch.fnmatch(target.name, "*.png")
+        assert not fnmatch.fnmatch(source.name, "*.png") and not source.match("*.png")
+    assert sorted(p.name for p in (tmp_path / "frames").iterdir()) == sorted(t.name for _, t in frames)
+
+
+def test_a_reused_run_folder_holds_one_run(tmp_path, capsys):
+    out = tmp_path / "run"
+    long = run_controller(TRACKER, duration=0.5, out=out)
+    (out / "notes.txt").write_text("the controller's or the user's: kept")
+    short = run_controller(TRACKER, duration=0.2, out=out)
+    assert long.camera_frames > short.camera_frames
+    assert len(list((out / "frames").iterdir())) == short.camera_frames
+    assert json.loads((out / "run.json").read_text())["camera_frames"] == short.camera_frames
+    assert (out / "notes.txt").exists()
+    # A killed run (run.json still says "incomplete", a temporary frame left) is an earlier run too.
+    (out / "run.json").write_text(json.dumps({"controller": str(TRACKER), "backend": "sim", "status": "incomplete"}))
+    (out / "frames" / ".000099.png.tmp").write_bytes(b"partial")
+    (out / "frames" / "000099.partial.png").write_bytes(b"partial")  # an earlier version's temporary name
+    assert run_controller(TRACKER, duration=0.2, out=out).camera_frames == short.camera_frames
+    assert len(list((out / "frames").iterdir())) == short.camera_frames
+    # Folders that hold something else are refused, untouched.
+    refused = {
+        "foreign run.json": {"run.json": '{"mine": true}'},
+        "frames without run.json": {"frames/000001.png": "ffmpeg's"},
+        "foreign file in frames": {"run.json": json.dumps({"controller": "x", "backend": "sim"}),
+                                   "frames/000001.png": "", "frames/notes.txt": "mine"},
+    }
+    for case, files in refused.items():
+        folder = tmp_path / case.replace(" ", "_")
+        for name, text in files.items():
+            (folder / name).parent.mkdir(parents=True, exist_ok=True)
+            (folder / name).write_text(text)
+        before = _snapshot(folder)
+        capsys.readouterr()
+        assert main(["run", str(TRACKER), "--duration", "0.1", "--out", str(folder)]) == 2, case
+        error = capsys.readouterr().err
+        assert error.startswith("aibo-sim: error: ") and error.count("\n") == 1 and "refusing" in error, case
+        assert _snapshot(folder) == before, case
+
+
+@pytest.mark.skipif(not hasattr(resource, "RLIMIT_FSIZE"), reason="needs RLIMIT_FSIZE")
+def test_run_out_on_a_full_disk_is_exit_2_naming_the_file(tmp_path):
+    """A write the system refuses (here the file-size limit: EFBIG, as ENOSPC on a full disk)."""
+    def limit():
+        resource.setrlimit(resource.RLIMIT_FSIZE, (4096, 4096))  # run.json's start fits, no frame does
+        signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+
+    out = tmp_path / "run"
+    env = {**os.environ, "PYTHONDONTWRITEBYTECODE": "1", "MESA_SHADER_CACHE_DISABLE": "true"}
+    result = subprocess.run(_cli("run", str(TRACKER), "--duration", "0.3", "--out", str(out)), cwd=ROOT, env=env,
+                            preexec_fn=limit, capture_output=True, text=True, timeout=60)
+    assert result.returncode == 2, result.stderr
+    assert result.stderr == f"aibo-sim: error: cannot write {out / 'frames' / '000000.png'}: File too large\n"
+    assert list((out / "frames").iterdir()) == []  # no partial file
+    assert json.loads((out / "run.json").read_text())["status"] == "incomplete"
