@@ -204,9 +204,11 @@ class Simulation:
         self._touch_adr = np.array([self._sensor_slices[s.name].start for s in TOUCH_SENSORS])
         self._touch_threshold = np.array([s.threshold for s in TOUCH_SENSORS])
         self._joint_qpos = np.array([self.model.joint(j.name).qposadr[0] for j in JOINTS])
-        # Views of the divergence counters, read after every frame.
-        self._divergence_warnings = [self.data.warning[w] for w in (mujoco.mjtWarning.mjWARN_BADQACC,
-                                                                    mujoco.mjtWarning.mjWARN_BADCTRL)]
+        # Views of the divergence counters, read after every frame (bad positions and velocities:
+        # MuJoCo resets the state silently and counts them here).
+        self._divergence_warnings = [self.data.warning[w] for w in (
+            mujoco.mjtWarning.mjWARN_BADQACC, mujoco.mjtWarning.mjWARN_BADCTRL, mujoco.mjtWarning.mjWARN_BADQPOS,
+            mujoco.mjtWarning.mjWARN_BADQVEL)]
         self._ball_body = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_BODY, "ball")  # -1: no ball
         self.camera = HeadCamera(self, camera_size(camera_full), camera_profile, camera_settings)
         self.reset(seed)

@@ -275,3 +275,18 @@ def test_ctrl_c_in_a_controller_exits_130_after_its_robot_die_functions(tmp_path
     assert main(["run", str(ctl), "--duration", "1", "--out", str(out)]) == 130
     assert "interrupted" in capsys.readouterr().err
     assert (out / "die.txt").read_text() == "ran"
+
+
+def test_a_state_mujoco_resets_silently_counts_as_diverged():
+    """MuJoCo replaces NaN positions by the model's defaults with only a warning: that is a divergence."""
+    import numpy as np
+
+    from aibo_sim.sim import Simulation, SimulationDiverged
+
+    sim = Simulation()
+    sim.data.qpos[0] = np.nan
+    with pytest.raises(SimulationDiverged, match="diverged"):
+        sim.step_frame()
+    sim.reset(0)
+    sim.step_frame()  # a reset clears the counters
+    sim.close()
