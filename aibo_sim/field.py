@@ -35,12 +35,12 @@ BEACON_PART_HEIGHT = 0.10  # parts A (top) and B (middle) around 0.30 m; part C 
 # Albedos as MuJoCo multiplies them with the light: with the venue's light (mjcf.py) the ers7
 # camera at FL / HIGH / FAST reads them as real ERS-7s read the field (models/README.md).
 COLOURS = {
-    "carpet": (0.0, 0.225, 0.145, 1.0),
+    "carpet": (0.0, 0.2, 0.16, 1.0),
     "line": (0.65, 0.65, 0.65, 1.0),
     "wall": (0.65, 0.65, 0.65, 1.0),
-    "yellow": (0.79, 0.59, 0.0, 1.0),
-    "skyblue": (0.0, 0.43, 0.75, 1.0),
-    "pink": (0.98, 0.17, 0.59, 1.0),
+    "yellow": (0.69, 0.62, 0.08, 1.0),
+    "skyblue": (0.04, 0.38, 0.69, 1.0),
+    "pink": (0.8, 0.27, 0.59, 1.0),
     "white": (0.65, 0.65, 0.65, 1.0),
     "orange": (1.0, 0.45, 0.05, 1.0),
 }

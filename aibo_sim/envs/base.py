@@ -92,7 +92,8 @@ class AiboEnv(gym.Env):
         self._actuated = np.array([JOINT_INDEX[name] for name in self.actuated_joints])
         self._target_low, target_high = model.actuator_ctrlrange[self._actuated].T
         self._target_span = target_high - self._target_low
-        self._nominal_lights = (model.light_diffuse.copy(), model.vis.headlight.diffuse.copy())
+        self._nominal_lights = (model.light_diffuse.copy(), model.vis.headlight.diffuse.copy(),
+                                model.vis.headlight.ambient.copy())
         self.camera_robot = RobotColour()  # this episode's camera colour deviation
         self._renderer: Renderer | None = None
 
@@ -186,10 +187,12 @@ class AiboEnv(gym.Env):
 
     def _randomize_scene(self) -> None:
         model, rng = self.sim.model, self.np_random
-        lights, headlight = self._nominal_lights
+        lights, headlight, ambient = self._nominal_lights
         spread = self.randomize.get("lighting", 0.0)
         model.light_diffuse[:] = lights * rng.uniform(1 - spread, 1 + spread, (len(lights), 1))
-        model.vis.headlight.diffuse[:] = headlight * rng.uniform(1 - spread, 1 + spread)
+        factor = rng.uniform(1 - spread, 1 + spread)  # the headlight's light and the ambient light
+        model.vis.headlight.diffuse[:] = headlight * factor
+        model.vis.headlight.ambient[:] = ambient * factor
         spread = self.randomize.get("camera_robot", 0.0)
         self.camera_robot = RobotColour.draw(rng, spread) if spread else RobotColour()
         self.sim.camera.set_robot(self.camera_robot)
