@@ -57,18 +57,45 @@ def _context_class(backend: str):
     return GLContext
 
 
-def _current_context_query(backend: str, gl) -> tuple:
-    """(a ctypes function returning the address of the calling thread's current OpenGL
-    context, the address of ``gl``'s context) for EGL, to skip making a context current
-    that already is; (None, None) for the other backends or if EGL's library is not found."""
+class _EglCurrent:
+    """The calling thread's current EGL context, read and restored through libEGL (ctypes):
+    ``address()`` (~0.4 us) tells whether a context is already current, ``save()`` and
+    ``restore(saved)`` put back whatever another renderer (Gymnasium's, ``mujoco.Renderer``)
+    had current, which they assume stays so."""
+
+    EGL_DRAW, EGL_READ = 0x3059, 0x305A
+
+    def __init__(self):
+        egl = ctypes.CDLL("libEGL.so.1")
+        for name in ("eglGetCurrentContext", "eglGetCurrentDisplay"):
+            getattr(egl, name).restype, getattr(egl, name).argtypes = ctypes.c_void_p, []
+        egl.eglGetCurrentSurface.restype, egl.eglGetCurrentSurface.argtypes = ctypes.c_void_p, [ctypes.c_int32]
+        egl.eglMakeCurrent.restype = ctypes.c_uint32
+        egl.eglMakeCurrent.argtypes = [ctypes.c_void_p] * 4
+        self._egl, self.address = egl, egl.eglGetCurrentContext
+
+    def save(self) -> tuple | None:
+        """(display, draw, read, context) of the current context; None when none is."""
+        egl = self._egl
+        context = egl.eglGetCurrentContext()
+        if not context:
+            return None
+        return (egl.eglGetCurrentDisplay(), egl.eglGetCurrentSurface(self.EGL_DRAW),
+                egl.eglGetCurrentSurface(self.EGL_READ), context)
+
+    def restore(self, saved: tuple) -> None:
+        self._egl.eglMakeCurrent(*saved)
+
+
+def _egl_current(backend: str) -> _EglCurrent | None:
+    """An ``_EglCurrent`` for EGL; None for the other backends or without libEGL (those make
+    their context current every frame and leave it so)."""
     if backend != "egl":
-        return None, None
+        return None
     try:
-        query = ctypes.CDLL("libEGL.so.1").eglGetCurrentContext
-        query.restype, query.argtypes = ctypes.c_void_p, []
-        return query, gl._context.address  # what mujoco.egl's own as_current compares
+        return _EglCurrent()
     except (OSError, AttributeError):
-        return None, None
+        return None
 
 
 class Renderer:
@@ -87,10 +114,13 @@ class Renderer:
             raise ValueError(f"quality must be 'fast' or 'high', not {quality!r}")
         self.width, self.height, self.model = width, height, model
         backend = gl_backend()
+        self._current_context = _egl_current(backend)
+        other = self._current_context.save() if self._current_context is not None else None  # before ours exists
         try:
-            self._gl = _context_class(backend)(width, height)
+            self._gl = _context_class(backend)(width, height)  # mujoco.egl makes it current at once
+            self._context_address = self._gl._context.address if self._current_context is not None else None
             self._gl.make_current()
-            self._current_context, self._context_address = _current_context_query(backend, self._gl)
+            self._other_context = other
         except RenderingUnavailable:
             raise
         except Exception as exc:  # EGL/OSMesa report failures with their own exception types
@@ -121,6 +151,7 @@ class Renderer:
         self._cullable_key = self._frustum_key = None
         self._cull_inputs = model.geom_group, self._option.geomgroup, model.geom_rbound  # views, read each frame
         self._hidden_group = next((g for g in range(mujoco.mjNGROUP) if g not in groups), None) if cull else None
+        self._leave()
         self._camera = mujoco.MjvCamera()
         self._rect = mujoco.MjrRect(0, 0, width, height)
         self._rgb = np.empty((height, width, 3), np.uint8)
@@ -134,8 +165,7 @@ class Renderer:
             cam.type = mujoco.mjtCamera.mjCAMERA_FIXED
             cam.fixedcamid = camera if isinstance(camera, int) else self.model.camera(camera).id
         # eglMakeCurrent through PyOpenGL: ~5 us, ~20 us right after a physics step; the check ~0.4 us.
-        if self._current_context is None or self._current_context() != self._context_address:
-            self._gl.make_current()
+        self._enter()
         culled = self._outside_view(data, cam)
         group = self.model.geom_group
         saved = group[culled]
@@ -146,6 +176,26 @@ class Renderer:
         finally:
             group[culled] = saved
         mujoco.mjr_render(self._rect, self._scene, self._context)
+
+    def _enter(self) -> None:
+        """Make this renderer's context current, remembering another renderer's (EGL)."""
+        self._other_context = None
+        if self._current_context is None:
+            self._gl.make_current()
+        elif self._current_context.address() != self._context_address:
+            self._other_context = self._current_context.save()
+            self._gl.make_current()
+
+    def _leave(self) -> None:
+        """Make current again the context another renderer had before ``_enter``: the process is
+        left as found (Gymnasium's renderers assume their context stays current)."""
+        if self._other_context is not None:
+            self._current_context.restore(self._other_context)
+            self._other_context = None
+
+    def _read(self, rgb: np.ndarray | None, depth: np.ndarray | None) -> None:
+        mujoco.mjr_readPixels(rgb, depth, self._rect, self._context)
+        self._leave()
 
     @property
     def scene(self) -> mujoco.MjvScene:
@@ -205,13 +255,13 @@ class Renderer:
     def render(self, data: mujoco.MjData, camera: int | str | mujoco.MjvCamera) -> np.ndarray:
         """RGB image of ``camera`` (id, name or free MjvCamera) in the state ``data``."""
         self._draw(data, camera)
-        mujoco.mjr_readPixels(self._rgb, None, self._rect, self._context)
+        self._read(self._rgb, None)
         return self._rgb[::-1].copy()
 
     def render_depth(self, data: mujoco.MjData, camera: int | str) -> np.ndarray:
         """Depth along the optical axis in metres, float32 ``(height, width)``."""
         self._draw(data, camera)
-        mujoco.mjr_readPixels(None, self._depth, self._rect, self._context)
+        self._read(None, self._depth)
         extent = self.model.stat.extent
         near, far = self.model.vis.map.znear * extent, self.model.vis.map.zfar * extent
         z = self._depth[::-1].astype(np.float64)
@@ -232,7 +282,7 @@ class Renderer:
             self._draw(data, camera)
         finally:
             flags[segment], flags[id_colour] = saved
-        mujoco.mjr_readPixels(self._rgb, None, self._rect, self._context)
+        self._read(self._rgb, None)
         colour = self._rgb[::-1].astype(np.int32)
         scene_index_plus_one = colour[..., 0] | colour[..., 1] << 8 | colour[..., 2] << 16
         drawn = self._scene.geoms[: self._scene.ngeom]
@@ -244,10 +294,11 @@ class Renderer:
 
     def close(self) -> None:
         if self._gl is not None:
-            self._gl.make_current()  # the GL objects freed are this context's
+            self._enter()  # the GL objects freed are this context's
             self._context.free()
             self._gl.free()
             self._gl = None
+            self._leave()
 
     def __del__(self):
         try:
