@@ -121,6 +121,8 @@ def _mtn_play(args) -> int:
 
     if args.repeat < 1:
         raise ValueError(f"--repeat must be at least 1, not {args.repeat}")
+    if args.no_ball and args.ball is not None:
+        raise ValueError("--ball and --no-ball exclude each other")
     result = play_motion(_motion_file(args.file), repeat=args.repeat, mode=args.mode, **world_options(args),
                          **camera_options(args))
     if args.json:
@@ -128,9 +130,13 @@ def _mtn_play(args) -> int:
     else:
         dx, dy = result["displacement_m"]
         x, y, yaw = result["end_pose"]
+        share = result["paw_stance_share"]
+        paw_share = "no stance (never touched the ground)" if share is None else f"{100 * share:.0f} % of the stance"
         print(f"displacement {dx:+.3f} m forward, {dy:+.3f} m left ({result['distance_m']:.3f} m), "
               f"heading {result['heading_change_deg']:+.1f} deg, {'FELL' if result['fell'] else 'did not fall'}, "
-              f"{result['duration_s']:.2f} s; ended at x {x:+.3f} m, y {y:+.3f} m, yaw {yaw:+.1f} deg")
+              f"{result['duration_s']:.2f} s; ended at x {x:+.3f} m, y {y:+.3f} m, yaw {yaw:+.1f} deg; "
+              f"kinematic distance {result['kinematic_distance_m']:+.3f} m; peak leg joint speed "
+              f"{result['peak_leg_joint_speed_rad_s']:.1f} rad/s; paws carry {paw_share}")
     return 0
 
 
@@ -169,6 +175,8 @@ def build_parser() -> argparse.ArgumentParser:
     play.add_argument("--repeat", type=int, default=1)
     play.add_argument("--mode", choices=MTN_MODES, default="openr")
     play.add_argument("--json", action="store_true")
+    play.add_argument("--no-ball", action="store_true",
+                      help="no ball in the scene: the default, unless --ball places one")
     add_world_options(play)  # the camera options too, so that one option set works with every command
     play.set_defaults(handler=_mtn_play)
 

@@ -23,11 +23,16 @@ CAMERA_FOCAL = 0.00327  # m (Sony: f = 3.27 mm)
 PAW_RADIUS = 0.01172  # Tekkotsu BallOfFootRadius; Webots uses 0.017 (see models/README.md)
 PAW_TOUCH_RADIUS = 0.015  # Webots touch sphere
 MAX_TORQUE = 5.4542  # N m, Webots maxForce for every servo (carried over from the ERS-210)
+SHIN_COLLISION_REACH, SHIN_COLLISION_RADIUS = 0.7, 0.0145  # shin capsule: knee to 70 % of the way to the paw
 TIMESTEP = 0.004  # s: two physics steps per 8 ms OPEN-R joint frame
 
-# Position-servo stiffness (N m / rad) by Sony gain class, and shared servo dynamics.
-KP = {"leg_j1": 20.0, "leg_j2": 16.0, "leg_j3": 20.0, "head": 6.0, "small": 1.0}
-SERVO_DAMPING = 0.08  # N m s / rad
+# The servos: a DC motor behind a gearbox, driven by Sony's PID through a PWM stage that
+# saturates at +-255 (models/README.md, "Servos"). The position actuator is the controller: its
+# stiffness follows Sony's P register (the legs' J1/J3 0x1C -> 20 N m/rad; the rest in
+# proportion) and its output saturates at the stall torque. The motor's back-EMF is a passive
+# damping, stall torque / no-load speed, taking Sony's recommended maximum speed as the speed
+# of maximum power, half the no-load speed.
+KP_PER_SONY_P = 20.0 / 0x1C  # N m/rad per unit of Sony's P gain
 SERVO_ARMATURE = 0.004  # kg m^2: reflected rotor inertia of a geared servo
 
 # Sony's stand (first keyframe of SWSDK.MTN) and sit (SITDANCE.MTN) poses, in degrees,
@@ -70,9 +75,19 @@ def inertial(mass: float, pos, size) -> ET.Element:
     return E("inertial", pos=pos, mass=mass, diaginertia=box_inertia(mass, size))
 
 
+def servo_stiffness(j) -> float:
+    """Position gain (N m/rad) of joint ``j``'s servo: Sony's P register, scaled."""
+    return KP_PER_SONY_P * j.gains[0]
+
+
+def motor_damping(j) -> float:
+    """Back-EMF damping (N m s/rad) of joint ``j``'s motor: stall torque / no-load speed."""
+    return MAX_TORQUE / (2 * j.max_speed)
+
+
 def joint(name: str, axis) -> ET.Element:
     j = JOINT_BY_NAME[name]
-    return E("joint", name=name, axis=axis, range=j.range)
+    return E("joint", name=name, axis=axis, range=j.range, damping=motor_damping(j))
 
 
 def visual(**attrs) -> ET.Element:
@@ -100,17 +115,13 @@ def touch_site(name: str, pos, radius: float) -> ET.Element:
 
 
 def _defaults() -> ET.Element:
-    servo = lambda cls: E(  # noqa: E731
-        "default", E("position", kp=KP[cls], forcerange=(-MAX_TORQUE, MAX_TORQUE)), class_=cls
-    )
     return E(
         "default",
         E(
             "default",
-            E("joint", damping=SERVO_DAMPING, armature=SERVO_ARMATURE),
-            E("position", inheritrange=1),
+            E("joint", armature=SERVO_ARMATURE),
+            E("position", inheritrange=1, forcerange=(-MAX_TORQUE, MAX_TORQUE)),
             E("site", group=4, rgba=(0.9, 0.2, 0.2, 0.4)),
-            *(servo(cls) for cls in KP),
             E(
                 "default",
                 E("geom", group=2, contype=0, conaffinity=0, density=0, material="shell"),
@@ -218,7 +229,7 @@ def _neck() -> ET.Element:
         hidden_visual(type="cylinder", fromto=(0, 0, 0, 0, 0, 0.08), size=0.0117, material="dark"),
         collision(type="cylinder", fromto=(0, 0, 0, 0, 0, 0.08), size=0.0117),
         pan,
-        name="neck", pos=(0.0675, 0, 0.0195), childclass="head",
+        name="neck", pos=(0.0675, 0, 0.0195),
     )
 
 
@@ -231,9 +242,7 @@ def _leg(leg: str) -> ET.Element:
     _, side, front = LEGS[leg]
     fb = 1 if front else -1  # front legs: + swings forward; hind legs mirrored
     paw = np.array(PAW_OFFSET[front])
-    shin_axis = paw / np.linalg.norm(paw)
     knee = (fb * KNEE_OFFSET[0], side * KNEE_OFFSET[1], KNEE_OFFSET[2])
-    shin_len = 0.046 if front else 0.080
     shin = E(
         "body",
         E("inertial", pos=0.6 * paw, mass=0.073, diaginertia=box_inertia(0.073, (0.035, 0.037, 0.07))),
@@ -241,10 +250,10 @@ def _leg(leg: str) -> ET.Element:
         visual(type="capsule", fromto=(0, 0, 0, *(0.8 * paw)), size=0.0145),
         visual(type="sphere", pos=paw, size=PAW_RADIUS, material="paw"),
         collision(type="box", size=(0.013, 0.0165, 0.02)),
-        collision(type="box", size=(0.0175, 0.0185, shin_len / 2), pos=0.45 * paw, zaxis=shin_axis),
+        collision(type="capsule", fromto=(0, 0, 0, *(SHIN_COLLISION_REACH * paw)), size=SHIN_COLLISION_RADIUS),
         collision(name=f"{leg}_paw", class_="paw", pos=paw),
         touch_site(f"touch_paw_{leg}", paw, PAW_TOUCH_RADIUS),
-        name=f"{leg}_j3", pos=knee, childclass="leg_j3",
+        name=f"{leg}_j3", pos=knee,
     )
     thigh = E(
         "body",
@@ -253,7 +262,7 @@ def _leg(leg: str) -> ET.Element:
         visual(type="capsule", fromto=(0, 0, 0, *knee), size=0.017),
         collision(type="box", size=(0.0165, 0.014, 0.0325), pos=(0, 0, -0.021)),
         shin,
-        name=f"{leg}_j2", pos=(0, 0, 0), childclass="leg_j2",
+        name=f"{leg}_j2", pos=(0, 0, 0),
     )
     disc_y = side * (0.049 - HIP_OFFSET[1])
     return E(
@@ -263,7 +272,7 @@ def _leg(leg: str) -> ET.Element:
         visual(type="sphere", size=0.024),
         collision(type="cylinder", fromto=(0, disc_y - 0.005, 0, 0, disc_y + 0.005, 0), size=0.032),
         thigh,
-        name=f"{leg}_j1", pos=(fb * HIP_OFFSET[0], side * HIP_OFFSET[1], HIP_OFFSET[2]), childclass="leg_j1",
+        name=f"{leg}_j1", pos=(fb * HIP_OFFSET[0], side * HIP_OFFSET[1], HIP_OFFSET[2]),
     )
 
 
@@ -282,7 +291,7 @@ def _tail() -> ET.Element:
         joint("tail_tilt", (0, 1, 0)),
         hidden_visual(type="sphere", size=0.008, material="dark"),
         tail,
-        name="tail_base", pos=(-0.102, 0, 0.033), childclass="small",
+        name="tail_base", pos=(-0.102, 0, 0.033),
     )
 
 
@@ -320,12 +329,7 @@ def _torso() -> ET.Element:
 
 
 def _actuators() -> ET.Element:
-    def cls(name: str) -> str:
-        if name.startswith(("lf", "lh", "rf", "rh")):
-            return "leg_" + name[-2:]
-        return "head" if name in ("neck_tilt", "head_pan", "head_tilt") else "small"
-
-    return E("actuator", *(E("position", name=j.name, joint=j.name, class_=cls(j.name)) for j in JOINTS))
+    return E("actuator", *(E("position", name=j.name, joint=j.name, class_="ers7", kp=servo_stiffness(j)) for j in JOINTS))
 
 
 def _sensors() -> ET.Element:
@@ -367,7 +371,7 @@ def robot_xml() -> ET.Element:
     root = E(
         "mujoco",
         E("compiler", angle="radian", autolimits="true"),
-        E("option", timestep=TIMESTEP, integrator="implicitfast"),
+        E("option", timestep=TIMESTEP, integrator="implicitfast", cone="elliptic"),
         _defaults(),
         _assets(),
         E("worldbody", _torso()),

@@ -15,6 +15,7 @@ import os
 from dataclasses import dataclass, replace
 from pathlib import Path
 
+import mujoco
 import numpy as np
 
 from .ers7 import JOINT_BY_LOCATOR, JOINT_INDEX, JOINTS, LEGS, joint_indices
@@ -239,6 +240,60 @@ def _webots_frames(player: MotionPlayer, repeat: int, step_ms: int):
             yield from [None] * (step_ms // FRAME_MS - 1)
 
 
+def kinematic_speed(motion: Motion) -> float:
+    """Forward speed (m/s, + = forward) at which the motion's paws push the body if they do not
+    slip: minus the mean body-frame x velocity of each paw while it is in its stance (its
+    lowest quarter of height), averaged over the legs."""
+    keyframes = motion.positions_rad()
+    if len(keyframes) < 2:
+        return 0.0
+    names = [JOINT_BY_LOCATOR[loc].name for loc in motion.locators]
+    dt = motion.frame_time_ms * (motion.interpolate + 1) / 1000  # each segment's duration
+    speeds = []
+    for leg in LEGS:
+        if not all(f"{leg}_j{i}" in names for i in (1, 2, 3)):
+            continue
+        columns = [names.index(f"{leg}_j{i}") for i in (1, 2, 3)]
+        paws = np.array([paw_position(leg, angles) for angles in keyframes[:, columns]])
+        z = paws[:, 2]
+        low = z <= z.min() + 0.25 * (z.max() - z.min())
+        stance = low[:-1] & low[1:]  # segments that start and end in stance
+        if stance.any():
+            speeds.append(-np.sum(np.diff(paws[:, 0])[stance]) / np.sum(dt[stance]))
+    return float(np.mean(speeds)) if speeds else 0.0
+
+
+class GaitMeter:
+    """Frame by frame: the peak speed of the leg joints and the ground contact force of the legs,
+    in total and on the paws (``paw_share``: the share of the stance the paws carry)."""
+
+    def __init__(self, sim: Simulation):
+        m = sim.model
+        self._dofs = [m.joint(j.name).dofadr[0] for j in JOINTS if j.name[:2] in LEGS]
+        robot = m.body_rootid[m.geom_bodyid] == m.body("body").id
+        leg_bodies = [m.body(f"{leg}_j{i}").id for leg in LEGS for i in (1, 2, 3)]
+        self._leg = np.isin(m.geom_bodyid, leg_bodies)
+        self._paw = np.zeros(m.ngeom, dtype=bool)
+        self._paw[[m.geom(f"{leg}_paw").id for leg in LEGS]] = True
+        self._robot = robot
+        self._force = np.zeros(6)
+        self.peak_speed = self.leg_force = self.paw_force = 0.0
+
+    def __call__(self, sim: Simulation) -> None:
+        m, d = sim.model, sim.data
+        self.peak_speed = max(self.peak_speed, float(np.abs(d.qvel[self._dofs]).max()))
+        for i, (g1, g2) in enumerate(d.contact.geom[:d.ncon]):
+            leg = g1 if self._leg[g1] and not self._robot[g2] else g2 if self._leg[g2] and not self._robot[g1] else -1
+            if leg >= 0:
+                mujoco.mj_contactForce(m, d, i, self._force)
+                self.leg_force += self._force[0]
+                self.paw_force += self._force[0] if self._paw[leg] else 0.0
+
+    @property
+    def paw_share(self) -> float | None:
+        return self.paw_force / self.leg_force if self.leg_force > 0 else None
+
+
 def play_motion(motion_or_path, repeat: int = 1, sim: Simulation | None = None, mode: str = "openr",
                 step_ms: int = 16, *, scene=None, seed: int = 0, pose: tuple[float, float, float] | None = None,
                 ball: tuple[float, float] | None = None, camera_profile: str = "ers7", camera_full: bool = False,
@@ -246,14 +301,18 @@ def play_motion(motion_or_path, repeat: int = 1, sim: Simulation | None = None, 
     """Play a motion (or MTN file) ``repeat`` times on ``sim`` (default: a new robot standing in
     ``scene``, the RoboCup field by default, made with ``seed`` and the camera options, which
     ``mtn play`` takes like every ``aibo-sim`` command) and say where it went. ``pose`` (x, y
-    in metres, yaw in degrees) and ``ball`` (x, y) place the robot and the ball first.
+    in metres, yaw in degrees) places the robot first; ``ball`` (x, y) places the ball, and
+    without it a new robot's scene has no ball (a walk measured into a ball measures the ball).
 
     The set-points first blend from their current values to the motion's first keyframe over
     ``BLEND_MS`` when they differ. ``mode="openr"``: every 8 ms frame the player's targets are
     written straight to the set-points, as OPEN-R joint command frames. ``mode="webots"``:
     Webots' ``mtn_step(step_ms)`` per control step, commands through ``servos.set_target``
-    (velocity limits apply). Playback stops if the robot falls. The displacement is in the
-    start heading's frame (x forward, y left); the heading change is unwrapped (+ = left)."""
+    (velocity limits apply). Playback stops if the robot falls. Displacement, heading change
+    and duration are the motion's, from its first keyframe on (after the blend): the
+    displacement in the heading there (x forward, y left), the heading change unwrapped (+ = left).
+    Also reported: the distance the paws' kinematics give (``kinematic_distance_m``), the peak
+    leg joint speed and the share of the legs' ground contact force that the paws carry."""
     motion = motion_or_path if isinstance(motion_or_path, Motion) else read_mtn(motion_or_path)
     player = MotionPlayer(motion, mode)
     if step_ms <= 0 or step_ms % FRAME_MS:
@@ -269,7 +328,7 @@ def play_motion(motion_or_path, repeat: int = 1, sim: Simulation | None = None, 
         place(sim, pose, ball)
         return _play(sim, motion, player, repeat, mode, step_ms)
     sim = Simulation(scene, seed=seed, camera_full=camera_full, camera_profile=camera_profile,
-                     camera_settings=camera_settings)
+                     camera_settings=camera_settings, ball=ball is not None)
     try:
         place(sim, pose, ball)
         return _play(sim, motion, player, repeat, mode, step_ms)
@@ -287,15 +346,25 @@ def _play(sim: Simulation, motion: Motion, player: MotionPlayer, repeat: int, mo
     blend = (start + (first - start) * (1 - math.cos(math.pi * i / n)) / 2 for i in range(1, n + 1))
     frames = _openr_frames(player, repeat) if mode == "openr" else _webots_frames(player, repeat, step_ms)
 
-    position, yaw, _ = sim.body_pose()
-    start_frame, yaw0, turned, fell = sim.frame, yaw, 0.0, False
-    for targets in itertools.chain(blend, frames):
-        if targets is not None:
-            if mode == "openr":
-                sim.servos.target[idx] = sim.servos.command[idx] = targets
-            else:
-                sim.servos.set_target(idx, targets)
+    def command(targets) -> None:
+        if mode == "openr":
+            sim.servos.target[idx] = sim.servos.command[idx] = targets
+        elif targets is not None:
+            sim.servos.set_target(idx, targets)
+
+    fell = False
+    for targets in blend:
+        command(targets)
         sim.step_frame()
+        if fell := sim.fallen():
+            break
+    position, yaw, _ = sim.body_pose()
+    start_frame, yaw0, turned = sim.frame, yaw, 0.0
+    meter = GaitMeter(sim)
+    for targets in () if fell else frames:
+        command(targets)
+        sim.step_frame()
+        meter(sim)
         new_yaw = sim.body_pose()[1]
         turned += math.remainder(new_yaw - yaw, 2 * math.pi)
         yaw = new_yaw
@@ -311,6 +380,9 @@ def _play(sim: Simulation, motion: Motion, player: MotionPlayer, repeat: int, mo
         "heading_change_deg": math.degrees(turned),
         "fell": fell,
         "duration_s": (sim.frame - start_frame) * FRAME_MS / 1000,
+        "kinematic_distance_m": kinematic_speed(motion) * repeat * motion.length_ms / 1000,
+        "peak_leg_joint_speed_rad_s": meter.peak_speed,
+        "paw_stance_share": meter.paw_share,
         # On the field, as ``--pose`` takes them: x, y (m), yaw (deg).
         "start_pose": [float(position[0]), float(position[1]), math.degrees(yaw0)],
         "end_pose": [float(end[0]), float(end[1]), math.degrees(yaw_end)],

@@ -43,8 +43,9 @@ def models_dir() -> Path:
     raise ModelError(f"bundled models not found next to {here}")
 
 
-def load_model(scene: str | Path | None = None) -> mujoco.MjModel:
-    """Compile a scene file (default: the RoboCup field), with an error that names the file."""
+def load_model(scene: str | Path | None = None, ball: bool = True) -> mujoco.MjModel:
+    """Compile a scene file (default: the RoboCup field), with an error that names the file;
+    ``ball=False`` leaves out its body named ``ball``."""
     path = Path(scene) if scene is not None else models_dir() / "scene.xml"
     try:
         if not path.is_file():
@@ -52,7 +53,12 @@ def load_model(scene: str | Path | None = None) -> mujoco.MjModel:
     except OSError as exc:  # a name too long, a folder without permission
         raise ModelError(f"{path}: cannot read: {exc.strerror or exc}") from None
     try:
-        return mujoco.MjModel.from_xml_path(str(path))
+        if ball:
+            return mujoco.MjModel.from_xml_path(str(path))
+        spec = mujoco.MjSpec.from_file(str(path))
+        if spec.body("ball") is not None:
+            spec.delete(spec.body("ball"))
+        return spec.compile()
     except ValueError as exc:
         raise ModelError(f"{path}: {exc}") from None
 
@@ -181,11 +187,13 @@ class Servos:
 
 class Simulation:
     """One ERS-7 in a scene, advanced in 8 ms frames, with its head camera (``camera``, see
-    ``aibo_sim.camera``: profile ``ers7`` or ``ideal``, settings by name)."""
+    ``aibo_sim.camera``: profile ``ers7`` or ``ideal``, settings by name); ``ball=False``
+    leaves the scene's ball out."""
 
     def __init__(self, scene=None, *, seed: int = 0, keyframe: str = "stand", camera_full: bool = False,
-                 camera_profile: str | CameraProfile = "ers7", camera_settings: CameraSettings | None = None):
-        self.model = load_model(scene)
+                 camera_profile: str | CameraProfile = "ers7", camera_settings: CameraSettings | None = None,
+                 ball: bool = True):
+        self.model = load_model(scene, ball)
         check_robot(self.model, scene if scene is not None else models_dir() / "scene.xml", keyframe)
         self.data = mujoco.MjData(self.model)
         self.keyframe = keyframe

@@ -87,16 +87,18 @@ def _forward_table() -> np.ndarray:
 
 def ycrcb_to_rgb(y, cr, cb) -> np.ndarray:
     """Sony's YCrCb2RGB, bit-exact, over uint8 arrays of one shape; returns (..., 3) uint8 RGB."""
-    y, cr, cb = _planes(y, cr, cb)
-    if y.size == 0:
-        return np.empty(y.shape + (3,), np.uint8)
-    index = np.zeros(y.shape + (8,), np.uint8)  # Y << 16 | Cr << 8 | Cb as little-endian int64
-    index[..., 0] = cb
-    index[..., 1] = cr
-    index[..., 2] = y
-    packed = np.take(_sony_table(), index.view("<i8").reshape(-1))
-    rgb = cv2.cvtColor(packed.view(np.uint8).reshape(1, -1, 4), cv2.COLOR_RGBA2RGB)
-    return rgb.reshape(y.shape + (3,))
+    return ycrcb_image_to_rgb(np.stack(_planes(y, cr, cb), axis=-1))
+
+
+def ycrcb_image_to_rgb(ycrcb: np.ndarray) -> np.ndarray:
+    """``ycrcb_to_rgb`` of one (..., 3) uint8 array of Y, Cr, Cb."""
+    if ycrcb.size == 0:
+        return np.empty(ycrcb.shape, np.uint8)
+    # Cb, Cr, Y, 255 as a little-endian int32 is the table index minus 2^24, which np.take
+    # counts from the table's end: the index itself.
+    bgra = cv2.cvtColor(ycrcb.reshape(1, -1, 3), cv2.COLOR_RGB2BGRA)
+    packed = np.take(_sony_table(), bgra.view(np.int32))
+    return cv2.cvtColor(packed.view(np.uint8), cv2.COLOR_RGBA2RGB).reshape(ycrcb.shape)
 
 
 def ycrcb_to_rgb_bt601(y, cr, cb) -> np.ndarray:

@@ -75,7 +75,7 @@ class CameraFrame:
     def rgb(self) -> np.ndarray:
         """(h, w, 3) uint8 RGB, read-only."""
         if self._rgb is None:
-            self._rgb = openr_bridge.ycrcb_to_rgb(self._ycrcb[..., 0], self._ycrcb[..., 1], self._ycrcb[..., 2])
+            self._rgb = openr_bridge.colour.ycrcb_image_to_rgb(self._ycrcb)
             self._rgb.flags.writeable = False
         return self._rgb
 
