@@ -188,11 +188,19 @@ class Servos:
 class Simulation:
     """One ERS-7 in a scene, advanced in 8 ms frames, with its head camera (``camera``, see
     ``aibo_sim.camera``: profile ``ers7`` or ``ideal``, settings by name); ``ball=False``
-    leaves the scene's ball out."""
+    leaves the scene's ball out.
+
+    ``command_latency_frames``: 8 ms frames between a set-point and the servo acting on it. On
+    the robot, OPEN-R plays joint commands from a queue of 4-frame command vectors, so a
+    command waits 32 ms or more; how many vectors the Webots-era wrapper kept in flight is
+    UNCONFIRMED, so the default is 0 (the set-point acts in the next frame)."""
 
     def __init__(self, scene=None, *, seed: int = 0, keyframe: str = "stand", camera_full: bool = False,
                  camera_profile: str | CameraProfile = "ers7", camera_settings: CameraSettings | None = None,
-                 ball: bool = True):
+                 ball: bool = True, command_latency_frames: int = 0):
+        if not isinstance(command_latency_frames, int) or command_latency_frames < 0:
+            raise ValueError(f"command_latency_frames must be a whole number >= 0, not {command_latency_frames!r}")
+        self.command_latency_frames = command_latency_frames
         self.model = load_model(scene, ball)
         check_robot(self.model, scene if scene is not None else models_dir() / "scene.xml", keyframe)
         self.data = mujoco.MjData(self.model)
@@ -231,6 +239,7 @@ class Simulation:
         mujoco.mj_resetDataKeyframe(self.model, self.data, key)
         mujoco.mj_forward(self.model, self.data)
         self.servos.reset(self.joint_positions())
+        self._queued = np.tile(self.servos.command, (self.command_latency_frames, 1))  # set-points on their way
         self.frame = 0  # 8 ms frames since reset
         self.camera.reset(self.seed)
 
@@ -290,6 +299,9 @@ class Simulation:
         if not isinstance(frames, int) or frames < 1:
             raise ValueError(f"frames must be a whole number >= 1, not {frames!r}")
         commands = self.servos.advance_frames(frames, FRAME_MS / 1000)
+        if self.command_latency_frames:
+            queue = np.concatenate((self._queued, commands))
+            commands, self._queued = queue[:frames], queue[frames:]
         model, data, options, camera = self.model, self.data, self.model.opt, self.camera
         steps = [self.steps_per_frame] * frames
         steps[-1] -= sensors  # the last step, with sensors, after the loop

@@ -121,3 +121,25 @@ def test_mtn_play_has_no_ball_unless_placed(capsys):
     assert blocked < free - 0.1, (blocked, free)
     assert cli.main(["mtn", "play", "STAND.MTN", "--no-ball", "--ball", "1", "1"]) == 2
     assert "--ball and --no-ball exclude each other" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("latency", [0, 4])
+def test_command_latency_delays_set_points_by_whole_frames(latency):
+    pan = [j.name for j in JOINTS].index("head_pan")
+
+    def commanded(frames_per_call: int) -> list[float]:
+        """The pan servo's set-point acting in each of 8 frames after a 0.2 rad command."""
+        sim = Simulation(camera_profile="ideal", ball=False, command_latency_frames=latency)
+        sim.servos.target[pan] = sim.servos.command[pan] = sim.servos.command[pan] + 0.2  # an OPEN-R joint frame
+        acting = []
+        for _ in range(8 // frames_per_call):
+            sim.step_frames(frames_per_call)
+            acting.append(sim.data.ctrl[pan])
+        sim.close()
+        return acting
+
+    by_frame = commanded(1)
+    assert [ctrl == by_frame[-1] for ctrl in by_frame] == [k >= latency for k in range(8)]
+    assert commanded(4) == by_frame[3::4]  # frames stepped together queue as frame by frame
+    with pytest.raises(ValueError, match="command_latency_frames"):
+        Simulation(command_latency_frames=-1)
