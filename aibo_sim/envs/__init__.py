@@ -10,8 +10,12 @@ loading): ``gymnasium.make("aibo_sim.envs:aibo_sim/HeadTrackBall-v0")``.
 The classes live in ``aibo_sim.envs.head_track`` and ``aibo_sim.envs.reach_ball``; the options
 and observations are described in ``aibo_sim.envs.base``.
 ``aibo_sim.envs.vector.BusyWaitWorker`` is a worker for ``make_vec(..., "async")`` that keeps
-its process awake between steps.
+its process awake between steps. ``make_vec(id, num_envs)`` without a mode (or with
+``vectorization_mode="vector_entry_point"``) makes a ``ThreadedVectorEnv``
+(``aibo_sim.envs.threaded``): the environments in threads of this process.
 """
+
+from functools import partial
 
 import gymnasium
 
@@ -21,11 +25,18 @@ ENV_SPECS = {
 }
 
 
+def _threaded_vector_env(env_id: str, num_envs: int, **kwargs):
+    from .threaded import ThreadedVectorEnv
+
+    return ThreadedVectorEnv(env_id, num_envs, **kwargs)
+
+
 def register_envs() -> None:
     """Register the environments with Gymnasium; calling it again changes nothing."""
     for env_id, (entry_point, max_episode_steps) in ENV_SPECS.items():
         if env_id not in gymnasium.registry:
-            gymnasium.register(env_id, entry_point=entry_point, max_episode_steps=max_episode_steps)
+            gymnasium.register(env_id, entry_point=entry_point, max_episode_steps=max_episode_steps,
+                               vector_entry_point=partial(_threaded_vector_env, env_id))
 
 
 register_envs()

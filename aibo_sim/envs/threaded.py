@@ -1,0 +1,198 @@
+"""A vector environment that steps its environments in threads of one process.
+
+``gymnasium.make_vec("aibo_sim/HeadTrackBall-v0", num_envs=N, vectorization_mode="vector_entry_point")``
+(the default mode for aibo-sim's ids) makes a ``ThreadedVectorEnv``: N environments, each
+made, stepped and closed in a thread of its own. What runs in parallel is what leaves
+Python's global interpreter lock: MuJoCo's physics step, its OpenGL rendering and OpenCV's
+passes of the sensor model; the environments' Python code runs one thread at a time. Each
+thread has its own OpenGL context, current in that thread alone (EGL allows one thread per
+context). Observations are written by each thread straight into its row of one batch
+buffer. Same seeds, same observations, rewards and infos as Gymnasium's ``SyncVectorEnv``
+(next-step autoreset, ``reset_mask``), bit for bit; ``benchmarks/vector.py`` measures the
+speed against one environment and Gymnasium's ``AsyncVectorEnv``.
+"""
+
+from __future__ import annotations
+
+import copy as copying
+import queue
+import threading
+
+import gymnasium
+import numpy as np
+from gymnasium.vector import AutoresetMode, VectorEnv
+from gymnasium.vector.utils import batch_space, create_empty_array, iterate
+
+
+def _write_row(batch, index: int, value) -> None:
+    """Put one environment's ``value`` into row ``index`` of the batch arrays ``batch``."""
+    if isinstance(batch, dict):
+        for key, part in batch.items():
+            _write_row(part, index, value[key])
+    elif isinstance(batch, tuple):
+        for part, item in zip(batch, value):
+            _write_row(part, index, item)
+    else:
+        batch[index] = value
+
+
+class _EnvThread(threading.Thread):
+    """One environment, made, used and closed in this thread; runs the calls it is sent."""
+
+    def __init__(self, index: int, make_env, results: queue.SimpleQueue):
+        super().__init__(name=f"aibo-sim env {index}", daemon=True)
+        self.index, self._make_env, self._results = index, make_env, results
+        self.calls: queue.SimpleQueue = queue.SimpleQueue()
+        self.start()
+
+    def run(self) -> None:
+        try:
+            env = self._make_env()
+        except BaseException as exc:  # reported by the constructor
+            self._results.put((self.index, None, exc))
+            return
+        self._results.put((self.index, None, None))
+        while (call := self.calls.get()) is not None:
+            function, args = call
+            try:
+                self._results.put((self.index, function(env, *args), None))
+            except BaseException as exc:
+                self._results.put((self.index, None, exc))
+        env.close()
+
+
+class ThreadedVectorEnv(VectorEnv):
+    """``num_envs`` environments ``gymnasium.make(env_id, **env_kwargs)``, one thread each.
+
+    Step it from one thread at a time. ``copy=False`` returns the batch buffers themselves
+    (valid until the next step), as Gymnasium's vector environments do.
+    """
+
+    def __init__(self, env_id: str, num_envs: int, *, copy: bool = True, **env_kwargs):
+        if not isinstance(num_envs, int) or num_envs < 1:
+            raise ValueError(f"num_envs must be a whole number >= 1, not {num_envs!r}")
+        self.num_envs, self.copy = num_envs, copy
+        self._results: queue.SimpleQueue = queue.SimpleQueue()
+        self._threads = [_EnvThread(i, lambda: gymnasium.make(env_id, **env_kwargs), self._results)
+                         for i in range(num_envs)]
+        try:
+            self._collect(range(num_envs))
+            first = self.call_each(lambda env: (env.observation_space, env.action_space, env.metadata,
+                                                env.render_mode), [0])[0]
+        except BaseException:
+            self.close()
+            raise
+        self.single_observation_space, self.single_action_space, env_metadata, self.render_mode = first
+        self.observation_space = batch_space(self.single_observation_space, num_envs)
+        self.action_space = batch_space(self.single_action_space, num_envs)
+        self.metadata = {**env_metadata, "autoreset_mode": AutoresetMode.NEXT_STEP}
+        self._observations = create_empty_array(self.single_observation_space, num_envs)
+        self._rewards = np.zeros(num_envs, np.float64)
+        self._terminations = np.zeros(num_envs, np.bool_)
+        self._truncations = np.zeros(num_envs, np.bool_)
+        self._autoreset = np.zeros(num_envs, np.bool_)
+
+    # ------------------------------------------------------------------ threads
+
+    def _collect(self, indices) -> list:
+        """The results of the calls sent to ``indices``, in that order; the first error raised."""
+        pending, results, error = set(indices), {}, None
+        while pending:
+            index, result, exc = self._results.get()
+            pending.discard(index)
+            results[index] = result
+            if exc is not None and error is None:
+                error = exc
+        if error is not None:
+            raise error
+        return [results[i] for i in indices]
+
+    def call_each(self, function, indices=None, args_per_env=None) -> list:
+        """``function(env, *args)`` in the threads of the environments ``indices`` (default all),
+        in parallel; their results in that order."""
+        if self.closed:
+            raise RuntimeError("this ThreadedVectorEnv is closed")
+        indices = list(range(self.num_envs)) if indices is None else list(indices)
+        for k, i in enumerate(indices):
+            self._threads[i].calls.put((function, () if args_per_env is None else args_per_env[k]))
+        return self._collect(indices)
+
+    # ------------------------------------------------------------------ the vector API
+
+    def reset(self, *, seed: int | list[int | None] | None = None, options: dict | None = None):
+        if seed is None:
+            seed = [None] * self.num_envs
+        elif isinstance(seed, int):
+            seed = [seed + i for i in range(self.num_envs)]
+        if len(seed) != self.num_envs:
+            raise ValueError(f"seed: a list of num_envs = {self.num_envs} seeds, not {len(seed)}")
+        options = dict(options or {})
+        mask = options.pop("reset_mask", None)
+        if mask is None:
+            mask = np.ones(self.num_envs, np.bool_)
+        elif not (isinstance(mask, np.ndarray) and mask.dtype == np.bool_ and mask.shape == (self.num_envs,) and mask.any()):
+            raise ValueError(f"options['reset_mask'] must be a bool array of shape ({self.num_envs},) "
+                             f"with a True value, not {mask!r}")
+        indices = np.flatnonzero(mask).tolist()
+        observations = self._observations
+
+        def reset_one(env, index, single_seed):
+            obs, info = env.reset(seed=single_seed, options=options or None)
+            _write_row(observations, index, obs)
+            return info
+
+        env_infos = self.call_each(reset_one, indices, [(i, seed[i]) for i in indices])
+        self._terminations[mask] = self._truncations[mask] = self._autoreset[mask] = False
+        infos = {}
+        for i, info in zip(indices, env_infos):
+            infos = self._add_info(infos, info, i)
+        return (copying.deepcopy(observations) if self.copy else observations), infos
+
+    def step(self, actions):
+        observations, autoreset = self._observations, self._autoreset
+
+        def step_one(env, index, action):
+            if autoreset[index]:
+                obs, info = env.reset()
+                result = (0.0, False, False, info)
+            else:
+                obs, reward, terminated, truncated, info = env.step(action)
+                result = (reward, terminated, truncated, info)
+            _write_row(observations, index, obs)
+            return result
+
+        results = self.call_each(step_one, None, list(enumerate(iterate(self.action_space, actions))))
+        infos = {}
+        for i, (reward, terminated, truncated, info) in enumerate(results):
+            self._rewards[i], self._terminations[i], self._truncations[i] = reward, terminated, truncated
+            infos = self._add_info(infos, info, i)
+        self._autoreset = np.logical_or(self._terminations, self._truncations)
+        return ((copying.deepcopy(observations) if self.copy else observations), self._rewards.copy(),
+                self._terminations.copy(), self._truncations.copy(), infos)
+
+    def render(self):
+        return tuple(self.call_each(lambda env: env.render()))
+
+    def call(self, name: str, *args, **kwargs) -> tuple:
+        """Each environment's method ``name`` called with the arguments (or its attribute)."""
+        def call_one(env):
+            value = env.get_wrapper_attr(name)
+            return value(*args, **kwargs) if callable(value) else value
+        return tuple(self.call_each(call_one))
+
+    def get_attr(self, name: str) -> tuple:
+        return tuple(self.call_each(lambda env: env.get_wrapper_attr(name)))
+
+    def set_attr(self, name: str, values) -> None:
+        if not isinstance(values, (list, tuple)):
+            values = [values] * self.num_envs
+        if len(values) != self.num_envs:
+            raise ValueError(f"set_attr: {self.num_envs} values, one per environment, not {len(values)}")
+        self.call_each(lambda env, value: env.set_wrapper_attr(name, value), None, [(v,) for v in values])
+
+    def close_extras(self, **kwargs) -> None:
+        """End the threads; each closes its environment."""
+        for thread in self._threads:
+            thread.calls.put(None)
+        for thread in self._threads:
+            thread.join()

@@ -1,0 +1,70 @@
+"""ThreadedVectorEnv: aibo-sim's environments in threads of one process, as Gymnasium's
+SyncVectorEnv steps them, bit for bit."""
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import aibo_sim  # noqa: F401  (registers the environments)
+from aibo_sim.envs.threaded import ThreadedVectorEnv
+
+HEAD_TRACK = "aibo_sim/HeadTrackBall-v0"
+
+
+def run(envs, actions, seed, reset_mask_at=None):
+    obs, info = envs.reset(seed=seed)
+    steps = [(obs, np.zeros(envs.num_envs), np.zeros(envs.num_envs, bool), np.zeros(envs.num_envs, bool), info)]
+    for k, action in enumerate(actions):
+        if k == reset_mask_at:
+            mask = np.array([False, True, False])
+            obs, info = envs.reset(seed=[None, 11, None], options={"reset_mask": mask})
+            steps.append((obs, None, None, None, info))
+        steps.append(envs.step(action))
+    return steps
+
+
+def assert_same(a, b):
+    if isinstance(a, dict):
+        assert a.keys() == b.keys()
+        for key in a:
+            assert_same(a[key], b[key])
+    elif a is not None:
+        np.testing.assert_array_equal(a, b)
+
+
+def test_threads_step_as_sync_bit_for_bit_through_autoreset_and_reset_mask():
+    # 3 envs, episodes of 4 steps: each autoresets twice within the 12 steps.
+    threaded = gym.make_vec(HEAD_TRACK, 3, max_episode_steps=4)
+    sync = gym.make_vec(HEAD_TRACK, 3, "sync", max_episode_steps=4)
+    assert isinstance(threaded.unwrapped, ThreadedVectorEnv)
+    assert threaded.observation_space == sync.observation_space and threaded.action_space == sync.action_space
+    threaded.action_space.seed(3)
+    actions = [threaded.action_space.sample() for _ in range(12)]
+    try:
+        runs = [run(envs, actions, seed=5, reset_mask_at=6) for envs in (threaded, sync)]
+        for step_threaded, step_sync in zip(*runs, strict=True):
+            for part_threaded, part_sync in zip(step_threaded, step_sync, strict=True):
+                assert_same(part_threaded, part_sync)
+        truncated = np.array([step[3] for step in runs[0] if step[3] is not None])
+        assert truncated.any(axis=0).all()  # every env reached its time limit
+        images = runs[0][-1][0]["image"]
+        assert not np.array_equal(images[0], images[1])
+        assert threaded.get_attr("camera_layer") == ("H", "H", "H")
+    finally:
+        threaded.close()
+        sync.close()
+
+
+def test_errors_reach_the_caller_and_a_closed_env_refuses():
+    envs = gym.make_vec(HEAD_TRACK, 2, vectorization_mode="vector_entry_point")
+    envs.reset(seed=0)
+    with pytest.raises(ValueError, match="actions must be finite"):
+        envs.step(np.full(envs.action_space.shape, np.nan, np.float32))
+    with pytest.raises(ValueError, match="reset_mask"):
+        envs.reset(options={"reset_mask": np.zeros(2, bool)})
+    envs.close()
+    assert all(not thread.is_alive() for thread in envs.unwrapped._threads)
+    with pytest.raises(RuntimeError, match="closed"):
+        envs.step(envs.action_space.sample())
+    with pytest.raises(TypeError):
+        gym.make_vec(HEAD_TRACK, 2, camera_bogus=1)  # the environment's own error, from its thread
