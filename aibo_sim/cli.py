@@ -18,11 +18,18 @@ EXIT_BAD_INPUT, EXIT_CONTROLLER, EXIT_DIVERGED, EXIT_INTERRUPTED = 2, 1, 3, 130
 
 def _run(args) -> int:
     from .runner import run_controller
+    from .viewer import LiveViewer
 
-    summary = run_controller(
-        args.controller, backend=args.backend, duration=args.duration, out=args.out, mtn_mode=args.mtn_mode,
-        memory_stick=args.memory_stick, **world_options(args), **camera_options(args),
-    )
+    viewer = LiveViewer() if args.view else None
+    try:
+        summary = run_controller(
+            args.controller, backend=args.backend, duration=args.duration, out=args.out, mtn_mode=args.mtn_mode,
+            memory_stick=args.memory_stick, frame_listeners=[viewer] if viewer else (), **world_options(args),
+            **camera_options(args),
+        )
+    finally:
+        if viewer is not None:
+            viewer.close()
     print(f"ran {Path(summary.controller).name} on the {summary.backend} backend: {summary.simulated_s:.2f} s simulated "
           f"in {summary.wall_s:.2f} s (real-time factor {summary.real_time_factor:.1f}), "
           f"{summary.camera_frames} camera frames written" + (f" to {args.out}" if args.out else ""))
@@ -152,6 +159,8 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--mtn-mode", choices=MTN_MODES, default="openr",
                      help="MTN playback: OPEN-R interpolation (default) or Webots keyframe stepping")
     run.add_argument("--memory-stick", help="OPEN-R memory stick folder for the openr backend")
+    run.add_argument("--view", action="store_true",
+                     help="watch it in MuJoCo's viewer, in real time (needs a display; space pauses, right arrow steps)")
     add_world_options(run)
     run.set_defaults(handler=_run)
 
@@ -194,6 +203,7 @@ def main(argv: list[str] | None = None) -> int:
     from .robot import DeviceError
     from .runner import ControllerFailed
     from .sim import ModelError, SimulationDiverged
+    from .viewer import ViewerUnavailable
 
     # Exit status: 0 done; 1 the controller failed (it raised, its robot_die function raised, or
     # it called sys.exit with a status other than 0); 2 bad input (one line naming it); 3 the
@@ -207,7 +217,8 @@ def main(argv: list[str] | None = None) -> int:
     except SimulationDiverged as exc:
         print(f"aibo-sim: error: {exc}", file=sys.stderr)
         return EXIT_DIVERGED
-    except (ModelError, MtnError, OpenRError, DeviceError, RenderingUnavailable, OSError, ValueError) as exc:
+    except (ModelError, MtnError, OpenRError, DeviceError, RenderingUnavailable, ViewerUnavailable, OSError,
+            ValueError) as exc:
         print(f"aibo-sim: error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except KeyboardInterrupt:  # Ctrl-C: 130, as a shell reports a process ended by SIGINT (128 + 2)

@@ -344,12 +344,13 @@ class Sensor:
             rgb = cv2.GaussianBlur(rgb, (3, 3), self.softness_px, borderType=cv2.BORDER_REPLICATE)
         if self.profile.motion_blur and math.hypot(*motion_px) >= MIN_BLUR_PX:
             rgb = motion_blur(rgb, motion_px)
-        signal = cv2.LUT(rgb, self._table)
-        ycrcb = cv2.transform(signal, self._matrix)
-        ycrcb *= self._slope
-        ycrcb += self._intercept
-        if self._noise is not None:
+        if self._noise is None:
+            ycrcb = self._intercept.copy()
+        else:
             start = noise_offset(seed, index, self._choices)
-            ycrcb += self._noise[start:start + self.width * self.height].reshape(self.height, self.width, 3)
+            noise = self._noise[start:start + self.width * self.height].reshape(self.height, self.width, 3)
+            ycrcb = self._intercept + noise
+        # Vignetting and robot: slope x (the response table's signal in Y, Cr, Cb) + intercept (+ noise).
+        cv2.accumulateProduct(cv2.transform(cv2.LUT(rgb, self._table), self._matrix), self._slope, ycrcb)
         # Y's floor, then bytes rounded to nearest and saturated at 255.
-        return cv2.convertScaleAbs(cv2.max(ycrcb, self._low))
+        return cv2.convertScaleAbs(cv2.max(ycrcb, self._low, dst=ycrcb))
