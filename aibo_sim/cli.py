@@ -200,7 +200,7 @@ def main(argv: list[str] | None = None) -> int:
 
     from .mtn import MtnError
     from .render import RenderingUnavailable
-    from .robot import DeviceError
+    from .robot import DeviceError, short_repr
     from .runner import ControllerFailed
     from .sim import ModelError, SimulationDiverged
     from .viewer import ViewerUnavailable
@@ -219,6 +219,8 @@ def main(argv: list[str] | None = None) -> int:
         return EXIT_DIVERGED
     except (ModelError, MtnError, OpenRError, DeviceError, RenderingUnavailable, ViewerUnavailable, OSError,
             ValueError) as exc:
+        if isinstance(exc, OSError) and exc.filename is not None:  # the name, cut if it is a long one
+            exc = f"{short_repr(str(exc.filename), 120)}: {exc.strerror or exc}"
         print(f"aibo-sim: error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except KeyboardInterrupt:  # Ctrl-C: 130, as a shell reports a process ended by SIGINT (128 + 2)

@@ -233,7 +233,8 @@ class Led(Device):
 _DEVICE_CLASSES = {"distance": DistanceSensor, "touch": TouchSensor, "accelerometer": Accelerometer, "camera": Camera}
 
 
-def _short_repr(value, limit: int = 60) -> str:
+def short_repr(value, limit: int = 60) -> str:
+    """``repr(value)``, cut after ``limit`` characters (saying how long it was)."""
     text = repr(value)
     return text if len(text) <= limit else f"{text[:limit]}... ({len(text)} characters)"
 
@@ -346,7 +347,7 @@ class Robot:
     @staticmethod
     def _motion(function: str, motion) -> Motion:
         if not isinstance(motion, Motion):
-            raise MtnError(None, None, f"{function}({_short_repr(motion)}): not an MTN (use the value mtn_new returned)")
+            raise MtnError(None, None, f"{function}({short_repr(motion)}): not an MTN (use the value mtn_new returned)")
         return motion
 
     def _playing(self, motion) -> "_Playing | None":

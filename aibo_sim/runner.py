@@ -25,7 +25,12 @@ from .sim import Simulation, SimulationDiverged, models_dir
 
 
 class ControllerFailed(RuntimeError):
-    """The controller raised; the message carries the simulated time and the traceback."""
+    """The controller raised; the message carries the simulated time and the traceback.
+    ``exit_status``: the status it passed to ``sys.exit`` when that ended it, else None."""
+
+    def __init__(self, message: str, exit_status=None):
+        super().__init__(message)
+        self.exit_status = exit_status
 
 
 @dataclass
@@ -277,7 +282,7 @@ def run_controller(path: str | Path, *, backend: str = "sim", duration: float = 
             if isinstance(error, SystemExit):
                 status = error.code if isinstance(error.code, int) else repr(error.code)
                 raise ControllerFailed(f"controller {path.name} exited with sys.exit({status}) {where}"
-                                       f"{die_report}") from error
+                                       f"{die_report}", exit_status=error.code) from error
             if error is not None:
                 raise ControllerFailed(f"controller {path.name} raised {where}:\n"
                                        + "".join(traceback.format_exception(error)) + die_report) from error

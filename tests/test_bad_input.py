@@ -264,6 +264,9 @@ def test_sys_exit_from_a_controller_is_its_exit_not_a_divergence(tmp_path, capsy
     assert "diverged" not in err and (out / "die.txt").read_text() == "ran"
     if status:
         assert f"ctl.py exited with sys.exit({code}) at simulated t = 0.064 s" in err
+        with pytest.raises(ControllerFailed) as failed:
+            run_controller(ctl, duration=1.0, out=tmp_path / "again")
+        assert failed.value.exit_status == eval(code)
     else:
         assert run_controller(ctl, duration=1.0, out=tmp_path / "again").simulated_s == pytest.approx(0.064)  # ends there
 
@@ -290,3 +293,10 @@ def test_a_state_mujoco_resets_silently_counts_as_diverged():
     sim.reset(0)
     sim.step_frame()  # a reset clears the counters
     sim.close()
+
+
+@pytest.mark.parametrize("command", [["mtn", "info"], ["mtn", "play"], ["run"]])
+def test_a_very_long_file_name_is_cut_in_the_message(command, capsys):
+    assert main([*command, "x" * 5000 + ".MTN"]) == 2
+    message = capsys.readouterr().err
+    assert len(message) < 300 and re.search(r"\.\.\. \(50\d\d characters\)", message), message

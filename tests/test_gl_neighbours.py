@@ -1,5 +1,5 @@
 """Good neighbours in one process (issue 15): our renderers leave the OpenGL context that was
-current as they found it, so Gymnasium's MuJoCo renderer keeps drawing."""
+current as they found it, so Gymnasium's MuJoCo renderer and mujoco.Renderer keep drawing."""
 
 import numpy as np
 import pytest
@@ -7,7 +7,7 @@ import pytest
 from aibo_sim.sim import Simulation
 
 
-def _ours_between(frames: list, draw, interleave: bool) -> list:
+def _ours_between(draw, interleave: bool) -> list:
     sim = Simulation() if interleave else None
     out = []
     for _ in range(3):
@@ -32,9 +32,50 @@ def test_gymnasium_mujoco_env_renders_the_same_beside_ours():
             env.step(np.zeros(env.action_space.shape))
             return env.render().copy()
 
-        result = _ours_between([], draw, interleave)
+        result = _ours_between(draw, interleave)
         env.close()
         return result
 
     alone, beside = frames(False), frames(True)
     assert alone[0].mean() > 20 and all(np.array_equal(a, b) for a, b in zip(alone, beside))
+
+
+def test_mujoco_renderer_and_ours_draw_the_same_beside_each_other():
+    import mujoco
+
+    from aibo_sim.sim import load_model
+
+    def frames(interleave):
+        model = load_model()
+        data = mujoco.MjData(model)
+        renderer = mujoco.Renderer(model, 48, 64)
+
+        def draw():
+            mujoco.mj_step(model, data, nstep=5)
+            renderer.update_scene(data, camera="camera")
+            return renderer.render().copy()
+
+        result = _ours_between(draw, interleave)
+        renderer.close()
+        return result
+
+    alone, beside = frames(False), frames(True)
+    assert alone[0].mean() > 20 and all(np.array_equal(a, b) for a, b in zip(alone, beside))
+    # And ours, with a mujoco.Renderer made first and drawing between our frames.
+    model = load_model()
+    data = mujoco.MjData(model)
+    renderer = mujoco.Renderer(model, 48, 64)
+    ours = []
+    for neighbour in (False, True):
+        sim = Simulation(camera_profile="ideal")
+        pictures = []
+        for _ in range(3):
+            sim.step_frames(sim.frames_to_camera_frame())
+            pictures.append(sim.camera.frame().rgb.copy())
+            if neighbour:
+                renderer.update_scene(data, camera="camera")
+                renderer.render()
+        sim.close()
+        ours.append(pictures)
+    renderer.close()
+    assert all(np.array_equal(a, b) for a, b in zip(*ours))
