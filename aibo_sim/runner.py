@@ -180,23 +180,31 @@ def _controller_context(controller_dir: Path, out: Path | None):
 
 
 class Progress:
-    """A one-line progress bar on a terminal; silent otherwise."""
+    """A one-line progress bar on a terminal: simulated time, frames (when counted), the
+    real-time factor and the time left, both from the progress since the first update;
+    silent otherwise."""
 
     def __init__(self, duration_s: float, stream=sys.stderr, enabled: bool = True):
         self.duration_s, self.stream = duration_s, stream
         self.enabled = enabled and stream.isatty()
-        self._last = 0.0
+        self._last, self._origin = 0.0, None
 
     def __call__(self, robot: Robot) -> None:
         """Frame listener form of ``update``."""
         self.update(robot.time_ms / 1000)
 
-    def update(self, simulated_s: float) -> None:
+    def update(self, simulated_s: float, frames: int | None = None) -> None:
         now = time.monotonic()
+        if self._origin is None:
+            self._origin = now, simulated_s
         if self.enabled and now - self._last > 0.25:
             self._last = now
             bar = "#" * int(30 * min(1.0, simulated_s / self.duration_s))
-            self.stream.write(f"\r[{bar:<30}] {simulated_s:7.2f} / {self.duration_s:.2f} s")
+            factor = (simulated_s - self._origin[1]) / max(now - self._origin[0], 1e-9)
+            left = f"{max(0.0, self.duration_s - simulated_s) / factor:.0f} s" if factor > 0 else "?"
+            counted = f"{frames} frames, " if frames is not None else ""
+            self.stream.write(f"\r[{bar:<30}] {counted}{simulated_s:.2f} / {self.duration_s:.2f} s, "
+                              f"{factor:.1f}x real time, {left} left\x1b[K")  # erase the longer line before
             self.stream.flush()
 
     def close(self) -> None:

@@ -6,8 +6,8 @@ Usage::
                   [--duration S | --steps N] [--backend sim|openr]
                   [--scene FILE] [--pose X Y YAW_DEG] [--ball X Y] [--seed N]
                   [--camera-profile ers7|ideal] [--camera-wb W] [--camera-gain G] [--camera-shutter S]
-                  [--formats rgb,yuv444,yuv420,annex,openr,bands,luma,depth,seg,mp4 | all]
-                  [--camera-full] [--resume] [--workers N]
+                  [--formats rgb,yuv444,yuv420,annex,openr,bands,luma,depth,seg,mp4,coco | all]
+                  [--camera-full] [--resume] [--workers N] [--engine local|ray] [--ray-address ADDR]
 
 A controller dump holds camera frames 0 .. 30 S - 1 (``--steps N``: frames 0 .. N - 1); an
 environment dump runs N ``env.step`` calls (``--duration S``: 30 S) and holds the frame of
@@ -32,6 +32,8 @@ controller is the camera frame index, k / 30 s)::
     depth/000123.npy     float32 metres along the optical axis, through the same lens
     seg/000123.png       uint8 class ids, names in meta.json (field.SEGMENTATION_CLASSES), same lens
     video.mp4            30 fps, codec mp4v (MPEG-4 part 2: OpenCV's wheels lack H.264)
+    coco.json            COCO detection annotations of the rgb files (needs rgb): a box per
+                         visible ball, goal, beacon and robot, with its visibility (``coco.py``)
 
 Colour: the yuv444 and yuv420 files are BT.601 limited range (Y 16-235, Cb/Cr 16-240), what
 ffmpeg, ffplay and OpenCV's ``COLOR_YUV2RGB_I420`` assume for raw yuv420p; 4:2:0 chroma is
@@ -48,8 +50,10 @@ there; readers see only complete frames. ``--resume`` re-runs the same simulatio
 start (it is deterministic for a seed: a resumed dump is byte-identical to an uninterrupted
 one, whatever the formats), drops a partial last line, writes the frames that are not
 complete, rewrites those listed whose files are missing, and rebuilds video.mp4 from every
-frame. It refuses a dump made with other parameters or from a controller file whose content
-changed since (meta.json records its SHA-256).
+frame. coco.json is written at the end from frames.jsonl's records (each frame's
+``"objects"``), so a resumed dump's is the same too. It refuses a dump made with other
+parameters or from a controller file whose content changed since (meta.json records its
+SHA-256).
 
 One writer per folder: a dump holds an ``flock`` on ``DIR/.dump.lock`` (which names its
 pid, command and start time) while it writes; a second dump or ``--resume`` into the folder
@@ -66,6 +70,17 @@ the shards' frames one after the other. The workers end with the dump: killed wi
 (SIGKILL too: ``PR_SET_PDEATHSIG`` on Linux, and everywhere a watch on the parent), stopped when
 it fails. A SIGTERM stops a dump cleanly (workers stopped, temporary files removed, exit
 status 143); Ctrl-C the same way, with exit status 130. Either can continue with ``--resume``.
+A sharded dump's coco.json lists every shard's frames (file names ``shard_k/rgb/...``).
+
+``--engine ray`` runs the shards as Ray tasks (``pip install 'aibo-sim[ray]'``): on the
+cluster at ``--ray-address`` (``ray start --head`` on one machine, ``ray start --address``
+on the others; each with aibo-sim installed and ``--out`` at the same path, a shared file
+system), or on a local Ray started for the dump. The files are the local engine's, byte for
+byte; locking, ``--resume`` and the errors are the same. A task whose worker is lost runs
+again (resuming its shard), up to 3 retries.
+
+On a terminal a dump shows its progress (frames, simulated time, real-time factor, time
+left); elsewhere it is quiet.
 """
 
 from .command import add_dump_parser

@@ -13,7 +13,7 @@ from openr_bridge import FRAME_RATE_HZ
 from ..options import add_world_options, camera_options, finite_float
 from ..robot import BACKENDS
 from .formats import DEFAULT_FORMATS, FORMATS
-from .running import POLICIES, dump
+from .running import ENGINES, POLICIES, dump
 
 EXIT_TERMINATED = 128 + signal.SIGTERM  # 143, as a shell reports a process that SIGTERM ended
 
@@ -51,7 +51,8 @@ def _dump_command(args) -> int:
             summary = dump(args.out, controller=args.controller, env=args.env, policy=args.policy, frames=frames,
                            backend=args.backend, scene=args.scene, seed=args.seed, pose=args.pose and tuple(args.pose),
                            ball=args.ball and tuple(args.ball), formats=formats, resume=args.resume,
-                           workers=args.workers, **camera_options(args))
+                           workers=args.workers, engine=args.engine, ray_address=args.ray_address,
+                           **camera_options(args))
     except Terminated:
         print("aibo-sim: terminated (SIGTERM): the dump stopped cleanly; continue it with --resume", file=sys.stderr)
         return EXIT_TERMINATED
@@ -80,5 +81,10 @@ def add_dump_parser(subcommands) -> argparse.ArgumentParser:
                         help=f"comma-separated from {','.join(FORMATS)}, or all (default {','.join(DEFAULT_FORMATS)})")
     parser.add_argument("--resume", action="store_true", help="continue an interrupted dump in --out")
     parser.add_argument("--workers", type=int, default=1, help="processes; the frames are split into shards")
+    parser.add_argument("--engine", choices=ENGINES, default="local",
+                        help="where the shards run: local processes (default) or Ray tasks "
+                             "(pip install 'aibo-sim[ray]')")
+    parser.add_argument("--ray-address", metavar="ADDR",
+                        help="with --engine ray: a running Ray cluster's address (default: start a local Ray)")
     parser.set_defaults(handler=_dump_command)
     return parser

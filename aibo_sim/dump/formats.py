@@ -14,12 +14,12 @@ from ..ers7 import JOINTS
 from ..field import SEGMENTATION_CLASSES
 from ..sim import Simulation
 
-FORMATS = ("rgb", "yuv444", "yuv420", "annex", "openr", "bands", "luma", "depth", "seg", "mp4")
+FORMATS = ("rgb", "yuv444", "yuv420", "annex", "openr", "bands", "luma", "depth", "seg", "mp4", "coco")
 DEFAULT_FORMATS = ("rgb", "yuv420", "openr", "mp4")
 DUMP_FORMAT = "aibo-sim dump 1"  # meta.json's "format"
 
 LAYERS = {name: layer for layer, name in enumerate(openr_bridge.LAYER_NAMES)}
-# Each format's file, relative to the dump folder ("mp4": one file for every frame).
+# Each format's file, relative to the dump folder ("mp4", "coco": one file for every frame).
 PATHS = {
     "rgb": "rgb/{index:06d}.png",
     "yuv444": "yuv444/{index:06d}.yuv",
@@ -31,6 +31,7 @@ PATHS = {
     "depth": "depth/{index:06d}.npy",
     "seg": "seg/{index:06d}.png",
     "mp4": "video.mp4",
+    "coco": "coco.json",
 }
 # Geoms by name prefix (first match wins); unnamed geoms of the robot's bodies are "robot".
 CLASS_PREFIXES = (("field_line", "line"), ("field", "field"), ("wall", "wall"), ("goal", "goal"),
@@ -121,6 +122,8 @@ def file_layouts(formats, width: int, height: int) -> dict:
         "depth": (f"NumPy float32 {size}, metres along the optical axis", None),
         "seg": (f"PNG, 8-bit class ids (segmentation_classes), {size}", None),
         "mp4": (f"MP4 (mp4v), 30 fps, {size}", None),
+        "coco": ("COCO detection annotations (ball, goal, beacon, robot boxes with visibility) of the rgb files, "
+                 "written at the end from frames.jsonl's \"objects\"", None),
     }
     return {f: dict(zip(("path", "layout", "bytes"), (PATHS[f], *layouts[f]))) for f in formats}
 

@@ -1,5 +1,6 @@
 """Running a dump: a controller run or an environment run into a ``DumpWriter``, or shards of
-it in worker processes that die with their parent."""
+it in worker processes that die with their parent (``engine="local"``) or in Ray tasks
+(``engine="ray"``)."""
 
 from __future__ import annotations
 
@@ -8,6 +9,7 @@ import ctypes
 import hashlib
 import os
 import signal
+import socket
 import sys
 import threading
 import time
@@ -24,10 +26,17 @@ from ..camera import CameraSettings, camera_size, describe_camera, scene_light_t
 from ..robot import BACKENDS, SimulationEnd
 from ..runner import Progress, run_controller
 from ..sim import load_model
+from .coco import coco_bytes
 from .formats import DEFAULT_FORMATS, DUMP_FORMAT, FORMATS, PATHS, DumpError
-from .writing import DumpWriter, command_line, prepare_folder, remove_temporary_files
+from .reading import LINES
+from .writing import COCO, DumpWriter, command_line, prepare_folder, remove_temporary_files, write_atomic
 
 POLICIES = ("random", "scripted", "zero")
+ENGINES = ("local", "ray")
+RAY_INSTALL = "pip install 'aibo-sim[ray]'"
+RAY_MAX_RETRIES = 3  # a shard whose Ray worker is lost runs again (resuming its folder)
+RAY_CONNECT_S = 5.0  # an --ray-address that does not answer in this is refused (ray.init would wait minutes)
+PROGRESS_POLL_S = 0.5  # a sharded dump counts its shards' frames this often
 SHARD_BALL_X, SHARD_BALL_Y = (0.3, 1.2), (-0.5, 0.5)  # metres: ahead of the robot's start
 SCRIPTED_SWEEP_HZ = 0.25
 PARENT_POLL_S = 0.5  # a worker's check that its parent still lives (where PR_SET_PDEATHSIG is missing)
@@ -57,8 +66,8 @@ class _CameraFrames:
     controller's step, it would otherwise read as the controller's own exception.
     """
 
-    def __init__(self, writer: DumpWriter, frames: int):
-        self.writer, self.frames = writer, frames
+    def __init__(self, writer: DumpWriter, frames: int, progress: Progress):
+        self.writer, self.frames, self.progress = writer, frames, progress
         self.last_index = -1
         self.error: Exception | None = None
 
@@ -67,6 +76,7 @@ class _CameraFrames:
         if index == self.last_index or index >= self.frames:
             return
         self.last_index = index
+        self.progress.update(robot.time_ms / 1000, index + 1)
         if self.writer.needs_frame(index):
             try:
                 self.writer.write(robot.sim, index)
@@ -81,13 +91,18 @@ def _dump_controller(parameters: dict, out: Path, resume: bool, **lock) -> DumpW
     model = load_model(parameters["scene"])
     camera = describe_camera(parameters["camera_profile"], settings, camera_size(camera_full),
                              scene_light_temperature(model))
+    progress = Progress(frames / FRAME_RATE_HZ, enabled=parameters.get("progress", True))
     with DumpWriter(out, parameters["formats"], parameters, resume=resume, camera=camera, model=model,
                     **lock) as writer:
-        listener = _CameraFrames(writer, frames)
-        run_controller(parameters["controller"], backend=parameters["backend"], duration=frames / FRAME_RATE_HZ,
-                       scene=parameters["scene"], seed=parameters["seed"], pose=parameters["pose"],
-                       ball=parameters["ball"], camera_full=camera_full, camera_profile=parameters["camera_profile"],
-                       camera_settings=settings, frame_listeners=[listener], progress=parameters.get("progress", True))
+        listener = _CameraFrames(writer, frames, progress)
+        try:
+            run_controller(parameters["controller"], backend=parameters["backend"], duration=frames / FRAME_RATE_HZ,
+                           scene=parameters["scene"], seed=parameters["seed"], pose=parameters["pose"],
+                           ball=parameters["ball"], camera_full=camera_full,
+                           camera_profile=parameters["camera_profile"], camera_settings=settings,
+                           frame_listeners=[listener], progress=False)
+        finally:
+            progress.close()
         if listener.error is not None:
             raise listener.error
     return writer
@@ -132,7 +147,7 @@ def _dump_env(parameters: dict, out: Path, resume: bool, **lock) -> DumpWriter:
                     env.reset()
                     index, episode = index + 1, episode + 1
                     writer.write(sim, index, {"episode": episode, "action": None, "reward": None})
-                progress.update((step + 1) / FRAME_RATE_HZ)
+                progress.update((step + 1) / FRAME_RATE_HZ, index + 1)
     finally:
         progress.close()
         env.close()
@@ -173,9 +188,12 @@ def dump(out, *, controller: str | Path | None = None, env: str | None = None, p
          frames: int = 300, backend: str = "sim", scene: str | Path | None = None, seed: int = 0,
          pose: tuple[float, float, float] | None = None, ball: tuple[float, float] | None = None,
          formats=DEFAULT_FORMATS, camera_full: bool = False, camera_profile: str = "ers7",
-         camera_settings: CameraSettings | None = None, resume: bool = False, workers: int = 1) -> DumpSummary:
+         camera_settings: CameraSettings | None = None, resume: bool = False, workers: int = 1,
+         engine: str = "local", ray_address: str | None = None) -> DumpSummary:
     """Dump a controller run (``frames`` camera frames) or an env run (``frames`` steps) to ``out``;
-    ``pose`` (x, y, yaw in degrees) and ``ball`` apply to controller dumps."""
+    ``pose`` (x, y, yaw in degrees) and ``ball`` apply to controller dumps. ``engine="ray"``
+    runs the ``workers`` shards as Ray tasks: on the Ray cluster at ``ray_address``, or on a
+    local Ray started for the dump; the files are the same, byte for byte."""
     if (controller is None) == (env is None):
         raise ValueError("dump a controller file or an environment (--env), not both or neither")
     unknown = sorted(set(formats) - set(FORMATS))
@@ -187,8 +205,21 @@ def dump(out, *, controller: str | Path | None = None, env: str | None = None, p
         raise ValueError(f"policy must be one of {POLICIES}, not {policy!r}")
     if frames < 1:
         raise ValueError(f"the number of frames (or steps) must be positive, not {frames}")
+    if "coco" in formats and "rgb" not in formats:
+        raise ValueError("--formats: coco annotates the rgb files; add rgb")
     if not 1 <= workers <= frames:
         raise ValueError(f"--workers must be between 1 and the number of frames ({frames}), not {workers}")
+    if engine not in ENGINES:
+        raise ValueError(f"--engine must be one of {', '.join(ENGINES)}, not {engine!r}")
+    if ray_address is not None and engine != "ray":
+        raise ValueError("--ray-address applies to --engine ray")
+    if engine == "ray":
+        if workers < 2:
+            raise ValueError("--engine ray runs the shards of --workers 2 or more as Ray tasks")
+        try:
+            import ray  # noqa: F401
+        except ImportError:
+            raise ValueError(f"--engine ray needs Ray, which is not installed: {RAY_INSTALL}") from None
     if env is not None and camera_full:
         raise ValueError("--camera-full applies to controller dumps; environments render their own layer")
     if env is not None and (ball is not None or pose is not None):
@@ -211,7 +242,10 @@ def dump(out, *, controller: str | Path | None = None, env: str | None = None, p
         parameters["controller_sha256"] = controller_sha256  # a resume refuses another controller file
     if workers == 1:
         return _dump_one(parameters, out, resume)
-    return _dump_sharded(parameters, out, resume, workers)
+    if engine == "local":
+        return _dump_sharded(parameters, out, resume, workers, engine)
+    with _ray_session(ray_address):  # before the folder is touched: a Ray that cannot start changes nothing
+        return _dump_sharded(parameters, out, resume, workers, engine)
 
 
 # ---------------------------------------------------------------- shards in worker processes
@@ -264,7 +298,33 @@ def _stop(processes) -> None:
             process.join()
 
 
-def _run_shards(shards: list[tuple[dict, Path]], resume: bool) -> list[DumpSummary]:
+class _ShardProgress(Progress):
+    """A sharded dump's progress: the frames its shards have listed, counted in what their
+    frames.jsonl files gained since the last ``poll``."""
+
+    def __init__(self, folders: list[Path], frames: int):
+        super().__init__(frames / FRAME_RATE_HZ)
+        self.offsets, self.frames = dict.fromkeys(folders, 0), 0
+
+    def poll(self) -> None:
+        if not self.enabled:
+            return
+        for folder, offset in self.offsets.items():
+            with contextlib.suppress(OSError), open(folder / LINES, "rb") as file:
+                file.seek(offset)
+                data = file.read()
+                self.frames += data.count(b"\n")
+                self.offsets[folder] = offset + len(data)
+        self.update(self.frames / FRAME_RATE_HZ, self.frames)
+
+
+def _remove_temporary_files(shards: list[tuple[dict, Path]]) -> None:
+    """The temporary files of stopped shards."""
+    for parameters, folder in shards:
+        remove_temporary_files(folder, {f: {"path": PATHS[f]} for f in parameters["formats"]})
+
+
+def _run_shards(shards: list[tuple[dict, Path]], resume: bool, progress: _ShardProgress) -> list[DumpSummary]:
     """Each shard in its own spawned process; the first failure stops the others and is raised.
     However this returns (an exception, a signal turned into one), no worker outlives it."""
     context, parent, command = get_context("spawn"), os.getpid(), command_line()
@@ -280,7 +340,8 @@ def _run_shards(shards: list[tuple[dict, Path]], resume: bool) -> list[DumpSumma
             processes.append(process)
             pending[receive] = k
         while pending:
-            for receive in connection.wait(list(pending)):
+            progress.poll()
+            for receive in connection.wait(list(pending), PROGRESS_POLL_S):
                 k = pending.pop(receive)
                 try:
                     status, value = receive.recv()
@@ -296,11 +357,73 @@ def _run_shards(shards: list[tuple[dict, Path]], resume: bool) -> list[DumpSumma
         stopped = [p for p in processes if p.is_alive()]
         _stop(processes)
         if stopped:
-            for parameters, folder in shards:
-                remove_temporary_files(folder, {f: {"path": PATHS[f]} for f in parameters["formats"]})
+            _remove_temporary_files(shards)
 
 
-def _dump_sharded(parameters: dict, out: Path, resume: bool, workers: int) -> DumpSummary:
+def _ray_shard(parameters: dict, folder: Path, command: str) -> DumpSummary:
+    """A Ray task's body: one shard, resumed (a retried task finds its lost attempt's frames)."""
+    return _dump_one(parameters, folder, True, lock_wait_s=SHARD_LOCK_WAIT_S, command=command)
+
+
+@contextlib.contextmanager
+def _ray_session(address: str | None):
+    """Ray for a dump: the cluster at ``address`` or a local Ray, stopped after the dump, unless
+    this process is connected to one already."""
+    import ray
+
+    host, _, port = (address or "").removeprefix("ray://").rpartition(":")
+    if host and port.isdigit():
+        try:
+            socket.create_connection((host, int(port)), RAY_CONNECT_S).close()
+        except OSError as exc:
+            raise ValueError(f"--ray-address {address}: no Ray cluster answers there ({exc.strerror or exc})") from None
+    started = not ray.is_initialized()
+    if started:
+        try:
+            ray.init(address=address, include_dashboard=False, logging_level="warning")
+        except Exception as exc:  # Ray's own exception types, by version
+            where = f"--ray-address {address}" if address else "--engine ray"
+            raise ValueError(f"{where}: cannot start or reach Ray ({str(exc).splitlines()[0]})") from None
+    try:
+        yield
+    finally:
+        if started:
+            ray.shutdown()
+
+
+def _run_ray_shards(shards: list[tuple[dict, Path]], progress: _ShardProgress) -> list[DumpSummary]:
+    """Each shard as a Ray task (retried when its worker is lost); the first failure cancels
+    the others and is raised."""
+    import ray
+
+    task = ray.remote(num_cpus=1, max_retries=RAY_MAX_RETRIES)(_ray_shard)
+    command = command_line()
+    pending = {task.remote(parameters, folder, f"{command} (Ray task: {folder.name})"): k
+               for k, (parameters, folder) in enumerate(shards)}
+    results = [None] * len(shards)
+    try:
+        while pending:
+            progress.poll()
+            for ref in ray.wait(list(pending), timeout=PROGRESS_POLL_S)[0]:
+                k = pending.pop(ref)
+                folder = shards[k][1]
+                try:
+                    results[k] = ray.get(ref)
+                except ray.exceptions.RayTaskError as exc:  # the shard's own error, as the local engine raises it
+                    raise exc.cause if exc.cause is not None else DumpError(f"{folder}: {exc}") from None
+                except ray.exceptions.RayError as exc:
+                    raise DumpError(f"{folder}: its Ray task was lost ({type(exc).__name__}) {RAY_MAX_RETRIES + 1} "
+                                    "times; continue with --resume") from None
+        return results
+    finally:
+        for ref in pending:
+            ray.cancel(ref, force=True)
+        if pending:
+            ray.wait(list(pending), num_returns=len(pending), timeout=WORKER_STOP_S)
+            _remove_temporary_files(shards)
+
+
+def _dump_sharded(parameters: dict, out: Path, resume: bool, workers: int, engine: str) -> DumpSummary:
     start = time.perf_counter()
     meta = {"format": DUMP_FORMAT, "parameters": {**parameters, "workers": workers},
             "shards": [f"shard_{k}" for k in range(workers)]}
@@ -316,7 +439,13 @@ def _dump_sharded(parameters: dict, out: Path, resume: bool, workers: int) -> Du
             frames = parameters["frames"] // workers + (k < parameters["frames"] % workers)
             shard = {**parameters, "seed": seed, "ball": ball, "frames": frames, "progress": False}
             shards.append((shard, out / f"shard_{k}"))
-        results = _run_shards(shards, resume)
+        progress = _ShardProgress([folder for _, folder in shards], parameters["frames"])
+        try:
+            results = _run_ray_shards(shards, progress) if engine == "ray" else _run_shards(shards, resume, progress)
+        finally:
+            progress.close()
+        if "coco" in parameters["formats"]:
+            write_atomic(out / COCO, coco_bytes(out, [folder for _, folder in shards]))
     finally:
         prepared.lock.release()
     return DumpSummary(str(out), sum(r.frames for r in results), sum(r.new_frames for r in results),

@@ -22,7 +22,8 @@ from openr_bridge import FRAME_RATE_HZ
 
 from ..field import SEGMENTATION_CLASSES
 from ..sim import Simulation
-from .formats import (DUMP_FORMAT, LAYERS, DumpError, annex_yuv, file_layouts, frame_files, frame_metadata,
+from .coco import Objects, coco_bytes
+from .formats import (DUMP_FORMAT, LAYERS, PATHS, DumpError, annex_yuv, file_layouts, frame_files, frame_metadata,
                       geom_classes, png, yuv420_bytes, yuv444_bytes)
 from .reading import LINES, META, parse_records, read_meta, split_lines
 
@@ -33,9 +34,9 @@ except ImportError:  # not POSIX: dumps are not locked there
 
 TEMP_PREFIX = ".tmp."  # a file being written: ".tmp." + its final name, in the same folder
 LOCK_NAME = ".dump.lock"  # flock()ed by the writer; holds its pid, command and start time
-VIDEO = "video.mp4"
+VIDEO, COCO = PATHS["mp4"], PATHS["coco"]
 # What an empty destination may hold: the lock, or the temporary meta.json of a writer killed at once.
-OWN_TOP_FILES = frozenset({LOCK_NAME, TEMP_PREFIX + META, TEMP_PREFIX + VIDEO})
+OWN_TOP_FILES = frozenset({LOCK_NAME, TEMP_PREFIX + META, TEMP_PREFIX + VIDEO, TEMP_PREFIX + COCO})
 HOLDER_COMMAND_CHARS = 300  # a holder's command line is cut to this in messages
 
 
@@ -276,6 +277,7 @@ class DumpWriter:
         self._lines = self._video = self._video_path = None
         try:
             self._classes = geom_classes(model) if "seg" in self.formats else None
+            self._objects = Objects(model) if "coco" in self.formats else None
             for name in self.formats:
                 path = out / self.layouts[name]["path"]
                 try:
@@ -315,7 +317,8 @@ class DumpWriter:
             self.missing.discard(index)
             self.repaired_frames += 1
             return
-        line = json.dumps({**frame_metadata(sim, index), **(extra or {})}) + "\n"
+        objects = {"objects": self._objects.detect(sim)} if self._objects is not None else {}
+        line = json.dumps({**frame_metadata(sim, index), **objects, **(extra or {})}) + "\n"
         try:
             self._lines.write(line.encode())
             self._lines.flush()
@@ -365,7 +368,7 @@ class DumpWriter:
             self.abort()
 
     def finish(self) -> None:
-        """Close the files; the video takes its final name only now."""
+        """Close the files; the video takes its final name only now, coco.json is written now."""
         try:
             self._close()
             if self._video_path is not None:
@@ -375,6 +378,8 @@ class DumpWriter:
                 except OSError as exc:
                     remove_temporary_files(self.out, self.layouts)
                     raise DumpError(f"cannot write {final}: {exc.strerror or exc}") from exc
+            if self._objects is not None:
+                write_atomic(self.out / COCO, coco_bytes(self.out, [self.out]))
         finally:
             self._lock.release()
 
