@@ -152,7 +152,8 @@ def build_parser() -> argparse.ArgumentParser:
     commands = parser.add_subparsers(dest="command", required=True)
 
     run = commands.add_parser("run", help="run a controller headless")
-    run.add_argument("controller", help="controller file (Python, Webots-era Aibo API)")
+    run.add_argument("controller", help="controller (Webots-era Aibo API): a Python file, or a C or C++ file or "
+                                        "folder (compiled with the system compiler)")
     run.add_argument("--backend", choices=BACKENDS, default="sim")
     run.add_argument("--duration", type=finite_float, default=10.0, help="simulated seconds (default 10)")
     run.add_argument("--out", help="folder for camera frames, the controller's files and run.json")
@@ -198,6 +199,7 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     from openr_bridge import OpenRError
 
+    from .cbind import CompileError
     from .mtn import MtnError
     from .render import RenderingUnavailable
     from .robot import DeviceError, short_repr
@@ -217,8 +219,8 @@ def main(argv: list[str] | None = None) -> int:
     except SimulationDiverged as exc:
         print(f"aibo-sim: error: {exc}", file=sys.stderr)
         return EXIT_DIVERGED
-    except (ModelError, MtnError, OpenRError, DeviceError, RenderingUnavailable, ViewerUnavailable, OSError,
-            ValueError) as exc:
+    except (ModelError, MtnError, OpenRError, DeviceError, RenderingUnavailable, ViewerUnavailable, CompileError,
+            OSError, ValueError) as exc:
         if isinstance(exc, OSError) and exc.filename is not None:  # the name, cut if it is a long one
             exc = f"{short_repr(str(exc.filename), 120)}: {exc.strerror or exc}"
         print(f"aibo-sim: error: {exc}", file=sys.stderr)

@@ -19,6 +19,7 @@ import numpy as np
 
 from . import controller
 from .camera import CameraSettings
+from .cbind import CControllerError, compile_controller, controller_sources, is_c_controller, run_c_controller
 from .options import place, start_values
 from .robot import Robot, SimulationEnd
 from .sim import Simulation, SimulationDiverged, models_dir
@@ -92,7 +93,8 @@ class FrameWriter:
     changed: a ``run.json`` that is not aibo-sim's, a non-empty ``frames/`` beside no
     ``run.json``, a ``frames/`` holding files that are not a run's frames. ``run.json`` is
     written at the start with ``"status": "incomplete"`` and replaced by the summary at the
-    end, so that a killed run's folder is still recognised.
+    end (by ``"status": "failed"``, the error and the simulated time when the controller
+    failed or the physics diverged), so that a killed run's folder is still recognised.
 
     A write that fails (a full disk) ends the run: the error is kept and ``check`` raises it
     after the run, as the OSError naming the file rather than as the controller's exception.
@@ -217,8 +219,9 @@ def run_controller(path: str | Path, *, backend: str = "sim", duration: float = 
                    camera_full: bool = False, camera_profile: str = "ers7",
                    camera_settings: CameraSettings | None = None, pose: tuple[float, float, float] | None = None,
                    ball: tuple[float, float] | None = None, frame_listeners=(), progress: bool = True) -> RunSummary:
-    """Run a controller file for ``duration`` simulated seconds; frames, its files and
-    ``run.json`` (the summary) go to ``out``.
+    """Run a controller for ``duration`` simulated seconds; frames, its files and ``run.json``
+    (the summary) go to ``out``. The controller is a Python file, or a C or C++ file or folder
+    (``aibo_sim.cbind``: compiled first, a CompileError when it does not compile).
 
     The robot starts at ``pose`` (x, y in metres, yaw in degrees; default the scene's start),
     the ball at ``ball``; the head camera is ``camera_profile`` (``ers7`` or ``ideal``) with
@@ -226,7 +229,11 @@ def run_controller(path: str | Path, *, backend: str = "sim", duration: float = 
     8 ms frame; ``progress=False`` silences the progress bar (worker processes).
     """
     path = Path(path).resolve()
-    if not path.is_file():
+    executable = None
+    if is_c_controller(path):
+        executable = compile_controller(path)
+        path = controller_sources(path)[0]  # the main file: its folder holds the controller's motions
+    elif not path.is_file():
         raise FileNotFoundError(f"{path}: no such controller file")
     if isinstance(duration, (str, bytes, bool)) or not isinstance(duration, (int, float, np.integer, np.floating)):
         raise ValueError(f"--duration must be a number of seconds, not {duration!r}")
@@ -268,7 +275,10 @@ def run_controller(path: str | Path, *, backend: str = "sim", duration: float = 
         with _controller_context(path.parent, out):
             error: BaseException | None = None
             try:
-                runpy.run_path(str(path), run_name="__main__")
+                if executable is None:
+                    runpy.run_path(str(path), run_name="__main__")
+                else:
+                    run_c_controller(executable, path.name)
             except SimulationEnd:
                 pass
             except SystemExit as exc:
@@ -289,13 +299,22 @@ def run_controller(path: str | Path, *, backend: str = "sim", duration: float = 
                 raise error
             if isinstance(error, SystemExit):
                 status = error.code if isinstance(error.code, int) else repr(error.code)
-                raise ControllerFailed(f"controller {path.name} exited with sys.exit({status}) {where}"
+                call = "sys.exit" if executable is None else "exit"
+                raise ControllerFailed(f"controller {path.name} exited with {call}({status}) {where}"
                                        f"{die_report}", exit_status=error.code) from error
+            if isinstance(error, CControllerError):
+                raise ControllerFailed(f"controller {path.name}: {error} {where}") from error
             if error is not None:
                 raise ControllerFailed(f"controller {path.name} raised {where}:\n"
                                        + "".join(traceback.format_exception(error)) + die_report) from error
             if die_report:
                 raise ControllerFailed(f"controller {path.name} ended {where};{die_report}")
+    except (ControllerFailed, SimulationDiverged) as failure:
+        if writer is not None:  # the frames so far stay, and run.json says how the run ended
+            writer.write_run_json({"controller": str(path), "backend": backend, "status": "failed",
+                                   "error": str(failure), "simulated_s": robot.time_ms / 1000,
+                                   "camera_frames": writer.count})
+        raise
     finally:
         progress_bar.close()
         controller.install(None)

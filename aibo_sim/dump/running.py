@@ -23,6 +23,7 @@ import numpy as np
 from openr_bridge import FRAME_RATE_HZ
 
 from ..camera import CameraSettings, camera_size, describe_camera, scene_light_temperature
+from ..cbind import compile_controller, controller_sources, is_c_controller
 from ..robot import BACKENDS, SimulationEnd
 from ..runner import Progress, run_controller
 from ..sim import load_model
@@ -184,6 +185,20 @@ def file_sha256(path: Path) -> str:
     return digest.hexdigest()
 
 
+def controller_sha256(path: Path) -> str:
+    """The hash of a controller: its file's, or for a C or C++ controller folder, that of its
+    sources' names and hashes (compiled first, so that a compile error stops the dump at once)."""
+    if not is_c_controller(path):
+        if not path.is_file():
+            raise FileNotFoundError(f"{path}: no such controller file")
+        return file_sha256(path)
+    compile_controller(path)
+    sources = controller_sources(path)[1]
+    if sources == [path]:
+        return file_sha256(path)
+    return hashlib.sha256("".join(f"{s.name}\0{file_sha256(s)}\0" for s in sources).encode()).hexdigest()
+
+
 def dump(out, *, controller: str | Path | None = None, env: str | None = None, policy: str = "random",
          frames: int = 300, backend: str = "sim", scene: str | Path | None = None, seed: int = 0,
          pose: tuple[float, float, float] | None = None, ball: tuple[float, float] | None = None,
@@ -226,20 +241,18 @@ def dump(out, *, controller: str | Path | None = None, env: str | None = None, p
         raise ValueError("--ball and --pose apply to controller dumps; environments place the robot and ball themselves")
     if env is not None:
         _check_env(env)
-    controller_sha256 = None
+    source_sha256 = None
     if controller is not None:
         controller = Path(controller).resolve()
-        if not controller.is_file():
-            raise FileNotFoundError(f"{controller}: no such controller file")
-        controller_sha256 = file_sha256(controller)
+        source_sha256 = controller_sha256(controller)
     out = Path(out).resolve()
     parameters = {"controller": controller and str(controller), "env": env, "policy": env and policy,
                   "frames": frames, "backend": backend, "scene": scene and str(Path(scene).resolve()), "seed": seed,
                   "pose": pose and list(pose), "ball": ball and list(ball),
                   "formats": [f for f in FORMATS if f in formats], "camera_full": camera_full,
                   "camera_profile": camera_profile, "camera_settings": (camera_settings or CameraSettings()).as_dict()}
-    if controller_sha256 is not None:
-        parameters["controller_sha256"] = controller_sha256  # a resume refuses another controller file
+    if source_sha256 is not None:
+        parameters["controller_sha256"] = source_sha256  # a resume refuses another controller
     if workers == 1:
         return _dump_one(parameters, out, resume)
     if engine == "local":

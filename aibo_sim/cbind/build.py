@@ -1,0 +1,119 @@
+"""Compiling a C or C++ controller against the Webots-era headers, into a cache.
+
+The executable lands in ``$XDG_CACHE_HOME/aibo-sim/c/<key>/`` (``~/.cache`` without it), the
+key a hash of everything that goes into it: the sources' names and bytes, the headers,
+``libaibo.c``, the call table, the flags and the compilers' versions. A second run of unchanged
+sources compiles nothing. ``CC`` and ``CXX`` choose the compilers (default ``cc`` and ``c++``).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import shutil
+import subprocess
+import tempfile
+from pathlib import Path
+
+from .protocol import c_header
+
+C_SUFFIXES = (".c", ".cc", ".cpp")
+PACKAGE = Path(__file__).resolve().parent
+INCLUDE = PACKAGE / "include"
+LIBRARY = PACKAGE / "libaibo.c"
+# -ffp-contract=off: no fused multiply-add, so that a controller's double arithmetic rounds as
+# the source (and Python) says, on every machine.
+FLAGS = ("-O2", "-ffp-contract=off")
+INSTALL_HINT = {"cc": "a C compiler (Debian/Ubuntu: apt-get install gcc)",
+                "c++": "a C++ compiler (Debian/Ubuntu: apt-get install g++)"}
+
+
+class CompileError(RuntimeError):
+    """No compiler, or the compiler refused the controller: the message says which, or is the
+    compiler's own output (file:line: error ...)."""
+
+
+def is_c_controller(path: str | os.PathLike) -> bool:
+    """A C or C++ source file, or a folder holding one named like the folder."""
+    path = Path(path)
+    if path.is_dir():
+        return any((path / (path.name + suffix)).is_file() for suffix in C_SUFFIXES)
+    return path.suffix in C_SUFFIXES
+
+
+def controller_sources(path: str | os.PathLike) -> tuple[Path, list[Path]]:
+    """(main file, all sources) of a controller file or folder (its C and C++ files, not below)."""
+    path = Path(path).resolve()
+    if path.is_dir():
+        main = next((path / (path.name + s) for s in C_SUFFIXES if (path / (path.name + s)).is_file()), None)
+        if main is None:
+            raise FileNotFoundError(f"{path}: no {' or '.join(path.name + s for s in C_SUFFIXES)} in this controller folder")
+        return main, sorted(p for p in path.iterdir() if p.suffix in C_SUFFIXES and p.is_file())
+    if not path.is_file():
+        raise FileNotFoundError(f"{path}: no such controller file")
+    return path, [path]
+
+
+def _compiler(kind: str) -> str:
+    """The path of the C (``cc``) or C++ (``c++``) compiler; CompileError naming it when missing."""
+    name = os.environ.get("CC" if kind == "cc" else "CXX") or kind
+    found = shutil.which(name)
+    if found is None:
+        raise CompileError(f"no compiler {name!r} found: this controller needs {INSTALL_HINT[kind]}"
+                           + (f", or set {'CC' if kind == 'cc' else 'CXX'}" if kind in INSTALL_HINT else ""))
+    return found
+
+
+def _version(compiler: str) -> bytes:
+    return subprocess.run([compiler, "--version"], capture_output=True).stdout
+
+
+def _cache_root() -> Path:
+    return Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "aibo-sim" / "c"
+
+
+def compile_controller(path: str | os.PathLike) -> Path:
+    """The executable of the controller at ``path`` (file or folder), compiled if it is not
+    in the cache; CompileError with the compiler's messages when it does not compile."""
+    main, sources = controller_sources(path)
+    compilers = {"cc": _compiler("cc")}
+    if any(s.suffix != ".c" for s in sources):
+        compilers["c++"] = _compiler("c++")
+    header = c_header()
+    digest = hashlib.sha256()
+    for part in (*FLAGS, header, LIBRARY.read_text(),
+                 *(f.read_text() for f in sorted(INCLUDE.rglob("*.h"))),
+                 *(compilers[k].encode() + _version(compilers[k]) for k in sorted(compilers))):
+        digest.update(part.encode() if isinstance(part, str) else part)
+        digest.update(b"\0")
+    for source in sources:
+        digest.update(source.name.encode() + b"\0" + source.read_bytes() + b"\0")
+    folder = _cache_root() / digest.hexdigest()[:32]
+    executable = folder / main.stem
+    if executable.is_file():
+        return executable
+    folder.parent.mkdir(parents=True, exist_ok=True)
+    with tempfile.TemporaryDirectory(dir=folder.parent, prefix=".build-") as build:
+        build = Path(build)
+        (build / "aibo_ops.h").write_text(header)
+        objects = []
+        for source in [LIBRARY, *sources]:
+            compiler = compilers["cc" if source.suffix == ".c" else "c++"]
+            objects.append(build / f"{len(objects)}_{source.stem}.o")
+            _run([compiler, *FLAGS, "-I", str(INCLUDE), "-I", str(build), "-c", str(source), "-o", str(objects[-1])],
+                 source)
+        _run([compilers.get("c++", compilers["cc"]), *map(str, objects), "-o", str(build / main.stem), "-lm"], main)
+        try:
+            os.replace(build, folder)  # whole or not at all; a racing build of the same key may have won
+        except OSError:
+            if not executable.is_file():
+                raise
+        else:
+            build.mkdir()  # for TemporaryDirectory's clean-up
+    return executable
+
+
+def _run(command: list[str], source: Path) -> None:
+    result = subprocess.run(command, capture_output=True, text=True)
+    if result.returncode != 0:
+        raise CompileError((result.stderr or result.stdout).rstrip() or f"{command[0]} failed on {source}")

@@ -1,0 +1,421 @@
+/* The controller side of aibo-sim's C binding: each API call becomes a message to the
+ * simulator (aibo_sim/cbind/protocol.py), which makes the same call on the Python API.
+ *
+ * The simulator starts the controller with AIBO_SIM_FD (its end of a socket) and AIBO_SIM_SHM
+ * (a file mapped by both: camera images). A call with results is sent at once and waits for
+ * its answer; calls without results are queued and go with it (or at exit). When the
+ * simulator answers "end" (the run is over), the controller exits with status 0; at exit, the
+ * robot_die functions run. */
+#include <errno.h>
+#include <fcntl.h>
+#include <sched.h>
+#include <stdarg.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/mman.h>
+#include <sys/socket.h>
+#include <time.h>
+#include <unistd.h>
+
+#include <device/accelerometer.h>
+#include <device/camera.h>
+#include <device/distance_sensor.h>
+#include <device/led.h>
+#include <device/mtn.h>
+#include <device/robot.h>
+#include <device/servo.h>
+#include <device/touch_sensor.h>
+
+#include "aibo_ops.h"
+
+#define MAX_DIE_FUNCTIONS 64
+/* How long a call polls for its answer before it sleeps: the simulator answers most calls in
+ * microseconds, and a process that sleeps wakes up slowly on a virtual machine. */
+#define SPIN_NS 2000000L
+
+static int channel = -1;
+static unsigned char *images;
+/* Calls without results wait in `outgoing` and go with the next call that has results (one
+ * write); `start` is where the call being built begins. Answers arrive in `answer`. */
+static unsigned char outgoing[1 << 16], answer[1 << 16];
+static size_t outgoing_length, start, cursor;
+static void (*die_functions[MAX_DIE_FUNCTIONS])(void);
+static int die_count;
+
+struct MTN {
+    int id;
+};
+
+static void fail(const char *what) {
+    fprintf(stderr, "aibo-sim C binding: %s: %s\n", what, strerror(errno));
+    _exit(70);
+}
+
+static void flush_calls(void);
+
+/* At exit (main returned, exit() called, or the run's end): the robot_die functions, then the
+ * calls still waiting to be sent. */
+static void at_exit(void) {
+    while (die_count) {
+        void (*exit_fn)(void) = die_functions[0];
+        memmove(die_functions, die_functions + 1, --die_count * sizeof *die_functions);
+        exit_fn();
+    }
+    flush_calls();
+}
+
+static void connect_to_simulator(void) {
+    const char *fd = getenv("AIBO_SIM_FD"), *shm = getenv("AIBO_SIM_SHM");
+    if (!fd || !shm) {
+        fprintf(stderr, "aibo-sim C binding: run this controller with `aibo-sim run`\n");
+        _exit(70);
+    }
+    channel = atoi(fd);
+    int file = open(shm, O_RDONLY);
+    if (file < 0) fail(shm);
+    images = mmap(NULL, AIBO_MAX_IMAGE_BYTES, PROT_READ, MAP_SHARED, file, 0);
+    if (images == MAP_FAILED) fail("mmap");
+    close(file);
+    atexit(at_exit);
+}
+
+/* ---- sending */
+
+static void write_all(const unsigned char *bytes, size_t size) {
+    while (size) {
+        ssize_t sent = write(channel, bytes, size);
+        if (sent < 0 && errno == EINTR) continue;
+        if (sent <= 0) _exit(70); /* the simulator is gone: it reports why */
+        bytes += sent;
+        size -= (size_t)sent;
+    }
+}
+
+static void flush_calls(void) {
+    if (channel >= 0 && start) write_all(outgoing, start);
+    start = outgoing_length = 0;
+}
+
+static void put(const void *bytes, size_t size) {
+    if (outgoing_length + size > sizeof outgoing) {
+        if (start == 0) {
+            fprintf(stderr, "aibo-sim C binding: a call's arguments exceed %zu bytes\n", sizeof outgoing);
+            _exit(70);
+        }
+        size_t building = outgoing_length - start; /* send the calls before this one */
+        write_all(outgoing, start);
+        memmove(outgoing, outgoing + start, building);
+        start = 0;
+        outgoing_length = building;
+        put(bytes, size);
+        return;
+    }
+    memcpy(outgoing + outgoing_length, bytes, size);
+    outgoing_length += size;
+}
+
+static void begin(enum aibo_op op) {
+    if (channel < 0) connect_to_simulator();
+    int32_t code = op, size = 0;
+    put(&size, 4); /* the length, filled in by queue_call */
+    put(&code, 4);
+}
+
+static void put_int(int value) {
+    int32_t v = value;
+    put(&v, 4);
+}
+
+static void put_double(double value) { put(&value, 8); }
+
+static void put_string(const char *text) {
+    if (!text) text = "";
+    uint32_t size = (uint32_t)strlen(text);
+    put(&size, 4);
+    put(text, size);
+}
+
+/* The call built since begin() joins the queue (a call without results: it needs no answer). */
+static void send_call(void) {
+    uint32_t size = (uint32_t)(outgoing_length - start - 4);
+    memcpy(outgoing + start, &size, 4);
+    start = outgoing_length;
+}
+
+/* ---- answers */
+
+static long now_ns(void) {
+    struct timespec t;
+    clock_gettime(CLOCK_MONOTONIC, &t);
+    return t.tv_sec * 1000000000L + t.tv_nsec;
+}
+
+/* Reads at least `need` bytes of the answer: polls for SPIN_NS, yielding the core between
+ * polls, then sleeps. */
+static size_t read_answer(size_t have, size_t need) {
+    long deadline = now_ns() + SPIN_NS;
+    while (have < need) {
+        int flags = now_ns() < deadline ? MSG_DONTWAIT : 0;
+        ssize_t got = recv(channel, answer + have, sizeof answer - have, flags);
+        if (got > 0) {
+            have += (size_t)got;
+        } else if (got < 0 && (errno == EAGAIN || errno == EWOULDBLOCK)) {
+            sched_yield();
+        } else if (!(got < 0 && errno == EINTR)) {
+            _exit(70); /* the simulator is gone: it reports why */
+        }
+    }
+    return have;
+}
+
+/* Sends the queue and this call, and reads its answer; on "end", the controller ends. */
+static void call(void) {
+    send_call();
+    flush_calls();
+    size_t have = read_answer(0, 4);
+    uint32_t size;
+    memcpy(&size, answer, 4);
+    if (size > sizeof answer - 4) _exit(70);
+    read_answer(have, 4 + size);
+    cursor = 8;
+    int32_t status;
+    memcpy(&status, answer + 4, 4);
+    if (status == AIBO_STATUS_END) exit(0); /* at_exit runs the robot_die functions */
+}
+
+static int get_int(void) {
+    int32_t v;
+    memcpy(&v, answer + cursor, 4);
+    cursor += 4;
+    return v;
+}
+
+static double get_double(void) {
+    double v;
+    memcpy(&v, answer + cursor, 8);
+    cursor += 8;
+    return v;
+}
+
+/* A string answer, kept until the next call of the same kind. */
+static const char *get_string(char *keep, size_t capacity) {
+    uint32_t size;
+    memcpy(&size, answer + cursor, 4);
+    cursor += 4;
+    if (size >= capacity) size = (uint32_t)capacity - 1;
+    memcpy(keep, answer + cursor, size);
+    keep[size] = 0;
+    return keep;
+}
+
+static void call_tag(enum aibo_op op, DeviceTag tag) {
+    begin(op);
+    put_int(tag);
+}
+
+static void send_tag_int(enum aibo_op op, DeviceTag tag, int value) {
+    call_tag(op, tag);
+    put_int(value);
+    send_call();
+}
+
+static void send_tag_double(enum aibo_op op, DeviceTag tag, double value) {
+    call_tag(op, tag);
+    put_double(value);
+    send_call();
+}
+
+static double get_tag_double(enum aibo_op op, DeviceTag tag) {
+    call_tag(op, tag);
+    call();
+    return get_double();
+}
+
+static int get_tag_int(enum aibo_op op, DeviceTag tag) {
+    call_tag(op, tag);
+    call();
+    return get_int();
+}
+
+/* ---- robot */
+
+void robot_live(void (*reset)(void)) {
+    if (channel < 0) connect_to_simulator();
+    if (reset) reset();
+}
+
+void robot_die(void (*exit_fn)(void)) {
+    if (channel < 0) connect_to_simulator();
+    if (die_count == MAX_DIE_FUNCTIONS) {
+        fprintf(stderr, "aibo-sim C binding: more than %d robot_die functions\n", MAX_DIE_FUNCTIONS);
+        _exit(70);
+    }
+    die_functions[die_count++] = exit_fn;
+}
+
+int robot_step(int ms) {
+    begin(AIBO_OP_robot_step);
+    put_int(ms);
+    call();
+    return get_int();
+}
+
+void robot_run(int (*run)(int)) {
+    int ms = 0;
+    for (;;) robot_step(ms = run(ms));
+}
+
+DeviceTag robot_get_device(const char *name) {
+    begin(AIBO_OP_robot_get_device);
+    put_string(name);
+    call();
+    return (DeviceTag)get_int();
+}
+
+double robot_get_time(void) {
+    begin(AIBO_OP_robot_get_time);
+    call();
+    return get_double();
+}
+
+const char *robot_get_name(void) {
+    static char name[64];
+    begin(AIBO_OP_robot_get_name);
+    call();
+    return get_string(name, sizeof name);
+}
+
+void robot_console_printf(const char *format, ...) {
+    char text[4096];
+    va_list args;
+    va_start(args, format);
+    vsnprintf(text, sizeof text, format, args);
+    va_end(args);
+    fflush(stdout); /* the controller's own output first, in order */
+    begin(AIBO_OP_robot_console_printf);
+    put_string(text);
+    send_call();
+    flush_calls(); /* printed now, in order with the controller's own output */
+}
+
+/* ---- servos */
+
+void servo_enable_position(DeviceTag s, unsigned short ms) { send_tag_int(AIBO_OP_servo_enable_position, s, ms); }
+void servo_disable_position(DeviceTag s) { call_tag(AIBO_OP_servo_disable_position, s); send_call(); }
+double servo_get_position(DeviceTag s) { return get_tag_double(AIBO_OP_servo_get_position, s); }
+void servo_set_position(DeviceTag s, double v) { send_tag_double(AIBO_OP_servo_set_position, s, v); }
+void servo_set_velocity(DeviceTag s, double v) { send_tag_double(AIBO_OP_servo_set_velocity, s, v); }
+void servo_set_acceleration(DeviceTag s, double v) { send_tag_double(AIBO_OP_servo_set_acceleration, s, v); }
+void servo_set_motor_force(DeviceTag s, double v) { send_tag_double(AIBO_OP_servo_set_motor_force, s, v); }
+void servo_set_control_p(DeviceTag s, double v) { send_tag_double(AIBO_OP_servo_set_control_p, s, v); }
+
+/* ---- camera */
+
+void camera_enable(DeviceTag c, unsigned short ms) { send_tag_int(AIBO_OP_camera_enable, c, ms); }
+void camera_disable(DeviceTag c) { call_tag(AIBO_OP_camera_disable, c); send_call(); }
+
+unsigned char *camera_get_image(DeviceTag c) {
+    static unsigned char *copy;
+    call_tag(AIBO_OP_camera_get_image, c);
+    call();
+    int width = get_int(), height = get_int();
+    size_t size = (size_t)width * (size_t)height * 3;
+    /* The controller's own copy: the shared block changes with the next image. */
+    if (!copy && !(copy = malloc(AIBO_MAX_IMAGE_BYTES))) fail("malloc");
+    memcpy(copy, images, size);
+    return copy;
+}
+
+unsigned short camera_get_width(DeviceTag c) { return (unsigned short)get_tag_int(AIBO_OP_camera_get_width, c); }
+unsigned short camera_get_height(DeviceTag c) { return (unsigned short)get_tag_int(AIBO_OP_camera_get_height, c); }
+float camera_get_fov(DeviceTag c) { return (float)get_tag_double(AIBO_OP_camera_get_fov, c); }
+void camera_set_white_balance(DeviceTag c, int v) { send_tag_int(AIBO_OP_camera_set_white_balance, c, v); }
+void camera_set_gain(DeviceTag c, int v) { send_tag_int(AIBO_OP_camera_set_gain, c, v); }
+void camera_set_shutter_speed(DeviceTag c, int v) { send_tag_int(AIBO_OP_camera_set_shutter_speed, c, v); }
+
+/* ---- sensors, LEDs */
+
+void distance_sensor_enable(DeviceTag d, unsigned short ms) { send_tag_int(AIBO_OP_distance_sensor_enable, d, ms); }
+void distance_sensor_disable(DeviceTag d) { call_tag(AIBO_OP_distance_sensor_disable, d); send_call(); }
+double distance_sensor_get_value(DeviceTag d) { return get_tag_double(AIBO_OP_distance_sensor_get_value, d); }
+void touch_sensor_enable(DeviceTag t, unsigned short ms) { send_tag_int(AIBO_OP_touch_sensor_enable, t, ms); }
+void touch_sensor_disable(DeviceTag t) { call_tag(AIBO_OP_touch_sensor_disable, t); send_call(); }
+double touch_sensor_get_value(DeviceTag t) { return get_tag_double(AIBO_OP_touch_sensor_get_value, t); }
+void accelerometer_enable(DeviceTag a, unsigned short ms) { send_tag_int(AIBO_OP_accelerometer_enable, a, ms); }
+void accelerometer_disable(DeviceTag a) { call_tag(AIBO_OP_accelerometer_disable, a); send_call(); }
+
+const float *accelerometer_get_values(DeviceTag a) {
+    static float values[3];
+    call_tag(AIBO_OP_accelerometer_get_values, a);
+    call();
+    for (int k = 0; k < 3; k++) values[k] = (float)get_double();
+    return values;
+}
+
+void led_set(DeviceTag l, int value) { send_tag_int(AIBO_OP_led_set, l, value); }
+
+/* ---- MTN */
+
+static int mtn_id(MTN *mtn) { return mtn ? mtn->id : 0; }
+
+MTN *mtn_new(const char *filename) {
+    begin(AIBO_OP_mtn_new);
+    put_string(filename);
+    call();
+    int id = get_int();
+    if (!id) return NULL;
+    MTN *mtn = malloc(sizeof *mtn);
+    if (!mtn) fail("malloc");
+    mtn->id = id;
+    return mtn;
+}
+
+void mtn_delete(MTN *mtn) {
+    begin(AIBO_OP_mtn_delete);
+    put_int(mtn_id(mtn));
+    send_call();
+    free(mtn);
+}
+
+void mtn_play(MTN *mtn) {
+    begin(AIBO_OP_mtn_play);
+    put_int(mtn_id(mtn));
+    send_call();
+}
+
+static int mtn_int(enum aibo_op op, MTN *mtn) {
+    begin(op);
+    put_int(mtn_id(mtn));
+    call();
+    return get_int();
+}
+
+int mtn_is_over(MTN *mtn) { return mtn_int(AIBO_OP_mtn_is_over, mtn); }
+int mtn_get_length(MTN *mtn) { return mtn_int(AIBO_OP_mtn_get_length, mtn); }
+int mtn_get_time(MTN *mtn) { return mtn_int(AIBO_OP_mtn_get_time, mtn); }
+
+const char *mtn_get_name(MTN *mtn) {
+    static char name[256];
+    begin(AIBO_OP_mtn_get_name);
+    put_int(mtn_id(mtn));
+    call();
+    return get_string(name, sizeof name);
+}
+
+void mtn_fprint(FILE *file, MTN *mtn) {
+    static char text[8192];
+    begin(AIBO_OP_mtn_fprint);
+    put_int(mtn_id(mtn));
+    call();
+    fputs(get_string(text, sizeof text), file);
+}
+
+const char *mtn_get_error(void) {
+    static char error[1024];
+    begin(AIBO_OP_mtn_get_error);
+    call();
+    const char *text = get_string(error, sizeof error);
+    return *text ? text : NULL;
+}

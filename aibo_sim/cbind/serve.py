@@ -1,0 +1,214 @@
+"""Running a compiled controller as a child process and answering its calls.
+
+Each call is made on the Python API (``aibo_sim.controller``) with the installed robot, so a
+C controller gets the values, the semantics and the errors a Python controller gets. How it
+ends, as the runner reports it:
+
+- the run's duration is over: ``robot_step`` answers "end", the controller runs its
+  ``robot_die`` functions and exits 0 (``SimulationEnd`` here); it returns from ``main`` or
+  calls ``exit(0)``: the run ends there;
+- ``exit(N)``, N not 0: ``SystemExit(N)``, as a Python controller's ``sys.exit(N)``;
+- a call raised (an unknown device, a bad value): the controller is stopped and
+  ``CControllerError`` names the call and the error;
+- it crashed (a signal: segmentation fault, abort): ``CControllerError`` names the signal.
+
+A controller that computes for long between two calls leaves the simulated time where it
+is; after ``WAIT_NOTICE_S`` of wall time without a call, one line on stderr says that the
+simulator is waiting for the controller (simulated time and how long), so such a controller
+is not taken for a simulator that hangs. Ctrl-C stops both.
+"""
+
+from __future__ import annotations
+
+import io
+import mmap
+import os
+import select
+import signal
+import socket
+import struct
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from .. import controller as api
+from ..robot import SimulationEnd
+from .protocol import MAX_IMAGE_BYTES, OPS, STATUS
+
+WAIT_NOTICE_S = 10.0
+SPIN_S = 0.002
+_OP, _LENGTH = struct.Struct("<i"), struct.Struct("<I")
+
+
+class CControllerError(RuntimeError):
+    """A C controller's call failed, or the controller crashed."""
+
+
+class _Motions:
+    """The MTN handles a controller holds: numbers 1, 2, ... for what ``mtn_new`` returned."""
+
+    def __init__(self):
+        self._by_id: dict[int, object] = {}
+
+    def new(self, filename: str) -> int:
+        motion = api.mtn_new(filename)
+        if motion is None:
+            return 0
+        self._by_id[len(self._by_id) + 1] = motion
+        return len(self._by_id)
+
+    def __getitem__(self, handle: int):
+        return self._by_id.get(handle)  # 0 (NULL): None, which the API reports as a failed mtn_new
+
+
+def _handlers(image: memoryview) -> dict:
+    """The Python side of each call in ``OPS``, by name."""
+    motions = _Motions()
+
+    def camera_get_image(tag):
+        pixels = np.ascontiguousarray(api.camera_get_image(tag), np.uint8).reshape(-1)
+        image[:pixels.size] = pixels
+        return api.camera_get_width(tag), api.camera_get_height(tag)
+
+    def mtn_fprint(handle):
+        text = io.StringIO()
+        api.mtn_fprint(text, motions[handle])
+        return text.getvalue()
+
+    def on_motion(function):
+        return lambda handle: function(motions[handle])
+
+    handlers = {name: getattr(api, name) for name, _, _ in OPS if hasattr(api, name)}
+    handlers.update({name: on_motion(handlers[name]) for name in (
+        "mtn_delete", "mtn_play", "mtn_is_over", "mtn_get_length", "mtn_get_time", "mtn_get_name")})
+    handlers.update({
+        "robot_console_printf": lambda text: api.robot_console_printf("%s", text),
+        "camera_get_image": camera_get_image,
+        "mtn_new": motions.new,
+        "mtn_fprint": mtn_fprint,
+        "mtn_get_error": lambda: api.mtn_get_error() or "",
+    })
+    return handlers
+
+
+class _Call:
+    """One call of ``OPS``: the Python function that answers it, how its arguments are read and
+    its answer written (precompiled: the binding's cost is mostly this, per call)."""
+
+    END = struct.pack("<Ii", 4, STATUS["end"])
+
+    def __init__(self, name: str, arguments: str, results: str, function):
+        assert "s" not in arguments or arguments == "s"  # a string comes alone
+        self.name, self.function, self.results = name, function, results
+        self._arguments = None if arguments == "s" else struct.Struct("<i" + arguments)
+        self._answer = None if results in ("", "s") else struct.Struct("<Ii" + ("ii" if results == "m" else results))
+
+    def arguments(self, payload: bytes) -> tuple:
+        if self._arguments is not None:
+            return self._arguments.unpack(payload)[1:]
+        size = _LENGTH.unpack_from(payload, 4)[0]
+        return (payload[8:8 + size].decode("utf-8", "replace"),)
+
+    def answer(self, result) -> bytes:
+        if self.results == "s":
+            text = str(result).encode()
+            return struct.pack("<IiI", 8 + len(text), STATUS["ok"], len(text)) + text
+        values = result if self.results in ("m", "ddd") else (result,)
+        return self._answer.pack(self._answer.size - 4, STATUS["ok"], *values)
+
+
+class _Calls:
+    """The calls arriving from the controller, read in bulk (calls without results come
+    queued, several to a read)."""
+
+    def __init__(self, channel: socket.socket, name: str, robot):
+        self._channel, self._name, self._robot = channel, name, robot
+        self._buffer = bytearray()
+
+    def next(self) -> bytes | None:
+        """The next call's payload, or None when the controller has closed its end."""
+        buffer = self._buffer
+        while len(buffer) < 4 or len(buffer) < 4 + _LENGTH.unpack_from(buffer)[0]:
+            chunk = self._read()
+            if not chunk:
+                return None
+            buffer += chunk
+        size = _LENGTH.unpack_from(buffer)[0]
+        payload = bytes(buffer[4:4 + size])
+        del buffer[:4 + size]
+        return payload
+
+    def _read(self) -> bytes:
+        """What the controller sent next. Polls for ``SPIN_S`` first, yielding the core
+        between polls: a controller's next call mostly comes within microseconds, and a process
+        that sleeps wakes up slowly on a virtual machine."""
+        deadline = time.perf_counter() + SPIN_S
+        while time.perf_counter() < deadline:
+            try:
+                return self._channel.recv(1 << 16, socket.MSG_DONTWAIT)
+            except BlockingIOError:
+                os.sched_yield()
+        waited = 0.0
+        while not select.select([self._channel], [], [], WAIT_NOTICE_S)[0]:
+            waited += WAIT_NOTICE_S
+            print(f"aibo-sim: waiting for controller {self._name}: no API call for {waited:.1f} s of wall time "
+                  f"(simulated time stays at t = {self._robot.time_ms / 1000:.3f} s)", file=sys.stderr, flush=True)
+        return self._channel.recv(1 << 16)
+
+
+def run_c_controller(executable: Path, name: str) -> None:
+    """Run ``executable`` in the working folder, answering its calls on the installed robot,
+    until it exits; raises as the module docstring says."""
+    robot = api.current_robot()
+    with tempfile.NamedTemporaryFile(prefix="aibo-sim-images-") as shared:
+        shared.truncate(MAX_IMAGE_BYTES)
+        image = mmap.mmap(shared.fileno(), MAX_IMAGE_BYTES)
+        ours, theirs = socket.socketpair()
+        environment = {**os.environ, "AIBO_SIM_FD": str(theirs.fileno()), "AIBO_SIM_SHM": shared.name}
+        child = subprocess.Popen([str(executable)], pass_fds=(theirs.fileno(),), env=environment)
+        theirs.close()
+        try:
+            with memoryview(image) as view:
+                _serve(ours, child, view, name, robot)
+        finally:
+            ours.close()
+            if child.poll() is None:
+                child.kill()
+            child.wait()
+            image.close()
+    status = child.returncode
+    if status < 0:
+        signal_name = signal.Signals(-status).name
+        raise CControllerError(f"crashed ({signal_name}: {signal.strsignal(-status)})")
+    if status:
+        raise SystemExit(status)
+
+
+def _serve(channel: socket.socket, child: subprocess.Popen, image: memoryview, name: str, robot) -> None:
+    handlers = _handlers(image)
+    table = [_Call(op_name, arguments, results, handlers[op_name]) for op_name, arguments, results in OPS]
+    ended, calls = False, _Calls(channel, name, robot)
+    while (payload := calls.next()) is not None:
+        number = _OP.unpack_from(payload)[0]
+        if not 0 <= number < len(table):
+            raise CControllerError(f"unknown call number {number} (a controller built against other headers?)")
+        call = table[number]
+        args = call.arguments(payload)
+        try:
+            result = call.function(*args)
+        except SimulationEnd:
+            ended = True
+            channel.sendall(_Call.END)
+            continue
+        except Exception as exc:
+            shown = ", ".join(repr(a) for a in args)
+            raise CControllerError(f"{call.name}({shown}) raised {type(exc).__name__}: {exc}") from exc
+        if call.results:
+            channel.sendall(call.answer(result))
+    child.wait()
+    if ended and child.returncode == 0:
+        raise SimulationEnd()
