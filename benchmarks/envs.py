@@ -48,10 +48,13 @@ ANT_KWARGS = {"render_mode": "rgb_array", "width": 208, "height": 160}
 STEPS = {AIBO: 300, AIBO_IDEAL: 300, ANT: 40, "CartPole-v1": 300}
 ROUNDS = 10  # blocks per environment and setting, alternating with the reference's
 SPAWN = {"context": "spawn"}
-SETTINGS = {  # name: vector_kwargs of make_vec with 2 async workers (None: one env), the 40x target applies
+THREADS = "threads"
+SETTINGS = {  # name: vector_kwargs of make_vec with 2 async workers (None: one env; THREADS: aibo-sim's
+    # ThreadedVectorEnv, 2 envs, against Ant-v5 in Gymnasium's sync vector env), the 40x target applies
     "1 env": (None, True),
     "make_vec async, 2 workers": (SPAWN, False),
     "make_vec async, 2 workers, BusyWaitWorker": ({**SPAWN, "worker": BusyWaitWorker()}, True),
+    "make_vec threads, 2 envs (ThreadedVectorEnv; Ant-v5: sync)": (THREADS, False),
 }
 MESA_DEFAULT = {"LP_NUM_THREADS": str(os.cpu_count() or 1)}  # what llvmpipe does with the variable unset
 ROOT = Path(__file__).resolve().parents[1]
@@ -65,6 +68,8 @@ def _make(env_id: str, vector_kwargs: dict | None):
         kwargs = {"camera_profile": profile}
     if vector_kwargs is None:
         return gym.make(env_id, **kwargs)
+    if vector_kwargs == THREADS:
+        return gym.make_vec(env_id, 2, "sync" if env_id == ANT else "vector_entry_point", **kwargs)
     return gym.make_vec(env_id, 2, "async", vector_kwargs=vector_kwargs, **kwargs)
 
 
@@ -100,6 +105,30 @@ def serve_blocks(env_id: str, vector_kwargs: dict | None) -> None:
         _step(env, actions)
         print(STEPS[env_id] * getattr(env, "num_envs", 1) / (time.perf_counter() - start), flush=True)
     env.close()
+
+
+def _released_share(steps: int = 300) -> float:
+    """The share of one env's step time spent in C calls (MuJoCo, OpenCV, numpy: they release
+    the GIL), profiled: what threads can run in parallel. cProfile slows the Python code, so
+    the share is a lower bound."""
+    import cProfile
+    import pstats
+
+    import cv2
+
+    env = gym.make(AIBO)
+    env.action_space.seed(0)
+    env.reset(seed=0)
+    actions = _random_actions(env, steps)
+    _step(env, actions[:20])
+    profile = cProfile.Profile()
+    profile.runcall(_step, env, actions)
+    env.close()
+    stats = pstats.Stats(profile).stats
+    released = sum(total for (file, _, name), (_, _, total, _, _) in stats.items()
+                   if file == "~" and (name.startswith(("<built-in method mujoco.", "<method"))
+                                       or name[1:-1].isidentifier() and hasattr(cv2, name[1:-1])))
+    return released / sum(total for _, _, total, _, _ in stats.values())
 
 
 def peak_rss_mib(env_id: str, camera: str | None) -> float:
@@ -188,6 +217,17 @@ def measure() -> list[dict]:
         if ideal is not None:
             rows.append(row(f"cost of an ers7 step over an ideal one, {setting} (ratio < 1.3: target)", ideal / aibo,
                             "x", target=("value", "<=", 1.3)))
+    one = "1 env"
+    threads, async_ = (name for name in SETTINGS if name.startswith(("make_vec threads", "make_vec async, 2 workers, B")))
+    single, threaded, processes = _alternating_best((AIBO, one), (AIBO, threads), (AIBO, async_))
+    reference = f"{AIBO} steps/s, 1 env (beside the two below)"
+    rows += [row(reference, single, "steps/s"),
+             row(f"{AIBO} steps/s, 2 envs in threads of one process (ThreadedVectorEnv)", threaded, "steps/s",
+                 reference, threaded / single, target=("ratio", ">=", 1.7)),
+             row(f"{AIBO} steps/s, 2 envs in 2 processes (make_vec async, BusyWaitWorker)", processes, "steps/s",
+                 reference, processes / single),
+             row("share of a step's time in calls that release the GIL (MuJoCo, OpenCV, numpy; cProfile)",
+                 100 * _released_share(), "%")]
     reference = f"{ANT} peak RSS, one env rendering 208x160"
     ant_rss = _in_fresh_process("--peak-rss", ANT, "")
     rows.append(row(reference, ant_rss, "MiB"))

@@ -134,7 +134,8 @@ def test_a_folder_without_its_main_file_is_refused(tmp_path, capsys):
     assert "no such controller file" in capsys.readouterr().err
 
 
-def test_dump_takes_a_c_controller_as_it_takes_its_python_twin(tmp_path):
+def test_dump_takes_a_c_controller_as_it_takes_its_python_twin(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)  # the tour writes tour.txt where it runs
     for name, path in (("c", TOUR), ("python", TOUR / "api_tour.py")):
         assert main(["dump", str(path), "--out", str(tmp_path / name), "--steps", "6", "--formats", "rgb",
                      "--camera-profile", "ideal"]) == 0

@@ -368,3 +368,26 @@ def test_run_out_on_a_full_disk_is_exit_2_naming_the_file(tmp_path):
     assert result.stderr == f"aibo-sim: error: cannot write {out / 'frames' / '000000.png'}: File too large\n"
     assert list((out / "frames").iterdir()) == []  # no partial file
     assert json.loads((out / "run.json").read_text())["status"] == "incomplete"
+
+
+def test_resume_refuses_a_scene_whose_model_changed(tmp_path):
+    models = tmp_path / "models"
+    shutil.copytree(ROOT / "models", models)
+    scene = models / "scene.xml"
+    out = tmp_path / "dump"
+    dump(out, controller=TRACKER, frames=3, scene=scene, formats=("rgb",))
+    dump(out, controller=TRACKER, frames=3, scene=scene, formats=("rgb",), resume=True)  # unchanged: fine
+    robot = models / "ers7.xml"
+    robot.write_text(robot.read_text().replace('timestep="0.004"', 'timestep="0.002"'))
+    with pytest.raises(DumpError, match=r"cannot resume, the dump was made with other parameters \(model_sha256\)"):
+        dump(out, controller=TRACKER, frames=3, scene=scene, formats=("rgb",), resume=True)
+
+
+def test_a_shards_error_names_the_shard(tmp_path):
+    from aibo_sim.runner import ControllerFailed
+
+    bad = tmp_path / "bad.py"
+    bad.write_text("from aibo_sim.controller import *\nrobot_step(64)\nraise RuntimeError('lost the ball')\n")
+    with pytest.raises(ControllerFailed, match=r"^shard_\d: controller bad\.py raised at simulated t = 0\.064 s") as failed:
+        dump(tmp_path / "dump", controller=bad, frames=8, workers=2, formats=("rgb",))
+    assert "lost the ball" in str(failed.value)

@@ -42,31 +42,46 @@ def test_view_without_a_display_says_so(monkeypatch, capsys):
     assert "--view needs a display" in capsys.readouterr().err
 
 
+def screen_dump(display: str) -> np.ndarray | None:
+    """The virtual screen's pixels, or None while its server refuses (starting, busy)."""
+    dump = subprocess.run(["xwd", "-root", "-silent", "-display", display], capture_output=True)
+    return read_xwd(dump.stdout) if dump.returncode == 0 else None
+
+
 @pytest.mark.skipif(not (shutil.which("Xvfb") and shutil.which("xwd")), reason="needs Xvfb and xwd (CI installs them)")
 def test_view_shows_the_robot_on_a_virtual_display(tmp_path):
     read_fd, write_fd = os.pipe()
     xvfb = subprocess.Popen(["Xvfb", "-displayfd", str(write_fd), "-screen", "0", "1280x800x24", "-nolisten", "tcp"],
-                            pass_fds=(write_fd,), stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+                            pass_fds=(write_fd,), stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
     os.close(write_fd)
-    display = ":" + os.read(read_fd, 16).decode().strip()
+    number = b""
+    while not number.endswith(b"\n"):  # the whole line: Xvfb dies if the pipe closes while it writes
+        chunk = os.read(read_fd, 16)
+        assert chunk, f"Xvfb: {xvfb.communicate()[1].decode()}"
+        number += chunk
     os.close(read_fd)
-    env = {**os.environ, "DISPLAY": display}
-    run = subprocess.Popen([sys.executable, "-m", "aibo_sim.cli", "run", str(CONTROLLER), "--duration", "30", "--view"],
-                           env=env, cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    display = ":" + number.decode().strip()
+    run = None
     try:
+        deadline = time.monotonic() + 30
+        while screen_dump(display) is None:  # the server takes connections
+            assert time.monotonic() < deadline and xvfb.poll() is None, f"Xvfb {display} did not start"
+            time.sleep(0.2)
+        run = subprocess.Popen([sys.executable, "-m", "aibo_sim.cli", "run", str(CONTROLLER), "--duration", "30",
+                                "--view"], env={**os.environ, "DISPLAY": display}, cwd=tmp_path,
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE)
         blob, screen, deadline = 0, None, time.monotonic() + 60
         while blob < 1000 and time.monotonic() < deadline and run.poll() is None:
             time.sleep(1)
-            dump = subprocess.run(["xwd", "-root", "-silent", "-display", display], capture_output=True)
-            if dump.returncode == 0:  # the server may refuse a dump while a client sets up its window
-                screen = read_xwd(dump.stdout)
-                blob = largest_white_blob(screen)
-        assert screen is not None, f"xwd never dumped the screen: {dump.stderr.decode()}"
+            screen = screen_dump(display)
+            blob = 0 if screen is None else largest_white_blob(screen)
+        assert run.poll() is None, f"the run ended: {run.communicate()[1].decode()}"
+        assert screen is not None, "xwd never dumped the screen"
         cv2.imwrite(str(tmp_path / "screenshot.png"), screen[..., ::-1])
-        assert run.poll() is None, run.communicate()[1].decode()
         assert blob >= 1000, f"no robot on the screen (largest white patch {blob} px): {tmp_path / 'screenshot.png'}"
     finally:
-        run.terminate()
-        run.communicate(timeout=30)
+        if run is not None:
+            run.terminate()
+            run.communicate(timeout=30)
         xvfb.terminate()
-        xvfb.wait(timeout=30)
+        xvfb.communicate(timeout=30)

@@ -18,6 +18,7 @@ from multiprocessing import connection, get_context
 from pathlib import Path
 
 import gymnasium
+import mujoco
 import numpy as np
 
 from openr_bridge import FRAME_RATE_HZ
@@ -185,6 +186,15 @@ def file_sha256(path: Path) -> str:
     return digest.hexdigest()
 
 
+def model_sha256(scene) -> str:
+    """The hash of the compiled scene (the robot, the field, their physics and looks): a resume
+    refuses a scene or an aibo-sim whose model changed since the dump began."""
+    model = load_model(scene)
+    saved = np.zeros(mujoco.mj_sizeModel(model), np.uint8)
+    mujoco.mj_saveModel(model, None, saved)
+    return hashlib.sha256(saved.tobytes()).hexdigest()
+
+
 def controller_sha256(path: Path) -> str:
     """The hash of a controller: its file's, or for a C or C++ controller folder, that of its
     sources' names and hashes (compiled first, so that a compile error stops the dump at once)."""
@@ -253,6 +263,7 @@ def dump(out, *, controller: str | Path | None = None, env: str | None = None, p
                   "camera_profile": camera_profile, "camera_settings": (camera_settings or CameraSettings()).as_dict()}
     if source_sha256 is not None:
         parameters["controller_sha256"] = source_sha256  # a resume refuses another controller
+    parameters["model_sha256"] = model_sha256(scene)
     if workers == 1:
         return _dump_one(parameters, out, resume)
     if engine == "local":
@@ -363,7 +374,7 @@ def _run_shards(shards: list[tuple[dict, Path]], resume: bool, progress: _ShardP
                     raise DumpError(f"{shards[k][1]}: its worker process ended without a result "
                                     f"(exit status {processes[k].exitcode}); continue with --resume") from None
                 if status == "error":
-                    raise value
+                    raise _in_shard(value, shards[k][1])
                 results[k] = value
         return results
     finally:
@@ -371,6 +382,19 @@ def _run_shards(shards: list[tuple[dict, Path]], resume: bool, progress: _ShardP
         _stop(processes)
         if stopped:
             _remove_temporary_files(shards)
+
+
+def _in_shard(error: BaseException, folder: Path) -> BaseException:
+    """``error`` of a shard, its message led by the shard's folder name (same type and
+    attributes: the exit status stays); as it is when its type cannot be made from a message."""
+    if str(error).startswith(str(folder)):
+        return error
+    try:
+        named = type(error)(f"{folder.name}: {error}")
+    except Exception:
+        return error
+    named.__dict__.update(error.__dict__)
+    return named.with_traceback(error.__traceback__)
 
 
 def _ray_shard(parameters: dict, folder: Path, command: str) -> DumpSummary:
@@ -423,7 +447,7 @@ def _run_ray_shards(shards: list[tuple[dict, Path]], progress: _ShardProgress) -
                 try:
                     results[k] = ray.get(ref)
                 except ray.exceptions.RayTaskError as exc:  # the shard's own error, as the local engine raises it
-                    raise exc.cause if exc.cause is not None else DumpError(f"{folder}: {exc}") from None
+                    raise _in_shard(exc.cause, folder) if exc.cause is not None else DumpError(f"{folder}: {exc}") from None
                 except ray.exceptions.RayError as exc:
                     raise DumpError(f"{folder}: its Ray task was lost ({type(exc).__name__}) {RAY_MAX_RETRIES + 1} "
                                     "times; continue with --resume") from None

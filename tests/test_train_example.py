@@ -1,0 +1,34 @@
+"""The training example's evaluation and learning-curve plot (training itself needs
+stable-baselines3 and minutes: the README has its measured result)."""
+
+import cv2
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import aibo_sim  # noqa: F401  (registers the environments)
+from aibo_sim.envs.train_example import EVAL_SEED, evaluate, plot_learning_curve
+
+
+def test_evaluation_replays_the_same_episodes_for_every_policy():
+    env = gym.make("aibo_sim/HeadTrackBall-v0", camera_layer="L", max_episode_steps=30)
+    still = evaluate(env, lambda obs: np.zeros(3, np.float32), 2)
+    again = evaluate(env, lambda obs: np.zeros(3, np.float32), 2)
+    randomly = evaluate(env, lambda obs: env.action_space.sample(), 2)
+    env.close()
+    assert still == again and len(still) == 2 and still != randomly  # seeds EVAL_SEED, EVAL_SEED + 1
+    assert all(0 <= total <= 30 for total in still + randomly)
+    assert EVAL_SEED == 10_000
+
+
+def test_learning_curve_is_a_png_with_the_policies_levels(tmp_path):
+    path = tmp_path / "curve.png"
+    steps = np.arange(1, 51) * 300.0
+    plot_learning_curve(str(path), steps, np.linspace(40, 140, 50), random_level=43.7, trained_level=141.3)
+    image = cv2.imread(str(path))
+    assert image.shape == (480, 800, 3)
+    random_blue, trained_green, mean_orange = [200, 0, 0], [0, 140, 0], [0, 80, 200]  # as OpenCV reads them: BGR
+    for colour, least in ((random_blue, 500), (trained_green, 500), (mean_orange, 100)):
+        assert (image == colour).all(axis=2).sum() > least, colour
+    with pytest.raises(OSError, match="could not write"):
+        plot_learning_curve(str(tmp_path / "no" / "such" / "folder.png"), steps, steps, 0.0, 1.0)
