@@ -142,3 +142,25 @@ def test_dump_takes_a_c_controller_as_it_takes_its_python_twin(tmp_path, monkeyp
     frames = sorted((tmp_path / "python" / "rgb").iterdir())
     assert len(frames) == 6
     assert all((tmp_path / "c" / "rgb" / f.name).read_bytes() == f.read_bytes() for f in frames)
+
+
+def test_ctrl_c_runs_the_c_robot_die_functions_then_exits_130(tmp_path):
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    source = c_file(tmp_path, "loop.c", "static void bye(void) {\n  FILE *f = fopen(\"die.txt\", \"w\");\n"
+                    "  fprintf(f, \"%d\\n\", robot_step(8));\n  fclose(f);\n}\n"
+                    "int main(void) {\n  robot_live(0); robot_die(bye);\n  fclose(fopen(\"started.txt\", \"w\"));\n"
+                    "  for (;;) robot_step(8);\n}\n")
+    out = tmp_path / "out"
+    run = subprocess.Popen([sys.executable, "-m", "aibo_sim.cli", "run", str(source), "--duration", "100000", "--out",
+                            str(out)], stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 60
+    while not (out / "started.txt").exists() and time.monotonic() < deadline:
+        time.sleep(0.05)
+    time.sleep(0.3)
+    run.send_signal(signal.SIGINT)
+    assert run.communicate(timeout=60)[1].endswith("aibo-sim: interrupted\n") and run.returncode == 130
+    assert (out / "die.txt").read_text() == "0\n"  # its robot_step past the end returned, as in Python

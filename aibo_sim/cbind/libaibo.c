@@ -42,7 +42,7 @@ static unsigned char *images;
 static unsigned char outgoing[1 << 16], answer[1 << 16];
 static size_t outgoing_length, start, cursor;
 static void (*die_functions[MAX_DIE_FUNCTIONS])(void);
-static int die_count;
+static int die_count, exiting;
 
 struct MTN {
     int id;
@@ -58,6 +58,7 @@ static void flush_calls(void);
 /* At exit (main returned, exit() called, or the run's end): the robot_die functions, then the
  * calls still waiting to be sent. */
 static void at_exit(void) {
+    exiting = 1;
     while (die_count) {
         void (*exit_fn)(void) = die_functions[0];
         memmove(die_functions, die_functions + 1, --die_count * sizeof *die_functions);
@@ -170,7 +171,8 @@ static size_t read_answer(size_t have, size_t need) {
     return have;
 }
 
-/* Sends the queue and this call, and reads its answer; on "end", the controller ends. */
+/* Sends the queue and this call, and reads its answer; on "end", the controller ends (a
+ * robot_die function that steps past the end just goes on). */
 static void call(void) {
     send_call();
     flush_calls();
@@ -182,7 +184,7 @@ static void call(void) {
     cursor = 8;
     int32_t status;
     memcpy(&status, answer + 4, 4);
-    if (status == AIBO_STATUS_END) exit(0); /* at_exit runs the robot_die functions */
+    if (status == AIBO_STATUS_END && !exiting) exit(0); /* at_exit runs the robot_die functions */
 }
 
 static int get_int(void) {
@@ -259,7 +261,7 @@ int robot_step(int ms) {
     begin(AIBO_OP_robot_step);
     put_int(ms);
     call();
-    return get_int();
+    return exiting ? 0 : get_int();
 }
 
 void robot_run(int (*run)(int)) {

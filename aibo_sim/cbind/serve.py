@@ -6,7 +6,8 @@ ends, as the runner reports it:
 
 - the run's duration is over: ``robot_step`` answers "end", the controller runs its
   ``robot_die`` functions and exits 0 (``SimulationEnd`` here); it returns from ``main`` or
-  calls ``exit(0)``: the run ends there;
+  calls ``exit(0)``: the run ends there; Ctrl-C: its ``robot_die`` functions run (its own
+  Ctrl-C is ignored), then ``KeyboardInterrupt`` (exit status 130);
 - ``exit(N)``, N not 0: ``SystemExit(N)``, as a Python controller's ``sys.exit(N)``;
 - a call raised (an unknown device, a bad value): the controller is stopped and
   ``CControllerError`` names the call and the error;
@@ -15,11 +16,12 @@ ends, as the runner reports it:
 A controller that computes for long between two calls leaves the simulated time where it
 is; after ``WAIT_NOTICE_S`` of wall time without a call, one line on stderr says that the
 simulator is waiting for the controller (simulated time and how long), so such a controller
-is not taken for a simulator that hangs. Ctrl-C stops both.
+is not taken for a simulator that hangs.
 """
 
 from __future__ import annotations
 
+import contextlib
 import io
 import mmap
 import os
@@ -152,12 +154,17 @@ class _Calls:
                 return self._channel.recv(1 << 16, socket.MSG_DONTWAIT)
             except BlockingIOError:
                 os.sched_yield()
+            except ConnectionResetError:  # it exited with an answer unread: gone all the same
+                return b""
         waited = 0.0
         while not select.select([self._channel], [], [], WAIT_NOTICE_S)[0]:
             waited += WAIT_NOTICE_S
             print(f"aibo-sim: waiting for controller {self._name}: no API call for {waited:.1f} s of wall time "
                   f"(simulated time stays at t = {self._robot.time_ms / 1000:.3f} s)", file=sys.stderr, flush=True)
-        return self._channel.recv(1 << 16)
+        try:
+            return self._channel.recv(1 << 16)
+        except ConnectionResetError:
+            return b""
 
 
 def run_c_controller(executable: Path, name: str) -> None:
@@ -169,11 +176,21 @@ def run_c_controller(executable: Path, name: str) -> None:
         image = mmap.mmap(shared.fileno(), MAX_IMAGE_BYTES)
         ours, theirs = socket.socketpair()
         environment = {**os.environ, "AIBO_SIM_FD": str(theirs.fileno()), "AIBO_SIM_SHM": shared.name}
-        child = subprocess.Popen([str(executable)], pass_fds=(theirs.fileno(),), env=environment)
+        # The controller ignores Ctrl-C: this process ends it, after its robot_die functions.
+        child = subprocess.Popen([str(executable)], pass_fds=(theirs.fileno(),), env=environment,
+                                 preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_IGN))
         theirs.close()
         try:
             with memoryview(image) as view:
-                _serve(ours, child, view, name, robot)
+                owed = []  # the call being answered, while it is
+                try:
+                    _serve(ours, child, view, name, robot, owed)
+                except KeyboardInterrupt:
+                    if owed:  # the controller waits for this answer: the run is over
+                        ours.sendall(_Call.END)
+                    with contextlib.suppress(SimulationEnd):
+                        _serve(ours, child, view, name, robot, [], ending=True)
+                    raise
         finally:
             ours.close()
             if child.poll() is None:
@@ -188,7 +205,11 @@ def run_c_controller(executable: Path, name: str) -> None:
         raise SystemExit(status)
 
 
-def _serve(channel: socket.socket, child: subprocess.Popen, image: memoryview, name: str, robot) -> None:
+def _serve(channel: socket.socket, child: subprocess.Popen, image: memoryview, name: str, robot, owed: list,
+           ending: bool = False) -> None:
+    """Answer the controller's calls until it exits; ``owed`` holds the call whose answer the
+    controller waits for, while it does. ``ending``: the run is over (Ctrl-C): every
+    ``robot_step`` is answered "end" (the controller's robot_die functions run, then it exits)."""
     handlers = _handlers(image)
     table = [_Call(op_name, arguments, results, handlers[op_name]) for op_name, arguments, results in OPS]
     ended, calls = False, _Calls(channel, name, robot)
@@ -198,17 +219,24 @@ def _serve(channel: socket.socket, child: subprocess.Popen, image: memoryview, n
             raise CControllerError(f"unknown call number {number} (a controller built against other headers?)")
         call = table[number]
         args = call.arguments(payload)
+        if ending and call.name == "robot_step":
+            channel.sendall(_Call.END)
+            continue
+        if call.results:
+            owed.append(call)
         try:
             result = call.function(*args)
         except SimulationEnd:
             ended = True
             channel.sendall(_Call.END)
+            owed.clear()
             continue
         except Exception as exc:
             shown = ", ".join(repr(a) for a in args)
             raise CControllerError(f"{call.name}({shown}) raised {type(exc).__name__}: {exc}") from exc
         if call.results:
             channel.sendall(call.answer(result))
+            owed.clear()
     child.wait()
     if ended and child.returncode == 0:
         raise SimulationEnd()
