@@ -9,7 +9,6 @@ Z up, origin midway between the four J1 axes. Angles are radians with Sony's sig
 
 from __future__ import annotations
 
-import itertools
 import math
 import os
 from dataclasses import dataclass, replace

@@ -138,7 +138,7 @@ def test_a_worker_without_prctl_watches_its_parent(tmp_path):
     child = textwrap.dedent("""
         import os, sys, time
         sys.platform = "darwin"  # no PR_SET_PDEATHSIG: the watchdog thread alone
-        from aibo_sim.dump.running import die_with_parent
+        from aibo_sim.dump.shards import die_with_parent
         die_with_parent(os.getppid())
         print(os.getpid(), flush=True)
         time.sleep(60)

@@ -14,7 +14,6 @@ pose at the exposure, and the OPEN-R message, encoded once.
 
 from __future__ import annotations
 
-import math
 
 import cv2
 import mujoco

@@ -81,6 +81,10 @@ again (resuming its shard), up to 3 retries.
 
 On a terminal a dump shows its progress (frames, simulated time, real-time factor, time
 left); elsewhere it is quiet.
+
+Modules: ``formats`` (what each format writes), ``writing`` (atomic files, the lock, resume),
+``running`` (one run into a writer; ``dump``), ``shards`` (worker processes and Ray tasks),
+``coco`` (detection labels), ``reading`` (``load_dump``), ``command`` (the CLI).
 """
 
 from .command import add_dump_parser

@@ -1,0 +1,250 @@
+"""A dump in shards: worker processes that die with their parent (``engine="local"``) or Ray
+tasks (``engine="ray"``), each shard a dump of its own folder, merged at the end."""
+
+from __future__ import annotations
+
+import contextlib
+import ctypes
+import os
+import signal
+import socket
+import sys
+import threading
+import time
+from multiprocessing import connection, get_context
+from pathlib import Path
+
+import numpy as np
+
+from openr_bridge import FRAME_RATE_HZ
+
+from ..runner import Progress
+from .coco import coco_bytes
+from .formats import DUMP_FORMAT, PATHS, DumpError
+from .reading import LINES
+from .running import DumpSummary, dump_one
+from .writing import COCO, command_line, prepare_folder, remove_temporary_files, write_atomic
+
+RAY_MAX_RETRIES = 3  # a shard whose Ray worker is lost runs again (resuming its folder)
+RAY_CONNECT_S = 5.0  # an --ray-address that does not answer in this is refused (ray.init would wait minutes)
+PROGRESS_POLL_S = 0.5  # a sharded dump counts its shards' frames this often
+SHARD_BALL_X, SHARD_BALL_Y = (0.3, 1.2), (-0.5, 0.5)  # metres: ahead of the robot's start
+PARENT_POLL_S = 0.5  # a worker's check that its parent still lives (where PR_SET_PDEATHSIG is missing)
+SHARD_LOCK_WAIT_S = 5.0  # a shard's lock may still be held by a worker of a killed dump, dying
+WORKER_STOP_S = 5.0  # SIGTERM, then SIGKILL after this
+PR_SET_PDEATHSIG = 1  # <linux/prctl.h>
+
+
+def die_with_parent(parent_pid: int) -> None:
+    """Make this worker process end when ``parent_pid`` does, however it ends (SIGKILL too).
+
+    Linux: ``prctl(PR_SET_PDEATHSIG, SIGKILL)``; everywhere: a thread that ends the process
+    once its parent is gone (it has been re-parented), checked every ``PARENT_POLL_S``.
+    """
+    if sys.platform.startswith("linux"):
+        with contextlib.suppress(OSError, AttributeError):
+            libc = ctypes.CDLL(None, use_errno=True)
+            libc.prctl(PR_SET_PDEATHSIG, int(signal.SIGKILL), 0, 0, 0)
+    if os.getppid() != parent_pid:  # the parent died before the line above
+        os._exit(1)
+
+    def watch() -> None:
+        while os.getppid() == parent_pid:
+            time.sleep(PARENT_POLL_S)
+        os._exit(1)
+
+    threading.Thread(target=watch, name="aibo-sim parent watchdog", daemon=True).start()
+
+
+def _shard_worker(results, parent_pid: int, parameters: dict, out: Path, resume: bool, command: str) -> None:
+    """A worker process's body: one shard, its summary or exception sent back on ``results``."""
+    die_with_parent(parent_pid)
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C reaches the whole group: the parent stops us
+    try:
+        result = ("ok", dump_one(parameters, out, resume, lock_wait_s=SHARD_LOCK_WAIT_S, command=command))
+    except BaseException as exc:  # noqa: BLE001 - the parent reports it
+        result = ("error", exc)
+    try:
+        results.send(result)
+    except Exception:  # an exception that does not pickle
+        results.send(("error", DumpError(f"{out}: {type(result[1]).__name__}: {result[1]}")))
+
+
+def _stop(processes) -> None:
+    for process in processes:
+        if process.is_alive():
+            process.terminate()
+    deadline = time.monotonic() + WORKER_STOP_S
+    for process in processes:
+        process.join(max(0.0, deadline - time.monotonic()))
+        if process.is_alive():
+            process.kill()
+            process.join()
+
+
+class _ShardProgress(Progress):
+    """A sharded dump's progress: the frames its shards have listed, counted in what their
+    frames.jsonl files gained since the last ``poll``."""
+
+    def __init__(self, folders: list[Path], frames: int):
+        super().__init__(frames / FRAME_RATE_HZ)
+        self.offsets, self.frames = dict.fromkeys(folders, 0), 0
+
+    def poll(self) -> None:
+        if not self.enabled:
+            return
+        for folder, offset in self.offsets.items():
+            with contextlib.suppress(OSError), open(folder / LINES, "rb") as file:
+                file.seek(offset)
+                data = file.read()
+                self.frames += data.count(b"\n")
+                self.offsets[folder] = offset + len(data)
+        self.update(self.frames / FRAME_RATE_HZ, self.frames)
+
+
+def _remove_temporary_files(shards: list[tuple[dict, Path]]) -> None:
+    """The temporary files of stopped shards."""
+    for parameters, folder in shards:
+        remove_temporary_files(folder, {f: {"path": PATHS[f]} for f in parameters["formats"]})
+
+
+def _run_shards(shards: list[tuple[dict, Path]], resume: bool, progress: _ShardProgress) -> list[DumpSummary]:
+    """Each shard in its own spawned process; the first failure stops the others and is raised.
+    However this returns (an exception, a signal turned into one), no worker outlives it."""
+    context, parent, command = get_context("spawn"), os.getpid(), command_line()
+    processes, pending, results = [], {}, [None] * len(shards)
+    try:
+        for k, (parameters, folder) in enumerate(shards):
+            receive, send = context.Pipe(duplex=False)
+            process = context.Process(target=_shard_worker, name=f"aibo-sim dump {folder.name}", daemon=True,
+                                      args=(send, parent, parameters, folder, resume,
+                                            f"{command} (worker of pid {parent}: {folder.name})"))
+            process.start()
+            send.close()
+            processes.append(process)
+            pending[receive] = k
+        while pending:
+            progress.poll()
+            for receive in connection.wait(list(pending), PROGRESS_POLL_S):
+                k = pending.pop(receive)
+                try:
+                    status, value = receive.recv()
+                except EOFError:
+                    processes[k].join()
+                    raise DumpError(f"{shards[k][1]}: its worker process ended without a result "
+                                    f"(exit status {processes[k].exitcode}); continue with --resume") from None
+                if status == "error":
+                    raise _in_shard(value, shards[k][1])
+                results[k] = value
+        return results
+    finally:
+        stopped = [p for p in processes if p.is_alive()]
+        _stop(processes)
+        if stopped:
+            _remove_temporary_files(shards)
+
+
+def _in_shard(error: BaseException, folder: Path) -> BaseException:
+    """``error`` of a shard, its message led by the shard's folder name (same type and
+    attributes: the exit status stays); as it is when its type cannot be made from a message."""
+    if str(error).startswith(str(folder)):
+        return error
+    try:
+        named = type(error)(f"{folder.name}: {error}")
+    except Exception:
+        return error
+    named.__dict__.update(error.__dict__)
+    return named.with_traceback(error.__traceback__)
+
+
+def _ray_shard(parameters: dict, folder: Path, command: str) -> DumpSummary:
+    """A Ray task's body: one shard, resumed (a retried task finds its lost attempt's frames)."""
+    return dump_one(parameters, folder, True, lock_wait_s=SHARD_LOCK_WAIT_S, command=command)
+
+
+@contextlib.contextmanager
+def ray_session(address: str | None):
+    """Ray for a dump: the cluster at ``address`` or a local Ray, stopped after the dump, unless
+    this process is connected to one already."""
+    import ray
+
+    host, _, port = (address or "").removeprefix("ray://").rpartition(":")
+    if host and port.isdigit():
+        try:
+            socket.create_connection((host, int(port)), RAY_CONNECT_S).close()
+        except OSError as exc:
+            raise ValueError(f"--ray-address {address}: no Ray cluster answers there ({exc.strerror or exc})") from None
+    started = not ray.is_initialized()
+    if started:
+        try:
+            ray.init(address=address, include_dashboard=False, logging_level="warning")
+        except Exception as exc:  # Ray's own exception types, by version
+            where = f"--ray-address {address}" if address else "--engine ray"
+            raise ValueError(f"{where}: cannot start or reach Ray ({str(exc).splitlines()[0]})") from None
+    try:
+        yield
+    finally:
+        if started:
+            ray.shutdown()
+
+
+def _run_ray_shards(shards: list[tuple[dict, Path]], progress: _ShardProgress) -> list[DumpSummary]:
+    """Each shard as a Ray task (retried when its worker is lost); the first failure cancels
+    the others and is raised."""
+    import ray
+
+    task = ray.remote(num_cpus=1, max_retries=RAY_MAX_RETRIES)(_ray_shard)
+    command = command_line()
+    pending = {task.remote(parameters, folder, f"{command} (Ray task: {folder.name})"): k
+               for k, (parameters, folder) in enumerate(shards)}
+    results = [None] * len(shards)
+    try:
+        while pending:
+            progress.poll()
+            for ref in ray.wait(list(pending), timeout=PROGRESS_POLL_S)[0]:
+                k = pending.pop(ref)
+                folder = shards[k][1]
+                try:
+                    results[k] = ray.get(ref)
+                except ray.exceptions.RayTaskError as exc:  # the shard's own error, as the local engine raises it
+                    raise _in_shard(exc.cause, folder) if exc.cause is not None else DumpError(f"{folder}: {exc}") from None
+                except ray.exceptions.RayError as exc:
+                    raise DumpError(f"{folder}: its Ray task was lost ({type(exc).__name__}) {RAY_MAX_RETRIES + 1} "
+                                    "times; continue with --resume") from None
+        return results
+    finally:
+        for ref in pending:
+            ray.cancel(ref, force=True)
+        if pending:
+            ray.wait(list(pending), num_returns=len(pending), timeout=WORKER_STOP_S)
+            _remove_temporary_files(shards)
+
+
+def dump_sharded(parameters: dict, out: Path, resume: bool, workers: int, engine: str) -> DumpSummary:
+    start = time.perf_counter()
+    meta = {"format": DUMP_FORMAT, "parameters": {**parameters, "workers": workers},
+            "shards": [f"shard_{k}" for k in range(workers)]}
+    prepared = prepare_folder(out, meta, resume)
+    try:
+        shards = []
+        for k in range(workers):
+            seed = parameters["seed"] + k
+            ball = parameters["ball"]
+            if parameters["controller"] and ball is None:
+                rng = np.random.default_rng(seed)
+                ball = [float(rng.uniform(*SHARD_BALL_X)), float(rng.uniform(*SHARD_BALL_Y))]
+            frames = parameters["frames"] // workers + (k < parameters["frames"] % workers)
+            shard = {**parameters, "seed": seed, "ball": ball, "frames": frames, "progress": False}
+            shards.append((shard, out / f"shard_{k}"))
+        progress = _ShardProgress([folder for _, folder in shards], parameters["frames"])
+        try:
+            results = _run_ray_shards(shards, progress) if engine == "ray" else _run_shards(shards, resume, progress)
+        finally:
+            progress.close()
+        if "coco" in parameters["formats"]:
+            write_atomic(out / COCO, coco_bytes(out, [folder for _, folder in shards]))
+    finally:
+        prepared.lock.release()
+    return DumpSummary(str(out), sum(r.frames for r in results), sum(r.new_frames for r in results),
+                       sum(r.bytes_written for r in results), time.perf_counter() - start,
+                       sum(r.repaired_frames for r in results))
