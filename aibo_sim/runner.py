@@ -192,8 +192,8 @@ class Progress:
         self._last, self._origin = 0.0, None
 
     def __call__(self, robot: Robot) -> None:
-        """Frame listener form of ``update``."""
-        self.update(robot.time_ms / 1000)
+        """Frame listener form of ``update``: the run's simulated time and camera frames."""
+        self.update(robot.time_ms / 1000, robot.sim.camera_frame_index() + 1)
 
     def update(self, simulated_s: float, frames: int | None = None) -> None:
         now = time.monotonic()
