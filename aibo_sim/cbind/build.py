@@ -56,11 +56,11 @@ def controller_sources(path: str | os.PathLike) -> tuple[Path, list[Path]]:
 
 def _compiler(kind: str) -> str:
     """The path of the C (``cc``) or C++ (``c++``) compiler; CompileError naming it when missing."""
-    name = os.environ.get("CC" if kind == "cc" else "CXX") or kind
+    variable = "CC" if kind == "cc" else "CXX"
+    name = os.environ.get(variable) or kind
     found = shutil.which(name)
     if found is None:
-        raise CompileError(f"no compiler {name!r} found: this controller needs {INSTALL_HINT[kind]}"
-                           + (f", or set {'CC' if kind == 'cc' else 'CXX'}" if kind in INSTALL_HINT else ""))
+        raise CompileError(f"no compiler {name!r} found: this controller needs {INSTALL_HINT[kind]}, or set {variable}")
     return found
 
 

@@ -42,7 +42,7 @@ from ..robot import SimulationEnd
 from .protocol import MAX_IMAGE_BYTES, OPS, STATUS
 
 WAIT_NOTICE_S = 10.0
-SPIN_S = 0.002
+SPIN_S = 0.002  # how long this process polls for the controller's next call before it sleeps
 _OP, _LENGTH = struct.Struct("<i"), struct.Struct("<I")
 
 
