@@ -21,6 +21,7 @@ a frame instead of ~0.67 ms). The image is the same, bit for bit (tested).
 from __future__ import annotations
 
 import ctypes
+import ctypes.util
 import math
 import os
 
@@ -87,13 +88,44 @@ class _EglCurrent:
         self._egl.eglMakeCurrent(*saved)
 
 
-def _egl_current(backend: str) -> _EglCurrent | None:
-    """An ``_EglCurrent`` for EGL; None for the other backends or without libEGL (those make
-    their context current every frame and leave it so)."""
-    if backend != "egl":
-        return None
+class _OsmesaCurrent:
+    """The same as ``_EglCurrent`` for OSMesa (libOSMesa, ctypes). OSMesa makes a context
+    current with its colour buffer, whose pixel type it does not tell: the contexts restored
+    are MuJoCo's (``mujoco.osmesa.GLContext``, which Gymnasium and ``mujoco.Renderer`` use),
+    whose buffers are float."""
+
+    GL_FLOAT = 0x1406
+
+    def __init__(self):
+        osmesa = ctypes.CDLL(ctypes.util.find_library("OSMesa") or "libOSMesa.so")
+        osmesa.OSMesaGetCurrentContext.restype, osmesa.OSMesaGetCurrentContext.argtypes = ctypes.c_void_p, []
+        pointer = ctypes.POINTER
+        osmesa.OSMesaGetColorBuffer.argtypes = [ctypes.c_void_p, pointer(ctypes.c_int), pointer(ctypes.c_int),
+                                                pointer(ctypes.c_int), pointer(ctypes.c_void_p)]
+        osmesa.OSMesaMakeCurrent.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_uint, ctypes.c_int, ctypes.c_int]
+        self._osmesa, self.address = osmesa, osmesa.OSMesaGetCurrentContext
+
+    def save(self) -> tuple | None:
+        """(context, buffer, width, height) of the current context; None when none is."""
+        context = self._osmesa.OSMesaGetCurrentContext()
+        if not context:
+            return None
+        width, height, pixel_format, buffer = ctypes.c_int(), ctypes.c_int(), ctypes.c_int(), ctypes.c_void_p()
+        if not self._osmesa.OSMesaGetColorBuffer(context, width, height, pixel_format, buffer):
+            return None
+        return context, buffer.value, width.value, height.value
+
+    def restore(self, saved: tuple) -> None:
+        context, buffer, width, height = saved
+        self._osmesa.OSMesaMakeCurrent(context, buffer, self.GL_FLOAT, width, height)
+
+
+def _current_context(backend: str) -> _EglCurrent | _OsmesaCurrent | None:
+    """What reads and restores the current context of ``backend`` (EGL, OSMesa); None for GLFW
+    or without the library (our renderer then makes its context current every frame and
+    leaves it so)."""
     try:
-        return _EglCurrent()
+        return {"egl": _EglCurrent, "osmesa": _OsmesaCurrent}[backend]() if backend in ("egl", "osmesa") else None
     except (OSError, AttributeError):
         return None
 
@@ -114,11 +146,12 @@ class Renderer:
             raise ValueError(f"quality must be 'fast' or 'high', not {quality!r}")
         self.width, self.height, self.model = width, height, model
         backend = gl_backend()
-        self._current_context = _egl_current(backend)
+        self._current_context = _current_context(backend)
         other = self._current_context.save() if self._current_context is not None else None  # before ours exists
         try:
             self._gl = _context_class(backend)(width, height)  # mujoco.egl makes it current at once
-            self._context_address = self._gl._context.address if self._current_context is not None else None
+            self._context_address = (ctypes.cast(self._gl._context, ctypes.c_void_p).value
+                                     if self._current_context is not None else None)
             self._gl.make_current()
             self._other_context = other
         except RenderingUnavailable:
