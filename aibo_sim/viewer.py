@@ -11,6 +11,7 @@ one, ``ViewerUnavailable`` says so before anything runs.
 from __future__ import annotations
 
 import os
+import threading
 import time
 
 import numpy as np
@@ -20,6 +21,7 @@ from .robot import SimulationEnd
 KEY_SPACE, KEY_RIGHT = 32, 262  # GLFW key codes
 TRACKING_VIEW = {"distance": 0.9, "elevation": -25.0, "azimuth": 135.0}  # the free camera follows the robot
 PAUSED_POLL_S = 0.02
+CLOSE_WAIT_S = 10.0
 
 
 class ViewerUnavailable(RuntimeError):
@@ -42,7 +44,7 @@ class LiveViewer:
 
     def __init__(self):
         check_display()
-        self._handle = None
+        self._handle, self._threads = None, set()
         self.paused, self._steps_asked = False, 0
         self._shown_camera_frame = -1
         self._clock_start = 0.0  # wall time at which simulated time 0 would have been shown
@@ -58,7 +60,9 @@ class LiveViewer:
         if self._handle is None:
             import mujoco.viewer
 
+            before = set(threading.enumerate())
             self._handle = mujoco.viewer.launch_passive(sim.model, sim.data, key_callback=self._key)
+            self._threads = set(threading.enumerate()) - before  # the viewer's, joined by close()
             with self._handle.lock():
                 camera = self._handle.cam
                 camera.type, camera.trackbodyid = mujoco.mjtCamera.mjCAMERA_TRACKING, sim.model.body("body").id
@@ -93,7 +97,11 @@ class LiveViewer:
         self._handle.set_images((mujoco.MjrRect(left, 0, inset.shape[1], inset.shape[0]), np.ascontiguousarray(inset)))
 
     def close(self) -> None:
+        """Close the window and wait for the viewer's thread: GLFW ends with the process, and
+        ending it under a thread that still draws crashes (segmentation fault at exit)."""
         if self._handle is not None:
             self._handle.close()
             self._handle = None
+            for thread in self._threads:
+                thread.join(CLOSE_WAIT_S)
 

@@ -1,21 +1,28 @@
 """C and C++ controllers: the Webots-era headers, compiled with the system compiler, bound to
 the running simulation through the Python API."""
 
+import fnmatch
 import json
 import re
 import shutil
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from aibo_sim import cbind, controller
+from aibo_sim.cbind import protocol, serve
 from aibo_sim.cli import main
+from aibo_sim.mtn import read_mtn
 from aibo_sim.runner import ControllerFailed, run_controller
+from aibo_sim.sim import models_dir
 from openr_bridge import ers7_camera
 
 ROOT = Path(__file__).resolve().parents[1]
 TOUR = ROOT / "tests" / "controllers" / "api_tour"
+ECHO = ROOT / "tests" / "controllers" / "api_echo"
 ANNEX_C, ANNEX_PY = ROOT / "controllers" / "annex_capture_c", ROOT / "controllers" / "annex_capture.py"
+SONY_WWFWD = ROOT.parent / "shared" / "data" / "mtn" / "WWFWD.MTN"  # test data, not shipped
 
 pytestmark = pytest.mark.skipif(not (shutil.which("cc") and shutil.which("c++")), reason="needs cc and c++")
 
@@ -49,13 +56,93 @@ def test_every_api_function_gives_in_c_what_it_gives_in_python(tmp_path):
         assert (tmp_path / "c" / "frames" / frame.name).read_bytes() == frame.read_bytes(), frame.name
 
 
+def _as_received(name: str, result) -> str:
+    """A Python API result as api_echo.cc writes what its C call returned (``protocol.OPS`` types)."""
+    kind = {name: results for name, _, results in protocol.OPS}[name]
+    if name == "camera_get_fov":  # float in C
+        return f"{float(np.float32(result)):.17g}"
+    if name == "mtn_new":  # the C side sees NULL or not
+        return str(int(result != 0))
+    if kind == "ddd":  # const float * in C
+        return " ".join(f"{float(np.float32(v)):.9g}" for v in result)
+    return {"i": lambda: str(int(result)), "d": lambda: f"{result:.17g}", "s": lambda: str(result),
+            "m": lambda: ""}[kind]()
+
+
 @pytest.mark.parametrize("backend", ["sim", "openr"])
-def test_annex_i_in_cpp_writes_the_python_ports_image_raw_byte_for_byte(tmp_path, backend):
+def test_each_c_call_returns_what_the_python_api_returned_in_the_same_run(tmp_path, monkeypatch, backend):
+    """api_echo.cc calls every function of ``protocol.OPS`` (and the pixel macros); what each
+    call received, value for value and byte for byte, is what the Python API returned for the
+    same call at the same simulated time (made then, or ahead with robot_step's answer)."""
+    returned, called = {}, set()  # (time in ms, name, argument) -> result
+    handlers = serve._handlers
+
+    def recording(image):
+        def record(name, function):
+            def call(*args):
+                now = controller.current_robot().time_ms
+                result = function(*args)
+                called.add(name)
+                if {n: r for n, _, r in protocol.OPS}[name]:
+                    on_motion = name.startswith("mtn_") and name not in ("mtn_new", "mtn_get_error")
+                    kept = bytes(image[:result[0] * result[1] * 3]) if name == "camera_get_image" else result
+                    returned[now, name, "mtn" if on_motion else str(args[0]) if args else "0"] = kept
+                return result
+            return call
+        return {name: record(name, function) for name, function in handlers(image).items()}
+
+    monkeypatch.setattr(serve, "_handlers", recording)
+    assert run_controller(ECHO, backend=backend, duration=1, out=tmp_path).simulated_s == 0.224
+    assert called == {name for name, _, _ in protocol.OPS}
+    now, images, lines = 0, [], (tmp_path / "echo.txt").read_text().splitlines()
+    for line in lines:
+        name, argument, value = line.split(" ", 2)
+        result = returned[now, name, argument]
+        if name == "camera_get_image":
+            images.append(np.frombuffer(result, np.uint8))
+        else:
+            assert value == _as_received(name, result), line
+        if name == "robot_step":
+            now += int(argument)
+    assert len(lines) == 62 and len(images) == 4
+    assert (tmp_path / "images.bin").read_bytes() == b"".join(i.tobytes() for i in images)
+    assert (tmp_path / "fprint.txt").read_text() == returned[0, "mtn_fprint", "mtn"]
+    pixel = (controller.camera_image_get_red, controller.camera_image_get_green, controller.camera_image_get_blue,
+             controller.camera_image_get_grey, controller.camera_image_get_gray)
+    assert (tmp_path / "pixels.txt").read_text() == "".join(
+        " ".join(str(int(f(i, 208, 10, 20))) for f in pixel) + "\n" for i in images)
+    assert "mtn_get_error 0 File not found: missing.mtn" in lines
+
+
+MOTIONS = {"WALKFWD.MTN": models_dir() / "motions" / "WALKFWD.MTN", "Sony's WWFWD.MTN": SONY_WWFWD}
+
+
+@pytest.mark.parametrize("backend", ["sim", "openr"])
+@pytest.mark.parametrize("motion", MOTIONS)
+def test_annex_i_in_cpp_writes_the_python_ports_image_raw_byte_for_byte(tmp_path, backend, motion):
+    """Both as shipped, each finding the same motion file beside it under the name it asks for
+    (the C++ Annex "wwfwd.mtn", the Python port "WALKFWD.MTN"), 15 plays at 16 ms steps."""
+    if not MOTIONS[motion].is_file():
+        pytest.skip(f"{MOTIONS[motion]} not present")
+    (tmp_path / "annex_capture_c").mkdir()
+    cpp = shutil.copy(ANNEX_C / "annex_capture_c.cpp", tmp_path / "annex_capture_c")
+    python = shutil.copy(ANNEX_PY, tmp_path)
+    shutil.copy(MOTIONS[motion], tmp_path / "annex_capture_c" / "WWFWD.MTN")
+    shutil.copy(MOTIONS[motion], tmp_path / "WALKFWD.MTN")
+    duration = 15 * (read_mtn(MOTIONS[motion]).length_ms + 32) / 1000 + 0.2  # 15 plays, then an image
     images = []
-    for name, path in (("cpp", ANNEX_C), ("python", ANNEX_PY)):
-        assert main(["run", str(path), "--duration", "5.2", "--backend", backend, "--out", str(tmp_path / name)]) == 0
-        images.append((tmp_path / name / "image.raw").read_bytes())
+    for name, path in (("cpp", Path(cpp).parent), ("python", python)):
+        out = tmp_path / f"out_{name}"
+        assert main(["run", str(path), "--duration", f"{duration:.3f}", "--backend", backend, "--out", str(out)]) == 0
+        images.append((out / "image.raw").read_bytes())
     assert len(images[0]) == 208 * 160 * 3 and images[0] == images[1]
+
+
+def test_annex_i_in_cpp_without_its_motion_file_says_so(tmp_path):
+    (tmp_path / "annex_capture_c").mkdir()
+    shutil.copy(ANNEX_C / "annex_capture_c.cpp", tmp_path / "annex_capture_c")
+    with pytest.raises(ControllerFailed, match=r"mtn_is_over: MTN is NULL: mtn_new failed \(File not found: wwfwd.mtn\)"):
+        run_controller(tmp_path / "annex_capture_c", duration=1)
 
 
 def test_a_second_run_compiles_nothing_and_a_changed_source_compiles_again(tmp_path):
@@ -99,6 +186,13 @@ def test_abort_exit_status_and_api_errors_end_the_run_as_in_python(tmp_path):
         "status.cpp": ("int main() { robot_live(0); robot_step(16); exit(3); }", r"exited with exit\(3\) at simulated t = 0\.016 s"),
         "tag.c": ("int main(void) { robot_live(0); servo_set_position(42, 0.1); robot_step(8); return 0; }",
                   r"servo_set_position\(42, 0\.1\) raised DeviceError: invalid device tag 42"),
+        "unread.c": ("int main(void) { robot_live(0); robot_step(8);\n"
+                     "  printf(\"%f\", servo_get_position(robot_get_device(\"PRM:/r1/c1/c2-Joint2:12\"))); return 0; }",
+                     r"servo_get_position\(1\) raised DeviceError: .*not enabled"),
+        "disabled.c": ("int main(void) { robot_live(0); DeviceTag pan = robot_get_device(\"PRM:/r1/c1/c2-Joint2:12\");\n"
+                       "  servo_enable_position(pan, 8); robot_step(8); servo_get_position(pan); robot_step(8);\n"
+                       "  servo_get_position(pan); servo_disable_position(pan); servo_get_position(pan); return 0; }",
+                       r"servo_get_position\(1\) raised DeviceError: .*not enabled"),  # not the answer given ahead
         "step.c": ("int main(void) { robot_live(0); robot_step(12); return 0; }",
                    r"robot_step\(12\) raised ValueError: step of 12 ms: must be a positive whole multiple"),
     }
@@ -164,3 +258,13 @@ def test_ctrl_c_runs_the_c_robot_die_functions_then_exits_130(tmp_path):
     run.send_signal(signal.SIGINT)
     assert run.communicate(timeout=60)[1].endswith("aibo-sim: interrupted\n") and run.returncode == 130
     assert (out / "die.txt").read_text() == "0\n"  # its robot_step past the end returned, as in Python
+
+
+def test_the_wheel_ships_the_headers_and_the_binding():
+    tomllib = pytest.importorskip("tomllib")  # Python 3.11+
+    patterns = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]["package-data"]["aibo_sim.cbind"]
+    package = Path(cbind.__file__).parent
+    data = [p.relative_to(package).as_posix() for p in package.rglob("*")
+            if p.is_file() and p.suffix not in (".py", ".pyc")]
+    assert "include/device/robot.h" in data and "libaibo.c" in data
+    assert all(any(fnmatch.fnmatch(name, pattern) for pattern in patterns) for name in data), data

@@ -79,6 +79,11 @@ def test_view_shows_the_robot_on_a_virtual_display(tmp_path):
         assert screen is not None, "xwd never dumped the screen"
         cv2.imwrite(str(tmp_path / "screenshot.png"), screen[..., ::-1])
         assert blob >= 1000, f"no robot on the screen (largest white patch {blob} px): {tmp_path / 'screenshot.png'}"
+        # A run that ends by itself closes the window and exits cleanly (GLFW ends after the viewer).
+        short = subprocess.run([sys.executable, "-m", "aibo_sim.cli", "run", str(CONTROLLER), "--duration", "0.3",
+                                "--view"], env={**os.environ, "DISPLAY": display}, cwd=tmp_path, capture_output=True,
+                               text=True, timeout=120)
+        assert short.returncode == 0, short.stderr
     finally:
         if run is not None:
             run.terminate()

@@ -3,7 +3,9 @@
  *
  * The simulator starts the controller with AIBO_SIM_FD (its end of a socket) and AIBO_SIM_SHM
  * (a file mapped by both: camera images). A call with results is sent at once and waits for
- * its answer; calls without results are queued and go with it (or at exit). When the
+ * its answer; calls without results are queued and go with it (or at exit). robot_step's answer
+ * brings the answers of the calls that only read the state (protocol.PREFETCHED) the controller
+ * made before: they serve it until its next call without results. When the
  * simulator answers "end" (the run is over), the controller exits with status 0; at exit, the
  * robot_die functions run. */
 #include <errno.h>
@@ -40,7 +42,10 @@ static unsigned char *images;
 /* Calls without results wait in `outgoing` and go with the next call that has results (one
  * write); `start` is where the call being built begins. Answers arrive in `answer`. */
 static unsigned char outgoing[1 << 16], answer[1 << 16];
-static size_t outgoing_length, start, cursor;
+static size_t outgoing_length, start, cursor, answer_end;
+/* The answers robot_step brought ahead: (int32 call, int32 argument, uint32 size, results)... */
+static unsigned char ahead[1 << 16];
+static size_t ahead_length;
 static void (*die_functions[MAX_DIE_FUNCTIONS])(void);
 static int die_count, exiting;
 
@@ -138,11 +143,17 @@ static void put_string(const char *text) {
     put(text, size);
 }
 
-/* The call built since begin() joins the queue (a call without results: it needs no answer). */
-static void send_call(void) {
+/* The call built since begin() is complete: its length goes in front. */
+static void end_call(void) {
     uint32_t size = (uint32_t)(outgoing_length - start - 4);
     memcpy(outgoing + start, &size, 4);
     start = outgoing_length;
+}
+
+/* A call without results joins the queue; it may change what the answers ahead say. */
+static void send_call(void) {
+    end_call();
+    ahead_length = 0;
 }
 
 /* ---- answers */
@@ -174,7 +185,7 @@ static size_t read_answer(size_t have, size_t need) {
 /* Sends the queue and this call, and reads its answer; on "end", the controller ends (a
  * robot_die function that steps past the end just goes on). */
 static void call(void) {
-    send_call();
+    end_call();
     flush_calls();
     size_t have = read_answer(0, 4);
     uint32_t size;
@@ -182,6 +193,7 @@ static void call(void) {
     if (size > sizeof answer - 4) _exit(70);
     read_answer(have, 4 + size);
     cursor = 8;
+    answer_end = 4 + size;
     int32_t status;
     memcpy(&status, answer + 4, 4);
     if (status == AIBO_STATUS_END && !exiting) exit(0); /* at_exit runs the robot_die functions */
@@ -212,6 +224,31 @@ static const char *get_string(char *keep, size_t capacity) {
     return keep;
 }
 
+/* The answer of `op` on `arg` (a tag, a motion, 0 for none) robot_step brought, into `answer`. */
+static int answered_ahead(enum aibo_op op, int arg) {
+    for (size_t at = 0; at < ahead_length;) {
+        int32_t entry[2];
+        uint32_t size;
+        memcpy(entry, ahead + at, 8);
+        memcpy(&size, ahead + at + 8, 4);
+        if (entry[0] == (int32_t)op && entry[1] == arg) {
+            memcpy(answer + 8, ahead + at + 12, size);
+            cursor = 8;
+            return 1;
+        }
+        at += 12 + size;
+    }
+    return 0;
+}
+
+/* A call with results on a tag or a motion: answered ahead, or made. */
+static void ask(enum aibo_op op, int arg) {
+    if (answered_ahead(op, arg)) return;
+    begin(op);
+    put_int(arg);
+    call();
+}
+
 static void call_tag(enum aibo_op op, DeviceTag tag) {
     begin(op);
     put_int(tag);
@@ -230,14 +267,12 @@ static void send_tag_double(enum aibo_op op, DeviceTag tag, double value) {
 }
 
 static double get_tag_double(enum aibo_op op, DeviceTag tag) {
-    call_tag(op, tag);
-    call();
+    ask(op, tag);
     return get_double();
 }
 
 static int get_tag_int(enum aibo_op op, DeviceTag tag) {
-    call_tag(op, tag);
-    call();
+    ask(op, tag);
     return get_int();
 }
 
@@ -261,7 +296,12 @@ int robot_step(int ms) {
     begin(AIBO_OP_robot_step);
     put_int(ms);
     call();
-    return exiting ? 0 : get_int();
+    ahead_length = 0;
+    if (exiting) return 0;
+    int result = get_int();
+    ahead_length = answer_end - cursor;
+    memcpy(ahead, answer + cursor, ahead_length);
+    return result;
 }
 
 void robot_run(int (*run)(int)) {
@@ -277,8 +317,10 @@ DeviceTag robot_get_device(const char *name) {
 }
 
 double robot_get_time(void) {
-    begin(AIBO_OP_robot_get_time);
-    call();
+    if (!answered_ahead(AIBO_OP_robot_get_time, 0)) {
+        begin(AIBO_OP_robot_get_time);
+        call();
+    }
     return get_double();
 }
 
@@ -320,8 +362,7 @@ void camera_disable(DeviceTag c) { call_tag(AIBO_OP_camera_disable, c); send_cal
 
 unsigned char *camera_get_image(DeviceTag c) {
     static unsigned char *copy;
-    call_tag(AIBO_OP_camera_get_image, c);
-    call();
+    ask(AIBO_OP_camera_get_image, c);
     int width = get_int(), height = get_int();
     size_t size = (size_t)width * (size_t)height * 3;
     /* The controller's own copy: the shared block changes with the next image. */
@@ -350,8 +391,7 @@ void accelerometer_disable(DeviceTag a) { call_tag(AIBO_OP_accelerometer_disable
 
 const float *accelerometer_get_values(DeviceTag a) {
     static float values[3];
-    call_tag(AIBO_OP_accelerometer_get_values, a);
-    call();
+    ask(AIBO_OP_accelerometer_get_values, a);
     for (int k = 0; k < 3; k++) values[k] = (float)get_double();
     return values;
 }
@@ -388,9 +428,7 @@ void mtn_play(MTN *mtn) {
 }
 
 static int mtn_int(enum aibo_op op, MTN *mtn) {
-    begin(op);
-    put_int(mtn_id(mtn));
-    call();
+    ask(op, mtn_id(mtn));
     return get_int();
 }
 

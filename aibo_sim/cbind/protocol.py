@@ -53,6 +53,15 @@ OPS = (
     ("mtn_fprint", "i", "s"),  # the text; the controller writes it to its FILE *
     ("mtn_get_error", "", "s"),
 )
+# Calls whose answers only read the state a step left: ``robot_step``'s answer carries, after
+# its own result, the answers of those the controller made during earlier steps (each: its
+# ``int32`` call number and argument, ``uint32`` size of the results, the results).
+# The controller uses them until it makes a call without results (which may change them). Not
+# the camera image: making a frame ahead for a controller that reads one now and then costs more
+# than the message it saves.
+PREFETCHED = ("robot_get_time", "servo_get_position", "camera_get_width", "camera_get_height",
+              "camera_get_fov", "distance_sensor_get_value", "touch_sensor_get_value", "accelerometer_get_values",
+              "mtn_is_over", "mtn_get_length", "mtn_get_time")
 STATUS = {"ok": 0, "end": 1}  # end: the run is over (the controller runs its robot_die functions and exits)
 MAX_IMAGE_BYTES = 416 * 320 * 3  # the shared memory block: the largest camera image
 

@@ -1,8 +1,9 @@
 """Running a compiled controller as a child process and answering its calls.
 
 Each call is made on the Python API (``aibo_sim.controller``) with the installed robot, so a
-C controller gets the values, the semantics and the errors a Python controller gets. How it
-ends, as the runner reports it:
+C controller gets the values, the semantics and the errors a Python controller gets; the
+answers of reading calls (``PREFETCHED``) also go ahead with each step's. How it ends, as the
+runner reports it:
 
 - the run's duration is over: ``robot_step`` answers "end", the controller runs its
   ``robot_die`` functions and exits 0 (``SimulationEnd`` here); it returns from ``main`` or
@@ -39,11 +40,11 @@ import numpy as np
 
 from .. import controller as api
 from ..robot import SimulationEnd
-from .protocol import MAX_IMAGE_BYTES, OPS, STATUS
+from .protocol import MAX_IMAGE_BYTES, OPS, PREFETCHED, STATUS
 
 WAIT_NOTICE_S = 10.0
 SPIN_S = 0.002  # how long this process polls for the controller's next call before it sleeps
-_OP, _LENGTH = struct.Struct("<i"), struct.Struct("<I")
+_OP, _LENGTH, _AHEAD = struct.Struct("<i"), struct.Struct("<I"), struct.Struct("<iiI")
 
 
 class CControllerError(RuntimeError):
@@ -106,6 +107,7 @@ class _Call:
     def __init__(self, name: str, arguments: str, results: str, function):
         assert "s" not in arguments or arguments == "s"  # a string comes alone
         self.name, self.function, self.results = name, function, results
+        self.ahead = name in PREFETCHED
         self._arguments = None if arguments == "s" else struct.Struct("<i" + arguments)
         self._answer = None if results in ("", "s") else struct.Struct("<Ii" + ("ii" if results == "m" else results))
 
@@ -213,6 +215,7 @@ def _serve(channel: socket.socket, child: subprocess.Popen, image: memoryview, n
     handlers = _handlers(image)
     table = [_Call(op_name, arguments, results, handlers[op_name]) for op_name, arguments, results in OPS]
     ended, calls = False, _Calls(channel, name, robot)
+    wanted = {}  # the PREFETCHED calls made so far, by (number, arguments): answered with each step
     while (payload := calls.next()) is not None:
         number = _OP.unpack_from(payload)[0]
         if not 0 <= number < len(table):
@@ -222,6 +225,8 @@ def _serve(channel: socket.socket, child: subprocess.Popen, image: memoryview, n
         if ending and call.name == "robot_step":
             channel.sendall(_Call.END)
             continue
+        if call.ahead:
+            wanted[number, args] = call
         if call.results:
             owed.append(call)
         try:
@@ -235,8 +240,23 @@ def _serve(channel: socket.socket, child: subprocess.Popen, image: memoryview, n
             shown = ", ".join(repr(a) for a in args)
             raise CControllerError(f"{call.name}({shown}) raised {type(exc).__name__}: {exc}") from exc
         if call.results:
-            channel.sendall(call.answer(result))
+            channel.sendall(_with_answers_ahead(call.answer(result), wanted) if call.name == "robot_step"
+                            else call.answer(result))
             owed.clear()
     child.wait()
     if ended and child.returncode == 0:
         raise SimulationEnd()
+
+
+def _with_answers_ahead(answer: bytes, wanted: dict) -> bytes:
+    """``robot_step``'s answer followed by the answers of the ``wanted`` calls (``PREFETCHED``) in
+    the state it left; a call that raises is left out (the controller makes it, and gets the error)."""
+    parts = []
+    for (number, args), call in wanted.items():
+        try:
+            results = call.answer(call.function(*args))[8:]
+        except Exception:
+            continue
+        parts.append(_AHEAD.pack(number, args[0] if args else 0, len(results)) + results)
+    payload = answer[4:] + b"".join(parts)
+    return _LENGTH.pack(len(payload)) + payload

@@ -7,14 +7,15 @@
 // - the include lines pointed at the Webots-era headers (<device/...>, which `aibo-sim run`
 //   puts on the include path);
 // - the output path made relative: image.raw lands in the run's --out folder;
-// - the motion file: MTN_FILE, the project's own forward walk, as controllers/annex_capture.py
-//   plays it (Sony's wwfwd.mtn is not shipped; put it beside this file and set MTN_FILE to
-//   "wwfwd.mtn" to play it: names are found ignoring case);
 // - its outright bugs fixed: `using namespace std` for ofstream; run() allocated three
 //   IMAGE_SIZE buffers on every call and never freed them (now one set, kept); run() opened
 //   image.raw on every call, truncating it during the walk (now only to write an image);
 //   run() fell off its end without returning the next step while the motion played (now it
 //   returns SIMULATION_STEP on every path); die() had a stray closing brace.
+// It plays Sony's wwfwd.mtn, which aibo-sim does not ship: put WWFWD.MTN (Webots'
+// data/mtn/ers7/ has it) in this folder; mtn_new finds it ignoring case, as the memory stick
+// did. Without it, mtn_new returns NULL and the first mtn_is_over ends the run with
+// "MTN is NULL: mtn_new failed (File not found: wwfwd.mtn)".
 /////////////////////////////////////////////////////////////////
 
 // Includes ///////////////////////////////////////////////////////////////////
@@ -37,8 +38,13 @@ using namespace std;
 #define IMAGE_SIZE 208*160
 #define MTN_REPLAY 15
 
-#define MTN_FILE "WALKFWD.MTN"
-#define IMAGE_FILE "image.raw"
+// Webots compilation.
+// #define MTN_PATH "../data/mtn/ers7/"
+// #define MTN_FILE "../data/mtn/ers7/wwfwd.mtn"
+
+// Aibo compilation.
+#define MTN_PATH "/ms/open-r/mw/data/p/"
+#define MTN_FILE "/ms/open-r/mw/data/p/wwfwd.mtn"
 
 // Static variables ///////////////////////////////////////////////////////////////////
 static MTN *mtn;
@@ -99,7 +105,7 @@ static void init(void) {
     }
 
     // Creating the mtn movement.
-    mtn = mtn_new(MTN_FILE);
+    mtn = mtn_new("wwfwd.mtn");
 }
 
 // Die function ///////////////////////////////////////////////////////////////////////////////////////////////////////////////////
@@ -108,7 +114,7 @@ static void die(void) {
     if( mtn ) mtn_delete(mtn);
 }
 
-// Run function ////////////////////////////////////////////////////////////////////////////////////////////////////////////////////////////////////////////////////////////////////////////////////////////////////
+// Run function ////////////////////////////////////////////////////////////////////////////////////////////////////////////////////////////////////////////////////////////////////////////////////////////////////////
 static int run (int ms) {
     static int loop=0;
     unsigned char *image;
@@ -122,7 +128,7 @@ static int run (int ms) {
     }
 
     else if ((mtn_is_over(mtn)) && (loop==MTN_REPLAY)) {
-        ofstream is(IMAGE_FILE, ios::binary);
+        ofstream is("image.raw");
         image = camera_get_image(camera);
         w = camera_get_width(camera);
         h = camera_get_height(camera);
@@ -146,7 +152,7 @@ static int run (int ms) {
     return SIMULATION_STEP;
 }
 
-// main function ////////////////////////////////////////////////////////////////////////////////////////////////////////////////////////////////////////////////////////////////////////////////////////////////////
+// main function ////////////////////////////////////////////////////////////////////////////////////////////////////////////////////////////////////////////////////////////////////////////////////////////////////////
 int main() {
     robot_live(init);
     robot_die(die);
