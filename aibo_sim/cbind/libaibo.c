@@ -125,7 +125,7 @@ static void put(const void *bytes, size_t size) {
 static void begin(enum aibo_op op) {
     if (channel < 0) connect_to_simulator();
     int32_t code = op, size = 0;
-    put(&size, 4); /* the length, filled in by queue_call */
+    put(&size, 4); /* the length, filled in by end_call */
     put(&code, 4);
 }
 
@@ -249,19 +249,23 @@ static void ask(enum aibo_op op, int arg) {
     call();
 }
 
-static void call_tag(enum aibo_op op, DeviceTag tag) {
+/* A call without results on a tag or a motion (`arg`), with no other argument. */
+static void send_tag(enum aibo_op op, int arg) {
     begin(op);
-    put_int(tag);
+    put_int(arg);
+    send_call();
 }
 
 static void send_tag_int(enum aibo_op op, DeviceTag tag, int value) {
-    call_tag(op, tag);
+    begin(op);
+    put_int(tag);
     put_int(value);
     send_call();
 }
 
 static void send_tag_double(enum aibo_op op, DeviceTag tag, double value) {
-    call_tag(op, tag);
+    begin(op);
+    put_int(tag);
     put_double(value);
     send_call();
 }
@@ -347,7 +351,7 @@ void robot_console_printf(const char *format, ...) {
 /* ---- servos */
 
 void servo_enable_position(DeviceTag s, unsigned short ms) { send_tag_int(AIBO_OP_servo_enable_position, s, ms); }
-void servo_disable_position(DeviceTag s) { call_tag(AIBO_OP_servo_disable_position, s); send_call(); }
+void servo_disable_position(DeviceTag s) { send_tag(AIBO_OP_servo_disable_position, s); }
 double servo_get_position(DeviceTag s) { return get_tag_double(AIBO_OP_servo_get_position, s); }
 void servo_set_position(DeviceTag s, double v) { send_tag_double(AIBO_OP_servo_set_position, s, v); }
 void servo_set_velocity(DeviceTag s, double v) { send_tag_double(AIBO_OP_servo_set_velocity, s, v); }
@@ -358,7 +362,7 @@ void servo_set_control_p(DeviceTag s, double v) { send_tag_double(AIBO_OP_servo_
 /* ---- camera */
 
 void camera_enable(DeviceTag c, unsigned short ms) { send_tag_int(AIBO_OP_camera_enable, c, ms); }
-void camera_disable(DeviceTag c) { call_tag(AIBO_OP_camera_disable, c); send_call(); }
+void camera_disable(DeviceTag c) { send_tag(AIBO_OP_camera_disable, c); }
 
 unsigned char *camera_get_image(DeviceTag c) {
     static unsigned char *copy;
@@ -381,13 +385,13 @@ void camera_set_shutter_speed(DeviceTag c, int v) { send_tag_int(AIBO_OP_camera_
 /* ---- sensors, LEDs */
 
 void distance_sensor_enable(DeviceTag d, unsigned short ms) { send_tag_int(AIBO_OP_distance_sensor_enable, d, ms); }
-void distance_sensor_disable(DeviceTag d) { call_tag(AIBO_OP_distance_sensor_disable, d); send_call(); }
+void distance_sensor_disable(DeviceTag d) { send_tag(AIBO_OP_distance_sensor_disable, d); }
 double distance_sensor_get_value(DeviceTag d) { return get_tag_double(AIBO_OP_distance_sensor_get_value, d); }
 void touch_sensor_enable(DeviceTag t, unsigned short ms) { send_tag_int(AIBO_OP_touch_sensor_enable, t, ms); }
-void touch_sensor_disable(DeviceTag t) { call_tag(AIBO_OP_touch_sensor_disable, t); send_call(); }
+void touch_sensor_disable(DeviceTag t) { send_tag(AIBO_OP_touch_sensor_disable, t); }
 double touch_sensor_get_value(DeviceTag t) { return get_tag_double(AIBO_OP_touch_sensor_get_value, t); }
 void accelerometer_enable(DeviceTag a, unsigned short ms) { send_tag_int(AIBO_OP_accelerometer_enable, a, ms); }
-void accelerometer_disable(DeviceTag a) { call_tag(AIBO_OP_accelerometer_disable, a); send_call(); }
+void accelerometer_disable(DeviceTag a) { send_tag(AIBO_OP_accelerometer_disable, a); }
 
 const float *accelerometer_get_values(DeviceTag a) {
     static float values[3];
@@ -415,17 +419,11 @@ MTN *mtn_new(const char *filename) {
 }
 
 void mtn_delete(MTN *mtn) {
-    begin(AIBO_OP_mtn_delete);
-    put_int(mtn_id(mtn));
-    send_call();
+    send_tag(AIBO_OP_mtn_delete, mtn_id(mtn));
     free(mtn);
 }
 
-void mtn_play(MTN *mtn) {
-    begin(AIBO_OP_mtn_play);
-    put_int(mtn_id(mtn));
-    send_call();
-}
+void mtn_play(MTN *mtn) { send_tag(AIBO_OP_mtn_play, mtn_id(mtn)); }
 
 static int mtn_int(enum aibo_op op, MTN *mtn) {
     ask(op, mtn_id(mtn));
@@ -438,17 +436,13 @@ int mtn_get_time(MTN *mtn) { return mtn_int(AIBO_OP_mtn_get_time, mtn); }
 
 const char *mtn_get_name(MTN *mtn) {
     static char name[256];
-    begin(AIBO_OP_mtn_get_name);
-    put_int(mtn_id(mtn));
-    call();
+    ask(AIBO_OP_mtn_get_name, mtn_id(mtn));
     return get_string(name, sizeof name);
 }
 
 void mtn_fprint(FILE *file, MTN *mtn) {
     static char text[8192];
-    begin(AIBO_OP_mtn_fprint);
-    put_int(mtn_id(mtn));
-    call();
+    ask(AIBO_OP_mtn_fprint, mtn_id(mtn));
     fputs(get_string(text, sizeof text), file);
 }
 

@@ -184,14 +184,13 @@ def run_c_controller(executable: Path, name: str) -> None:
         theirs.close()
         try:
             with memoryview(image) as view:
-                owed = []  # the call being answered, while it is
+                server = _Server(ours, view, name, robot)
                 try:
-                    _serve(ours, child, view, name, robot, owed)
+                    server.serve(child)
                 except KeyboardInterrupt:
-                    if owed:  # the controller waits for this answer: the run is over
-                        ours.sendall(_Call.END)
+                    server.end_run()
                     with contextlib.suppress(SimulationEnd):
-                        _serve(ours, child, view, name, robot, [], ending=True)
+                        server.serve(child)
                     raise
         finally:
             ours.close()
@@ -207,45 +206,57 @@ def run_c_controller(executable: Path, name: str) -> None:
         raise SystemExit(status)
 
 
-def _serve(channel: socket.socket, child: subprocess.Popen, image: memoryview, name: str, robot, owed: list,
-           ending: bool = False) -> None:
-    """Answer the controller's calls until it exits; ``owed`` holds the call whose answer the
-    controller waits for, while it does. ``ending``: the run is over (Ctrl-C): every
-    ``robot_step`` is answered "end" (the controller's robot_die functions run, then it exits)."""
-    handlers = _handlers(image)
-    table = [_Call(op_name, arguments, results, handlers[op_name]) for op_name, arguments, results in OPS]
-    ended, calls = False, _Calls(channel, name, robot)
-    wanted = {}  # the PREFETCHED calls made so far, by (number, arguments): answered with each step
-    while (payload := calls.next()) is not None:
-        number = _OP.unpack_from(payload)[0]
-        if not 0 <= number < len(table):
-            raise CControllerError(f"unknown call number {number} (a controller built against other headers?)")
-        call = table[number]
-        args = call.arguments(payload)
-        if ending and call.name == "robot_step":
-            channel.sendall(_Call.END)
-            continue
-        if call.ahead:
-            wanted[number, args] = call
-        if call.results:
-            owed.append(call)
-        try:
-            result = call.function(*args)
-        except SimulationEnd:
-            ended = True
-            channel.sendall(_Call.END)
-            owed.clear()
-            continue
-        except Exception as exc:
-            shown = ", ".join(repr(a) for a in args)
-            raise CControllerError(f"{call.name}({shown}) raised {type(exc).__name__}: {exc}") from exc
-        if call.results:
-            channel.sendall(_with_answers_ahead(call.answer(result), wanted) if call.name == "robot_step"
-                            else call.answer(result))
-            owed.clear()
-    child.wait()
-    if ended and child.returncode == 0:
-        raise SimulationEnd()
+class _Server:
+    """Answers one controller's calls: its motions, the calls it sent and those read ahead, and
+    whether it waits for an answer now."""
+
+    def __init__(self, channel: socket.socket, image: memoryview, name: str, robot):
+        handlers = _handlers(image)
+        self._table = [_Call(op_name, arguments, results, handlers[op_name]) for op_name, arguments, results in OPS]
+        self._channel, self._calls = channel, _Calls(channel, name, robot)
+        self._wanted = {}  # the PREFETCHED calls made so far, by (number, arguments): answered with each step
+        self._owed = False  # the controller waits for the answer to the call being made
+        self._ending = False
+
+    def end_run(self) -> None:
+        """Ctrl-C: the run is over. The call the controller waits for, and every ``robot_step``
+        from now on, is answered "end" (its robot_die functions run, then it exits)."""
+        if self._owed:
+            self._channel.sendall(_Call.END)
+            self._owed = False
+        self._ending = True
+
+    def serve(self, child: subprocess.Popen) -> None:
+        """Answer the controller's calls until it exits; SimulationEnd after a run that ended."""
+        ended = False
+        while (payload := self._calls.next()) is not None:
+            number = _OP.unpack_from(payload)[0]
+            if not 0 <= number < len(self._table):
+                raise CControllerError(f"unknown call number {number} (a controller built against other headers?)")
+            call = self._table[number]
+            args = call.arguments(payload)
+            if self._ending and call.name == "robot_step":
+                self._channel.sendall(_Call.END)
+                continue
+            if call.ahead:
+                self._wanted[number, args] = call
+            self._owed = bool(call.results)
+            try:
+                result = call.function(*args)
+            except SimulationEnd:
+                ended, self._owed = True, False
+                self._channel.sendall(_Call.END)
+                continue
+            except Exception as exc:
+                shown = ", ".join(repr(a) for a in args)
+                raise CControllerError(f"{call.name}({shown}) raised {type(exc).__name__}: {exc}") from exc
+            if call.results:
+                self._channel.sendall(_with_answers_ahead(call.answer(result), self._wanted)
+                                      if call.name == "robot_step" else call.answer(result))
+                self._owed = False
+        child.wait()
+        if ended and child.returncode == 0:
+            raise SimulationEnd()
 
 
 def _with_answers_ahead(answer: bytes, wanted: dict) -> bytes:
