@@ -14,6 +14,7 @@ import os
 import threading
 import time
 
+import mujoco
 import numpy as np
 
 from .robot import SimulationEnd
@@ -90,8 +91,6 @@ class LiveViewer:
             return
         self._shown_camera_frame = index
         inset = sim.camera.frame().rgb
-        import mujoco
-
         view = self._handle.viewport
         left = max(0, (view.left + view.width - inset.shape[1]) if view is not None else 0)
         self._handle.set_images((mujoco.MjrRect(left, 0, inset.shape[1], inset.shape[0]), np.ascontiguousarray(inset)))

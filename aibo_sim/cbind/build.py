@@ -13,6 +13,7 @@ import os
 import shutil
 import subprocess
 import tempfile
+from functools import cache
 from pathlib import Path
 
 from .protocol import c_header
@@ -64,7 +65,9 @@ def _compiler(kind: str) -> str:
     return found
 
 
+@cache
 def _version(compiler: str) -> bytes:
+    """What ``compiler --version`` says (asked once a process: each run and dump shard compiles)."""
     return subprocess.run([compiler, "--version"], capture_output=True).stdout
 
 
