@@ -175,6 +175,26 @@ def test_segmentation_and_projection_follow_the_lens():
     sim.close()
 
 
+def test_image_offset_is_the_projection_in_half_sizes():
+    sim = Simulation()
+    camera = sim.camera
+    frame = camera.frame()
+    forward = -frame.xmat[:, 2]  # MuJoCo cameras look along -z
+    points = frame.position + np.array([forward * 0.8, forward * 0.5 + frame.xmat[:, 0] * 0.3,
+                                        forward * 0.4 + frame.xmat[:, 1] * 0.5, -forward * 0.5])
+    for point in points:
+        (u, v), depth = (a[0] for a in camera.project(point))
+        offset, visible = camera.image_offset(point)
+        if depth > 0:
+            assert offset == pytest.approx(((u + 0.5) / 104 - 1, (v + 0.5) / 80 - 1), abs=1e-12)
+            assert visible == (-0.5 <= u <= 207.5 and -0.5 <= v <= 159.5)
+        else:
+            assert (offset, visible) == ((0.0, 0.0), False)
+    visible = [camera.image_offset(p)[1] for p in points]
+    assert visible == [True, False, False, False]  # ahead; off to the right; above; behind
+    sim.close()
+
+
 def smear_px(still: np.ndarray, moving: np.ndarray) -> float:
     """Length (px) of the box blur that turned ``still`` into ``moving`` across a vertical
     bright-to-dark edge: a box of L px moves L / 2 of the step's area across the edge."""

@@ -291,9 +291,14 @@ class HeadCamera:
     def image_offset(self, point_world) -> tuple[tuple[float, float], bool]:
         """A world point's offset from the image centre in half-widths and half-heights (x right,
         y down) and whether it is in front of the camera and inside the image."""
-        (u, v), depth = (a[0] for a in self.project(point_world))
-        if not depth > 0:
+        frame = self.frame()
+        # The camera frame's axes are the columns of xmat, y and z flipped (``project``), in floats.
+        relative = [float(p) - c for p, c in zip(point_world, frame.position.tolist())]
+        x, y, z = ([relative[0] * m[0] + relative[1] * m[1] + relative[2] * m[2] for m in zip(*frame.xmat.tolist())])
+        pixel = self.lens.project_point(x, -y, -z)
+        if pixel is None:
             return (0.0, 0.0), False
+        u, v = pixel
         x, y = (u + 0.5) / (self.width / 2) - 1, (v + 0.5) / (self.height / 2) - 1
         return (x, y), abs(x) <= 1 and abs(y) <= 1
 

@@ -67,12 +67,17 @@ class Lens:
     def distort(self, normalised) -> np.ndarray:
         """Pixels (n, 2) of ideal normalised coordinates (n, 2)."""
         x, y = np.asarray(normalised, dtype=np.float64).reshape(-1, 2).T
+        return np.stack(self._pixel(x, y), axis=-1)
+
+    def _pixel(self, x, y):
+        """(u, v) of ideal normalised (x, y): arrays, or Python floats (one point costs ~1 us
+        that way, ~40 us through arrays)."""
         k1, k2, p1, p2, k3 = self.distortion
         r2 = x * x + y * y
         radial = 1 + r2 * (k1 + r2 * (k2 + r2 * k3))
         xd = x * radial + 2 * p1 * x * y + p2 * (r2 + 2 * x * x)
         yd = y * radial + p1 * (r2 + 2 * y * y) + 2 * p2 * x * y
-        return np.stack([self.fx * xd + self.cx, self.fy * yd + self.cy], axis=-1)
+        return self.fx * xd + self.cx, self.fy * yd + self.cy
 
     def undistort(self, pixels, iterations: int = 100) -> np.ndarray:
         """Ideal normalised coordinates (n, 2) of pixels (n, 2): the fixed-point iteration of
@@ -104,6 +109,11 @@ class Lens:
         pixels = self.distort(normalised)
         pixels[depth <= 0] = np.nan
         return pixels, depth
+
+    def project_point(self, x: float, y: float, z: float) -> tuple[float, float] | None:
+        """``project`` of one point in the camera frame, in Python floats: its pixel (u, v), or
+        None behind the camera."""
+        return self._pixel(x / z, y / z) if z > 0 else None
 
     def render_pinhole(self, margin: float = 1.5) -> tuple[int, int, float]:
         """(width, height, focal length in px) of a centred square-pixel pinhole render that
