@@ -46,6 +46,7 @@ def test_worker_rejects_a_bad_spin_time_naming_it(spin_s):
         BusyWaitWorker(spin_s)
 
 
+@pytest.mark.filterwarnings("ignore:.*ERROR:UserWarning")  # Gymnasium's report of the error below
 def test_async_envs_with_the_busy_wait_worker_step_as_sync_ones_bit_for_bit():
     # This process has used OpenGL already: forked workers could deadlock in Mesa, spawn them.
     busy = gym.make_vec(HEAD_TRACK, 2, "async", vector_kwargs={"context": "spawn", "worker": BusyWaitWorker()})
