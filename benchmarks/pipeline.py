@@ -58,7 +58,7 @@ def measure() -> list[dict]:
     sim = Simulation()
     sim.camera.frame()  # the camera's renderer exists from here on
     render_s = best_mean_seconds(lambda: sim.camera._render(sim.data, "rgb"), 50)
-    width, height = sim.camera._render_width, sim.camera._render_height
+    width, height = sim.camera.render_size
     floor_s = _floor_seconds_per_frame(sim)
     sim.close()
     floor = "bare MuJoCo: steps for 1/30 s + Renderer 208x160 + readback"

@@ -123,10 +123,10 @@ class HeadCamera:
         self.sensor = (Sensor(self.profile, self.width, self.height, self._settings, self.light_temperature_k)
                        if self.profile.sensor else None)
         if self.lens.distorted or self.profile.lens != "pinhole":
-            self._render_width, self._render_height, self._render_focal = self.lens.render_pinhole()
-            self._remap = self.lens.remap_tables(self._render_width, self._render_height, self._render_focal)
-        else:
-            self._render_width, self._render_height, self._render_focal, self._remap = self.width, self.height, None, None
+            self._pinhole = self.lens.render_pinhole()
+            self._remap = self.lens.remap_tables(self._pinhole)
+        else:  # the model's own camera renders the picture
+            self._pinhole = self._remap = None
         self._renderer: Renderer | None = None
         self._spare: list[mujoco.MjData] = []
         self._exposures: list[_Exposure] = []
@@ -239,26 +239,34 @@ class HeadCamera:
         if moving:
             exposure = self.sensor.settings.exposure_s
             delay = (self.height - 1 - np.arange(self.height, dtype=np.float32)) / (self.height - 1) * readout
-            scale = self._render_focal / self.lens.fx / exposure
+            scale = self._pinhole.focal / self.lens.fx / exposure
             map_x += (motion[0] * scale * delay)[:, np.newaxis]
             map_y += (motion[1] * scale * delay)[:, np.newaxis]
         if moving or interpolation == cv2.INTER_NEAREST:
             return cv2.remap(image, map_x, map_y, interpolation, borderMode=cv2.BORDER_REPLICATE)
         return cv2.remap(image, *self._remap, interpolation, borderMode=cv2.BORDER_REPLICATE)
 
+    @property
+    def render_size(self) -> tuple[int, int]:
+        """(width, height) of the render the picture is made from."""
+        return (self.width, self.height) if self._pinhole is None else (self._pinhole.width, self._pinhole.height)
+
     def _render(self, data: mujoco.MjData, kind: str) -> np.ndarray:
         if self._renderer is None:
-            self._renderer = Renderer(self.model, self._render_width, self._render_height, groups=HEAD_CAMERA_GROUPS)
+            self._renderer = Renderer(self.model, *self.render_size, groups=HEAD_CAMERA_GROUPS)
         render = {"rgb": self._renderer.render, "depth": self._renderer.render_depth,
                   "segmentation": self._renderer.render_segmentation}[kind]
-        if self._render_focal is None:
+        if self._pinhole is None:
             return render(data, self.camera_id)
-        model, cam = self.model, self.camera_id
+        model, cam, pinhole = self.model, self.camera_id, self._pinhole
         saved = model.cam_intrinsic[cam].copy(), model.cam_sensorsize[cam].copy(), model.cam_resolution[cam].copy()
         pitch = 1e-5  # metres per render pixel: any value, as long as the three agree
-        model.cam_intrinsic[cam] = (self._render_focal * pitch, self._render_focal * pitch, 0, 0)
-        model.cam_sensorsize[cam] = (self._render_width * pitch, self._render_height * pitch)
-        model.cam_resolution[cam] = (self._render_width, self._render_height)
+        # MuJoCo's principal point offsets (metres) are the image centre less the principal
+        # point in image axes (x right, y down): positive values move the principal point left, up.
+        offset = ((pinhole.width - 1) / 2 - pinhole.centre[0], (pinhole.height - 1) / 2 - pinhole.centre[1])
+        model.cam_intrinsic[cam] = (pinhole.focal * pitch, pinhole.focal * pitch, offset[0] * pitch, offset[1] * pitch)
+        model.cam_sensorsize[cam] = (pinhole.width * pitch, pinhole.height * pitch)
+        model.cam_resolution[cam] = (pinhole.width, pinhole.height)
         try:
             return render(data, cam)
         finally:

@@ -115,24 +115,40 @@ class Lens:
         None behind the camera."""
         return self._pixel(x / z, y / z) if z > 0 else None
 
-    def render_pinhole(self, margin: float = 1.5) -> tuple[int, int, float]:
-        """(width, height, focal length in px) of a centred square-pixel pinhole render that
-        covers every pixel of this lens's image with ``margin`` pixels to spare, at the
-        lens's own pixel density (fx)."""
+    def render_pinhole(self, margin: float = 1.5) -> "PinholeRender":
+        """The square-pixel pinhole render that covers every pixel of this lens's image with
+        ``margin`` pixels to spare (at least ``margin`` - 0.5 after the shift below), at the
+        lens's own pixel density (fx). Its principal point sits a whole number of pixels from
+        the lens's, so that around the image centre the remap samples the render at its pixel
+        centres: with a fractional offset there, the bilinear remap of the (aliased) render
+        moves edges by a few hundredths of a pixel, the same way all over the centre, and
+        OpenCV's calibration of the frames reads that as a principal point ~0.7 px away."""
         u, v = np.meshgrid(np.arange(-0.5, self.width, 0.5), np.arange(-0.5, self.height, 0.5))
         border = (u == -0.5) | (v == -0.5) | (u >= self.width - 0.5) | (v >= self.height - 0.5)
         extent = np.abs(self.undistort(np.stack([u[border], v[border]], axis=-1))).max(axis=0)
         focal = self.fx
         width, height = (2 * math.ceil(focal * e + margin) for e in extent)
-        return width, height, focal
+        centre = (self.cx + round((width - 1) / 2 - self.cx), self.cy + round((height - 1) / 2 - self.cy))
+        return PinholeRender(width, height, focal, centre)
 
-    def remap_tables(self, render_width: int, render_height: int, focal: float) -> tuple[np.ndarray, np.ndarray]:
-        """OpenCV fixed-point maps from this lens's pixels into the centred pinhole render."""
+    def remap_tables(self, render: "PinholeRender") -> tuple[np.ndarray, np.ndarray]:
+        """OpenCV fixed-point maps from this lens's pixels into the pinhole ``render``."""
         u, v = np.meshgrid(np.arange(self.width, dtype=np.float64), np.arange(self.height, dtype=np.float64))
         ideal = self.undistort(np.stack([u.ravel(), v.ravel()], axis=-1))
-        map_x = (ideal[:, 0] * focal + (render_width - 1) / 2).reshape(self.height, self.width).astype(np.float32)
-        map_y = (ideal[:, 1] * focal + (render_height - 1) / 2).reshape(self.height, self.width).astype(np.float32)
+        map_x = (ideal[:, 0] * render.focal + render.centre[0]).reshape(self.height, self.width).astype(np.float32)
+        map_y = (ideal[:, 1] * render.focal + render.centre[1]).reshape(self.height, self.width).astype(np.float32)
         return cv2.convertMaps(map_x, map_y, cv2.CV_16SC2)
+
+
+@dataclass(frozen=True)
+class PinholeRender:
+    """A pinhole render's size, focal length (px) and principal point (px, pixel centres at
+    integers, as OpenCV)."""
+
+    width: int
+    height: int
+    focal: float
+    centre: tuple[float, float]
 
 
 def _sony_focal(size: int, fov_deg: float) -> float:
