@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import openr_bridge
-from aibo_sim.camera import HEAD_CAMERA_GROUPS, LENSES, CameraProfile, CameraSettings, RobotColour
+from aibo_sim.camera import HEAD_CAMERA_GROUPS, LENSES, PROFILES, CameraProfile, CameraSettings, RobotColour
 from aibo_sim.camera.sensor import planckian_rgb, light_gains
 from aibo_sim.render import Renderer
 from aibo_sim.sim import Simulation, models_dir
@@ -343,6 +343,74 @@ def test_noise_statistics_resemble_real_ers7_frames():
     sim.close()
     assert ours[2] == max(ours) and real[2] >= real[0]  # Cb the noisiest in both
     assert np.all(ours / real > 0.5) and np.all(ours / real < 2.0)
+
+
+def _edge_bases() -> np.ndarray:
+    """Unit-norm, zero-mean erf steps sampled at -4..4, one per (sigma, edge position) of a grid;
+    ``EDGE_SIGMAS`` names each row's sigma."""
+    phi = np.vectorize(lambda z: 0.5 * (1 + math.erf(z / math.sqrt(2))))
+    samples = np.arange(-4, 5)
+    bases = np.array([phi((samples - x0) / s) for s in EDGE_SIGMAS for x0 in EDGE_POSITIONS])
+    bases -= bases.mean(axis=1, keepdims=True)
+    return bases / np.linalg.norm(bases, axis=1, keepdims=True)
+
+
+EDGE_SIGMAS = np.arange(0.15, 1.6, 0.025)
+EDGE_POSITIONS = np.arange(-1.0, 1.0001, 0.05)
+EDGE_BASES = _edge_bases()
+
+
+def edge_widths(luma: np.ndarray, step: float = 25, flat: float = 3.0) -> np.ndarray:
+    """The width (sigma of the best-fitting erf, px) of every clean step edge across the rows
+    and the columns of ``luma``: a jump of at least ``step`` levels between neighbours, the
+    largest within 3 px, with 3 px on either side flat (std at most ``flat``) and 1.5 ``step``
+    apart."""
+    profiles = []
+    for lines in (luma, luma.T):
+        lines = lines.astype(float)
+        jumps = np.abs(np.diff(lines, axis=1))
+        for line, jump in zip(lines, jumps):
+            for x in range(5, len(line) - 6):
+                if jump[x] < step or jump[x] < jump[x - 3:x + 4].max():
+                    continue
+                profile = line[x - 3:x + 6]  # the edge between samples 3 and 4
+                left, right = profile[:3], profile[-3:]
+                if left.std() <= flat and right.std() <= flat and abs(right.mean() - left.mean()) >= 1.5 * step:
+                    profiles.append(profile)
+    centred = np.array(profiles) - np.mean(profiles, axis=1, keepdims=True)
+    best = np.argmax((centred @ EDGE_BASES.T) ** 2, axis=1)  # least squares a + b * basis
+    return EDGE_SIGMAS[best // len(EDGE_POSITIONS)]
+
+
+FIELD_VIEWS = ((-0.8, -1.0, -0.09), (0.5, 0.5, 0.8), (1.0, -0.5, -0.3), (-1.5, 0.8, 2.5), (2.0, 0.2, 0.1),
+               (-2.0, -0.3, 3.1))  # x, y, yaw: goals, beacons, lines, walls and the ball 0.4 m ahead
+
+
+def field_edge_width(camera: CameraProfile | str = "ers7") -> float:
+    """The median edge width in Y of the head camera's frames of ``FIELD_VIEWS``."""
+    widths = []
+    for x, y, yaw in FIELD_VIEWS:
+        sim = Simulation(seed=3, camera_profile=camera)
+        sim.place_robot(x, y, yaw)
+        sim.place_ball(x + 0.4 * math.cos(yaw), y + 0.4 * math.sin(yaw))
+        sim.step_frames(5)
+        widths.append(edge_widths(sim.camera.frame().ycrcb[..., 0]))
+        sim.close()
+    return float(np.median(np.concatenate(widths)))
+
+
+def test_softness_widens_the_edges():
+    widths = [field_edge_width(PROFILES["ers7"].with_options(softness_px=s)) for s in (0.0, 0.37, 0.5)]
+    assert widths[0] < widths[1] < widths[2]
+    assert 0.3 < widths[0] < 0.45  # the bilinear remap of the point-sampled render alone
+
+
+@pytest.mark.skipif(not REAL_FRAMES.is_dir(), reason="real ERS-7 frames not present (../shared/data)")
+def test_edges_are_as_sharp_as_in_real_ers7_frames():
+    real = np.concatenate([edge_widths(cv2.imread(str(path))[..., 2])  # EasyTrain: R = Y
+                           for path in sorted(REAL_FRAMES.glob("*.png"))])
+    assert len(real) > 300
+    assert field_edge_width() == pytest.approx(np.median(real), abs=0.05)
 
 
 def test_dump_shows_the_frames_run_shows_and_resumes_byte_identically_without_mp4(tmp_path):

