@@ -21,8 +21,9 @@ neutral settings keeps the ``ideal`` picture's tones). Then, per frame:
    what real robots read on the field carpet (Cr 101 at Y 52 would need R < 0): the real
    chroma is stronger than the decoder assumes, which is why Sony's RGB looks saturated;
 4. vignetting with the blue cast, as measured on output bytes (rUNSWift 2005's table,
-   section 3): per channel an affine map ``a(r) v + b(r)`` fitted at each tabulated radius
-   from the channel's own ring centre, linear in r between the radii;
+   section 3): per channel a quadratic ``c(r) v^2 + a(r) v + b(r)`` through the table's
+   columns at each tabulated radius from the channel's own ring centre (within 0.6 levels of
+   every entry), linear in r between the radii;
 5. per-robot colour: ``v' = pivot + gain (v - pivot) + offset`` per channel (section 4);
 6. noise: Gaussian, sigma per channel at MID gain times sqrt(gain factor) (section 4), from
    a fixed pool of normal numbers at an offset drawn from (seed, frame index): the same
@@ -212,13 +213,18 @@ def linear_to_srgb(v: np.ndarray) -> np.ndarray:
 
 
 @cache
-def vignetting_fit() -> tuple[np.ndarray, np.ndarray]:
-    """(slopes, intercepts), each (3 channels, radii): least-squares lines through the table."""
-    slopes, intercepts = np.empty((3, len(VIGNETTING_RADII))), np.empty((3, len(VIGNETTING_RADII)))
+def vignetting_fit() -> np.ndarray:
+    """Coefficients (3 channels, radii, 3: v^2, v, 1) of the quadratic through each channel's
+    raw values at each tabulated radius (least squares for Y's four columns; Cb's three
+    exactly; Cr's two columns give a line). A line leaves Y up to 5 levels and Cb 4.7 off the
+    table in the corners (a grey at Y 150 corners 0.71 of the centre where the table says
+    0.68); the quadratic, 0.6 at most."""
+    fit = np.zeros((3, len(VIGNETTING_RADII), 3))
     for c, (centre, rows) in enumerate(VIGNETTING_TABLE.values()):
+        degree = min(2, len(centre) - 1)
         for i, raw in enumerate(rows):
-            slopes[c, i], intercepts[c, i] = np.polyfit(centre, raw, 1)
-    return slopes, intercepts
+            fit[c, i, 2 - degree:] = np.polyfit(centre, raw, degree)
+    return fit
 
 
 def _along_radius(values: np.ndarray, r: np.ndarray) -> np.ndarray:
@@ -229,16 +235,17 @@ def _along_radius(values: np.ndarray, r: np.ndarray) -> np.ndarray:
     return np.where(r > radii[-1], values[-1] + slope * (r - radii[-1]), inside)
 
 
-def vignetting_maps(width: int, height: int) -> tuple[np.ndarray, np.ndarray]:
-    """Per-pixel (slope, intercept) maps, (h, w, 3) float64, of an image of this size."""
+def vignetting_maps(width: int, height: int) -> np.ndarray:
+    """Per-pixel quadratic coefficients (v^2, v, 1), (3, h, w, 3) float64, of an image of this size."""
     scale = 208 / width  # radii and ring centres are in layer-H pixels
     v, u = np.mgrid[0:height, 0:width].astype(np.float64)
-    slopes, intercepts = vignetting_fit()
-    a, b = np.empty((height, width, 3)), np.empty((height, width, 3))
+    fit = vignetting_fit()
+    maps = np.empty((3, height, width, 3))
     for c, (x0, y0) in enumerate(RING_CENTRES):
         r = np.hypot((u + 0.5) * scale - 0.5 - x0, (v + 0.5) * scale - 0.5 - y0)
-        a[..., c], b[..., c] = _along_radius(slopes[c], r), _along_radius(intercepts[c], r)
-    return a, b
+        for k in range(3):
+            maps[k, ..., c] = _along_radius(fit[c, :, k], r)
+    return maps
 
 
 # ---------------------------------------------------------------- motion
@@ -330,10 +337,12 @@ class Sensor:
         matrix = np.array([[*(y_scale * luma), p.black_level],
                            [*(p.chroma_gain[0] * (np.array([1.0, 0, 0]) - luma)), 128.0],
                            [*(p.chroma_gain[1] * (np.array([0, 0, 1.0]) - luma)), 128.0]])
-        slope, intercept = self._vignetting if self._vignetting is not None else (1.0, 0.0)
+        curve, slope, intercept = self._vignetting if self._vignetting is not None else (0.0, 1.0, 0.0)
         gain, pivot = np.asarray(robot.gain), np.asarray(ROBOT_PIVOT)
-        # Robot after vignetting: gain (a v + b - pivot) + pivot + offset.
+        # Robot after vignetting: gain (c v^2 + a v + b - pivot) + pivot + offset.
         self._matrix = matrix.astype(np.float32)
+        self._curve = (np.broadcast_to(gain * curve, (self.height, self.width, 3)).astype(np.float32)
+                       if np.any(curve) else None)
         self._slope = np.broadcast_to(gain * slope, (self.height, self.width, 3)).astype(np.float32)
         self._intercept = np.broadcast_to(gain * (intercept - pivot) + pivot + np.asarray(robot.offset),
                                           (self.height, self.width, 3)).astype(np.float32)
@@ -354,7 +363,11 @@ class Sensor:
             start = noise_offset(seed, index, self._choices)
             noise = self._noise[start:start + self.width * self.height].reshape(self.height, self.width, 3)
             ycrcb = self._intercept + noise
-        # Vignetting and robot: slope x (the response table's signal in Y, Cr, Cb) + intercept (+ noise).
-        cv2.accumulateProduct(cv2.transform(cv2.LUT(rgb, self._table), self._matrix), self._slope, ycrcb)
+        # Vignetting and robot: curve x signal^2 + slope x signal + intercept (+ noise), the signal
+        # being the response table's Y, Cr, Cb.
+        signal = cv2.transform(cv2.LUT(rgb, self._table), self._matrix)
+        cv2.accumulateProduct(signal, self._slope, ycrcb)
+        if self._curve is not None:
+            cv2.accumulateProduct(cv2.multiply(signal, signal), self._curve, ycrcb)
         # Y's floor, then bytes rounded to nearest and saturated at 255.
         return cv2.convertScaleAbs(cv2.max(ycrcb, self._low, dst=ycrcb))
