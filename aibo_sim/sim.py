@@ -16,7 +16,7 @@ import numpy as np
 
 from openr_bridge import FRAME_RATE_HZ, FRAME_TICK_MS
 
-from .camera import CameraProfile, CameraSettings, HeadCamera, camera_size
+from .camera import CameraProfile, CameraSettings, HeadCamera, camera_size, scene_light
 from .field import BALL_RADIUS
 from .ers7 import DISTANCE_SENSORS, HEAD_CAMERA, JOINTS, LED_BY_NAME, LED_OFF_RGBA, SENSORS, TOUCH_SENSORS
 
@@ -44,8 +44,9 @@ def models_dir() -> Path:
 
 
 def load_model(scene: str | Path | None = None, ball: bool = True) -> mujoco.MjModel:
-    """Compile a scene file (default: the RoboCup field), with an error that names the file;
-    ``ball=False`` leaves out its body named ``ball``."""
+    """Compile a scene file (default: the RoboCup field), with an error that names the file
+    (also for its light's custom numerics out of range: ``SceneLight``); ``ball=False`` leaves
+    out its body named ``ball``."""
     path = Path(scene) if scene is not None else models_dir() / "scene.xml"
     try:
         if not path.is_file():
@@ -54,11 +55,14 @@ def load_model(scene: str | Path | None = None, ball: bool = True) -> mujoco.MjM
         raise ModelError(f"{path}: cannot read: {exc.strerror or exc}") from None
     try:
         if ball:
-            return mujoco.MjModel.from_xml_path(str(path))
-        spec = mujoco.MjSpec.from_file(str(path))
-        if spec.body("ball") is not None:
-            spec.delete(spec.body("ball"))
-        return spec.compile()
+            model = mujoco.MjModel.from_xml_path(str(path))
+        else:
+            spec = mujoco.MjSpec.from_file(str(path))
+            if spec.body("ball") is not None:
+                spec.delete(spec.body("ball"))
+            model = spec.compile()
+        scene_light(model)  # its custom numerics in range
+        return model
     except ValueError as exc:
         raise ModelError(f"{path}: {exc}") from None
 

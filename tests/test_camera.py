@@ -9,27 +9,28 @@ import numpy as np
 import pytest
 
 import openr_bridge
-from aibo_sim.camera import HEAD_CAMERA_GROUPS, LENSES, PROFILES, CameraProfile, CameraSettings, RobotColour
+from aibo_sim.camera import HEAD_CAMERA_GROUPS, LENSES, PROFILES, CameraProfile, CameraSettings, RobotColour, SceneLight
 from aibo_sim.camera.sensor import RING_CENTRES, VIGNETTING_TABLE, light_gains, planckian_rgb, vignetting_fit, vignetting_maps
 from aibo_sim.render import Renderer
-from aibo_sim.sim import Simulation, models_dir
+from aibo_sim.sim import ModelError, Simulation, models_dir
 
 ROOT = Path(__file__).resolve().parents[1]
 REAL_FRAMES = ROOT.parent / "shared" / "data" / "ers7-camera" / "frames"
 QUIET = CameraProfile("ers7-quiet", lens="tekkotsu", sensor=True, noise_sigma=(0.0, 0.0, 0.0), softness_px=0.0)
 
 
-def target_scene(tmp_path, bodies: str, temperature: float = 5000.0) -> Path:
+def target_scene(tmp_path, bodies: str, temperature: float = 5000.0, **numerics: float) -> Path:
     """The robot, floating still (no gravity), before emissive targets (``emissive``) and no
-    other light: what is drawn is the targets' colour."""
+    other light: what is drawn is the targets' colour. ``numerics``: more custom numerics."""
     colours = sorted(set(s.split('"')[0] for s in bodies.split('material="e')[1:]))
     materials = "".join(f'<material name="e{c}" rgba="{c.replace("_", " ")} 1" emission="1" specular="0"/>'
                         for c in colours)
+    numeric_elements = "".join(f'<numeric name="{name}" data="{value}"/>' for name, value in numerics.items())
     scene = tmp_path / "target.xml"
     scene.write_text(f"""<mujoco>
   <include file="{models_dir() / 'ers7.xml'}"/>
   <visual><headlight diffuse="0 0 0" ambient="0 0 0" specular="0 0 0"/></visual>
-  <custom><numeric name="light_temperature_K" data="{temperature}"/></custom>
+  <custom><numeric name="light_temperature_K" data="{temperature}"/>{numeric_elements}</custom>
   <asset>{materials}</asset>
   <option gravity="0 0 0"/>
   <statistic extent="1" center="0 0 0.2"/>
@@ -131,6 +132,52 @@ def test_noise_per_channel_in_the_measured_bands_and_rising_with_gain(tmp_path):
     assert 0.9 <= y <= 2.6 and 1.5 <= cr <= 2.2 and 2.0 <= cb <= 4.5  # rUNSWift, FL / HIGH / FAST
     assert cb > cr >= y * 0.95
     assert np.all(sigmas["low"] < sigmas["mid"]) and np.all(sigmas["mid"] < sigmas["high"])
+
+
+def test_flicker_averages_out_over_whole_ripples():
+    """Spec section 7: on 50 Hz mains (a 100 Hz ripple) MID (1/100 s) and SLOW integrate whole
+    ripples, FAST half of one; on 60 Hz mains MID does not either."""
+    light = SceneLight(flicker_depth=0.3, mains_hz=50.0)
+    ends = np.arange(0, 0.05, 0.0007)
+    for shutter, spread in (("slow", 0.0), ("mid", 0.0), ("fast", 2 * 0.3 * 2 / math.pi)):
+        gains = [light.exposure_gain(end, CameraSettings(shutter=shutter).exposure_s) for end in ends]
+        assert max(gains) - min(gains) == pytest.approx(spread, abs=0.01)
+        assert np.mean(gains) == pytest.approx(1.0, abs=0.01)
+    at_60_hz = [SceneLight(flicker_depth=0.3, mains_hz=60.0).exposure_gain(end, 0.01) for end in ends]
+    assert max(at_60_hz) - min(at_60_hz) > 0.05
+    assert SceneLight().exposure_gain(0.0123, 0.005) == 1.0
+
+
+def test_a_flickering_light_changes_fast_frames_only(tmp_path):
+    def centre_y(scene, shutter: str, frames: int = 6) -> np.ndarray:
+        """Y at the image centre in consecutive frames (30 fps on the 8 ms grid: the ripple's
+        phase moves from frame to frame)."""
+        sim = Simulation(scene, camera_profile=QUIET, camera_settings=CameraSettings(gain="high", shutter=shutter))
+        values = []
+        for _ in range(frames):
+            values.append(centre(sim.camera.frame().ycrcb.astype(float))[0])
+            sim.step_frames(sim.frames_to_camera_frame())
+        sim.close()
+        return np.array(values)
+
+    flickering = target_scene(tmp_path, wall(0.5), light_flicker_depth=0.3, mains_frequency_Hz=50)
+    sim = Simulation(flickering)
+    assert sim.camera.describe()["light_flicker_depth"] == 0.3 and sim.camera.describe()["mains_frequency_Hz"] == 50
+    sim.close()
+    (tmp_path / "steady").mkdir()
+    steady_fast = centre_y(target_scene(tmp_path / "steady", wall(0.5)), "fast")
+    assert np.ptp(steady_fast) == 0 and np.ptp(centre_y(flickering, "mid")) == 0
+    fast = centre_y(flickering, "fast")
+    assert np.ptp(fast) > 15 and np.mean(fast) == pytest.approx(steady_fast[0], abs=6)
+
+
+@pytest.mark.parametrize("numerics, named", [({"light_flicker_depth": 1.5}, "light_flicker_depth"),
+                                             ({"mains_frequency_Hz": 0}, "mains_frequency_Hz"),
+                                             ({"temperature": 900}, "light_temperature_K")])
+def test_a_scene_light_out_of_range_is_named(tmp_path, numerics, named):
+    scene = target_scene(tmp_path, wall(0.5), **numerics)
+    with pytest.raises(ModelError, match=rf"{scene}: scene custom numeric {named} must be a number from"):
+        Simulation(scene)
 
 
 def test_same_seed_same_noise_and_ir_untouched_by_rendering():

@@ -12,7 +12,7 @@ import mujoco
 import numpy as np
 import pytest
 
-from aibo_sim.camera import CameraSettings, scene_light_temperature
+from aibo_sim.camera import CameraSettings, scene_light
 from aibo_sim.sim import Simulation
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -116,6 +116,6 @@ def test_field_colours_in_the_order_any_real_field_has(measured):
 def test_the_default_field_is_lit_warm():
     sim = Simulation(camera_profile="ideal")
     try:
-        assert 2800 <= scene_light_temperature(sim.model) <= 3600  # tungsten-halogen
+        assert 2800 <= scene_light(sim.model).temperature_k <= 3600  # tungsten-halogen
     finally:
         sim.close()

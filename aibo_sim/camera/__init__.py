@@ -6,9 +6,9 @@ the geometry; ``sensor.py`` the ``ideal`` and ``ers7`` profiles and the settings
 backends.
 """
 
-from .head import HEAD_CAMERA_GROUPS, CameraFrame, HeadCamera, camera_size, describe_camera, scene_light_temperature
+from .head import HEAD_CAMERA_GROUPS, CameraFrame, HeadCamera, camera_size, describe_camera, scene_light
 from .lens import LENSES, Lens
-from .sensor import PROFILES, CameraProfile, CameraSettings, RobotColour, camera_profile
+from .sensor import PROFILES, CameraProfile, CameraSettings, RobotColour, SceneLight, camera_profile
 
 __all__ = ["HEAD_CAMERA_GROUPS", "LENSES", "PROFILES", "CameraFrame", "CameraProfile", "CameraSettings", "HeadCamera",
-           "Lens", "RobotColour", "camera_profile", "camera_size", "describe_camera", "scene_light_temperature"]
+           "Lens", "RobotColour", "SceneLight", "camera_profile", "camera_size", "describe_camera", "scene_light"]

@@ -25,10 +25,9 @@ from openr_bridge import FULL_HEIGHT, FULL_WIDTH, LAYER_SIZE, encode_frame, enco
 from ..ers7 import HEAD_CAMERA
 from ..render import Renderer
 from .lens import LENSES, Lens
-from .sensor import CameraProfile, CameraSettings, RobotColour, Sensor, camera_profile
+from .sensor import CameraProfile, CameraSettings, RobotColour, SceneLight, Sensor, camera_profile
 
 HEAD_CAMERA_GROUPS = (0, 2)  # group 1 holds the robot's geoms behind the head camera
-DEFAULT_LIGHT_TEMPERATURE_K = 5000.0  # a scene without the custom numeric ``light_temperature_K``
 # MuJoCo camera axes (x right, y up, z backwards) to OpenCV's (x right, y down, z forward).
 _MUJOCO_TO_OPENCV = np.diag([1.0, -1.0, -1.0])
 
@@ -38,24 +37,27 @@ def camera_size(camera_full: bool) -> tuple[int, int]:
     return (FULL_WIDTH, FULL_HEIGHT) if camera_full else LAYER_SIZE[0]
 
 
-def scene_light_temperature(model: mujoco.MjModel) -> float:
-    """The scene's light colour temperature (K): custom numeric ``light_temperature_K``."""
-    index = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_NUMERIC, "light_temperature_K")
-    if index < 0:
-        return DEFAULT_LIGHT_TEMPERATURE_K
-    return float(model.numeric_data[model.numeric_adr[index]])
+def scene_light(model: mujoco.MjModel) -> SceneLight:
+    """The scene's light from its custom numerics (``SceneLight``; the defaults where absent);
+    ValueError naming a numeric out of range."""
+    values = {}
+    for field_name, numeric in (("temperature_k", "light_temperature_K"), ("flicker_depth", "light_flicker_depth"),
+                                ("mains_hz", "mains_frequency_Hz")):
+        index = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_NUMERIC, numeric)
+        if index >= 0:
+            values[field_name] = float(model.numeric_data[model.numeric_adr[index]])
+    return SceneLight(**values)
 
 
 def describe_camera(profile: str | CameraProfile, settings: CameraSettings, size: tuple[int, int],
-                    light_temperature_k: float) -> dict:
+                    light: SceneLight) -> dict:
     """The head camera's profile, lens (OpenCV intrinsics and distortion at ``size``) and
     settings, as run.json and a dump's meta.json record them."""
     profile = camera_profile(profile)
     lens = LENSES[profile.lens].scaled(*size)
     return {"profile": profile.name, "lens": lens.name, "width": lens.width, "height": lens.height,
             "fx": lens.fx, "fy": lens.fy, "cx": lens.cx, "cy": lens.cy, "distortion": list(lens.distortion),
-            "distortion_model": "OpenCV k1, k2, p1, p2, k3", **settings.as_dict(),
-            "light_temperature_K": light_temperature_k}
+            "distortion_model": "OpenCV k1, k2, p1, p2, k3", **settings.as_dict(), **light.as_dict()}
 
 
 class CameraFrame:
@@ -112,15 +114,15 @@ class HeadCamera:
     """The ERS-7's head camera on one simulation: renderer, lens, sensor, frames and labels."""
 
     def __init__(self, sim, size: tuple[int, int], profile: str | CameraProfile = "ers7",
-                 settings: CameraSettings | None = None, light_temperature_k: float | None = None):
+                 settings: CameraSettings | None = None, light: SceneLight | None = None):
         self.sim, self.model = sim, sim.model
         self.width, self.height = size
         self.profile = camera_profile(profile)
         self.camera_id = self.model.camera(HEAD_CAMERA).id
-        self.light_temperature_k = light_temperature_k or scene_light_temperature(self.model)
+        self.light = light or scene_light(self.model)
         self.lens: Lens = LENSES[self.profile.lens].scaled(self.width, self.height)
         self._settings = settings or CameraSettings()
-        self.sensor = (Sensor(self.profile, self.width, self.height, self._settings, self.light_temperature_k)
+        self.sensor = (Sensor(self.profile, self.width, self.height, self._settings, self.light.temperature_k)
                        if self.profile.sensor else None)
         if self.lens.distorted or self.profile.lens != "pinhole":
             self._pinhole = self.lens.render_pinhole()
@@ -152,7 +154,7 @@ class HeadCamera:
 
     def describe(self) -> dict:
         """Profile, lens and settings, as run.json and meta.json record them."""
-        return describe_camera(self.profile, self._settings, (self.width, self.height), self.light_temperature_k)
+        return describe_camera(self.profile, self._settings, (self.width, self.height), self.light)
 
     # ---------------------------------------------------------------- timing (called by Simulation)
 
@@ -218,7 +220,8 @@ class HeadCamera:
             self.sensor.configure(exposure.settings, self.sensor.robot)
         motion = self.image_motion(data, exposure.settings.exposure_s)
         lensed = self._lens_remap(rendered, motion, cv2.INTER_LINEAR)
-        ycrcb = self.sensor.expose(lensed, motion, self.seed, exposure.index)
+        light = self.light.exposure_gain(data.time, exposure.settings.exposure_s)
+        ycrcb = self.sensor.expose(lensed, motion, self.seed, exposure.index, light)
         return CameraFrame(exposure.index, exposure.frame_number, exposure.settings, pose, ycrcb=ycrcb)
 
     def image_motion(self, data: mujoco.MjData, seconds: float) -> tuple[float, float]:

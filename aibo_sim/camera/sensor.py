@@ -99,6 +99,40 @@ class CameraSettings:
 
 
 @dataclass(frozen=True)
+class SceneLight:
+    """The scene's light as the camera meets it, from the scene's custom numerics: colour
+    temperature (``light_temperature_K``) and flicker. Lamps on AC mains ripple at twice the
+    mains frequency (``mains_frequency_Hz``) by ``light_flicker_depth`` of their mean: on 50 Hz
+    mains MID (1/100 s) and SLOW integrate whole ripples, FAST half of one (section 7), so at FAST
+    a frame's brightness depends on when its exposure falls. Default: steady light, as in
+    rUNSWift's lab (its 1000-frame sigma of white at FAST, Y 1.8, leaves room for a ripple of
+    about 1 % at most)."""
+
+    temperature_k: float = 5000.0
+    flicker_depth: float = 0.0
+    mains_hz: float = 50.0
+
+    def __post_init__(self):
+        checks = (("light_temperature_K", self.temperature_k, 1667.0, 25000.0),  # planckian_rgb's range
+                  ("light_flicker_depth", self.flicker_depth, 0.0, 1.0), ("mains_frequency_Hz", self.mains_hz, 1.0, 1000.0))
+        for name, value, low, high in checks:
+            if not (isinstance(value, (int, float)) and low <= value <= high):  # NaN fails too
+                raise ValueError(f"scene custom numeric {name} must be a number from {low:g} to {high:g}, not {value!r}")
+
+    def exposure_gain(self, end_s: float, exposure_s: float) -> float:
+        """The light over the exposure [end_s - exposure_s, end_s] relative to its mean, the
+        lamp's output being mean x (1 + depth cos(2 pi 2 f t))."""
+        if not self.flicker_depth:
+            return 1.0
+        w = 4 * math.pi * self.mains_hz
+        return 1 + self.flicker_depth * (math.sin(w * end_s) - math.sin(w * (end_s - exposure_s))) / (w * exposure_s)
+
+    def as_dict(self) -> dict:
+        return {"light_temperature_K": self.temperature_k, "light_flicker_depth": self.flicker_depth,
+                "mains_frequency_Hz": self.mains_hz}
+
+
+@dataclass(frozen=True)
 class RobotColour:
     """One robot's colour deviation: per channel (Y, Cr, Cb) gain about the pivot and offset."""
 
@@ -328,9 +362,8 @@ class Sensor:
         """Take new settings or a new robot: rebuild the colour table, maps and noise scale."""
         self.settings, self.robot = settings, robot
         p = self.profile
-        levels = srgb_to_linear(np.arange(256) / 255.0)
-        gains = light_gains(self.light_temperature_k, settings.white_balance) * settings.exposure_factor * p.sensitivity
-        self._table = (255 * linear_to_srgb(levels[:, np.newaxis] * gains)).astype(np.float32).reshape(1, 256, 3)
+        self._gains = light_gains(self.light_temperature_k, settings.white_balance) * settings.exposure_factor * p.sensitivity
+        self._tables: dict[float, np.ndarray] = {}
         # Sony's forward model with the black level on Y; rows Y, Cr, Cb; columns R, G, B, 1.
         luma = np.array([0.299, 0.587, 0.114])
         y_scale = (p.white_level - p.black_level) / 255
@@ -350,9 +383,21 @@ class Sensor:
         self._noise = (self._pool * sigma.astype(np.float32)) if sigma.any() else None
         self._low = (p.black_level, 0.0, 0.0, 0.0)
 
-    def expose(self, rgb: np.ndarray, motion_px: tuple[float, float], seed: int, index: int) -> np.ndarray:
+    def _response_table(self, light: float) -> np.ndarray:
+        """Stage 2's table for ``light`` x the scene's mean light (a flickering light takes a
+        few values, frame after frame: each table is kept)."""
+        table = self._tables.get(light)
+        if table is None:
+            levels = srgb_to_linear(np.arange(256) / 255.0)
+            table = (255 * linear_to_srgb(levels[:, np.newaxis] * self._gains * light)).astype(np.float32)
+            table = self._tables[light] = table.reshape(1, 256, 3)
+        return table
+
+    def expose(self, rgb: np.ndarray, motion_px: tuple[float, float], seed: int, index: int,
+               light: float = 1.0) -> np.ndarray:
         """Y, Cr, Cb (h, w, 3) uint8 of an (h, w, 3) uint8 RGB picture through the lens, with
-        ``motion_px`` the image motion during the exposure."""
+        ``motion_px`` the image motion and ``light`` the scene's light (relative to its mean)
+        during the exposure."""
         if self.softness_px >= 0.05:
             rgb = cv2.GaussianBlur(rgb, (3, 3), self.softness_px, borderType=cv2.BORDER_REPLICATE)
         if self.profile.motion_blur and math.hypot(*motion_px) >= MIN_BLUR_PX:
@@ -365,7 +410,7 @@ class Sensor:
             ycrcb = self._intercept + noise
         # Vignetting and robot: curve x signal^2 + slope x signal + intercept (+ noise), the signal
         # being the response table's Y, Cr, Cb.
-        signal = cv2.transform(cv2.LUT(rgb, self._table), self._matrix)
+        signal = cv2.transform(cv2.LUT(rgb, self._response_table(light)), self._matrix)
         cv2.accumulateProduct(signal, self._slope, ycrcb)
         if self._curve is not None:
             cv2.accumulateProduct(cv2.multiply(signal, signal), self._curve, ycrcb)

@@ -14,7 +14,7 @@ import numpy as np
 
 from openr_bridge import FRAME_RATE_HZ
 
-from ..camera import CameraSettings, camera_size, describe_camera, scene_light_temperature
+from ..camera import CameraSettings, camera_size, describe_camera, scene_light
 from ..cbind import compile_controller, controller_sources, is_c_controller
 from ..robot import BACKENDS, SimulationEnd
 from ..runner import Progress, run_controller
@@ -73,7 +73,7 @@ def _dump_controller(parameters: dict, out: Path, resume: bool, **lock) -> DumpW
     settings = CameraSettings(**parameters["camera_settings"])
     model = load_model(parameters["scene"])
     camera = describe_camera(parameters["camera_profile"], settings, camera_size(camera_full),
-                             scene_light_temperature(model))
+                             scene_light(model))
     progress = Progress(frames / FRAME_RATE_HZ, enabled=parameters.get("progress", True))
     with DumpWriter(out, parameters["formats"], parameters, resume=resume, camera=camera, model=model,
                     **lock) as writer:
