@@ -105,8 +105,8 @@ class SceneLight:
     mains frequency (``mains_frequency_Hz``) by ``light_flicker_depth`` of their mean: on 50 Hz
     mains MID (1/100 s) and SLOW integrate whole ripples, FAST half of one (section 7), so at FAST
     a frame's brightness depends on when its exposure falls. Default: steady light, as in
-    rUNSWift's lab: through the gamma a ripple m moves white's Y (~149) at FAST by ~43 m
-    levels (sigma ~30 m over frames), and its 1000-frame sigma, Y 1.8, with 1.7 from the noise
+    rUNSWift's lab: through the gamma a ripple m moves white's Y (~149) at FAST by ~40 m
+    levels (sigma ~28 m over frames), and its 1000-frame sigma, Y 1.8, with 1.7 from the noise
     model, leaves room for m of about 2 % at most."""
 
     temperature_k: float = 5000.0
