@@ -531,3 +531,86 @@ def test_render_side_by_side_shows_both_profiles_and_a_real_frame(tmp_path):
     three = cv2.imread(str(tmp_path / "side_by_side.png"))
     assert three.shape == (320, 1248, 3) and np.all(three[:, :416] == 90)
     assert main(["render", "--out", str(tmp_path), "--side-by-side", str(tmp_path / "missing.png")]) == 2
+
+
+def _warp(image: np.ndarray, maps: tuple[np.ndarray, np.ndarray], outer: float = 0.0, centre: float = 1.0) -> np.ndarray:
+    """``image`` (h, w, 3) uint8 through ``kernels``' two passes on ``maps``, as bytes (h', w', 3)."""
+    from aibo_sim.camera import kernels
+    from aibo_sim.camera.lens import Warp
+
+    warp = Warp.from_maps(*maps, image.shape[1])
+    planes = np.stack(cv2.split(image))
+    rows = np.empty((3, maps[0].shape[0], image.shape[1] + 4), np.float32)
+    out = np.empty((3, *maps[0].shape), np.uint8)
+    kernels.warp_rows(planes, warp.rows_base, warp.rows_frac, *warp.rows_runs, np.float32(outer), np.float32(centre), rows)
+    kernels.warp_columns(rows, warp.columns_base, warp.columns_frac, *warp.columns_runs, np.float32(outer),
+                         np.float32(centre), out)
+    return cv2.merge(list(out))
+
+
+def test_two_pass_warp_is_the_lens_remap():
+    """The sensor's two 1-D passes draw what OpenCV's bilinear remap draws of the same render,
+    through the calibrated lens (within a level on a smooth picture), and an identity map
+    returns the picture unchanged."""
+    lens = LENSES["tekkotsu"]
+    render = lens.render_pinhole()
+    noise = np.random.default_rng(7).integers(0, 256, (render.height, render.width, 3), dtype=np.uint8)
+    picture = cv2.GaussianBlur(noise, (0, 0), 2.0)  # features a few pixels wide, as in a frame
+    maps = lens.render_maps(render)
+    expected = cv2.remap(picture, *(m.astype(np.float32) for m in maps), cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+    difference = np.abs(_warp(picture, maps).astype(int) - expected)
+    assert difference.max() <= 1 and difference.mean() < 0.1
+    identity = np.meshgrid(np.arange(lens.width, dtype=np.float64), np.arange(lens.height, dtype=np.float64))
+    assert np.array_equal(_warp(picture[:lens.height, :lens.width].copy(), identity), picture[:lens.height, :lens.width])
+
+
+def test_two_pass_warp_refuses_a_map_that_folds_back():
+    from aibo_sim.camera.lens import Warp
+
+    map_x, map_y = np.meshgrid(np.arange(8.0), np.arange(4.0))
+    map_x[2, 5] = 3.0
+    with pytest.raises(ValueError, match="never decreases"):
+        Warp.from_maps(map_x, map_y, 8)
+
+
+def test_smear_sums_shifted_rows_with_edges_repeated():
+    from aibo_sim.camera import kernels
+
+    image = np.random.default_rng(3).integers(0, 256, (3, 12, 20), dtype=np.uint8)
+    dx, dy, weights = np.array([-2, 0, 3]), np.array([1, 0, -1]), np.array([64, 128, 64], np.uint16)
+    pad = 3
+    padded = np.pad(image, ((0, 0), (0, 0), (pad, pad)), mode="edge")
+    out = np.empty(image.shape, np.uint16)
+    kernels.smear(padded, pad, dx, dy, weights, out)
+    expected = np.zeros(image.shape, np.int64)
+    for shift_x, shift_y, weight in zip(dx, dy, weights):
+        rows = np.clip(np.arange(12) + shift_y, 0, 11)
+        columns = np.clip(np.arange(20) + shift_x, 0, 19)
+        expected += int(weight) * image[:, rows][:, :, columns].astype(np.int64)
+    assert np.array_equal(out, expected)
+
+
+def test_rolling_shutter_skews_rows_by_the_motion_during_the_readout():
+    """With a readout as long as the exposure, the first row is read where the image was one
+    exposure before the last: a vertical edge moves by the whole image motion from the
+    bottom row to the top, and by half of it at the middle row."""
+    from aibo_sim.camera.sensor import Sensor
+
+    profile = CameraProfile("rolling", sensor=True, noise_sigma=(0.0, 0.0, 0.0), softness_px=0.0, vignetting=False,
+                            motion_blur=False, readout_ms=1000 * CameraSettings().exposure_s)
+    height, width = 21, 32
+    maps = tuple(m.astype(np.float64) for m in np.meshgrid(np.arange(width) + 12.0, np.arange(height) + 2.0))
+    render = np.full((height + 4, width + 24, 3), 40, np.uint8)
+    render[:, 30:] = 200  # an edge between render columns 29 and 30: picture column 17.5 at rest
+    sensor = Sensor(profile, CameraSettings(), 5000.0, maps, (width + 24, height + 4), (1.0, 1.0))
+
+    def edge(ycrcb, row):
+        luma = ycrcb[row, :, 0].astype(float)
+        return np.interp(0.5, (luma - luma.min()) / np.ptp(luma), np.arange(width))
+
+    still = sensor.expose(render, (0.0, 0.0), 0, 0)
+    moving = sensor.expose(render, (8.0, 0.0), 0, 0)
+    assert edge(still, 0) == pytest.approx(edge(still, height - 1)) == pytest.approx(17.5, abs=0.01)
+    assert edge(moving, height - 1) == pytest.approx(17.5, abs=0.01)
+    assert edge(moving, height // 2) == pytest.approx(17.5 - 4, abs=0.05)
+    assert edge(moving, 0) == pytest.approx(17.5 - 8, abs=0.05)

@@ -122,13 +122,17 @@ class HeadCamera:
         self.light = light or scene_light(self.model)
         self.lens: Lens = LENSES[self.profile.lens].scaled(self.width, self.height)
         self._settings = settings or CameraSettings()
-        self.sensor = (Sensor(self.profile, self.width, self.height, self._settings, self.light.temperature_k)
-                       if self.profile.sensor else None)
         if self.lens.distorted or self.profile.lens != "pinhole":
             self._pinhole = self.lens.render_pinhole()
-            self._remap = self.lens.remap_tables(self._pinhole)
+            maps = self.lens.render_maps(self._pinhole)
+            self._remap = cv2.convertMaps(*(m.astype(np.float32) for m in maps), cv2.CV_16SC2)
+            render_scale = (self._pinhole.focal / self.lens.fx, self._pinhole.focal / self.lens.fy)
         else:  # the model's own camera renders the picture
             self._pinhole = self._remap = None
+            maps = tuple(np.meshgrid(np.arange(self.width, dtype=np.float64), np.arange(self.height, dtype=np.float64)))
+            render_scale = (1.0, 1.0)
+        self.sensor = (Sensor(self.profile, self._settings, self.light.temperature_k, maps, self.render_size, render_scale)
+                       if self.profile.sensor else None)
         self._renderer: Renderer | None = None
         self._spare: list[mujoco.MjData] = []
         self._exposures: list[_Exposure] = []
@@ -213,15 +217,13 @@ class HeadCamera:
         pose = (data.cam_xpos[self.camera_id].copy(), data.cam_xmat[self.camera_id].reshape(3, 3).copy())
         rendered = self._render(data, "rgb")
         if self.sensor is None:
-            picture = rendered if self._remap is None else cv2.remap(rendered, *self._remap, cv2.INTER_LINEAR,
-                                                                      borderMode=cv2.BORDER_REPLICATE)
+            picture = rendered if self._remap is None else self._lens_remap(rendered, cv2.INTER_LINEAR)
             return CameraFrame(exposure.index, exposure.frame_number, exposure.settings, pose, rgb=picture)
         if self.sensor.settings != exposure.settings:
             self.sensor.configure(exposure.settings, self.sensor.robot)
         motion = self.image_motion(data, exposure.settings.exposure_s)
-        lensed = self._lens_remap(rendered, motion, cv2.INTER_LINEAR)
         light = self.light.exposure_gain(data.time, exposure.settings.exposure_s)
-        ycrcb = self.sensor.expose(lensed, motion, self.seed, exposure.index, light)
+        ycrcb = self.sensor.expose(rendered, motion, self.seed, exposure.index, light)
         return CameraFrame(exposure.index, exposure.frame_number, exposure.settings, pose, ycrcb=ycrcb)
 
     def image_motion(self, data: mujoco.MjData, seconds: float) -> tuple[float, float]:
@@ -231,23 +233,12 @@ class HeadCamera:
         wx, wy = self._velocity[0], self._velocity[1]  # about the camera's right and up axes
         return float(self.lens.fx * wy * seconds), float(self.lens.fy * wx * seconds)
 
-    def _lens_remap(self, image: np.ndarray, motion: tuple[float, float], interpolation: int) -> np.ndarray:
-        """The render as the lens draws it; with a rolling shutter, each row where it was when
-        read. Nearest-neighbour lookups (labels) use float maps: OpenCV's fixed-point maps
+    def _lens_remap(self, image: np.ndarray, interpolation: int) -> np.ndarray:
+        """The render as the lens draws it (the ``ideal`` picture of a distorted lens, and the
+        labels). Nearest-neighbour lookups (labels) use float maps: OpenCV's fixed-point maps
         would round down."""
-        readout = self.profile.readout_ms / 1000
-        moving = readout > 0 and self.sensor is not None and any(motion)
-        if moving or interpolation == cv2.INTER_NEAREST:
-            map_x, map_y = cv2.convertMaps(*self._remap, cv2.CV_32FC1)
-        if moving:
-            exposure = self.sensor.settings.exposure_s
-            delay = (self.height - 1 - np.arange(self.height, dtype=np.float32)) / (self.height - 1) * readout
-            scale = self._pinhole.focal / self.lens.fx / exposure
-            map_x += (motion[0] * scale * delay)[:, np.newaxis]
-            map_y += (motion[1] * scale * delay)[:, np.newaxis]
-        if moving or interpolation == cv2.INTER_NEAREST:
-            return cv2.remap(image, map_x, map_y, interpolation, borderMode=cv2.BORDER_REPLICATE)
-        return cv2.remap(image, *self._remap, interpolation, borderMode=cv2.BORDER_REPLICATE)
+        maps = cv2.convertMaps(*self._remap, cv2.CV_32FC1) if interpolation == cv2.INTER_NEAREST else self._remap
+        return cv2.remap(image, *maps, interpolation, borderMode=cv2.BORDER_REPLICATE)
 
     @property
     def render_size(self) -> tuple[int, int]:
@@ -283,14 +274,14 @@ class HeadCamera:
     def depth(self) -> np.ndarray:
         """Metres along the optical axis at each pixel of the current frame, float32 (h, w)."""
         depth = self._render(self._exposure_data(), "depth")
-        return depth if self._remap is None else self._lens_remap(depth, (0.0, 0.0), cv2.INTER_NEAREST)
+        return depth if self._remap is None else self._lens_remap(depth, cv2.INTER_NEAREST)
 
     def segmentation(self) -> np.ndarray:
         """Geom id at each pixel of the current frame, int32 (h, w); -1 where nothing is drawn."""
         ids = self._render(self._exposure_data(), "segmentation")
         if self._remap is None:
             return ids
-        return self._lens_remap(ids.astype(np.float32), (0.0, 0.0), cv2.INTER_NEAREST).astype(np.int32)
+        return self._lens_remap(ids.astype(np.float32), cv2.INTER_NEAREST).astype(np.int32)
 
     def project(self, points_world, frame: CameraFrame | None = None) -> tuple[np.ndarray, np.ndarray]:
         """Pixels (n, 2) (x right, y down, pixel centres at integers; NaN behind the camera) and

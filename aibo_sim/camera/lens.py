@@ -131,13 +131,18 @@ class Lens:
         centre = (self.cx + round((width - 1) / 2 - self.cx), self.cy + round((height - 1) / 2 - self.cy))
         return PinholeRender(width, height, focal, centre)
 
-    def remap_tables(self, render: "PinholeRender") -> tuple[np.ndarray, np.ndarray]:
-        """OpenCV fixed-point maps from this lens's pixels into the pinhole ``render``."""
+    def render_maps(self, render: "PinholeRender") -> tuple[np.ndarray, np.ndarray]:
+        """Where each pixel of this lens's image lies in the pinhole ``render``: x and y,
+        float64 (height, width)."""
         u, v = np.meshgrid(np.arange(self.width, dtype=np.float64), np.arange(self.height, dtype=np.float64))
         ideal = self.undistort(np.stack([u.ravel(), v.ravel()], axis=-1))
-        map_x = (ideal[:, 0] * render.focal + render.centre[0]).reshape(self.height, self.width).astype(np.float32)
-        map_y = (ideal[:, 1] * render.focal + render.centre[1]).reshape(self.height, self.width).astype(np.float32)
-        return cv2.convertMaps(map_x, map_y, cv2.CV_16SC2)
+        return ((ideal[:, 0] * render.focal + render.centre[0]).reshape(self.height, self.width),
+                (ideal[:, 1] * render.focal + render.centre[1]).reshape(self.height, self.width))
+
+    def remap_tables(self, render: "PinholeRender") -> tuple[np.ndarray, np.ndarray]:
+        """OpenCV fixed-point maps from this lens's pixels into the pinhole ``render``."""
+        map_x, map_y = self.render_maps(render)
+        return cv2.convertMaps(map_x.astype(np.float32), map_y.astype(np.float32), cv2.CV_16SC2)
 
 
 @dataclass(frozen=True)
@@ -163,3 +168,46 @@ LENSES = {
     "pinhole": Lens("pinhole", _sony_focal(LAYER_WIDTH, HORIZONTAL_FOV_DEG), _sony_focal(LAYER_HEIGHT, VERTICAL_FOV_DEG),
                     (LAYER_WIDTH - 1) / 2, (LAYER_HEIGHT - 1) / 2),
 }
+
+
+@dataclass(frozen=True)
+class Warp:
+    """A remap (output pixel (u, v) reads the render at ``map_x``, ``map_y``) as Catmull and
+    Smith's two 1-D passes: pass 1 resamples each render column x at the row where the map's
+    row v crosses x (``rows_*``: (h, render width)), pass 2 resamples each output row along x
+    (``columns_*``: (h, w)). A pass stores, per sample, the first of its source pixels
+    (``*_base``) and the fraction past it (``*_frac``); ``*_runs`` (row pointers, then (start,
+    end) pairs) split each row into runs where the source is the destination shifted by one
+    constant offset, so that every run is a contiguous slice. The lens's mild barrel keeps
+    both passes single-valued and smooth (a few runs per row)."""
+
+    rows_base: np.ndarray
+    rows_frac: np.ndarray
+    rows_runs: tuple[np.ndarray, np.ndarray]
+    columns_base: np.ndarray
+    columns_frac: np.ndarray
+    columns_runs: tuple[np.ndarray, np.ndarray]
+
+    @classmethod
+    def from_maps(cls, map_x: np.ndarray, map_y: np.ndarray, render_width: int) -> "Warp":
+        height, width = map_x.shape
+        if np.any(np.diff(map_x, axis=1) < 0):
+            raise ValueError("a two-pass warp needs a map that never decreases along a row")
+        columns = np.arange(render_width, dtype=np.float64)
+        row_at_column = np.stack([np.interp(columns, map_x[v], map_y[v]) for v in range(height)])
+        rows_base = np.floor(row_at_column).astype(np.int64)
+        columns_base = np.floor(map_x).astype(np.int64)
+        return cls(rows_base, (row_at_column - rows_base).astype(np.float32),
+                   _runs(rows_base), columns_base, (map_x - columns_base).astype(np.float32),
+                   _runs(columns_base - np.arange(width)))
+
+
+def _runs(key: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Row pointers and (start, end) of the runs of each row of ``key`` where it stays the same:
+    pass 1's source row, pass 2's source column less the destination column."""
+    pointers, runs = [0], []
+    for row in key:
+        cuts = np.flatnonzero(np.diff(row)) + 1
+        runs += zip(np.r_[0, cuts], np.r_[cuts, row.size])
+        pointers.append(len(runs))
+    return np.array(pointers, np.int64), np.array(runs, np.int64).reshape(-1, 2)

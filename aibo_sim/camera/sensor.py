@@ -4,11 +4,12 @@ Numbers and sources: ``specs/ers7-camera.md`` (section numbers below refer to it
 rendered frame is read as sRGB-encoded scene radiance under a neutral light (so ``ers7`` at
 neutral settings keeps the ``ideal`` picture's tones). Then, per frame:
 
-1. optics and time: the lens (``lens.py``, applied by ``HeadCamera`` as a remap of a wider
-   render), a slight softness (3x3 Gaussian, sigma ``softness_px``, fitted to the edges of
-   real frames), and motion blur: the average along the image motion during the exposure
-   that the camera's angular velocity at the frame's tick gives (``omega x exposure x focal
-   length`` px, section 7);
+1. time and optics, on the wider pinhole render ``HeadCamera`` draws: motion blur, the
+   average along the image motion during the exposure that the camera's angular velocity at
+   the frame's tick gives (``omega x exposure x focal length`` px, section 7), taken before
+   the lens as light moves across the scene's pinhole image; then the lens (``lens.py``'s
+   map, as two 1-D passes, ``kernels.Warp``) with a slight softness folded into each pass
+   (OpenCV's 3-tap Gaussian, sigma ``softness_px``, fitted to the edges of real frames);
 2. exposure and colour, one per-channel table from rendered byte to sensor RGB: linear
    light x scene light colour (a Planckian of the scene's ``light_temperature_K``) x white
    balance gains (von Kries against the preset's Planckian, section 6) x exposure (each gain
@@ -46,6 +47,8 @@ import cv2
 import numpy as np
 
 from openr_bridge import CAMERA_DEFAULTS, CAMERA_SETTINGS
+
+from .lens import Warp
 
 PROFILES_DOC = "ideal: the rendered picture unchanged; ers7: the calibrated ERS-7 sensor"
 GAIN_STEPS = {"low": -1, "mid": 0, "high": 1}  # -6, 0, +6 dB: each step doubles the signal
@@ -311,23 +314,6 @@ def motion_taps(motion_px: tuple[float, float]) -> list[tuple[int, int, float]]:
     return [tap for tap in taps if tap[2] > 0]
 
 
-def motion_blur(image: np.ndarray, motion_px: tuple[float, float]) -> np.ndarray:
-    """``image`` (h, w, 3) uint8 averaged along the motion (``motion_taps``), edges repeated.
-
-    The taps accumulate as a running weighted mean (``cv2.accumulateWeighted`` reads the uint8
-    picture straight into a float32 sum: ~4x faster than float32 arithmetic per tap)."""
-    taps = motion_taps(motion_px)
-    reach = max(max(abs(dx), abs(dy)) for dx, dy, _ in taps)
-    height, width = image.shape[:2]
-    padded = cv2.copyMakeBorder(image, reach, reach, reach, reach, cv2.BORDER_REPLICATE)
-    mean, total = np.zeros(image.shape, np.float32), 0.0
-    for dx, dy, weight in taps:
-        total += weight
-        cv2.accumulateWeighted(padded[reach + dy:reach + dy + height, reach + dx:reach + dx + width], mean,
-                               weight / total)
-    return cv2.convertScaleAbs(mean)
-
-
 # ---------------------------------------------------------------- the sensor
 
 
@@ -346,17 +332,30 @@ def noise_offset(seed: int, index: int, choices: int) -> int:
 
 
 class Sensor:
-    """Stages 1-7 for one image size: ``expose`` turns the lens's RGB picture into Y, Cr, Cb."""
+    """Stages 1-7 for one image size: ``expose`` turns the pinhole render into the lens's
+    picture in Y, Cr, Cb, through the passes of ``kernels``: ``maps`` (x, y, float (h, w)) say
+    where each pixel of the picture lies in the render of ``render_size`` (width, height),
+    ``render_scale`` its pixels per picture pixel (x, y)."""
 
-    def __init__(self, profile: CameraProfile, width: int, height: int, settings: CameraSettings,
-                 light_temperature_k: float):
-        self.profile, self.width, self.height = profile, width, height
-        self.light_temperature_k = light_temperature_k
-        self.softness_px = profile.softness_px * width / 208
-        self._vignetting = vignetting_maps(width, height) if profile.vignetting else None
-        pixels = width * height
-        self._pool = _unit_noise(NOISE_POOL_FRAMES * pixels * 3).reshape(-1, 3)
+    def __init__(self, profile: CameraProfile, settings: CameraSettings, light_temperature_k: float,
+                 maps: tuple[np.ndarray, np.ndarray], render_size: tuple[int, int], render_scale: tuple[float, float]):
+        self.profile, self.light_temperature_k = profile, light_temperature_k
+        self.height, self.width = maps[0].shape
+        self.maps, self.render_size, self.render_scale = maps, render_size, render_scale
+        from . import kernels  # numba, loaded by the first sensor rather than by every import of aibo_sim
+
+        self._kernels = kernels
+        self.warp = Warp.from_maps(*maps, render_size[0])
+        # The softness's 3-tap Gaussian (OpenCV's, as GaussianBlur uses), in render pixels.
+        sigma = profile.softness_px * self.width / 208 * render_scale[0]
+        outer, centre, _ = cv2.getGaussianKernel(3, sigma).ravel() if sigma >= 0.05 else (0.0, 1.0, 0.0)
+        self._taps = np.float32(outer), np.float32(centre)
+        self._vignetting = vignetting_maps(self.width, self.height) if profile.vignetting else None
+        pixels = self.width * self.height
+        self._pool = _unit_noise(NOISE_POOL_FRAMES * pixels * 3).reshape(3, -1)
         self._choices = (NOISE_POOL_FRAMES - 1) * pixels
+        self._codes = np.empty((3, self.height, self.width), np.uint8)
+        self._ycrcb = np.empty((3, self.height * self.width), np.uint8)
         self.configure(settings, profile.robot)
 
     def configure(self, settings: CameraSettings, robot: RobotColour) -> None:
@@ -368,52 +367,70 @@ class Sensor:
         # Sony's forward model with the black level on Y; rows Y, Cr, Cb; columns R, G, B, 1.
         luma = np.array([0.299, 0.587, 0.114])
         y_scale = (p.white_level - p.black_level) / 255
-        matrix = np.array([[*(y_scale * luma), p.black_level],
-                           [*(p.chroma_gain[0] * (np.array([1.0, 0, 0]) - luma)), 128.0],
-                           [*(p.chroma_gain[1] * (np.array([0, 0, 1.0]) - luma)), 128.0]])
+        self._matrix = np.array([[*(y_scale * luma), p.black_level],
+                                 [*(p.chroma_gain[0] * (np.array([1.0, 0, 0]) - luma)), 128.0],
+                                 [*(p.chroma_gain[1] * (np.array([0, 0, 1.0]) - luma)), 128.0]], np.float32)
         curve, slope, intercept = self._vignetting if self._vignetting is not None else (0.0, 1.0, 0.0)
         gain, pivot = np.asarray(robot.gain), np.asarray(ROBOT_PIVOT)
+
+        def planes(values):  # (h, w, 3) or per channel -> float32 (3, h * w)
+            values = np.broadcast_to(values, (self.height, self.width, 3))
+            return np.ascontiguousarray(values.reshape(-1, 3).T, np.float32)
+
         # Robot after vignetting: gain (c v^2 + a v + b - pivot) + pivot + offset.
-        self._matrix = matrix.astype(np.float32)
-        self._curve = (np.broadcast_to(gain * curve, (self.height, self.width, 3)).astype(np.float32)
-                       if np.any(curve) else None)
-        self._slope = np.broadcast_to(gain * slope, (self.height, self.width, 3)).astype(np.float32)
-        self._intercept = np.broadcast_to(gain * (intercept - pivot) + pivot + np.asarray(robot.offset),
-                                          (self.height, self.width, 3)).astype(np.float32)
+        self._curve, self._slope = planes(gain * curve), planes(gain * slope)
+        self._intercept = planes(gain * (intercept - pivot) + pivot + np.asarray(robot.offset))
         sigma = np.asarray(p.noise_sigma) * math.sqrt(2.0 ** GAIN_STEPS[settings.gain])
-        self._noise = (self._pool * sigma.astype(np.float32)) if sigma.any() else None
-        self._low = (p.black_level, 0.0, 0.0, 0.0)
+        self._noise = self._pool * sigma.astype(np.float32)[:, np.newaxis]
+        self._black = np.float32(p.black_level)
 
     def _response_table(self, light: float) -> np.ndarray:
-        """Stage 2's table for ``light`` x the scene's mean light (a flickering light takes a
-        few values, frame after frame: each table is kept)."""
+        """Stage 2's tables (3, 1, 256) float32 for ``light`` x the scene's mean light (a
+        flickering light takes a few values, frame after frame: each table is kept)."""
         table = self._tables.get(light)
         if table is None:
             levels = srgb_to_linear(np.arange(256) / 255.0)
             table = (255 * linear_to_srgb(levels[:, np.newaxis] * self._gains * light)).astype(np.float32)
-            table = self._tables[light] = table.reshape(1, 256, 3)
+            table = self._tables[light] = np.ascontiguousarray(table.T.reshape(3, 1, 256))
         return table
 
-    def expose(self, rgb: np.ndarray, motion_px: tuple[float, float], seed: int, index: int,
+    def _rolling_warp(self, motion_px: tuple[float, float]) -> Warp:
+        """The warp with each row read where the image was when that row's exposure ended
+        (``readout_ms`` after the first row's, the last row's at the frame's tick)."""
+        readout = self.profile.readout_ms / 1000
+        delay = (self.height - 1 - np.arange(self.height)) / (self.height - 1) * readout / self.settings.exposure_s
+        (width, height), (map_x, map_y) = self.render_size, self.maps
+        shift_x, shift_y = (m * scale * delay[:, np.newaxis] for m, scale in zip(motion_px, self.render_scale))
+        return Warp.from_maps(np.clip(map_x + shift_x, 0, width - 1), np.clip(map_y + shift_y, 0, height - 1), width)
+
+    def expose(self, render: np.ndarray, motion_px: tuple[float, float], seed: int, index: int,
                light: float = 1.0) -> np.ndarray:
-        """Y, Cr, Cb (h, w, 3) uint8 of an (h, w, 3) uint8 RGB picture through the lens, with
-        ``motion_px`` the image motion and ``light`` the scene's light (relative to its mean)
+        """Y, Cr, Cb (h, w, 3) uint8 of the (h', w', 3) uint8 pinhole render, with ``motion_px``
+        the image motion (image pixels) and ``light`` the scene's light (relative to its mean)
         during the exposure."""
-        if self.softness_px >= 0.05:
-            rgb = cv2.GaussianBlur(rgb, (3, 3), self.softness_px, borderType=cv2.BORDER_REPLICATE)
-        if self.profile.motion_blur and math.hypot(*motion_px) >= MIN_BLUR_PX:
-            rgb = motion_blur(rgb, motion_px)
-        if self._noise is None:
-            ycrcb = self._intercept.copy()
+        warp = self._rolling_warp(motion_px) if self.profile.readout_ms > 0 and any(motion_px) else self.warp
+        outer, centre = self._taps
+        motion = (motion_px[0] * self.render_scale[0], motion_px[1] * self.render_scale[1])
+        if self.profile.motion_blur and math.hypot(*motion) >= MIN_BLUR_PX:
+            taps = motion_taps(motion)
+            dx, dy = (np.array(axis, np.int64) for axis in list(zip(*taps))[:2])
+            weights = np.array([round(256 * weight) for _, _, weight in taps])
+            weights[np.argmax(weights)] += 256 - weights.sum()  # the sum stays exactly 256
+            reach = int(np.abs(dx).max())
+            padded = -(-render.shape[1] // 32) * 32  # whole vectors: no scalar tail
+            source = np.stack(cv2.split(cv2.copyMakeBorder(render, 0, 0, reach, reach + padded - render.shape[1],
+                                                           cv2.BORDER_REPLICATE)))
+            planes = np.empty((3, render.shape[0], padded), np.uint16)
+            self._kernels.smear(source, reach, dx, dy, weights.astype(np.uint16), planes)
+            outer, centre = outer / np.float32(256), centre / np.float32(256)
         else:
-            start = noise_offset(seed, index, self._choices)
-            noise = self._noise[start:start + self.width * self.height].reshape(self.height, self.width, 3)
-            ycrcb = self._intercept + noise
-        # Vignetting and robot: curve x signal^2 + slope x signal + intercept (+ noise), the signal
-        # being the response table's Y, Cr, Cb.
-        signal = cv2.transform(cv2.LUT(rgb, self._response_table(light)), self._matrix)
-        cv2.accumulateProduct(signal, self._slope, ycrcb)
-        if self._curve is not None:
-            cv2.accumulateProduct(cv2.multiply(signal, signal), self._curve, ycrcb)
-        # Y's floor, then bytes rounded to nearest and saturated at 255.
-        return cv2.convertScaleAbs(cv2.max(ycrcb, self._low, dst=ycrcb))
+            planes = np.stack(cv2.split(render))
+        rows = np.empty((3, self.height, self.render_size[0] + 4), np.float32)
+        self._kernels.warp_rows(planes, warp.rows_base, warp.rows_frac, *warp.rows_runs, outer, centre, rows)
+        self._kernels.warp_columns(rows, warp.columns_base, warp.columns_frac, *warp.columns_runs, *self._taps, self._codes)
+        table = self._response_table(light)
+        red, green, blue = (cv2.LUT(self._codes[c], table[c]).ravel() for c in range(3))
+        start = noise_offset(seed, index, self._choices)
+        self._kernels.colour(red, green, blue, self._matrix, self._curve, self._slope, self._intercept, self._noise, start,
+                       self._black, self._ycrcb)
+        return cv2.merge([plane.reshape(self.height, self.width) for plane in self._ycrcb])
