@@ -139,11 +139,6 @@ class Lens:
         return ((ideal[:, 0] * render.focal + render.centre[0]).reshape(self.height, self.width),
                 (ideal[:, 1] * render.focal + render.centre[1]).reshape(self.height, self.width))
 
-    def remap_tables(self, render: "PinholeRender") -> tuple[np.ndarray, np.ndarray]:
-        """OpenCV fixed-point maps from this lens's pixels into the pinhole ``render``."""
-        map_x, map_y = self.render_maps(render)
-        return cv2.convertMaps(map_x.astype(np.float32), map_y.astype(np.float32), cv2.CV_16SC2)
-
 
 @dataclass(frozen=True)
 class PinholeRender:
