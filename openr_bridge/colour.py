@@ -9,8 +9,8 @@ Cb' = Cb - 128, in double precision,
 each clamped to 0..255 and truncated to a byte. The C expression is compiled with numba,
 operation by operation in float64 as the C source has it (no fused multiply-adds: numba
 compiles without fast-math), into a loop that LLVM vectorises: ~20 us a 208x160 frame,
-against ~25-55 us for a gather from a 64 MiB table of all 2^24 answers, whose misses on noisy
-frames also evicted the physics' data from the caches. The test suite checks every input
+against ~25-55 us (hot or cold) for a gather from a 64 MiB table of all 2^24 answers. The
+test suite checks every input
 against the compiled C.
 
 ``ycrcb_to_rgb_bt601`` is the JFIF / BT.601 full-range decoder that Tekkotsu and most

@@ -8,7 +8,7 @@ neutral settings keeps the ``ideal`` picture's tones). Then, per frame:
    average along the image motion during the exposure that the camera's angular velocity at
    the frame's tick gives (``omega x exposure x focal length`` px, section 7), taken before
    the lens as light moves across the scene's pinhole image; then the lens (``lens.py``'s
-   map, as two 1-D passes, ``kernels.Warp``) with a slight softness folded into each pass
+   map, as two 1-D passes, ``lens.Warp``) with a slight softness folded into each pass
    (OpenCV's 3-tap Gaussian, sigma ``softness_px``, fitted to the edges of real frames);
 2. exposure and colour, one per-channel table from rendered byte to sensor RGB: linear
    light x scene light colour (a Planckian of the scene's ``light_temperature_K``) x white
