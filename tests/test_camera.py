@@ -506,13 +506,12 @@ def test_dump_shows_the_frames_run_shows_and_resumes_byte_identically_without_mp
 
 @pytest.mark.parametrize("motion", [(0.3, 0.0), (14.0, -9.0), (-5.0, 0.0), (0.0, 0.6), (2.5, 7.2), (-13.4, 2.2)])
 def test_motion_taps_average_along_the_motion(motion):
-    from aibo_sim.camera.sensor import motion_taps
+    from aibo_sim.camera.kernels import motion_taps
 
-    taps = motion_taps(motion)
-    weights = np.array([w for _, _, w in taps])
-    centroid = np.array([[dx, dy] for dx, dy, _ in taps]).T @ weights
+    dx, dy, weights = motion_taps(*motion)
+    centroid = np.array([dx, dy]) @ weights
     longer = max(abs(motion[0]), abs(motion[1]))
-    assert weights.sum() == pytest.approx(1) and weights.min() > 0 and len(taps) <= math.ceil(longer) + 1
+    assert weights.sum() == pytest.approx(1) and weights.min() > 0 and len(weights) <= math.ceil(longer) + 1
     assert centroid == pytest.approx(np.array(motion) / 2, abs=0.5)  # the other axis is rounded to pixels
     major = int(abs(motion[1]) > abs(motion[0]))
     assert centroid[major] == pytest.approx(motion[major] / 2, abs=1e-9)
@@ -534,18 +533,26 @@ def test_render_side_by_side_shows_both_profiles_and_a_real_frame(tmp_path):
 
 
 def _warp(image: np.ndarray, maps: tuple[np.ndarray, np.ndarray], outer: float = 0.0, centre: float = 1.0) -> np.ndarray:
-    """``image`` (h, w, 3) uint8 through ``kernels``' two passes on ``maps``, as bytes (h', w', 3)."""
+    """``image`` (h, w, 3) uint8 through ``kernels``' two passes on ``maps``, as bytes (h', w', 3):
+    ``develop`` with a colour stage that changes nothing (identity response and matrix, no
+    vignetting, no noise, no floor)."""
     from aibo_sim.camera import kernels
     from aibo_sim.camera.lens import Warp
 
     warp = Warp.from_maps(*maps, image.shape[1])
-    planes = np.stack(cv2.split(image))
-    rows = np.empty((3, maps[0].shape[0], image.shape[1] + 4), np.float32)
-    out = np.empty((3, *maps[0].shape), np.uint8)
-    kernels.warp_rows(planes, warp.rows_base, warp.rows_frac, *warp.rows_runs, np.float32(outer), np.float32(centre), rows)
-    kernels.warp_columns(rows, warp.columns_base, warp.columns_frac, *warp.columns_runs, np.float32(outer),
-                         np.float32(centre), out)
-    return cv2.merge(list(out))
+    height, width = maps[0].shape
+    planes = np.empty((3, *image.shape[:2]), np.uint8)
+    kernels.split(image, 0, planes)
+    identity = np.float32([[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0]])
+    response = np.float32([[1, 0]] * 3)
+    curve, slope, intercept = (np.full((3, 1, width), value, np.float32) for value in (0, 1, 0))
+    out = np.empty((height, width, 3), np.uint8)
+    taps = np.float32(outer), np.float32(centre)
+    kernels.develop(planes, warp.rows_base, warp.rows_frac, *warp.rows_runs, warp.columns_base, warp.columns_frac,
+                    *warp.columns_runs, np.float32(1), *taps, response, identity, curve, slope, intercept,
+                    np.zeros(height, np.int64), np.zeros((3, height * width), np.int8), np.zeros(3, np.float32), 0,
+                    np.float32(0), np.empty((3, image.shape[1] + 4), np.float32), np.empty((3, width), np.float32), out)
+    return out
 
 
 def test_two_pass_warp_is_the_lens_remap():
@@ -573,13 +580,15 @@ def test_two_pass_warp_refuses_a_map_that_folds_back():
         Warp.from_maps(map_x, map_y, 8)
 
 
-def test_smear_sums_shifted_rows_with_edges_repeated():
+def test_split_pads_the_edges_and_smear_sums_shifted_rows():
     from aibo_sim.camera import kernels
 
     image = np.random.default_rng(3).integers(0, 256, (3, 12, 20), dtype=np.uint8)
-    dx, dy, weights = np.array([-2, 0, 3]), np.array([1, 0, -1]), np.array([64, 128, 64], np.uint16)
-    pad = 3
-    padded = np.pad(image, ((0, 0), (0, 0), (pad, pad)), mode="edge")
+    dx, dy, weights = np.array([-2, 0, 3, 25]), np.array([1, 0, -1, 0]), np.array([64, 96, 64, 32], np.uint16)
+    pad = 26
+    padded = np.empty((3, 12, 20 + 2 * pad), np.uint8)
+    kernels.split(image.transpose(1, 2, 0).copy(), pad, padded)
+    assert np.array_equal(padded, np.pad(image, ((0, 0), (0, 0), (pad, pad)), mode="edge"))
     out = np.empty(image.shape, np.uint16)
     kernels.smear(padded, pad, dx, dy, weights, out)
     expected = np.zeros(image.shape, np.int64)

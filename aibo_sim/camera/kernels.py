@@ -1,14 +1,18 @@
 """The ``ers7`` sensor's per-frame passes over the picture, compiled with numba.
 
-A frame goes through four passes (``Sensor.expose`` calls them in this order), each a loop
-over contiguous row slices that LLVM vectorises, on planes (channel, row, column):
+A frame goes through these passes (``Sensor.expose`` calls them in this order), each a loop
+over contiguous row slices that LLVM vectorises (interleaved channels are indexed 3 x + c,
+which LLVM reads and writes with shuffles):
 
-1. ``smear``: motion blur on the pinhole render, the sum of shifted copies of each row
-   (integer taps, weights in 1/256, uint16 sums: twice the SIMD lanes of float32);
-2. ``warp_rows`` and ``warp_columns``: the lens remap as two 1-D passes (``lens.Warp``),
-   each a linear interpolation convolved with the 3-tap Gaussian of the lens's softness;
-3. the response table (OpenCV's ``LUT``, a gather numba's compiler does not vectorise);
-4. ``colour``: the YCrCb matrix, vignetting and robot colour, noise, Y's floor, rounding.
+1. ``split``: the render's interleaved R, G, B into planes, padded for the smear;
+2. ``smear``: motion blur on the pinhole render, the sum of shifted copies of each row
+   (``motion_taps``: integer taps, weights in 1/256, uint16 sums: twice the SIMD lanes of
+   float32);
+3. ``develop``, row by row: the lens remap as two 1-D passes (``lens.Warp``), each a linear
+   interpolation convolved with the 3-tap Gaussian of the lens's softness, into a row
+   buffer; then the response (a gain and an offset per channel, clipped), the YCrCb matrix,
+   vignetting and robot colour, noise, Y's floor and rounding, into the interleaved Y, Cr,
+   Cb picture. One pass over the frame: the passes' intermediate rows stay in the cache.
 
 Numbers stay in IEEE float32 without fast-math reassociation: the same input gives the same
 bytes on a machine, whatever the vector width. Compiled on first use and cached beside the
@@ -18,10 +22,54 @@ not load numba.
 
 from __future__ import annotations
 
+import math
+
 import numba
 import numpy as np
 
 _compiled = numba.njit(cache=True, nogil=True, boundscheck=False)
+
+
+@_compiled
+def motion_taps(du, dv):
+    """(dx, dy, weights) of the integer shifts whose weighted sum averages a picture along the
+    image motion (du, dv) px over the exposure: what each pixel saw during the exposure lies at
+    +t (du, dv), t in 0..1. One tap per pixel along the longer axis (each unit segment's length
+    shared by the pixels at its ends, so that its centroid stays put), the other axis rounded
+    to the nearest pixel; weights sum to 1, taps of weight 0 left out."""
+    horizontal = abs(du) >= abs(dv)
+    along, across = (du, dv) if horizontal else (dv, du)
+    length = abs(along)
+    slope = across / along if along != 0 else 0.0
+    count = int(math.ceil(length)) + 1
+    weights = np.zeros(count)
+    weights[0] = 1.0 if length == 0 else 0.0
+    for k in range(count - 1):
+        covered = min(k + 1.0, length) - k  # the line's length in the unit segment [k, k + 1]
+        weights[k] += covered * (1 - covered / 2)
+        weights[k + 1] += covered * covered / 2
+    kept = np.flatnonzero(weights > 0)
+    major = np.copysign(kept.astype(np.float64), along).astype(np.int64)
+    minor = np.round(major * slope).astype(np.int64)
+    if horizontal:
+        return major, minor, weights[kept] / weights.sum()
+    return minor, major, weights[kept] / weights.sum()
+
+
+@_compiled
+def split(image, pad, out):
+    """``out[c, y, pad + x]`` = ``image[y, x, c]``: the picture's interleaved channels as planes,
+    the ``pad`` columns each side repeating the edge."""
+    height, width, _ = image.shape
+    flat = image.reshape(height, 3 * width)
+    for y in range(height):
+        row = flat[y]
+        red, green, blue = out[0, y, pad:pad + width], out[1, y, pad:pad + width], out[2, y, pad:pad + width]
+        for x in range(width):
+            red[x], green[x], blue[x] = row[3 * x], row[3 * x + 1], row[3 * x + 2]
+        for c in range(3):
+            out[c, y, :pad] = row[c]
+            out[c, y, pad + width:] = row[3 * width - 3 + c]
 
 
 @_compiled
@@ -43,70 +91,81 @@ def smear(planes, pad, dx, dy, weights, out):
 
 
 @_compiled
-def warp_rows(planes, base, frac, pointers, runs, outer, centre, out):
-    """Pass 1: ``out[c, v, 2 + x]`` = the column x of ``planes`` at row ``base[v, x] + frac[v, x]``,
-    interpolated linearly and convolved with the taps (``outer``, ``centre``, ``outer``) along the
-    column (rows clamped at the edges); two columns each side repeat the edge."""
-    channels, height, width = planes.shape[0], planes.shape[1], out.shape[2] - 4
-    for v in range(base.shape[0]):
-        for k in range(pointers[v], pointers[v + 1]):
-            start, end = runs[k, 0], runs[k, 1]
-            first = base[v, start]
-            r0, r1 = min(max(first - 1, 0), height - 1), min(max(first, 0), height - 1)
-            r2, r3 = min(max(first + 1, 0), height - 1), min(max(first + 2, 0), height - 1)
-            f = frac[v, start:end]
-            for c in range(channels):
-                a0, a1 = planes[c, r0, start:end], planes[c, r1, start:end]
-                a2, a3 = planes[c, r2, start:end], planes[c, r3, start:end]
-                o = out[c, v, start + 2:end + 2]
-                for i in range(end - start):
-                    p = f[i]
-                    q = np.float32(1.0) - p
-                    o[i] = (outer * (q * np.float32(a0[i]) + p * np.float32(a3[i]))
-                            + (centre * q + outer * p) * np.float32(a1[i]) + (outer * q + centre * p) * np.float32(a2[i]))
-        for c in range(channels):
-            out[c, v, 0] = out[c, v, 1] = out[c, v, 2]
-            out[c, v, width + 2] = out[c, v, width + 3] = out[c, v, width + 1]
+def develop(planes, rows_base, rows_frac, rows_pointers, rows_runs, columns_base, columns_frac, columns_pointers,
+            columns_runs, level, outer, centre, response, matrix, curve, slope, intercept, coefficient_row, noise, noise_scale,
+            start, black, across, line, out):
+    """The lens's two passes and the colour, row by row of the picture ``out`` (h, w, 3):
 
+    1. ``across[c, 2 + x]`` = the column x of ``planes`` (3, h', w') at row ``rows_base[v, x] +
+       rows_frac[v, x]``, interpolated linearly and convolved with the taps (``outer``,
+       ``centre``, ``outer``) along the column (rows clamped at the edges), times ``level``
+       (what a unit of ``planes`` is worth: 1 for bytes, 1/256 for ``smear``'s sums), two
+       columns each side repeating the edge;
+    2. ``line[c, u]`` = ``across`` at column ``columns_base[v, u] + columns_frac[v, u]``,
+       interpolated and convolved the same way;
+    3. per pixel ``min(max(response[c, 0] line + response[c, 1], 0), 255)`` (R, G, B),
+       ``matrix`` (3, 4) to Y, Cr, Cb, ``curve v^2 + slope v + intercept`` (vignetting and
+       robot colour, planes (3, rows, w), image row v at ``coefficient_row[v]``), plus
+       ``noise[c, start + v w + u] * noise_scale[c]``; Y floored at ``black``, all clipped to
+       0..255 and rounded half up.
 
-@_compiled
-def warp_columns(rows, base, frac, pointers, runs, outer, centre, out):
-    """Pass 2: ``out[c, v, u]`` = row v of pass 1's output at column ``base[v, u] + frac[v, u]``,
-    interpolated and convolved as in pass 1, rounded to bytes."""
-    for v in range(base.shape[0]):
-        for k in range(pointers[v], pointers[v + 1]):
-            start, end = runs[k, 0], runs[k, 1]
-            shift = base[v, start] - start + 1  # tap -1 of column ``start``, in pass 1's padded columns
-            f = frac[v, start:end]
-            for c in range(out.shape[0]):
-                row = rows[c, v]
-                a0, a1 = row[start + shift:end + shift], row[start + shift + 1:end + shift + 1]
-                a2, a3 = row[start + shift + 2:end + shift + 2], row[start + shift + 3:end + shift + 3]
-                o = out[c, v, start:end]
-                for i in range(end - start):
-                    p = f[i]
-                    q = np.float32(1.0) - p
-                    o[i] = np.uint8(outer * (q * a0[i] + p * a3[i]) + (centre * q + outer * p) * a1[i]
-                                    + (outer * q + centre * p) * a2[i] + np.float32(0.5))
-
-
-@_compiled
-def colour(red, green, blue, matrix, curve, slope, intercept, noise, start, black, out):
-    """Y, Cr, Cb planes (uint8, ``out``) of the sensor's R, G, B (float32 planes, flattened):
-    ``matrix`` (3, 4) to Y, Cr, Cb, then per pixel and channel ``curve v^2 + slope v +
-    intercept`` (vignetting and robot colour, flattened planes), plus ``noise[c, start + i]``;
-    Y floored at ``black``, all clipped to 0..255 and rounded half up."""
-    n = red.shape[0]
+    ``*_pointers`` and ``*_runs`` split each row into runs of one source offset (``lens.Warp``)."""
+    height, width = columns_base.shape
+    source_width, last = across.shape[1] - 4, planes.shape[1] - 1
+    flat = out.reshape(height, 3 * width)  # indexed 3 u + c: LLVM vectorises the interleaved stores
     m = matrix
-    noise_y, noise_cr, noise_cb = noise[0, start:start + n], noise[1, start:start + n], noise[2, start:start + n]
-    for i in range(n):
-        r, g, b = red[i], green[i], blue[i]
-        y = m[0, 0] * r + m[0, 1] * g + m[0, 2] * b + m[0, 3]
-        cr = m[1, 0] * r + m[1, 1] * g + m[1, 2] * b + m[1, 3]
-        cb = m[2, 0] * r + m[2, 1] * g + m[2, 2] * b + m[2, 3]
-        y = (curve[0, i] * y + slope[0, i]) * y + intercept[0, i] + noise_y[i]
-        cr = (curve[1, i] * cr + slope[1, i]) * cr + intercept[1, i] + noise_cr[i]
-        cb = (curve[2, i] * cb + slope[2, i]) * cb + intercept[2, i] + noise_cb[i]
-        out[0, i] = np.uint8(min(max(y, black), np.float32(255.0)) + np.float32(0.5))
-        out[1, i] = np.uint8(min(max(cr, np.float32(0.0)), np.float32(255.0)) + np.float32(0.5))
-        out[2, i] = np.uint8(min(max(cb, np.float32(0.0)), np.float32(255.0)) + np.float32(0.5))
+    outer_level, centre_level = outer * level, centre * level
+    for v in range(height):
+        for k in range(rows_pointers[v], rows_pointers[v + 1]):
+            first, end = rows_runs[k, 0], rows_runs[k, 1]
+            top = rows_base[v, first]
+            r0, r1 = min(max(top - 1, 0), last), min(max(top, 0), last)
+            r2, r3 = min(max(top + 1, 0), last), min(max(top + 2, 0), last)
+            f = rows_frac[v, first:end]
+            for c in range(3):
+                a0, a1 = planes[c, r0, first:end], planes[c, r1, first:end]
+                a2, a3 = planes[c, r2, first:end], planes[c, r3, first:end]
+                o = across[c, first + 2:end + 2]
+                for i in range(end - first):
+                    p = f[i]
+                    q = np.float32(1.0) - p
+                    o[i] = (outer_level * (q * np.float32(a0[i]) + p * np.float32(a3[i]))
+                            + (centre_level * q + outer_level * p) * np.float32(a1[i])
+                            + (outer_level * q + centre_level * p) * np.float32(a2[i]))
+        for c in range(3):
+            across[c, 0] = across[c, 1] = across[c, 2]
+            across[c, source_width + 2] = across[c, source_width + 3] = across[c, source_width + 1]
+        for k in range(columns_pointers[v], columns_pointers[v + 1]):
+            first, end = columns_runs[k, 0], columns_runs[k, 1]
+            shift = columns_base[v, first] - first + 1  # tap -1 of column ``first``, in ``across``'s columns
+            f = columns_frac[v, first:end]
+            for c in range(3):
+                row = across[c]
+                a0, a1 = row[first + shift:end + shift], row[first + shift + 1:end + shift + 1]
+                a2, a3 = row[first + shift + 2:end + shift + 2], row[first + shift + 3:end + shift + 3]
+                o = line[c, first:end]
+                for i in range(end - first):
+                    p = f[i]
+                    q = np.float32(1.0) - p
+                    o[i] = (outer * (q * a0[i] + p * a3[i]) + (centre * q + outer * p) * a1[i]
+                            + (outer * q + centre * p) * a2[i])
+        at = start + v * width
+        noise_y, noise_cr, noise_cb = noise[0, at:at + width], noise[1, at:at + width], noise[2, at:at + width]
+        row = coefficient_row[v]
+        curve_y, curve_cr, curve_cb = curve[0, row], curve[1, row], curve[2, row]
+        slope_y, slope_cr, slope_cb = slope[0, row], slope[1, row], slope[2, row]
+        intercept_y, intercept_cr, intercept_cb = intercept[0, row], intercept[1, row], intercept[2, row]
+        red, green, blue, picture = line[0], line[1], line[2], flat[v]
+        for u in range(width):
+            r = min(max(response[0, 0] * red[u] + response[0, 1], np.float32(0.0)), np.float32(255.0))
+            g = min(max(response[1, 0] * green[u] + response[1, 1], np.float32(0.0)), np.float32(255.0))
+            b = min(max(response[2, 0] * blue[u] + response[2, 1], np.float32(0.0)), np.float32(255.0))
+            y = m[0, 0] * r + m[0, 1] * g + m[0, 2] * b + m[0, 3]
+            cr = m[1, 0] * r + m[1, 1] * g + m[1, 2] * b + m[1, 3]
+            cb = m[2, 0] * r + m[2, 1] * g + m[2, 2] * b + m[2, 3]
+            y = (curve_y[u] * y + slope_y[u]) * y + intercept_y[u] + noise_scale[0] * np.float32(noise_y[u])
+            cr = (curve_cr[u] * cr + slope_cr[u]) * cr + intercept_cr[u] + noise_scale[1] * np.float32(noise_cr[u])
+            cb = (curve_cb[u] * cb + slope_cb[u]) * cb + intercept_cb[u] + noise_scale[2] * np.float32(noise_cb[u])
+            picture[3 * u] = np.uint8(min(max(y, black), np.float32(255.0)) + np.float32(0.5))
+            picture[3 * u + 1] = np.uint8(min(max(cr, np.float32(0.0)), np.float32(255.0)) + np.float32(0.5))
+            picture[3 * u + 2] = np.uint8(min(max(cb, np.float32(0.0)), np.float32(255.0)) + np.float32(0.5))

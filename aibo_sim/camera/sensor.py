@@ -1,8 +1,9 @@
 """The ERS-7's CMOS sensor as a chain of small stages, in the order light goes through it.
 
 Numbers and sources: ``specs/ers7-camera.md`` (section numbers below refer to it). The
-rendered frame is read as sRGB-encoded scene radiance under a neutral light (so ``ers7`` at
-neutral settings keeps the ``ideal`` picture's tones). Then, per frame:
+rendered frame is read as scene radiance under a neutral light, encoded with the sensor's
+gamma (stage 2; so ``ers7`` at neutral settings keeps the ``ideal`` picture's tones).
+Then, per frame:
 
 1. time and optics, on the wider pinhole render ``HeadCamera`` draws: motion blur, the
    average along the image motion during the exposure that the camera's angular velocity at
@@ -10,11 +11,15 @@ neutral settings keeps the ``ideal`` picture's tones). Then, per frame:
    the lens as light moves across the scene's pinhole image; then the lens (``lens.py``'s
    map, as two 1-D passes, ``lens.Warp``) with a slight softness folded into each pass
    (OpenCV's 3-tap Gaussian, sigma ``softness_px``, fitted to the edges of real frames);
-2. exposure and colour, one per-channel table from rendered byte to sensor RGB: linear
-   light x scene light colour (a Planckian of the scene's ``light_temperature_K``) x white
-   balance gains (von Kries against the preset's Planckian, section 6) x exposure (each gain
-   step and each shutter step doubles the signal, section 1) x ``sensitivity``, then the
-   on-chip gamma (sRGB's curve) with clipping at full scale;
+2. exposure and colour: per channel, linear light x scene light colour (a Planckian of the
+   scene's ``light_temperature_K``) x white balance gains (von Kries against the preset's
+   Planckian, section 6) x exposure (each gain step and each shutter step doubles the
+   signal, section 1) x ``sensitivity``, then the on-chip gamma with clipping at 0 and full
+   scale. The gamma (UNCONFIRMED) is sRGB's power segment, 1.055 L^(1/2.4) - 0.055, over the
+   whole range, and the render's codes are read with its inverse: a factor k on the light is
+   then a gain k^(1/2.4) and an offset on the codes, exact for every code (sRGB's linear toe,
+   below code 11, would make dark codes a table lookup; at the default settings k is 1 and
+   both agree);
 3. YCrCb: Y = 0.299 R + 0.587 G + 0.114 B spanning ``black_level`` .. ``white_level``
    (section 4: Y never below 16-19, white 250-254), Cr and Cb = 128 + ``chroma_gain`` x
    (R - Y, B - Y). The gain is UNCONFIRMED; chosen: BT.601's (0.713, 0.564), what a CMOS
@@ -27,8 +32,9 @@ neutral settings keeps the ``ideal`` picture's tones). Then, per frame:
    every entry), linear in r between the radii;
 5. per-robot colour: ``v' = pivot + gain (v - pivot) + offset`` per channel (section 4);
 6. noise: Gaussian, sigma per channel at MID gain times sqrt(gain factor) (section 4), from
-   a fixed pool of normal numbers at an offset drawn from (seed, frame index): the same
-   frame of the same seed gets the same noise whoever asks and in whatever order;
+   a fixed pool of normal numbers (bytes, in steps of sigma / ``NOISE_STEPS``) at an offset
+   drawn from (seed, frame index): the same frame of the same seed gets the same noise
+   whoever asks and in whatever order;
 7. rounding and clipping to bytes (Y floor ``black_level``).
 
 UNCONFIRMED in the spec, chosen here and configurable: rolling shutter (``readout_ms``,
@@ -71,6 +77,8 @@ ROBOT_PIVOT = (0.0, 128.0, 128.0)
 ROBOT_GAIN_SIGMA = (0.03, 0.15, 0.10)
 ROBOT_OFFSET_SIGMA = (1.5, 1.5, 1.5)
 NOISE_POOL_FRAMES = 8
+NOISE_STEPS = 32  # the noise pool's steps per sigma: bytes reach 127 / 32, ~4 sigma
+GAMMA, GAMMA_OFFSET = 2.4, 0.055  # stage 2's curve: sRGB's power segment
 MIN_BLUR_PX = 0.25  # image motion below this is left sharp
 
 
@@ -238,15 +246,6 @@ def light_gains(scene_kelvin: float, white_balance: str) -> np.ndarray:
     return light / preset
 
 
-def srgb_to_linear(v: np.ndarray) -> np.ndarray:
-    return np.where(v <= 0.04045, v / 12.92, ((v + 0.055) / 1.055) ** 2.4)
-
-
-def linear_to_srgb(v: np.ndarray) -> np.ndarray:
-    v = np.clip(v, 0.0, 1.0)
-    return np.where(v <= 0.0031308, 12.92 * v, 1.055 * v ** (1 / 2.4) - 0.055)
-
-
 # ---------------------------------------------------------------- vignetting
 
 
@@ -286,41 +285,15 @@ def vignetting_maps(width: int, height: int) -> np.ndarray:
     return maps
 
 
-# ---------------------------------------------------------------- motion
-
-
-def motion_taps(motion_px: tuple[float, float]) -> list[tuple[int, int, float]]:
-    """(dx, dy, weight) of the integer shifts whose weighted sum averages a picture along the
-    image motion over the exposure, ``motion_px`` = (du, dv): what each pixel saw during the
-    exposure lies at +t (du, dv), t in 0..1. One tap per pixel along the longer axis (each unit
-    segment's length shared by the pixels at its ends), the other axis rounded to the nearest
-    pixel: a line of L px costs about L + 2 taps."""
-    du, dv = motion_px
-    along, across = (du, dv) if abs(du) >= abs(dv) else (dv, du)
-    length, slope = abs(along), (across / along if along else 0.0)
-    weights = [0.0] * (math.ceil(length) + 1)  # a few dozen at most: plain Python is cheapest
-    for k in range(len(weights) - 1):
-        covered = min(k + 1.0, length) - k  # the line's length in the unit segment [k, k + 1]
-        weights[k] += covered * (1 - covered / 2)  # shared so that the segment's centroid stays put
-        weights[k + 1] += covered * covered / 2
-    if length == 0:
-        weights = [1.0]
-    total = sum(weights)
-    taps = []
-    for k, weight in enumerate(weights):
-        major = int(math.copysign(k, along))
-        minor = round(major * slope)
-        taps.append((major, minor, weight / total) if abs(du) >= abs(dv) else (minor, major, weight / total))
-    return [tap for tap in taps if tap[2] > 0]
-
-
 # ---------------------------------------------------------------- the sensor
 
 
 @cache
-def _unit_noise(length: int) -> np.ndarray:
-    """A fixed pool of standard normal float32 numbers (the same on every run)."""
-    return np.random.default_rng(0x45525337).standard_normal(length, dtype=np.float32)
+def _noise_pool(length: int) -> np.ndarray:
+    """A fixed pool of standard normal numbers in steps of 1 / ``NOISE_STEPS``, as int8 (the
+    same on every run; beyond 127 / 32 sigma, clipped: about 1 in 14000)."""
+    normal = np.random.default_rng(0x45525337).standard_normal(length, dtype=np.float32)
+    return np.clip(np.round(normal * NOISE_STEPS), -127, 127).astype(np.int8)
 
 
 def noise_offset(seed: int, index: int, choices: int) -> int:
@@ -352,18 +325,18 @@ class Sensor:
         self._taps = np.float32(outer), np.float32(centre)
         self._vignetting = vignetting_maps(self.width, self.height) if profile.vignetting else None
         pixels = self.width * self.height
-        self._pool = _unit_noise(NOISE_POOL_FRAMES * pixels * 3).reshape(3, -1)
+        self._pool = _noise_pool(NOISE_POOL_FRAMES * pixels * 3).reshape(3, -1)
         self._choices = (NOISE_POOL_FRAMES - 1) * pixels
-        self._codes = np.empty((3, self.height, self.width), np.uint8)
-        self._ycrcb = np.empty((3, self.height * self.width), np.uint8)
+        self._across, self._line = np.empty((3, render_size[0] + 4), np.float32), np.empty((3, self.width), np.float32)
+        self._buffers: dict[tuple, np.ndarray] = {}
         self.configure(settings, profile.robot)
 
     def configure(self, settings: CameraSettings, robot: RobotColour) -> None:
-        """Take new settings or a new robot: rebuild the colour table, maps and noise scale."""
+        """Take new settings or a new robot: the light's gains, colour maps and noise scale."""
         self.settings, self.robot = settings, robot
         p = self.profile
         self._gains = light_gains(self.light_temperature_k, settings.white_balance) * settings.exposure_factor * p.sensitivity
-        self._tables: dict[float, np.ndarray] = {}
+        self._responses: dict[float, np.ndarray] = {}
         # Sony's forward model with the black level on Y; rows Y, Cr, Cb; columns R, G, B, 1.
         luma = np.array([0.299, 0.587, 0.114])
         y_scale = (p.white_level - p.black_level) / 255
@@ -372,27 +345,44 @@ class Sensor:
                                  [*(p.chroma_gain[1] * (np.array([0, 0, 1.0]) - luma)), 128.0]], np.float32)
         curve, slope, intercept = self._vignetting if self._vignetting is not None else (0.0, 1.0, 0.0)
         gain, pivot = np.asarray(robot.gain), np.asarray(ROBOT_PIVOT)
-
-        def planes(values):  # (h, w, 3) or per channel -> float32 (3, h * w)
-            values = np.broadcast_to(values, (self.height, self.width, 3))
-            return np.ascontiguousarray(values.reshape(-1, 3).T, np.float32)
-
-        # Robot after vignetting: gain (c v^2 + a v + b - pivot) + pivot + offset.
-        self._curve, self._slope = planes(gain * curve), planes(gain * slope)
-        self._intercept = planes(gain * (intercept - pivot) + pivot + np.asarray(robot.offset))
+        # Robot after vignetting: gain (c v^2 + a v + b - pivot) + pivot + offset, as planes (3, h, w).
+        coefficients = [np.broadcast_to(values, (self.height, self.width, 3)).transpose(2, 0, 1)
+                        for values in (gain * curve, gain * slope, gain * (intercept - pivot) + pivot + np.asarray(robot.offset))]
+        self._coefficients = self._distinct_rows(np.stack(coefficients).astype(np.float32))
         sigma = np.asarray(p.noise_sigma) * math.sqrt(2.0 ** GAIN_STEPS[settings.gain])
-        self._noise = self._pool * sigma.astype(np.float32)[:, np.newaxis]
+        self._noise_scale = (sigma / NOISE_STEPS).astype(np.float32)
         self._black = np.float32(p.black_level)
 
-    def _response_table(self, light: float) -> np.ndarray:
-        """Stage 2's tables (3, 1, 256) float32 for ``light`` x the scene's mean light (a
-        flickering light takes a few values, frame after frame: each table is kept)."""
-        table = self._tables.get(light)
-        if table is None:
-            levels = srgb_to_linear(np.arange(256) / 255.0)
-            table = (255 * linear_to_srgb(levels[:, np.newaxis] * self._gains * light)).astype(np.float32)
-            table = self._tables[light] = np.ascontiguousarray(table.T.reshape(3, 1, 256))
-        return table
+    def _distinct_rows(self, coefficients: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """The colour planes (3 coefficients, 3 channels, h, w) as curve, slope and intercept
+        holding each distinct image row once, and the row each image row reads: the vignetting's
+        rings are centred on the middle row, so that the top half mirrors the bottom (half the
+        memory the colour pass streams through each frame)."""
+        by_row = coefficients.transpose(2, 0, 1, 3).reshape(self.height, -1)
+        _, first, inverse = np.unique(by_row, axis=0, return_index=True, return_inverse=True)
+        order = np.argsort(first)
+        rank = np.empty_like(order)
+        rank[order] = np.arange(order.size)
+        distinct = coefficients[:, :, first[order]]
+        return (*(np.ascontiguousarray(plane) for plane in distinct), rank[inverse.ravel()].astype(np.int64))
+
+    def _response(self, light: float) -> np.ndarray:
+        """Stage 2 as (3, 2) float32: each channel's gain and offset on the codes for ``light``
+        x the scene's mean light (a flickering light takes a few values, frame after frame:
+        each is kept)."""
+        response = self._responses.get(light)
+        if response is None:
+            gain = (self._gains * light) ** (1 / GAMMA)
+            response = self._responses[light] = np.stack([gain, 255 * GAMMA_OFFSET * (gain - 1)], axis=1).astype(np.float32)
+        return response
+
+    def _buffer(self, shape: tuple[int, ...], dtype: type) -> np.ndarray:
+        """A scratch array of this shape, kept from frame to frame (arrays of a few hundred KB are
+        mapped afresh by each allocation, and their pages faulted in)."""
+        buffer = self._buffers.get((shape, dtype))
+        if buffer is None:
+            buffer = self._buffers[(shape, dtype)] = np.empty(shape, dtype)
+        return buffer
 
     def _rolling_warp(self, motion_px: tuple[float, float]) -> Warp:
         """The warp with each row read where the image was when that row's exposure ended
@@ -408,29 +398,25 @@ class Sensor:
         """Y, Cr, Cb (h, w, 3) uint8 of the (h', w', 3) uint8 pinhole render, with ``motion_px``
         the image motion (image pixels) and ``light`` the scene's light (relative to its mean)
         during the exposure."""
+        kernels = self._kernels
         warp = self._rolling_warp(motion_px) if self.profile.readout_ms > 0 and any(motion_px) else self.warp
-        outer, centre = self._taps
-        motion = (motion_px[0] * self.render_scale[0], motion_px[1] * self.render_scale[1])
-        if self.profile.motion_blur and math.hypot(*motion) >= MIN_BLUR_PX:
-            taps = motion_taps(motion)
-            dx, dy = (np.array(axis, np.int64) for axis in list(zip(*taps))[:2])
-            weights = np.array([round(256 * weight) for _, _, weight in taps])
-            weights[np.argmax(weights)] += 256 - weights.sum()  # the sum stays exactly 256
+        height, width = render.shape[:2]
+        du, dv = motion_px[0] * self.render_scale[0], motion_px[1] * self.render_scale[1]
+        if self.profile.motion_blur and math.hypot(du, dv) >= MIN_BLUR_PX:
+            dx, dy, weights = kernels.motion_taps(du, dv)
+            fixed = np.round(256 * weights).astype(np.int64)
+            fixed[np.argmax(fixed)] += 256 - fixed.sum()  # the sum stays exactly 256
             reach = int(np.abs(dx).max())
-            padded = -(-render.shape[1] // 32) * 32  # whole vectors: no scalar tail
-            source = np.stack(cv2.split(cv2.copyMakeBorder(render, 0, 0, reach, reach + padded - render.shape[1],
-                                                           cv2.BORDER_REPLICATE)))
-            planes = np.empty((3, render.shape[0], padded), np.uint16)
-            self._kernels.smear(source, reach, dx, dy, weights.astype(np.uint16), planes)
-            outer, centre = outer / np.float32(256), centre / np.float32(256)
+            padded = self._buffer((3, height, width + 2 * reach), np.uint8)
+            kernels.split(render, reach, padded)
+            planes, level = self._buffer((3, height, width), np.uint16), np.float32(1 / 256)
+            kernels.smear(padded, reach, dx, dy, fixed.astype(np.uint16), planes)
         else:
-            planes = np.stack(cv2.split(render))
-        rows = np.empty((3, self.height, self.render_size[0] + 4), np.float32)
-        self._kernels.warp_rows(planes, warp.rows_base, warp.rows_frac, *warp.rows_runs, outer, centre, rows)
-        self._kernels.warp_columns(rows, warp.columns_base, warp.columns_frac, *warp.columns_runs, *self._taps, self._codes)
-        table = self._response_table(light)
-        red, green, blue = (cv2.LUT(self._codes[c], table[c]).ravel() for c in range(3))
-        start = noise_offset(seed, index, self._choices)
-        self._kernels.colour(red, green, blue, self._matrix, self._curve, self._slope, self._intercept, self._noise, start,
-                       self._black, self._ycrcb)
-        return cv2.merge([plane.reshape(self.height, self.width) for plane in self._ycrcb])
+            planes, level = self._buffer((3, height, width), np.uint8), np.float32(1)
+            kernels.split(render, 0, planes)
+        ycrcb = np.empty((self.height, self.width, 3), np.uint8)
+        kernels.develop(planes, warp.rows_base, warp.rows_frac, *warp.rows_runs, warp.columns_base, warp.columns_frac,
+                        *warp.columns_runs, level, *self._taps, self._response(light), self._matrix, *self._coefficients,
+                        self._pool, self._noise_scale, noise_offset(seed, index, self._choices), self._black,
+                        self._across, self._line, ycrcb)
+        return ycrcb
