@@ -623,3 +623,24 @@ def test_rolling_shutter_skews_rows_by_the_motion_during_the_readout():
     assert edge(moving, height - 1) == pytest.approx(17.5, abs=0.01)
     assert edge(moving, height // 2) == pytest.approx(17.5 - 4, abs=0.05)
     assert edge(moving, 0) == pytest.approx(17.5 - 8, abs=0.05)
+
+
+@pytest.mark.parametrize("gain, shutter, factor", [("high", "slow", 4.0), ("low", "fast", 0.25), ("mid", "mid", 1.0)])
+def test_exposure_scales_linear_light_through_the_gamma(gain, shutter, factor):
+    """Stage 2 on uniform renders: a code read as linear light through the gamma
+    ((v / 255 + 0.055) / 1.055)^2.4, scaled by the exposure, encoded back and clipped; then
+    Y = black + (white - black) / 255 x the code for a grey."""
+    from aibo_sim.camera.sensor import Sensor
+
+    profile = CameraProfile("flat", sensor=True, noise_sigma=(0.0, 0.0, 0.0), softness_px=0.0, vignetting=False,
+                            motion_blur=False)
+    height, width = 6, 8
+    maps = tuple(m.astype(np.float64) for m in np.meshgrid(np.arange(width) + 2.0, np.arange(height) + 2.0))
+    sensor = Sensor(profile, CameraSettings(white_balance="fl", gain=gain, shutter=shutter), 5000.0, maps,
+                    (width + 4, height + 4), (1.0, 1.0))
+    for code in (0, 5, 40, 100, 180, 250):
+        light = factor * ((code / 255 + 0.055) / 1.055) ** 2.4
+        expected = min(max(255 * (1.055 * light ** (1 / 2.4) - 0.055), 0), 255)
+        ycrcb = sensor.expose(np.full((height + 4, width + 4, 3), code, np.uint8), (0.0, 0.0), 0, 0)
+        y = profile.black_level + (profile.white_level - profile.black_level) / 255 * expected
+        assert np.all(ycrcb[..., 0] == math.floor(y + 0.5)) and np.all(ycrcb[..., 1:] == 128), (code, y)
