@@ -76,18 +76,25 @@ def split(image, pad, out):
 def smear(planes, pad, dx, dy, weights, out):
     """``out[c, y, x]`` = sum over taps t of ``weights[t] * planes[c, y + dy[t], pad + x + dx[t]]``,
     rows clamped at the edges (columns come padded by ``pad``, edges repeated); uint8 planes,
-    weights in 1/256 summing to 256, uint16 sums."""
+    weights in 1/256 summing to 256, uint16 sums, taken four taps at a time."""
     channels, height, width = out.shape
+    taps = dx.shape[0]
     for c in range(channels):
         for y in range(height):
             row_out = out[c, y]
             row_out[:] = 0
-            for t in range(dx.shape[0]):
-                source = planes[c, min(max(y + dy[t], 0), height - 1)]
-                shifted = source[pad + dx[t]:pad + dx[t] + width]
-                weight = weights[t]
+            for first in range(0, taps, 4):
+                t0, t1, t2, t3 = first, min(first + 1, taps - 1), min(first + 2, taps - 1), min(first + 3, taps - 1)
+                s0 = planes[c, min(max(y + dy[t0], 0), height - 1), pad + dx[t0]:pad + dx[t0] + width]
+                s1 = planes[c, min(max(y + dy[t1], 0), height - 1), pad + dx[t1]:pad + dx[t1] + width]
+                s2 = planes[c, min(max(y + dy[t2], 0), height - 1), pad + dx[t2]:pad + dx[t2] + width]
+                s3 = planes[c, min(max(y + dy[t3], 0), height - 1), pad + dx[t3]:pad + dx[t3] + width]
+                # past the last tap, the last again with weight 0
+                w0, w1 = weights[t0], weights[t1] if first + 1 < taps else np.uint16(0)
+                w2, w3 = weights[t2] if first + 2 < taps else np.uint16(0), weights[t3] if first + 3 < taps else np.uint16(0)
                 for x in range(width):
-                    row_out[x] += weight * np.uint16(shifted[x])
+                    row_out[x] += (w0 * np.uint16(s0[x]) + w1 * np.uint16(s1[x])
+                                   + w2 * np.uint16(s2[x]) + w3 * np.uint16(s3[x]))
 
 
 @_compiled
