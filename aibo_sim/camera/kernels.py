@@ -57,6 +57,16 @@ def motion_taps(du, dv):
 
 
 @_compiled
+def smear_taps(du, dv):
+    """``motion_taps`` with the weights in 1/256 (uint16, summing to exactly 256: the largest
+    takes the rounding's remainder) and the taps' reach, the largest |dx|."""
+    dx, dy, weights = motion_taps(du, dv)
+    fixed = np.round(256 * weights).astype(np.int64)
+    fixed[np.argmax(fixed)] += 256 - fixed.sum()
+    return dx, dy, fixed.astype(np.uint16), np.abs(dx).max()
+
+
+@_compiled
 def split(image, pad, out):
     """``out[c, y, pad + x]`` = ``image[y, x, c]``: the picture's interleaved channels as planes,
     the ``pad`` columns each side repeating the edge."""

@@ -403,14 +403,11 @@ class Sensor:
         height, width = render.shape[:2]
         du, dv = motion_px[0] * self.render_scale[0], motion_px[1] * self.render_scale[1]
         if self.profile.motion_blur and math.hypot(du, dv) >= MIN_BLUR_PX:
-            dx, dy, weights = kernels.motion_taps(du, dv)
-            fixed = np.round(256 * weights).astype(np.int64)
-            fixed[np.argmax(fixed)] += 256 - fixed.sum()  # the sum stays exactly 256
-            reach = int(np.abs(dx).max())
+            dx, dy, weights, reach = kernels.smear_taps(du, dv)
             padded = self._buffer((3, height, width + 2 * reach), np.uint8)
             kernels.split(render, reach, padded)
             planes, level = self._buffer((3, height, width), np.uint16), np.float32(1 / 256)
-            kernels.smear(padded, reach, dx, dy, fixed.astype(np.uint16), planes)
+            kernels.smear(padded, reach, dx, dy, weights, planes)
         else:
             planes, level = self._buffer((3, height, width), np.uint8), np.float32(1)
             kernels.split(render, 0, planes)
