@@ -584,7 +584,9 @@ def test_split_pads_the_edges_and_smear_sums_shifted_rows():
     from aibo_sim.camera import kernels
 
     image = np.random.default_rng(3).integers(0, 256, (3, 12, 20), dtype=np.uint8)
-    dx, dy, weights = np.array([-2, 0, 3, 25]), np.array([1, 0, -1, 0]), np.array([64, 96, 64, 32], np.uint16)
+    # six taps: a pass of four, then one of two (the rest weighted 0); one reaches past the picture
+    dx, dy = np.array([-2, 0, 3, 25, 1, -1]), np.array([1, 0, -1, 0, 4, -30])
+    weights = np.array([64, 48, 64, 32, 40, 8], np.uint16)
     pad = 26
     padded = np.empty((3, 12, 20 + 2 * pad), np.uint8)
     kernels.split(image.transpose(1, 2, 0).copy(), pad, padded)
