@@ -10,8 +10,7 @@ each clamped to 0..255 and truncated to a byte. The C expression is compiled wit
 operation by operation in float64 as the C source has it (no fused multiply-adds: numba
 compiles without fast-math), into a loop that LLVM vectorises: ~20 us a 208x160 frame,
 against ~25-55 us (hot or cold) for a gather from a 64 MiB table of all 2^24 answers. The
-test suite checks every input
-against the compiled C.
+test suite checks every input against the compiled C.
 
 ``ycrcb_to_rgb_bt601`` is the JFIF / BT.601 full-range decoder that Tekkotsu and most
 image libraries assume: R = Y + 1.402 Cr', G = Y - 0.344136 Cb' - 0.714136 Cr',

@@ -327,7 +327,6 @@ class Sensor:
         pixels = self.width * self.height
         self._pool = _noise_pool(NOISE_POOL_FRAMES * pixels * 3).reshape(3, -1)
         self._choices = (NOISE_POOL_FRAMES - 1) * pixels
-        self._across, self._line = np.empty((3, render_size[0] + 4), np.float32), np.empty((3, self.width), np.float32)
         self._buffers: dict[tuple, np.ndarray] = {}
         self.configure(settings, profile.robot)
 
@@ -359,12 +358,9 @@ class Sensor:
         rings are centred on the middle row, so that the top half mirrors the bottom (half the
         memory the colour pass streams through each frame)."""
         by_row = coefficients.transpose(2, 0, 1, 3).reshape(self.height, -1)
-        _, first, inverse = np.unique(by_row, axis=0, return_index=True, return_inverse=True)
-        order = np.argsort(first)
-        rank = np.empty_like(order)
-        rank[order] = np.arange(order.size)
-        distinct = coefficients[:, :, first[order]]
-        return (*(np.ascontiguousarray(plane) for plane in distinct), rank[inverse.ravel()].astype(np.int64))
+        distinct, row_of = np.unique(by_row, axis=0, return_inverse=True)
+        planes = distinct.reshape(-1, 3, 3, self.width).transpose(1, 2, 0, 3)
+        return (*(np.ascontiguousarray(plane) for plane in planes), row_of.ravel().astype(np.int64))
 
     def _response(self, light: float) -> np.ndarray:
         """Stage 2 as (3, 2) float32: each channel's gain and offset on the codes for ``light``
@@ -415,5 +411,5 @@ class Sensor:
         kernels.develop(planes, warp.rows_base, warp.rows_frac, *warp.rows_runs, warp.columns_base, warp.columns_frac,
                         *warp.columns_runs, level, *self._taps, self._response(light), self._matrix, *self._coefficients,
                         self._pool, self._noise_scale, noise_offset(seed, index, self._choices), self._black,
-                        self._across, self._line, ycrcb)
+                        self._buffer((3, width + 4), np.float32), self._buffer((3, self.width), np.float32), ycrcb)
         return ycrcb
