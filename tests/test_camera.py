@@ -539,9 +539,9 @@ def _warp(image: np.ndarray, maps: tuple[np.ndarray, np.ndarray], outer: float =
     from aibo_sim.camera import kernels
     from aibo_sim.camera.lens import Warp
 
-    warp = Warp.from_maps(*maps, image.shape[1])
+    warp = Warp.from_maps(*maps, image.shape[1], kernels.SLACK)
     height, width = maps[0].shape
-    planes = np.empty((3, *image.shape[:2]), np.uint8)
+    planes = np.empty((3, image.shape[0], image.shape[1] + kernels.SLACK), np.uint8)
     kernels.split(image, 0, planes)
     identity = np.float32([[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0]])
     response = np.float32([[1, 0]] * 3)
@@ -551,8 +551,28 @@ def _warp(image: np.ndarray, maps: tuple[np.ndarray, np.ndarray], outer: float =
     kernels.develop(planes, warp.rows_base, warp.rows_frac, *warp.rows_runs, warp.columns_base, warp.columns_frac,
                     *warp.columns_runs, np.float32(1), *taps, response, identity, curve, slope, intercept,
                     np.zeros(height, np.int64), np.zeros((3, height * width), np.int8), np.zeros(3, np.float32), 0,
-                    np.float32(0), np.empty((3, image.shape[1] + 4), np.float32), np.empty((3, width), np.float32), out)
+                    np.float32(0), np.zeros((3, image.shape[1] + 4 + kernels.SLACK), np.float32),
+                    np.zeros((3, width + kernels.SLACK), np.float32), out)
     return out
+
+
+@pytest.mark.parametrize("name", sorted(LENSES))
+@pytest.mark.parametrize("size", [(208, 160), (416, 320)])
+def test_pinhole_render_covers_the_image_with_its_margin_and_no_more(name, size):
+    """Every pixel edge of the lens's image lies at least the margin inside the render, on each
+    side, and one render column or row fewer would cut into that margin; the render's principal
+    point is the lens's moved by whole pixels."""
+    lens, margin = LENSES[name].scaled(*size), 1.5
+    render = lens.render_pinhole(margin)
+    edges = np.meshgrid(np.linspace(-0.5, lens.width - 0.5, 4 * lens.width + 1),
+                        np.linspace(-0.5, lens.height - 0.5, 4 * lens.height + 1))
+    ideal = lens.undistort(np.stack([edge.ravel() for edge in edges], axis=-1))
+    at = ideal * render.focal + render.centre  # the same points in the render's pixels
+    low, high = at.min(axis=0), at.max(axis=0)
+    assert np.all(low - margin >= -0.5 - 1e-9) and np.all(high + margin <= np.array([render.width, render.height]) - 0.5)
+    assert np.all(low - margin < 0.5) and np.all(high + margin > np.array([render.width, render.height]) - 1.5)
+    offset = np.array(render.centre) - (lens.cx, lens.cy)
+    assert np.allclose(offset, np.round(offset), atol=1e-9)
 
 
 def test_two_pass_warp_is_the_lens_remap():
@@ -587,12 +607,13 @@ def test_split_pads_the_edges_and_smear_sums_shifted_rows():
     # six taps: a pass of four, then one of two (the rest weighted 0); one reaches past the picture
     dx, dy = np.array([-2, 0, 3, 25, 1, -1]), np.array([1, 0, -1, 0, 4, -30])
     weights = np.array([64, 48, 64, 32, 40, 8], np.uint16)
-    pad = 26
-    padded = np.empty((3, 12, 20 + 2 * pad), np.uint8)
+    pad, slack = 26, kernels.SLACK
+    padded = np.empty((3, 12, 20 + 2 * pad + slack), np.uint8)
     kernels.split(image.transpose(1, 2, 0).copy(), pad, padded)
-    assert np.array_equal(padded, np.pad(image, ((0, 0), (0, 0), (pad, pad)), mode="edge"))
-    out = np.empty(image.shape, np.uint16)
+    assert np.array_equal(padded, np.pad(image, ((0, 0), (0, 0), (pad, pad + slack)), mode="edge"))
+    out = np.empty((3, 12, 20 + slack), np.uint16)
     kernels.smear(padded, pad, dx, dy, weights, out)
+    out = out[:, :, :20]
     expected = np.zeros(image.shape, np.int64)
     for shift_x, shift_y, weight in zip(dx, dy, weights):
         rows = np.clip(np.arange(12) + shift_y, 0, 11)

@@ -117,18 +117,21 @@ class Lens:
 
     def render_pinhole(self, margin: float = 1.5) -> "PinholeRender":
         """The square-pixel pinhole render that covers every pixel of this lens's image with
-        ``margin`` pixels to spare (at least ``margin`` - 0.5 after the shift below), at the
-        lens's own pixel density (fx). Its principal point sits a whole number of pixels from
-        the lens's, so that around the image centre the remap samples the render at its pixel
-        centres: with a fractional offset there, the bilinear remap of the (aliased) render
-        moves edges by a few hundredths of a pixel, the same way all over the centre, and
-        OpenCV's calibration of the frames reads that as a principal point ~0.7 px away."""
+        ``margin`` pixels to spare on each side, at the lens's own pixel density (fx): no wider
+        than that, its principal point off-centre as the lens's is. Its principal point sits a
+        whole number of pixels from the lens's, so that around the image centre the remap
+        samples the render at its pixel centres: with a fractional offset there, the bilinear
+        remap of the (aliased) render moves edges by a few hundredths of a pixel, the same way
+        all over the centre, and OpenCV's calibration of the frames reads that as a principal
+        point ~0.7 px away."""
         u, v = np.meshgrid(np.arange(-0.5, self.width, 0.5), np.arange(-0.5, self.height, 0.5))
         border = (u == -0.5) | (v == -0.5) | (u >= self.width - 0.5) | (v >= self.height - 0.5)
-        extent = np.abs(self.undistort(np.stack([u[border], v[border]], axis=-1))).max(axis=0)
+        ideal = self.undistort(np.stack([u[border], v[border]], axis=-1))
         focal = self.fx
-        width, height = (2 * math.ceil(focal * e + margin) for e in extent)
-        centre = (self.cx + round((width - 1) / 2 - self.cx), self.cy + round((height - 1) / 2 - self.cy))
+        # Render pixel i spans i - 0.5 .. i + 0.5: the principal point far enough from the first
+        # pixel's outer edge for the left (top) extent, the size reaching past the right (bottom).
+        centre = tuple(c + math.ceil(-focal * low + margin - 0.5 - c) for c, low in zip((self.cx, self.cy), ideal.min(axis=0)))
+        width, height = (math.ceil(c + focal * high + margin + 0.5) for c, high in zip(centre, ideal.max(axis=0)))
         return PinholeRender(width, height, focal, centre)
 
     def render_maps(self, render: "PinholeRender") -> tuple[np.ndarray, np.ndarray]:
@@ -174,7 +177,8 @@ class Warp:
     (``*_base``) and the fraction past it (``*_frac``); ``*_runs`` (row pointers, then (start,
     end) pairs) split each row into runs where the source is the destination shifted by one
     constant offset, so that every run is a contiguous slice. The lens's mild barrel keeps
-    both passes single-valued and smooth (a few runs per row)."""
+    both passes single-valued and smooth (a few runs per row). The fractions carry ``slack``
+    zero columns past each row's end (what ``kernels`` reads past a run)."""
 
     rows_base: np.ndarray
     rows_frac: np.ndarray
@@ -184,7 +188,7 @@ class Warp:
     columns_runs: tuple[np.ndarray, np.ndarray]
 
     @classmethod
-    def from_maps(cls, map_x: np.ndarray, map_y: np.ndarray, render_width: int) -> "Warp":
+    def from_maps(cls, map_x: np.ndarray, map_y: np.ndarray, render_width: int, slack: int = 0) -> "Warp":
         height, width = map_x.shape
         if np.any(np.diff(map_x, axis=1) < 0):
             raise ValueError("a two-pass warp needs a map that never decreases along a row")
@@ -192,9 +196,9 @@ class Warp:
         row_at_column = np.stack([np.interp(columns, map_x[v], map_y[v]) for v in range(height)])
         rows_base = np.floor(row_at_column).astype(np.int64)
         columns_base = np.floor(map_x).astype(np.int64)
-        return cls(rows_base, (row_at_column - rows_base).astype(np.float32),
-                   _runs(rows_base), columns_base, (map_x - columns_base).astype(np.float32),
-                   _runs(columns_base - np.arange(width)))
+        rows_frac, columns_frac = (np.pad((position - base).astype(np.float32), ((0, 0), (0, slack)))
+                                   for position, base in ((row_at_column, rows_base), (map_x, columns_base)))
+        return cls(rows_base, rows_frac, _runs(rows_base), columns_base, columns_frac, _runs(columns_base - np.arange(width)))
 
 
 def _runs(key: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -318,7 +318,7 @@ class Sensor:
         from . import kernels  # numba, loaded by the first sensor rather than by every import of aibo_sim
 
         self._kernels = kernels
-        self.warp = Warp.from_maps(*maps, render_size[0])
+        self.warp = Warp.from_maps(*maps, render_size[0], kernels.SLACK)
         # The softness's 3-tap Gaussian (OpenCV's, as GaussianBlur uses), in render pixels.
         sigma = profile.softness_px * self.width / 208 * render_scale[0]
         outer, centre, _ = cv2.getGaussianKernel(3, sigma).ravel() if sigma >= 0.05 else (0.0, 1.0, 0.0)
@@ -374,10 +374,11 @@ class Sensor:
 
     def _buffer(self, shape: tuple[int, ...], dtype: type) -> np.ndarray:
         """A scratch array of this shape, kept from frame to frame (arrays of a few hundred KB are
-        mapped afresh by each allocation, and their pages faulted in)."""
+        mapped afresh by each allocation, and their pages faulted in); zeros at first, so that
+        what a pass computes into the slack is always a number."""
         buffer = self._buffers.get((shape, dtype))
         if buffer is None:
-            buffer = self._buffers[(shape, dtype)] = np.empty(shape, dtype)
+            buffer = self._buffers[(shape, dtype)] = np.zeros(shape, dtype)
         return buffer
 
     def _rolling_warp(self, motion_px: tuple[float, float]) -> Warp:
@@ -387,7 +388,8 @@ class Sensor:
         delay = (self.height - 1 - np.arange(self.height)) / (self.height - 1) * readout / self.settings.exposure_s
         (width, height), (map_x, map_y) = self.render_size, self.maps
         shift_x, shift_y = (m * scale * delay[:, np.newaxis] for m, scale in zip(motion_px, self.render_scale))
-        return Warp.from_maps(np.clip(map_x + shift_x, 0, width - 1), np.clip(map_y + shift_y, 0, height - 1), width)
+        return Warp.from_maps(np.clip(map_x + shift_x, 0, width - 1), np.clip(map_y + shift_y, 0, height - 1), width,
+                              self._kernels.SLACK)
 
     def expose(self, render: np.ndarray, motion_px: tuple[float, float], seed: int, index: int,
                light: float = 1.0) -> np.ndarray:
@@ -397,19 +399,21 @@ class Sensor:
         kernels = self._kernels
         warp = self._rolling_warp(motion_px) if self.profile.readout_ms > 0 and any(motion_px) else self.warp
         height, width = render.shape[:2]
+        slack = kernels.SLACK
         du, dv = motion_px[0] * self.render_scale[0], motion_px[1] * self.render_scale[1]
         if self.profile.motion_blur and math.hypot(du, dv) >= MIN_BLUR_PX:
             dx, dy, weights, reach = kernels.smear_taps(du, dv)
-            padded = self._buffer((3, height, width + 2 * reach), np.uint8)
+            padded = self._buffer((3, height, width + 2 * reach + slack), np.uint8)
             kernels.split(render, reach, padded)
-            planes, level = self._buffer((3, height, width), np.uint16), np.float32(1 / 256)
+            planes, level = self._buffer((3, height, width + slack), np.uint16), np.float32(1 / 256)
             kernels.smear(padded, reach, dx, dy, weights, planes)
         else:
-            planes, level = self._buffer((3, height, width), np.uint8), np.float32(1)
+            planes, level = self._buffer((3, height, width + slack), np.uint8), np.float32(1)
             kernels.split(render, 0, planes)
         ycrcb = np.empty((self.height, self.width, 3), np.uint8)
         kernels.develop(planes, warp.rows_base, warp.rows_frac, *warp.rows_runs, warp.columns_base, warp.columns_frac,
                         *warp.columns_runs, level, *self._taps, self._response(light), self._matrix, *self._coefficients,
                         self._pool, self._noise_scale, noise_offset(seed, index, self._choices), self._black,
-                        self._buffer((3, width + 4), np.float32), self._buffer((3, self.width), np.float32), ycrcb)
+                        self._buffer((3, width + 4 + slack), np.float32), self._buffer((3, self.width + slack), np.float32),
+                        ycrcb)
         return ycrcb
