@@ -17,8 +17,9 @@ the default):
 
 - corners found where the recorded lens projects the board's corners: mean offset at most
   0.013 px, rms 0.04-0.08 px. What is left is the bilinear remap from the pinhole render to
-  the lens's image (OpenCV's remap for ``ideal``, the sensor's two-pass ``lens.Warp`` for ``ers7``): an offset of a few hundredths of a pixel,
-  periodic in the sub-pixel phase at which the remap samples the render;
+  the lens's image (OpenCV's remap for ``ideal``, the sensor's two-pass ``lens.Warp`` for
+  ``ers7``): an offset of a few hundredths of a pixel, periodic in the sub-pixel phase at
+  which the remap samples the render;
 - fx, fy within 0.05 %, cx, cy within 0.12 px (std 0.05-0.12), the whole mapping from rays
   to pixels within 0.32-0.41 px of the recorded one over the whole image, edges included.
 

@@ -127,11 +127,11 @@ class Lens:
         u, v = np.meshgrid(np.arange(-0.5, self.width, 0.5), np.arange(-0.5, self.height, 0.5))
         border = (u == -0.5) | (v == -0.5) | (u >= self.width - 0.5) | (v >= self.height - 0.5)
         ideal = self.undistort(np.stack([u[border], v[border]], axis=-1))
-        focal = self.fx
+        focal, lowest, highest = self.fx, ideal.min(axis=0), ideal.max(axis=0)
         # Render pixel i spans i - 0.5 .. i + 0.5: the principal point far enough from the first
         # pixel's outer edge for the left (top) extent, the size reaching past the right (bottom).
-        centre = tuple(c + math.ceil(-focal * low + margin - 0.5 - c) for c, low in zip((self.cx, self.cy), ideal.min(axis=0)))
-        width, height = (math.ceil(c + focal * high + margin + 0.5) for c, high in zip(centre, ideal.max(axis=0)))
+        centre = tuple(c + math.ceil(margin - 0.5 - focal * low - c) for c, low in zip((self.cx, self.cy), lowest))
+        width, height = (math.ceil(c + focal * high + margin + 0.5) for c, high in zip(centre, highest))
         return PinholeRender(width, height, focal, centre)
 
     def render_maps(self, render: "PinholeRender") -> tuple[np.ndarray, np.ndarray]:
