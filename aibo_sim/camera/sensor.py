@@ -323,7 +323,9 @@ class Sensor:
         sigma = profile.softness_px * self.width / 208 * render_scale[0]
         outer, centre, _ = cv2.getGaussianKernel(3, sigma).ravel() if sigma >= 0.05 else (0.0, 1.0, 0.0)
         self._taps = np.float32(outer), np.float32(centre)
-        self._vignetting = vignetting_maps(self.width, self.height) if profile.vignetting else None
+        vignetting = (vignetting_maps(self.width, self.height) if profile.vignetting
+                      else np.broadcast_to(np.array([0.0, 1.0, 0.0])[:, None, None, None], (3, self.height, self.width, 3)))
+        self._vignetting_rows, self._coefficient_row = self._distinct_rows(vignetting.transpose(0, 3, 1, 2))
         pixels = self.width * self.height
         self._pool = _noise_pool(NOISE_POOL_FRAMES * pixels * 3).reshape(3, -1)
         self._choices = (NOISE_POOL_FRAMES - 1) * pixels
@@ -342,25 +344,23 @@ class Sensor:
         self._matrix = np.array([[*(y_scale * luma), p.black_level],
                                  [*(p.chroma_gain[0] * (np.array([1.0, 0, 0]) - luma)), 128.0],
                                  [*(p.chroma_gain[1] * (np.array([0, 0, 1.0]) - luma)), 128.0]], np.float32)
-        curve, slope, intercept = self._vignetting if self._vignetting is not None else (0.0, 1.0, 0.0)
-        gain, pivot = np.asarray(robot.gain), np.asarray(ROBOT_PIVOT)
-        # Robot after vignetting: gain (c v^2 + a v + b - pivot) + pivot + offset, as planes (3, h, w).
-        coefficients = [np.broadcast_to(values, (self.height, self.width, 3)).transpose(2, 0, 1)
-                        for values in (gain * curve, gain * slope, gain * (intercept - pivot) + pivot + np.asarray(robot.offset))]
-        self._coefficients = self._distinct_rows(np.stack(coefficients).astype(np.float32))
+        curve, slope, intercept = self._vignetting_rows
+        gain, pivot, offset = (np.asarray(values)[:, None, None] for values in (robot.gain, ROBOT_PIVOT, robot.offset))
+        # Robot after vignetting: gain (c v^2 + a v + b - pivot) + pivot + offset, per channel.
+        self._coefficients = tuple(np.ascontiguousarray(values, np.float32) for values in
+                                   (gain * curve, gain * slope, gain * (intercept - pivot) + pivot + offset))
         sigma = np.asarray(p.noise_sigma) * math.sqrt(2.0 ** GAIN_STEPS[settings.gain])
         self._noise_scale = (sigma / NOISE_STEPS).astype(np.float32)
         self._black = np.float32(p.black_level)
 
-    def _distinct_rows(self, coefficients: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """The colour planes (3 coefficients, 3 channels, h, w) as curve, slope and intercept
-        holding each distinct image row once, and the row each image row reads: the vignetting's
+    def _distinct_rows(self, planes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The planes (coefficients, channels, h, w) holding each distinct image row once,
+        (coefficients, channels, rows, w), and the row each image row reads: the vignetting's
         rings are centred on the middle row, so that the top half mirrors the bottom (half the
         memory the colour pass streams through each frame)."""
-        by_row = coefficients.transpose(2, 0, 1, 3).reshape(self.height, -1)
+        by_row = planes.transpose(2, 0, 1, 3).reshape(self.height, -1)
         distinct, row_of = np.unique(by_row, axis=0, return_inverse=True)
-        planes = distinct.reshape(-1, 3, 3, self.width).transpose(1, 2, 0, 3)
-        return (*(np.ascontiguousarray(plane) for plane in planes), row_of.ravel().astype(np.int64))
+        return distinct.reshape(-1, *planes.shape[:2], self.width).transpose(1, 2, 0, 3), row_of.ravel().astype(np.int64)
 
     def _response(self, light: float) -> np.ndarray:
         """Stage 2 as (3, 2) float32: each channel's gain and offset on the codes for ``light``
@@ -413,7 +413,7 @@ class Sensor:
         ycrcb = np.empty((self.height, self.width, 3), np.uint8)
         kernels.develop(planes, warp.rows_base, warp.rows_frac, *warp.rows_runs, warp.columns_base, warp.columns_frac,
                         *warp.columns_runs, level, *self._taps, self._response(light), self._matrix, *self._coefficients,
-                        self._pool, self._noise_scale, noise_offset(seed, index, self._choices), self._black,
+                        self._coefficient_row, self._pool, self._noise_scale, noise_offset(seed, index, self._choices), self._black,
                         self._buffer((3, width + 4 + slack), np.float32), self._buffer((3, self.width + slack), np.float32),
                         ycrcb)
         return ycrcb
