@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
+import select
 import sys
 from pathlib import Path
 
@@ -13,7 +15,7 @@ from .mtn import MODES as MTN_MODES
 from .options import ArgumentParser, add_world_options, camera_options, finite_float, place, world_options
 from .robot import BACKENDS
 
-EXIT_BAD_INPUT, EXIT_CONTROLLER, EXIT_DIVERGED, EXIT_INTERRUPTED = 2, 1, 3, 130
+EXIT_BAD_INPUT, EXIT_CONTROLLER, EXIT_DIVERGED, EXIT_INTERRUPTED, EXIT_BROKEN_PIPE = 2, 1, 3, 130, 141
 
 
 def _run(args) -> int:
@@ -196,6 +198,16 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _reader_gone(stream) -> bool:
+    """Whether ``stream`` is a pipe whose reading end is closed (poll reports an error on it)."""
+    try:
+        poller = select.poll()
+        poller.register(stream.fileno(), select.POLLOUT)
+        return any(event & select.POLLERR for _, event in poller.poll(0))
+    except (OSError, ValueError):  # no file descriptor (a test's StringIO)
+        return False
+
+
 def main(argv: list[str] | None = None) -> int:
     from openr_bridge import OpenRError
 
@@ -209,7 +221,7 @@ def main(argv: list[str] | None = None) -> int:
 
     # Exit status: 0 done; 1 the controller failed (it raised, its robot_die function raised, or
     # it called sys.exit with a status other than 0); 2 bad input (one line naming it); 3 the
-    # physics diverged; 130 interrupted (Ctrl-C).
+    # physics diverged; 130 interrupted (Ctrl-C); 141 standard output closed by its reader (`| head`).
     args = build_parser().parse_args(argv)
     try:
         return args.handler(args)
@@ -219,6 +231,12 @@ def main(argv: list[str] | None = None) -> int:
     except SimulationDiverged as exc:
         print(f"aibo-sim: error: {exc}", file=sys.stderr)
         return EXIT_DIVERGED
+    except BrokenPipeError as exc:
+        if _reader_gone(sys.stdout):  # stop quietly, as a process that SIGPIPE ends
+            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+            return EXIT_BROKEN_PIPE
+        print(f"aibo-sim: error: {exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
     except (ModelError, MtnError, OpenRError, DeviceError, RenderingUnavailable, ViewerUnavailable, CompileError,
             OSError, ValueError) as exc:
         if isinstance(exc, OSError) and exc.filename is not None:  # the name, cut if it is a long one

@@ -318,8 +318,7 @@ def play_motion(motion_or_path, repeat: int = 1, sim: Simulation | None = None, 
         raise ValueError(f"step_ms must be a positive multiple of {FRAME_MS} ms")
     unknown = [loc for loc in motion.locators if loc not in JOINT_BY_LOCATOR]
     if unknown:
-        source = motion.name if isinstance(motion_or_path, Motion) else os.fspath(motion_or_path)
-        raise ValueError(f"{source}: no joint for locator(s) {', '.join(unknown)}")
+        raise ValueError(f"{motion.source}: no joint for locator(s) {', '.join(unknown)}")
     pose, ball = start_values("--pose", pose, 3), start_values("--ball", ball, 2)
     if sim is not None:
         if scene is not None:

@@ -13,15 +13,21 @@ Decisions where the spec leaves room (also listed in the report that came with t
   zeros). Section 3's size must equal ``12 + N*4*(3+J) + 4*(N-1)`` exactly; bytes after it
   are ignored (OPEN-R and Webots stop reading there), so they do not survive a round trip. A motion needs at least one keyframe, one joint, distinct locators, a frame time
   > 0 and non-negative interpolation counts.
+* Limits no real motion reaches, so that a corrupt word is an error rather than a motion
+  that plays for days or a joint sent to -2147 rad: a motion lasts at most
+  ``MAX_LENGTH_MS`` (10 minutes; Sony's motions last seconds, SITDANCE 28 s), and a joint
+  value lies within a full turn, +-2 pi rad (the ERS-7's widest joint spans 4.1 rad). Values
+  just past a joint's hardware range are kept (Sony's own SWSDK.MTN has one: the servo
+  stops at its limit).
 * Strings are latin-1 (a pstring is a u8 length, so at most 255 bytes).
 * A missing file is an ``OSError`` from :func:`read_mtn` (it is not a malformed file);
   :func:`mtn_new` turns it into Webots' "File not found: <path>" :class:`MtnError`.
 * OPEN-R playback (``MTN.cc``) hard-codes 16 ms frames: ``2n+2`` sub-frames of 8 ms per
   segment. Here a segment has ``(n+1)*frame_time_ms/8`` sub-frames, which is the same for
   16 ms and scales otherwise; a frame time that is not a multiple of 8 ms cannot be played in
-  this mode (``ValueError``). ``MTN.cc`` never sends the final keyframe itself (it stops once
-  the last segment is done); this player appends it as one last sub-frame, so a motion ends
-  exactly on its final pose at ``t = length_ms``.
+  this mode (an :class:`MtnError` naming the file). ``MTN.cc`` never sends the final keyframe
+  itself (it stops once the last segment is done); this player appends it as one last
+  sub-frame, so a motion ends exactly on its final pose at ``t = length_ms``.
 * Joint values are held in int64; OPEN-R's 32-bit ``value1 - value0`` could overflow for
   values more than 2^31 apart, which no real file has; this code does not reproduce that.
 """
@@ -48,6 +54,8 @@ DEFAULT_FRAME_TIME_MS = 16
 SUBFRAME_MS = 8  # OPEN-R command vectors carry one joint value per 8 ms
 MODES = ("openr", "webots")  # MotionPlayer's playback modes
 _S32_MIN, _S32_MAX = -(2**31), 2**31 - 1
+MAX_LENGTH_MS = 10 * 60 * 1000
+MAX_JOINT_URAD = round(2 * np.pi * 1e6)
 
 
 class MtnError(ValueError):
@@ -64,6 +72,23 @@ class MtnError(ValueError):
         super().__init__(": ".join(where + [message]))
 
 
+def _beyond_limits(frame_time_ms: int, interpolate: np.ndarray, keyframes: np.ndarray,
+                   locators: Sequence[str]) -> tuple[str, int, int | None] | None:
+    """The first of ``MAX_LENGTH_MS`` and ``MAX_JOINT_URAD`` a motion breaks, as (message, keyframe,
+    joint): for the length, the keyframe that ends its longest segment and joint None."""
+    length_ms = int(((interpolate + 1) * frame_time_ms).sum())
+    if length_ms > MAX_LENGTH_MS:
+        k = int(np.argmax(interpolate))
+        return (f"the motion lasts {length_ms / 1000:.0f} s, longer than the {MAX_LENGTH_MS // 1000} s a motion may "
+                f"last (segment {k} -> {k + 1}: numInterpolate {int(interpolate[k])} of {frame_time_ms} ms frames)",
+                k + 1, None)
+    beyond = np.argwhere(np.abs(keyframes) > MAX_JOINT_URAD)
+    if beyond.size:
+        k, j = beyond[0].tolist()
+        return f"keyframe {k}, {printable(locators[j])}: {keyframes[k, j] / 1e6:g} rad is beyond a full turn", k, j
+    return None
+
+
 def _check(source: str, checks) -> None:
     """Raise the MtnError of the first (bad, message) pair whose ``bad`` is true."""
     for bad, message in checks:
@@ -76,7 +101,8 @@ class Motion:
     """One motion. Angles are integer micro-radians, as stored in the file.
 
     ``keyframes`` (N, J) joint values; ``attitudes`` (N, 3) body roll/pitch/yaw (editor data,
-    ignored by playback); ``interpolate`` (N-1,) numInterpolate of each segment k -> k+1.
+    ignored by playback); ``interpolate`` (N-1,) numInterpolate of each segment k -> k+1;
+    ``source`` the file it was read from, which its errors name (default: its name).
     """
 
     name: str
@@ -88,14 +114,16 @@ class Motion:
     attitudes: np.ndarray
     interpolate: np.ndarray
     option: int = 0
+    source: str | None = None
 
     def __post_init__(self) -> None:
         self.locators = tuple(self.locators)
         self.keyframes = np.asarray(self.keyframes, dtype=np.int64)
         self.attitudes = np.asarray(self.attitudes, dtype=np.int64)
         self.interpolate = np.asarray(self.interpolate, dtype=np.int64).reshape(-1)
+        self.source = self.name if self.source is None else self.source
         n, j = len(self.keyframes), len(self.locators)
-        _check(self.name, [
+        _check(self.source, [
             (n < 1, "a motion needs at least one keyframe"),
             (j < 1, "a motion needs at least one joint"),
             (len(set(self.locators)) != j, "duplicate locator"),
@@ -108,6 +136,9 @@ class Motion:
         ])
         self.frame_time_ms = int(self.frame_time_ms)
         self.option = int(self.option)
+        problem = _beyond_limits(self.frame_time_ms, self.interpolate, self.keyframes, self.locators)
+        if problem is not None:
+            raise MtnError(self.source, None, problem[0])
 
     def __eq__(self, other: object) -> bool:
         if not isinstance(other, Motion):
@@ -214,7 +245,9 @@ class _Reader:
         num, size = self.unpack("<II", offset, f"section {number} header")
         if num != number:
             raise self.fail(offset, f"section number {num}, expected {number}")
-        if size < 8 or offset + size > len(self.data):
+        if size < 8:
+            raise self.fail(offset + 4, f"section {number} size {size} is less than its 8-byte header")
+        if offset + size > len(self.data):
             raise self.fail(offset + 4, f"section {number} size {size} overruns the file ({len(self.data)} bytes)")
         return offset + size
 
@@ -248,6 +281,8 @@ def parse_mtn(data: bytes, source: str = "<bytes>") -> Motion:
     (njoint,) = r.unpack("<H", end1 + 8, "joint count", end2)
     if njoint == 0:
         raise r.fail(end1 + 8, "zero joints")
+    if end1 + 10 + njoint > end2:  # a locator takes at least its length byte
+        raise r.fail(end1 + 8, f"{njoint} joints cannot fit in section 2's {end2 - end1 - 10} bytes of locators")
     locators, p = [], end1 + 10
     for i in range(njoint):
         at = p
@@ -276,16 +311,22 @@ def parse_mtn(data: bytes, source: str = "<bytes>") -> Motion:
         k = int(np.argmax(interpolate < 0)) + 1
         offset = body + k * 4 * (1 + kf_words) - 4
         raise r.fail(offset, f"negative interpolation count {int(interpolate[k - 1])} before keyframe {k}")
+    keyframes = words[:, 4:]
+    problem = _beyond_limits(frame_time, interpolate, keyframes, locators)
+    if problem is not None:  # at the word: the segment's numInterpolate, or the joint's value
+        message, k, j = problem
+        raise r.fail(body + (k * (1 + kf_words) + (0 if j is None else 4 + j)) * 4 - 4, message)
     return Motion(
         name=name,
         creator=creator,
         design=design,
         frame_time_ms=frame_time,
         locators=tuple(locators),
-        keyframes=words[:, 4:].copy(),
+        keyframes=keyframes.copy(),
         attitudes=words[:, 1:4].copy(),
         interpolate=interpolate.copy(),
         option=option,
+        source=source,
     )
 
 
@@ -388,8 +429,8 @@ class MotionPlayer:
         self.motion, self.mode = motion, mode
         if mode == "openr":
             if motion.frame_time_ms % SUBFRAME_MS:
-                raise ValueError(
-                    f"{motion.name}: frame time {motion.frame_time_ms} ms is not a multiple of {SUBFRAME_MS} ms")
+                raise MtnError(motion.source, None,
+                               f"frame time {motion.frame_time_ms} ms is not a multiple of {SUBFRAME_MS} ms")
             self._subframes = (motion.interpolate + 1) * (motion.frame_time_ms // SUBFRAME_MS)
             self._start = np.concatenate(([0], np.cumsum(self._subframes)))  # segment k starts at _start[k]
             kf = motion.keyframes

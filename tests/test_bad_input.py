@@ -300,3 +300,18 @@ def test_a_very_long_file_name_is_cut_in_the_message(command, capsys):
     assert main([*command, "x" * 5000 + ".MTN"]) == 2
     message = capsys.readouterr().err
     assert len(message) < 300 and re.search(r"\.\.\. \(50\d\d characters\)", message), message
+
+
+def test_output_into_a_closed_pipe_ends_quietly_with_141():
+    """``aibo-sim mtn info FILE | head -0``: no error message for the reader having left, no traceback."""
+    import subprocess
+    import sys
+
+    read_end, write_end = os.pipe()
+    os.close(read_end)  # the reader leaves before the first line
+    try:
+        done = subprocess.run([sys.executable, "-m", "aibo_sim.cli", "mtn", "info", str(ROOT / "models/motions/SIT.MTN")],
+                              stdout=write_end, stderr=subprocess.PIPE, text=True, timeout=60)
+    finally:
+        os.close(write_end)
+    assert (done.returncode, done.stderr) == (141, "")

@@ -1,6 +1,8 @@
 """The gymnasium environments (issue 5)."""
 
+import copy
 import os
+import pickle
 import subprocess
 import sys
 import warnings
@@ -252,6 +254,14 @@ def test_no_camera_and_invalid_options():
         gym.make(HEAD_TRACK, randomize={"gravity": 1.0})
     with pytest.raises(ValueError, match="camera must be"):
         gym.make(HEAD_TRACK, camera="bgr")
+    with pytest.raises(ValueError, match=r"randomize\['lighting'\] = True"):
+        gym.make(HEAD_TRACK, randomize={"lighting": True})
+    env = gym.make(HEAD_TRACK, camera=None, randomize={"lighting": np.float32(0.25), "ball_start": np.int64(0)})
+    with pytest.raises(TypeError, match="cannot be pickled or copied"):
+        copy.deepcopy(env)
+    with pytest.raises(TypeError, match="cannot be pickled or copied"):
+        pickle.dumps(env.unwrapped)
+    env.close()
 
 
 def test_randomisation_varies_the_scene_between_seeds_and_only_then():

@@ -13,6 +13,8 @@ import pytest
 
 from aibo_sim import ers7
 from aibo_sim.mtn import (
+    MAX_JOINT_URAD,
+    MAX_LENGTH_MS,
     Motion,
     MotionPlayer,
     MtnError,
@@ -174,7 +176,29 @@ BAD_TINY = {
     "data type": (_patch(TINY, 80, "<I", 1), 80),
     "negative interpolation": (_patch(TINY, 104, "<i", -1), 104),
     "truncated section 3": (TINY[:127], 72),
+    "section 1 size below its header": (_patch(TINY, 32, "<I", 0), 32),
+    "more joints than section 2 holds": (_patch(TINY, 64, "<H", 9), 64),
+    "a segment of days": (_patch(TINY, 104, "<i", 2**31 - 1), 104),
+    "a frame time that makes it last 11 minutes": (_patch(_patch(TINY, 22, "<H", 0xFFFF), 104, "<i", 9), 104),
+    "a joint beyond a full turn": (_patch(TINY, 124, "<i", -(2**31)), 124),
 }
+
+
+def test_limits_hold_at_their_edges_and_for_motions_built_in_code():
+    longest = MAX_LENGTH_MS // 16 - 1  # tiny's one segment lasts n + 1 frames of 16 ms
+    assert parse_mtn(_patch(TINY, 104, "<i", longest), "tiny").length_ms == MAX_LENGTH_MS
+    with pytest.raises(MtnError, match="longer than the 600 s"):
+        parse_mtn(_patch(TINY, 104, "<i", longest + 1), "tiny")
+    assert parse_mtn(_patch(TINY, 124, "<i", MAX_JOINT_URAD), "tiny").keyframes[1, 1] == MAX_JOINT_URAD
+    with pytest.raises(MtnError, match=r"^walk: keyframe 0, a: -7 rad is beyond a full turn$"):
+        Motion("walk", "me", "DRX-1000", 16, ("a",), [[-7_000_000], [0]], np.zeros((2, 3)), [0])
+
+
+def test_play_errors_name_the_file(tmp_path):
+    path = tmp_path / "odd frame.mtn"
+    path.write_bytes(_patch(TINY, 22, "<H", 20))
+    with pytest.raises(MtnError, match=r"odd frame\.mtn: frame time 20 ms is not a multiple of 8 ms"):
+        MotionPlayer(read_mtn(path))
 
 
 def test_bytes_after_section_3_are_ignored_as_the_robot_reads():

@@ -62,6 +62,9 @@ def test_errors_reach_the_caller_and_a_closed_env_refuses():
         envs.step(np.full(envs.action_space.shape, np.nan, np.float32))
     with pytest.raises(ValueError, match="reset_mask"):
         envs.reset(options={"reset_mask": np.zeros(2, bool)})
+    for rows in (1, 3):  # one row short, one too many: neither dropped nor an IndexError from a thread
+        with pytest.raises(ValueError, match=rf"actions of shape \({rows}, 3\): want \(2, 3\)"):
+            envs.step(np.zeros((rows, 3), np.float32))
     envs.close()
     assert all(not thread.is_alive() for thread in envs.unwrapped._threads)
     with pytest.raises(RuntimeError, match="closed"):

@@ -37,6 +37,8 @@ over real robots.
 
 from __future__ import annotations
 
+import numbers
+
 import gymnasium as gym
 import mujoco
 import numpy as np
@@ -77,7 +79,8 @@ class AiboEnv(gym.Env):
         if unknown:
             raise ValueError(f"unknown randomisations {sorted(unknown)}; known: {RANDOMIZATIONS}")
         for name, value in self.randomize.items():
-            if not isinstance(value, (int, float)) or not 0 <= value < float("inf") or name == "lighting" and value > 1:
+            if isinstance(value, bool) or not isinstance(value, numbers.Real) or not 0 <= value < float("inf") \
+                    or name == "lighting" and value > 1:
                 raise ValueError(f"randomize[{name!r}] = {value!r}: must be a finite number >= 0"
                                  + (" and at most 1" if name == "lighting" else ""))
         if camera == "openr" and camera_layer != "H":
@@ -152,6 +155,10 @@ class AiboEnv(gym.Env):
         if self._renderer is None:
             self._renderer = Renderer(self.sim.model, *RENDER_SIZE, quality="high")
         return self._renderer.render(self.sim.data, "tracking")
+
+    def __reduce_ex__(self, protocol):
+        raise TypeError(f"{type(self).__name__} cannot be pickled or copied (it holds a MuJoCo simulation and OpenGL "
+                        "renderers): make a new environment with the same arguments and reset it with the same seed")
 
     def close(self):
         """Free the renderers; the environment is then spent: ``step``, ``reset`` and ``render``

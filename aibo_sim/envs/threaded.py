@@ -20,6 +20,7 @@ import threading
 
 import gymnasium
 import numpy as np
+from gymnasium.spaces import Box
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space, create_empty_array, iterate
 
@@ -149,6 +150,9 @@ class ThreadedVectorEnv(VectorEnv):
         return (copying.deepcopy(observations) if self.copy else observations), infos
 
     def step(self, actions):
+        if isinstance(self.action_space, Box) and np.shape(actions) != self.action_space.shape:
+            raise ValueError(f"actions of shape {np.shape(actions)}: want {self.action_space.shape}, "
+                             f"one row for each of the {self.num_envs} environments")
         observations, autoreset = self._observations, self._autoreset
 
         def step_one(env, index, action):
