@@ -3,19 +3,24 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import os
 import select
+import signal
 import sys
+import threading
 from pathlib import Path
 
 import numpy as np
 
 from .mtn import MODES as MTN_MODES
-from .options import ArgumentParser, add_world_options, camera_options, finite_float, place, world_options
+from .options import (ArgumentParser, add_world_options, camera_options, finite_float, make_out_folder, place,
+                      world_options)
 from .robot import BACKENDS
 
 EXIT_BAD_INPUT, EXIT_CONTROLLER, EXIT_DIVERGED, EXIT_INTERRUPTED, EXIT_BROKEN_PIPE = 2, 1, 3, 130, 141
+EXIT_TERMINATED = 128 + signal.SIGTERM  # 143, as a shell reports a process that SIGTERM ended
 
 
 def _run(args) -> int:
@@ -58,7 +63,7 @@ def _render(args) -> int:
         sim.close()
     if args.side_by_side is not None:
         images["side_by_side.png"] = _side_by_side(args)
-    out.mkdir(parents=True, exist_ok=True)
+    make_out_folder(out)
     for name, rgb in images.items():
         if not cv2.imwrite(str(out / name), np.ascontiguousarray(rgb[:, :, ::-1])):
             raise OSError(f"could not write {out / name}")
@@ -95,6 +100,8 @@ def _side_by_side(args) -> np.ndarray:
 
     pictures = []
     if args.side_by_side:  # a real layer-H frame as Tekkotsu's EasyTrain stores it: R, G, B = Y, Cb, Cr
+        if not Path(args.side_by_side).is_file():
+            raise FileNotFoundError(f"--side-by-side {args.side_by_side}: no such file")
         real = cv2.imread(args.side_by_side, cv2.IMREAD_COLOR)
         if real is None or real.shape != (160, 208, 3):
             raise ValueError(f"--side-by-side {args.side_by_side}: not a 208x160 EasyTrain PNG (R, G, B = Y, Cb, Cr)")
@@ -182,7 +189,10 @@ def build_parser() -> argparse.ArgumentParser:
     info.add_argument("file", help="an MTN file, or the name of a bundled motion (WALKFWD.MTN, TURNL.MTN, ...)")
     info.add_argument("--json", action="store_true")
     info.set_defaults(handler=_mtn_info)
-    play = mtn.add_parser("play", help="play a file on the standing robot and report how it moved")
+    play = mtn.add_parser("play", help="play a file on the standing robot and report how it moved",
+                          description="Play a motion on the standing robot and report how it moved. It takes "
+                          "the options of every aibo-sim command; it renders no camera frame and reads no "
+                          "noisy sensor, so --seed and the camera options leave its report unchanged.")
     play.add_argument("file", help="an MTN file, or the name of a bundled motion")
     play.add_argument("--repeat", type=int, default=1)
     play.add_argument("--mode", choices=MTN_MODES, default="openr")
@@ -196,6 +206,30 @@ def build_parser() -> argparse.ArgumentParser:
 
     add_dump_parser(commands)
     return parser
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM, raised in the main thread so that a command stops as after Ctrl-C: a run's
+    ``robot_die`` functions run and its run.json says so, a dump's writers abort (temporary
+    files removed, locks released) and its workers stop. A KeyboardInterrupt, so that no
+    ``except Exception`` (a controller's own) swallows it."""
+
+
+def _raise_terminated(signum, frame):
+    raise Terminated()
+
+
+@contextlib.contextmanager
+def sigterm_stops_cleanly():
+    """SIGTERM raises ``Terminated`` while the command runs (main thread only; restored after)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.signal(signal.SIGTERM, _raise_terminated)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
 
 
 def _reader_gone(stream) -> bool:
@@ -221,10 +255,12 @@ def main(argv: list[str] | None = None) -> int:
 
     # Exit status: 0 done; 1 the controller failed (it raised, its robot_die function raised, or
     # it called sys.exit with a status other than 0); 2 bad input (one line naming it); 3 the
-    # physics diverged; 130 interrupted (Ctrl-C); 141 standard output closed by its reader (`| head`).
+    # physics diverged; 130 interrupted (Ctrl-C); 141 standard output closed by its reader (`| head`);
+    # 143 terminated (SIGTERM).
     args = build_parser().parse_args(argv)
     try:
-        return args.handler(args)
+        with sigterm_stops_cleanly():
+            return args.handler(args)
     except ControllerFailed as exc:
         print(f"aibo-sim: {exc}", file=sys.stderr)
         return EXIT_CONTROLLER
@@ -243,8 +279,11 @@ def main(argv: list[str] | None = None) -> int:
             exc = f"{short_repr(str(exc.filename), 120)}: {exc.strerror or exc}"
         print(f"aibo-sim: error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
-    except KeyboardInterrupt:  # Ctrl-C: 130, as a shell reports a process ended by SIGINT (128 + 2)
+    except KeyboardInterrupt as exc:  # Ctrl-C: 130, as a shell reports a process ended by SIGINT (128 + 2)
         hint = " (the dump can continue with --resume)" if args.command == "dump" else ""
+        if isinstance(exc, Terminated):
+            print(f"aibo-sim: terminated (SIGTERM){hint}", file=sys.stderr)
+            return EXIT_TERMINATED
         print(f"\naibo-sim: interrupted{hint}", file=sys.stderr)
         return EXIT_INTERRUPTED
 

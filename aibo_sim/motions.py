@@ -372,13 +372,14 @@ def _play(sim: Simulation, motion: Motion, player: MotionPlayer, repeat: int, mo
     dx, dy = end[:2] - position[:2]
     c, s = math.cos(yaw0), math.sin(yaw0)
     forward, left = float(c * dx + s * dy), float(-s * dx + c * dy)
+    played_s = (sim.frame - start_frame) * FRAME_MS / 1000
     return {
         "displacement_m": [forward, left],
         "distance_m": math.hypot(forward, left),
         "heading_change_deg": math.degrees(turned),
         "fell": fell,
-        "duration_s": (sim.frame - start_frame) * FRAME_MS / 1000,
-        "kinematic_distance_m": kinematic_speed(motion) * repeat * motion.length_ms / 1000,
+        "duration_s": played_s,
+        "kinematic_distance_m": kinematic_speed(motion) * min(repeat * motion.length_ms / 1000, played_s),  # to a fall
         "peak_leg_joint_speed_rad_s": meter.peak_speed,
         "paw_stance_share": meter.paw_share,
         # On the field, as ``--pose`` takes them: x, y (m), yaw (deg).

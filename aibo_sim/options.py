@@ -13,10 +13,12 @@ from __future__ import annotations
 
 import argparse
 import math
+from pathlib import Path
 
 from openr_bridge import CAMERA_DEFAULTS, CAMERA_SETTINGS
 
 from .camera import PROFILES, CameraSettings
+from .sim import SEED_LIMIT
 
 MAX_MAGNITUDE = 1e6  # |value| beyond this is a typo, not a position (metres) or an angle (degrees)
 CAMERA_SETTING_OPTIONS = (("white_balance", "--camera-wb"), ("gain", "--camera-gain"), ("shutter", "--camera-shutter"))
@@ -46,14 +48,14 @@ def finite_float(text: str) -> float:
     return value
 
 
-def non_negative_int(text: str) -> int:
-    """argparse type: a whole number >= 0 (a seed)."""
+def seed_number(text: str) -> int:
+    """argparse type: a seed, a whole number from 0 to 2**64 - 1."""
     try:
         value = int(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"{text!r} is negative (a seed is a whole number >= 0)")
+    if not 0 <= value < SEED_LIMIT:
+        raise argparse.ArgumentTypeError(f"{text!r} is out of range (a seed is a whole number from 0 to 2**64 - 1)")
     return value
 
 
@@ -65,7 +67,7 @@ def add_world_options(parser: argparse.ArgumentParser, camera: bool = True) -> N
                         help="robot position on the field (m) and heading (deg); default: the scene's start")
     parser.add_argument("--ball", type=finite_float, nargs=2, metavar=("X", "Y"),
                         help="ball position on the field (m); default: the scene's")
-    parser.add_argument("--seed", type=non_negative_int, default=0, metavar="N",
+    parser.add_argument("--seed", type=seed_number, default=0, metavar="N",
                         help="random seed (IR and camera noise, randomised choices; default 0)")
     if not camera:
         return
@@ -102,6 +104,15 @@ def start_values(name: str, values, count: int) -> tuple[float, ...] | None:
     if len(numbers) != count or not all(math.isfinite(v) for v in numbers):
         raise ValueError(f"{name} must be {count} finite numbers, not {' '.join(map(str, numbers))}")
     return numbers
+
+
+def make_out_folder(path) -> Path:
+    """``--out``: the folder, made with its parents; NotADirectoryError naming it if it is a file."""
+    path = Path(path)
+    if path.exists() and not path.is_dir():
+        raise NotADirectoryError(f"--out {path}: not a folder")
+    path.mkdir(parents=True, exist_ok=True)
+    return path
 
 
 def place(sim, pose: tuple[float, float, float] | None = None, ball: tuple[float, float] | None = None) -> None:

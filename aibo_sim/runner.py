@@ -17,10 +17,13 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+import openr_bridge
+
 from . import controller
 from .camera import CameraSettings
-from .cbind import CControllerError, compile_controller, controller_sources, is_c_controller, run_c_controller
-from .options import place, start_values
+from .cbind import (C_SUFFIXES, CControllerError, compile_controller, controller_sources, is_c_controller,
+                    run_c_controller)
+from .options import make_out_folder, place, start_values
 from .robot import Robot, SimulationEnd
 from .sim import Simulation, SimulationDiverged, models_dir
 
@@ -65,18 +68,36 @@ RUN_FILE = "run.json"
 RUN_FRAME_NAMES = re.compile(r"\d{6,}\.png|\.\d{6,}\.png\.tmp|\d{6,}\.partial\.png")
 
 
+def check_python_controller(path: Path) -> None:
+    """A Python controller file that exists and compiles: FileNotFoundError, or ValueError naming
+    the file and line of a syntax error (bad input, found before anything is run or written)."""
+    if not path.is_file():
+        main_files = " or ".join(path.name + suffix for suffix in C_SUFFIXES)
+        what = (f"a folder with no {main_files} (a C or C++ controller folder holds its main file under the "
+                "folder's name)" if path.is_dir() else "no such controller file")
+        raise FileNotFoundError(f"{path}: {what}")
+    try:
+        compile(path.read_bytes(), str(path), "exec")
+    except SyntaxError as exc:  # IndentationError too
+        code = f" ({exc.text.strip()!r})" if exc.text and exc.text.strip() else ""
+        raise ValueError(f"{path}, line {exc.lineno}: {type(exc).__name__}: {exc.msg}{code}") from None
+
+
 def write_file_atomic(path: Path, data: bytes) -> None:
     """Write ``path`` whole or not at all: as ``.NAME.tmp`` in the same folder (a name no
-    pattern of the final files matches), then renamed. An OSError names ``path`` and leaves
-    no temporary file (a full disk: "cannot write PATH: No space left on device")."""
+    pattern of the final files matches), then renamed. An OSError names ``path``; no
+    temporary file is left, whatever stops the write (a full disk: "cannot write PATH: No space
+    left on device"; Ctrl-C)."""
     temp = path.with_name(f".{path.name}.tmp")
     try:
         with open(temp, "wb") as file:
             file.write(data)
         os.replace(temp, path)
-    except OSError as exc:
+    except BaseException as exc:
         with contextlib.suppress(OSError):
             temp.unlink()
+        if not isinstance(exc, OSError):
+            raise
         error = OSError(f"cannot write {path}: {exc.strerror or exc}")
         error.errno = exc.errno
         raise error from exc
@@ -167,13 +188,35 @@ class FrameWriter:
             raise self.error
 
 
+# Where the frames that call a controller, and that its API calls raise from, live.
+_SIMULATOR_CODE = (*(str(Path(package.__file__).resolve().parent) + os.sep for package in (controller, openr_bridge)),
+                   runpy.__file__, "<frozen runpy>")
+
+
+def controller_traceback(error: BaseException) -> str:
+    """``error``'s traceback as the controller's author needs it: their own frames, without the
+    simulator's and runpy's around them (an API call's error names what was wrong); chained
+    exceptions raised inside the simulator alone are left out."""
+    def own(exc: traceback.TracebackException) -> traceback.TracebackException:
+        frames = [frame for frame in exc.stack if not frame.filename.startswith(_SIMULATOR_CODE)]
+        exc.stack = traceback.StackSummary.from_list(frames or exc.stack)
+        for link in ("__cause__", "__context__"):
+            chained = getattr(exc, link)
+            if chained is not None:
+                outside = any(not f.filename.startswith(_SIMULATOR_CODE) for f in chained.stack)
+                setattr(exc, link, own(chained) if outside else None)
+        return exc
+
+    return "".join(own(traceback.TracebackException.from_exception(error)).format())
+
+
 @contextlib.contextmanager
-def _controller_context(controller_dir: Path, out: Path | None):
-    """Modules beside the controller import; its files land in ``out`` (when given)."""
+def _controller_context(controller_dir: Path, workdir: Path | None):
+    """Modules beside the controller import; its files land in ``workdir`` (when given)."""
     previous = Path.cwd()
     sys.path.insert(0, str(controller_dir))
-    if out is not None:
-        os.chdir(out)
+    if workdir is not None:
+        os.chdir(workdir)
     try:
         yield
     finally:
@@ -218,7 +261,8 @@ def run_controller(path: str | Path, *, backend: str = "sim", duration: float = 
                    out: str | Path | None = None, mtn_mode: str = "openr", memory_stick=None,
                    camera_full: bool = False, camera_profile: str = "ers7",
                    camera_settings: CameraSettings | None = None, pose: tuple[float, float, float] | None = None,
-                   ball: tuple[float, float] | None = None, frame_listeners=(), progress: bool = True) -> RunSummary:
+                   ball: tuple[float, float] | None = None, frame_listeners=(), progress: bool = True,
+                   workdir: str | Path | None = None) -> RunSummary:
     """Run a controller for ``duration`` simulated seconds; frames, its files and ``run.json``
     (the summary) go to ``out``. The controller is a Python file, or a C or C++ file or folder
     (``aibo_sim.cbind``: compiled first, a CompileError when it does not compile).
@@ -226,15 +270,16 @@ def run_controller(path: str | Path, *, backend: str = "sim", duration: float = 
     The robot starts at ``pose`` (x, y in metres, yaw in degrees; default the scene's start),
     the ball at ``ball``; the head camera is ``camera_profile`` (``ers7`` or ``ideal``) with
     ``camera_settings`` at the start. ``frame_listeners`` are called with the robot after every
-    8 ms frame; ``progress=False`` silences the progress bar (worker processes).
+    8 ms frame; ``progress=False`` silences the progress bar (worker processes). The controller
+    runs in ``workdir`` (default ``out``; with neither, the current folder): its files land there.
     """
     path = Path(path).resolve()
     executable = None
     if is_c_controller(path):
         executable = compile_controller(path)
         path = controller_sources(path)[0]  # the main file: its folder holds the controller's motions
-    elif not path.is_file():
-        raise FileNotFoundError(f"{path}: no such controller file")
+    else:
+        check_python_controller(path)
     if isinstance(duration, (str, bytes, bool)) or not isinstance(duration, (int, float, np.integer, np.floating)):
         raise ValueError(f"--duration must be a number of seconds, not {duration!r}")
     if not (math.isfinite(duration) and duration > 0):
@@ -244,18 +289,17 @@ def run_controller(path: str | Path, *, backend: str = "sim", duration: float = 
                      camera_settings=camera_settings)
     try:
         place(sim, pose, ball)
-        camera = sim.camera.describe()
         robot = Robot(sim, backend=backend, mtn_mode=mtn_mode, memory_stick=memory_stick,
                       search_dirs=motion_dirs(path))
+        camera = sim.camera.describe((robot.camera_source.width, robot.camera_source.height))  # what it serves
     except BaseException:
         sim.close()
         raise
     robot.end_ms = int(round(duration * 1000))
     writer = None
     if out is not None:
-        out = Path(out).resolve()
         try:
-            out.mkdir(parents=True, exist_ok=True)
+            out = make_out_folder(Path(out).resolve())
             writer = FrameWriter(out, controller=path, backend=backend)
         except BaseException:
             sim.close()
@@ -272,7 +316,7 @@ def run_controller(path: str | Path, *, backend: str = "sim", duration: float = 
     # The physics diverges: SimulationDiverged (exit status 3). Its robot_die functions run in
     # every case (Ctrl-C too); one that raises is reported after the controller's own error.
     try:
-        with _controller_context(path.parent, out):
+        with _controller_context(path.parent, out if workdir is None else Path(workdir).resolve()):
             error: BaseException | None = None
             try:
                 if executable is None:
@@ -291,7 +335,7 @@ def run_controller(path: str | Path, *, backend: str = "sim", duration: float = 
             where = f"at simulated t = {ended_ms / 1000:.3f} s"
             die_report = "".join(
                 f"\n{'then ' if error is not None or k else ''}its robot_die function "
-                f"{getattr(fn, '__qualname__', repr(fn))} raised:\n" + "".join(traceback.format_exception(exc)).rstrip()
+                f"{getattr(fn, '__qualname__', repr(fn))} raised:\n" + controller_traceback(exc).rstrip()
                 for k, (fn, exc) in enumerate(die_failures))
             if isinstance(error, SimulationDiverged):
                 if die_report:
@@ -306,14 +350,15 @@ def run_controller(path: str | Path, *, backend: str = "sim", duration: float = 
                 raise ControllerFailed(f"controller {path.name}: {error} {where}") from error
             if error is not None:
                 raise ControllerFailed(f"controller {path.name} raised {where}:\n"
-                                       + "".join(traceback.format_exception(error)) + die_report) from error
+                                       + controller_traceback(error) + die_report) from error
             if die_report:
                 raise ControllerFailed(f"controller {path.name} ended {where};{die_report}")
-    except (ControllerFailed, SimulationDiverged) as failure:
+    except (ControllerFailed, SimulationDiverged, KeyboardInterrupt) as failure:
         if writer is not None:  # the frames so far stay, and run.json says how the run ended
-            writer.write_run_json({"controller": str(path), "backend": backend, "status": "failed",
-                                   "error": str(failure), "simulated_s": robot.time_ms / 1000,
-                                   "camera_frames": writer.count})
+            ended = {"status": "interrupted"} if isinstance(failure, KeyboardInterrupt) else \
+                {"status": "failed", "error": str(failure)}
+            writer.write_run_json({"controller": str(path), "backend": backend, **ended,
+                                   "simulated_s": robot.time_ms / 1000, "camera_frames": writer.count, "camera": camera})
         raise
     finally:
         progress_bar.close()

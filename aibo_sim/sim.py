@@ -8,6 +8,7 @@ simulated time reaches the next multiple of 1/30 s.
 from __future__ import annotations
 
 import math
+import numbers
 from collections.abc import Callable
 from pathlib import Path
 
@@ -23,6 +24,7 @@ from .ers7 import DISTANCE_SENSORS, HEAD_CAMERA, JOINTS, LED_BY_NAME, LED_OFF_RG
 FRAME_MS = FRAME_TICK_MS  # OPEN-R joint frame, 8 ms
 GRAVITY = 9.80665
 ACCEL_RANGE = 2 * GRAVITY  # Sony: +-19 613 300 um/s^2
+SEED_LIMIT = 2**64  # seeds are whole numbers below this (the camera's noise mixes 64 bits of them)
 IR_NOISE = 0.1  # Webots lookup tables: 10 % noise at mid-range, none at the ends
 
 
@@ -63,8 +65,9 @@ def load_model(scene: str | Path | None = None, ball: bool = True) -> mujoco.MjM
             model = spec.compile()
         scene_light(model)  # its custom numerics in range
         return model
-    except ValueError as exc:
-        raise ModelError(f"{path}: {exc}") from None
+    except ValueError as exc:  # MuJoCo's message spans lines (the element and line on the second): one line
+        lines = (line.strip().rstrip(":") for line in str(exc).splitlines())
+        raise ModelError(f"{path}: " + "; ".join(line for line in lines if line)) from None
 
 
 def check_robot(model: mujoco.MjModel, path, keyframe: str = "stand") -> None:
@@ -237,6 +240,9 @@ class Simulation:
 
     def reset(self, seed: int | None = None, keyframe: str | None = None) -> None:
         if seed is not None:
+            if isinstance(seed, bool) or not isinstance(seed, numbers.Integral) or not 0 <= seed < SEED_LIMIT:
+                raise ValueError(f"seed must be a whole number from 0 to 2**64 - 1, not {seed!r}")
+            seed = int(seed)
             self.rng = np.random.default_rng(seed)  # IR noise; the camera's noise has its own stream
             self.seed = seed
         key = self.model.key(keyframe or self.keyframe).id

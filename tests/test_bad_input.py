@@ -2,6 +2,7 @@
 end (an exception, sys.exit, Ctrl-C, a robot_die function that raises) is reported as such;
 CONNECT.CFG is parsed in linear time, quoted briefly and read only from a regular file (issue 15)."""
 
+import json
 import math
 import os
 import re
@@ -278,6 +279,33 @@ def test_ctrl_c_in_a_controller_exits_130_after_its_robot_die_functions(tmp_path
     assert main(["run", str(ctl), "--duration", "1", "--out", str(out)]) == 130
     assert "interrupted" in capsys.readouterr().err
     assert (out / "die.txt").read_text() == "ran"
+    run = json.loads((out / "run.json").read_text())
+    assert (run["status"], run["simulated_s"], run["camera"]["profile"]) == ("interrupted", 0.008, "ers7")
+
+
+def test_sigterm_ends_a_run_as_ctrl_c_does_with_143(tmp_path):
+    import signal
+    import subprocess
+    import sys
+
+    ctl = controller(tmp_path, "camera = robot_get_device('PRM:/r1/c1/c2/c3/i1-FbkImageSensor:F1')\n"
+                               "camera_enable(camera, 32)\n"
+                               "robot_die(lambda: open('die.txt', 'w').write('ran'))\n"
+                               "while True:\n    robot_step(32)\n")
+    out = tmp_path / "out"
+    process = subprocess.Popen([sys.executable, "-m", "aibo_sim.cli", "run", str(ctl), "--duration", "1e5",
+                                "--out", str(out)], stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 60
+    while not list((out / "frames").glob("*.png")) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    process.send_signal(signal.SIGTERM)
+    _, err = process.communicate(timeout=60)
+    assert process.returncode == 143 and err.strip() == "aibo-sim: terminated (SIGTERM)", err
+    run = json.loads((out / "run.json").read_text())
+    frames = sorted(p.name for p in (out / "frames").iterdir())
+    assert run["status"] == "interrupted" and run["camera_frames"] == len(frames) > 0
+    assert all(name.endswith(".png") and not name.startswith(".") for name in frames)  # no temporary file left
+    assert (out / "die.txt").read_text() == "ran"
 
 
 def test_a_state_mujoco_resets_silently_counts_as_diverged():
@@ -315,3 +343,32 @@ def test_output_into_a_closed_pipe_ends_quietly_with_141():
     finally:
         os.close(write_end)
     assert (done.returncode, done.stderr) == (141, "")
+
+
+def test_seeds_beyond_64_bits_are_refused_rather_than_aliased(capsys):
+    with pytest.raises(SystemExit) as exited:  # argparse's own error, before anything runs
+        main(["render", "--seed", str(2**64), "--out", "unused"])
+    assert exited.value.code == 2
+    one_error_line(capsys, "--seed", "from 0 to 2**64 - 1")
+    with pytest.raises(ValueError, match="seed must be a whole number from 0 to 2\\*\\*64 - 1"):
+        Simulation(seed=2**64)
+
+
+def test_mujoco_s_scene_errors_come_on_one_line(tmp_path, capsys):
+    scene = tmp_path / "odd.xml"
+    scene.write_text("<mujoco>\n<statistic bogus='1'/>\n</mujoco>\n")
+    assert main(["render", "--scene", str(scene), "--out", str(tmp_path / "out")]) == 2
+    one_error_line(capsys, "odd.xml", "unrecognized attribute: 'bogus'", "Element 'statistic', line 2")
+
+
+def test_an_out_that_is_a_file_and_a_missing_side_by_side_frame_are_named(tmp_path, capsys):
+    taken = tmp_path / "taken"
+    taken.write_text("keep")
+    assert main(["render", "--out", str(taken)]) == 2
+    one_error_line(capsys, f"--out {taken}: not a folder")
+    assert main(["run", str(SCRIPTED), "--duration", "0.1", "--out", str(taken)]) == 2
+    one_error_line(capsys, f"--out {taken}: not a folder")
+    assert taken.read_text() == "keep"
+    assert main(["render", "--side-by-side", str(tmp_path / "real.png"), "--out", str(tmp_path / "out")]) == 2
+    one_error_line(capsys, f"--side-by-side {tmp_path / 'real.png'}: no such file")
+    assert not (tmp_path / "out").exists()

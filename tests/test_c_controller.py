@@ -225,7 +225,7 @@ def test_a_folder_without_its_main_file_is_refused(tmp_path, capsys):
     (folder / "other.c").write_text("int main(void) { return 0; }\n")
     assert not cbind.is_c_controller(folder)
     assert main(["run", str(folder)]) == 2
-    assert "no such controller file" in capsys.readouterr().err
+    assert f"{folder}: a folder with no walker.c or walker.cc or walker.cpp" in capsys.readouterr().err
 
 
 def test_dump_takes_a_c_controller_as_it_takes_its_python_twin(tmp_path, monkeypatch):

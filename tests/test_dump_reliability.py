@@ -6,6 +6,7 @@ a full disk."""
 import fnmatch
 import json
 import os
+import re
 import resource
 import shutil
 import signal
@@ -295,6 +296,37 @@ def test_corrupt_meta_and_frames_name_the_file_and_line(small_dump, tmp_path, ca
     (out / "meta.json").write_bytes(b'{"format": "\xff"}')
     with pytest.raises(DumpError, match=r"meta\.json: not UTF-8"):
         load_dump(out)
+
+
+def test_resume_rewrites_fixed_size_files_of_the_wrong_size(tmp_path, capsys):
+    formats = ("rgb", "yuv420", "openr", "depth")
+    reference = tmp_path / "reference"
+    dump(reference, controller=TRACKER, frames=10, formats=formats)
+    out = tmp_path / "dump"
+    shutil.copytree(reference, out)
+    for name in ("openr/000009.ofbk", "yuv420/000003.yuv", "depth/000003.npy"):
+        with open(out / name, "r+b") as file:
+            file.truncate(100)
+    argv = ["dump", str(TRACKER), "--out", str(out), "--steps", "10", "--formats", ",".join(formats), "--resume"]
+    assert main(argv) == 0
+    assert "(0 written now, 2 with missing or damaged files rewritten)" in capsys.readouterr().out
+    assert {k: v[0] for k, v in _snapshot(out).items()} == {k: v[0] for k, v in _snapshot(reference).items()}
+
+
+def test_load_dump_names_a_damaged_file(small_dump, tmp_path):
+    out = tmp_path / "dump"
+    shutil.copytree(small_dump, out)
+    yuv, png = out / "yuv420" / "000001.yuv", out / "rgb" / "000002.png"
+    with open(yuv, "r+b") as file:
+        file.truncate(0)
+    png.write_bytes(b"not a PNG")
+    frames = load_dump(out)
+    with pytest.raises(DumpError, match=f"^{re.escape(str(yuv))}: 0 bytes, expected 49920; the file is truncated "
+                                        "or corrupt$"):
+        frames[1].yuv420
+    with pytest.raises(DumpError, match=f"^{re.escape(str(png))}: not a readable PNG; the file is corrupt$"):
+        frames[2].rgb
+    assert frames[2].yuv420[0].shape == frames[1].rgb.shape[:2]
 
 
 # ---------------------------------------------------------------- run --out

@@ -132,3 +132,13 @@ def test_play_motion_rejects_bad_arguments():
     stray = Motion.from_poses("x", ["PRM:/r9/c1-Joint2:91"], [[0.0]], 16)
     with pytest.raises(ValueError, match="locator"):
         motions.play_motion(stray)
+
+
+def test_a_fall_ends_the_report_s_kinematic_distance_too():
+    """SIT.MTN played over and over jumps from sitting back to its first pose and tips the robot
+    over: the kinematic distance is the motion's kinematics over what was played, not over
+    every repeat asked for."""
+    sit = models_dir() / "motions" / "SIT.MTN"
+    played = motions.play_motion(sit, repeat=50)
+    assert played["fell"] and played["duration_s"] < 50 * read_mtn(sit).length_ms / 1000
+    assert played["kinematic_distance_m"] == pytest.approx(motions.kinematic_speed(read_mtn(sit)) * played["duration_s"])

@@ -1,6 +1,7 @@
 """The headless runner, the CLI, both backends on one controller, the Annex I port (issue 4)."""
 
 import json
+import re
 from pathlib import Path
 
 import cv2
@@ -69,6 +70,36 @@ def test_controller_exception_reports_simulated_time(tmp_path):
     with pytest.raises(ControllerFailed, match=r"t = 0\.224 s(.|\n)*RuntimeError: boom"):
         run_controller(bad, duration=1.0)
     assert main(["run", str(bad), "--duration", "1"]) == 1
+
+
+def test_a_controller_error_shows_the_controller_s_frames_only(tmp_path):
+    """An API call's error: the controller's lines and the message, not the simulator's frames
+    (runpy, runner, controller.py, robot.py) nor the exception the simulator raised it from."""
+    bad = tmp_path / "bad.py"
+    bad.write_text("from aibo_sim.controller import *\n"
+                   "cam = robot_get_device('PRM:/r1/c1/c2/c3/i1-FbkImageSensor:F1')\n"
+                   "def run(ms):\n"
+                   "    camera_set_gain(cam, 7)\n"
+                   "robot_live(None)\nrobot_run(run)\n")
+    with pytest.raises(ControllerFailed) as failure:
+        run_controller(bad, duration=0.1)
+    report = str(failure.value)
+    frames = re.findall(r'File "([^"]+)", line (\d+)', report)
+    assert frames == [(str(bad), "6"), (str(bad), "4")], report
+    assert report.rstrip().endswith("the value must be 1 (ocamparamGAIN_LOW), 2 (ocamparamGAIN_MID) or 3 "
+                                    "(ocamparamGAIN_HIGH)") and "above exception" not in report, report
+
+
+def test_a_syntax_error_is_bad_input_found_before_anything_runs(tmp_path, capsys):
+    bad = tmp_path / "syntax.py"
+    bad.write_text("from aibo_sim.controller import *\ndef init(:\n    pass\n")
+    for command in (["run", str(bad), "--out", str(tmp_path / "run")],
+                    ["dump", str(bad), "--out", str(tmp_path / "dump"), "--steps", "2"]):
+        assert main(command) == 2
+        assert capsys.readouterr().err.strip() == f"aibo-sim: error: {bad}, line 2: SyntaxError: invalid syntax ('def init(:')"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["syntax.py"]  # no folder made
+    assert main(["run", str(tmp_path)]) == 2
+    assert f"{tmp_path}: a folder with no {tmp_path.name}.c or {tmp_path.name}.cc or" in capsys.readouterr().err
 
 
 def test_cli_bad_input_exits_2_with_a_clear_message(tmp_path, capsys):
@@ -153,3 +184,14 @@ def test_cli_mtn_info_and_play(capsys, tmp_path):
     broken.write_bytes(walk.read_bytes()[:100])
     assert main(["mtn", "info", str(broken)]) == 2
     assert "BROKEN.MTN" in capsys.readouterr().err
+
+
+def test_run_json_describes_the_pictures_the_backend_serves(tmp_path):
+    """On openr, --camera-full renders 416x320 but the wrapper serves layer H: run.json's lens is
+    that of the 208x160 frames written."""
+    full = run_controller(SCRIPTED, duration=0.1, camera_full=True, out=tmp_path / "sim").camera
+    served = run_controller(SCRIPTED, backend="openr", camera_full=True, duration=0.1, out=tmp_path / "openr").camera
+    frame = cv2.imread(str(next((tmp_path / "openr" / "frames").glob("*.png"))))
+    assert (full["width"], full["height"], served["width"], served["height"]) == (416, 320, 208, 160)
+    assert frame.shape == (160, 208, 3) and served["fx"] == pytest.approx(full["fx"] / 2, abs=1e-3)
+    assert json.loads((tmp_path / "openr" / "run.json").read_text())["camera"] == served

@@ -156,9 +156,10 @@ class HeadCamera:
         if self.sensor is not None:
             self.sensor.configure(self.sensor.settings, robot)
 
-    def describe(self) -> dict:
-        """Profile, lens and settings, as run.json and meta.json record them."""
-        return describe_camera(self.profile, self._settings, (self.width, self.height), self.light)
+    def describe(self, size: tuple[int, int] | None = None) -> dict:
+        """Profile, lens and settings, as run.json and meta.json record them, for pictures of
+        ``size`` (default the camera's own; the openr backend serves layer H of it)."""
+        return describe_camera(self.profile, self._settings, size or (self.width, self.height), self.light)
 
     # ---------------------------------------------------------------- timing (called by Simulation)
 

@@ -3,8 +3,8 @@
 Usage::
 
     aibo-sim dump (CONTROLLER | --env ENV_ID [--policy random|scripted|zero]) --out DIR
-                  [--duration S | --steps N] [--backend sim|openr]
-                  [--scene FILE] [--pose X Y YAW_DEG] [--ball X Y] [--seed N]
+                  [--duration S | --steps N] [--backend sim|openr] [--mtn-mode openr|webots]
+                  [--memory-stick DIR] [--scene FILE] [--pose X Y YAW_DEG] [--ball X Y] [--seed N]
                   [--camera-profile ers7|ideal] [--camera-wb W] [--camera-gain G] [--camera-shutter S]
                   [--formats rgb,yuv444,yuv420,annex,openr,bands,luma,depth,seg,mp4,coco | all]
                   [--camera-full] [--resume] [--workers N] [--engine local|ray] [--ray-address ADDR]
@@ -21,6 +21,8 @@ controller is the camera frame index, k / 30 s)::
                          distortion), every file's path and layout
     frames.jsonl         one line per complete frame (see ``frame_metadata``)
     .dump.lock           the writer's lock: pid, command and start time of the dump writing now
+    controller_files/    a controller dump's working folder: the files the controller writes
+                         (``run --out`` puts them in its folder); each shard has its own
     rgb/000123.png       8-bit RGB
     yuv444/000123.yuv    I444 planar: Y, then U (Cb), then V (Cr), each w x h
     yuv420/000123.yuv    I420 planar: Y (w x h), U, V (w/2 x h/2): ffmpeg -pix_fmt yuv420p
@@ -49,11 +51,12 @@ line goes into frames.jsonl after all its files. A frame is complete when its li
 there; readers see only complete frames. ``--resume`` re-runs the same simulation from the
 start (it is deterministic for a seed: a resumed dump is byte-identical to an uninterrupted
 one, whatever the formats), drops a partial last line, writes the frames that are not
-complete, rewrites those listed whose files are missing, and rebuilds video.mp4 from every
-frame. coco.json is written at the end from frames.jsonl's records (each frame's
-``"objects"``), so a resumed dump's is the same too. It refuses a dump made with other
-parameters or from a controller file whose content changed since (meta.json records its
-SHA-256).
+complete, rewrites those listed whose files are missing or, in a fixed-size format (every
+one but the PNGs), of the wrong size, and rebuilds video.mp4 from every frame. The
+controller runs again from the start in controller_files/, rewriting its files there.
+coco.json is written at the end from frames.jsonl's records (each frame's ``"objects"``),
+so a resumed dump's is the same too. It refuses a dump made with other parameters or from
+a controller file whose content changed since (meta.json records its SHA-256).
 
 One writer per folder: a dump holds an ``flock`` on ``DIR/.dump.lock`` (which names its
 pid, command and start time) while it writes; a second dump or ``--resume`` into the folder

@@ -3,42 +3,15 @@
 from __future__ import annotations
 
 import argparse
-import contextlib
-import signal
 import sys
-import threading
 
 from openr_bridge import FRAME_RATE_HZ
 
+from ..mtn import MODES as MTN_MODES
 from ..options import add_world_options, camera_options, finite_float
 from ..robot import BACKENDS
 from .formats import DEFAULT_FORMATS, FORMATS
 from .running import ENGINES, POLICIES, dump
-
-EXIT_TERMINATED = 128 + signal.SIGTERM  # 143, as a shell reports a process that SIGTERM ended
-
-
-class Terminated(KeyboardInterrupt):
-    """SIGTERM, raised in the main thread so that a dump stops as after Ctrl-C: writers abort
-    (temporary files removed, locks released), workers are stopped. A KeyboardInterrupt so
-    that no ``except Exception`` (a controller's own) swallows it."""
-
-
-def _raise_terminated(signum, frame):
-    raise Terminated()
-
-
-@contextlib.contextmanager
-def _sigterm_stops_cleanly():
-    """SIGTERM raises ``Terminated`` while the dump runs (main thread only; restored after)."""
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    previous = signal.signal(signal.SIGTERM, _raise_terminated)
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGTERM, previous)
 
 
 def _dump_command(args) -> int:
@@ -46,17 +19,13 @@ def _dump_command(args) -> int:
     if args.steps is not None and args.steps <= 0 or args.duration is not None and args.duration <= 0:
         raise ValueError("--steps and --duration must be positive")
     frames = args.steps if args.steps is not None else round((args.duration or 10.0) * FRAME_RATE_HZ)
-    try:
-        with _sigterm_stops_cleanly():
-            summary = dump(args.out, controller=args.controller, env=args.env, policy=args.policy, frames=frames,
-                           backend=args.backend, scene=args.scene, seed=args.seed, pose=args.pose and tuple(args.pose),
-                           ball=args.ball and tuple(args.ball), formats=formats, resume=args.resume,
-                           workers=args.workers, engine=args.engine, ray_address=args.ray_address,
-                           **camera_options(args))
-    except Terminated:
-        print("aibo-sim: terminated (SIGTERM): the dump stopped cleanly; continue it with --resume", file=sys.stderr)
-        return EXIT_TERMINATED
-    repaired = f", {summary.repaired_frames} with missing files rewritten" if summary.repaired_frames else ""
+    # Ctrl-C and SIGTERM (``cli.sigterm_stops_cleanly``) stop it cleanly: writers abort, workers stop.
+    summary = dump(args.out, controller=args.controller, env=args.env, policy=args.policy, frames=frames,
+                   backend=args.backend, scene=args.scene, seed=args.seed, pose=args.pose and tuple(args.pose),
+                   ball=args.ball and tuple(args.ball), formats=formats, resume=args.resume,
+                   workers=args.workers, engine=args.engine, ray_address=args.ray_address,
+                   mtn_mode=args.mtn_mode, memory_stick=args.memory_stick, **camera_options(args))
+    repaired = f", {summary.repaired_frames} with missing or damaged files rewritten" if summary.repaired_frames else ""
     print(f"dumped {summary.frames} frames to {summary.out} ({summary.new_frames} written now{repaired}) in "
           f"{summary.wall_s:.1f} s: {summary.frames_per_s:.1f} frames/s, "
           f"{summary.bytes_written / 1e6 / max(summary.wall_s, 1e-9):.2f} MB/s")
@@ -76,6 +45,11 @@ def add_dump_parser(subcommands) -> argparse.ArgumentParser:
     length.add_argument("--duration", type=finite_float, help="simulated seconds, 30 frames each (default 10)")
     length.add_argument("--steps", type=int, help="camera frames (controller) or environment steps")
     parser.add_argument("--backend", choices=BACKENDS, default="sim", help="what the controller sees")
+    parser.add_argument("--mtn-mode", choices=MTN_MODES,
+                        help="controller dumps: MTN playback, OPEN-R interpolation (default openr) or Webots "
+                             "keyframe stepping")
+    parser.add_argument("--memory-stick", metavar="DIR",
+                        help="controller dumps: OPEN-R memory stick folder for the openr backend")
     add_world_options(parser)  # --scene, --pose, --ball, --seed (shard k of --workers: seed + k), camera
     parser.add_argument("--formats", default=",".join(DEFAULT_FORMATS),
                         help=f"comma-separated from {','.join(FORMATS)}, or all (default {','.join(DEFAULT_FORMATS)})")

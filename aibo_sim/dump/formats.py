@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+import io
+
 import cv2
 import mujoco
 import numpy as np
 
 import openr_bridge
-from openr_bridge.image import BAND_RUNS
+from openr_bridge.image import BAND_RUNS, IMAGE_INFO_SIZE, VECTOR_INFO_SIZE
 
 from ..camera import HEAD_CAMERA_GROUPS
 from ..ers7 import JOINTS
@@ -88,6 +90,13 @@ def png(image: np.ndarray) -> bytes:
     return encoded.tobytes()
 
 
+def npy(array: np.ndarray) -> bytes:
+    """``np.save``'s bytes of an array."""
+    buffer = io.BytesIO()
+    np.save(buffer, array)
+    return buffer.getvalue()
+
+
 def geom_classes(model: mujoco.MjModel) -> np.ndarray:
     """Segmentation class id per geom id, plus a last entry (background) that id -1 selects."""
     robot_root = model.body_rootid[model.body("body").id]
@@ -105,21 +114,23 @@ def geom_classes(model: mujoco.MjModel) -> np.ndarray:
 
 
 def file_layouts(formats, width: int, height: int) -> dict:
-    """meta.json's "files": each format's path pattern, layout and size in bytes."""
+    """meta.json's "files": each format's path pattern, layout and size in bytes (None: it varies)."""
     size, full = f"{width}x{height}", f"{openr_bridge.FULL_WIDTH}x{openr_bridge.FULL_HEIGHT}"
+    bands = {name: BAND_RUNS[layer_type][1] * w * h for name, (w, h), layer_type
+             in zip(openr_bridge.LAYER_NAMES, openr_bridge.LAYER_SIZE, openr_bridge.LAYER_TYPE, strict=True)}
     layouts = {
         "rgb": (f"PNG, 8-bit RGB, {size}", None),
         "yuv444": (f"I444 planar, {size}, Y then U (Cb) then V (Cr), BT.601 limited range", 3 * width * height),
         "yuv420": (f"I420 planar (ffmpeg yuv420p), {size}, Y then U (Cb) then V (Cr) at "
                    f"{width // 2}x{height // 2}, BT.601 limited range", width * height * 3 // 2),
         "annex": (f"Annex I: Y, U, V bytes per pixel, row-major, {size}", 3 * width * height),
-        "openr": ("OFbkImageVectorData message bytes", None),
+        "openr": ("OFbkImageVectorData message bytes",  # the header, the layers' infos, the layers back to back
+                  VECTOR_INFO_SIZE + IMAGE_INFO_SIZE * len(bands) + sum(bands.values())),
         "bands": ("a layer's GetData bytes: H, M, L rows of Y, Cr, Cb, Y_LH, Y_HL, Y_HH (6 w h bytes), C the CDT "
-                  "band (w h bytes)",
-                  {name: BAND_RUNS[layer_type][1] * w * h for name, (w, h), layer_type
-                   in zip(openr_bridge.LAYER_NAMES, openr_bridge.LAYER_SIZE, openr_bridge.LAYER_TYPE, strict=True)}),
+                  "band (w h bytes)", bands),
         "luma": (f"PNG, 8-bit grey, {full}, reconstruct_luma of layer H", None),
-        "depth": (f"NumPy float32 {size}, metres along the optical axis", None),
+        "depth": (f"NumPy float32 {size}, metres along the optical axis",
+                  len(npy(np.zeros((height, width), np.float32)))),
         "seg": (f"PNG, 8-bit class ids (segmentation_classes), {size}", None),
         "mp4": (f"MP4 (mp4v), 30 fps, {size}", None),
         "coco": ("COCO detection annotations (ball, goal, beacon, robot boxes with visibility) of the rgb files, "

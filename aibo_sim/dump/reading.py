@@ -3,6 +3,7 @@ parsed with errors that name the file and the line (the writer's resume uses the
 
 from __future__ import annotations
 
+import io
 import json
 from pathlib import Path
 
@@ -89,12 +90,26 @@ class DumpFrame:
             raise FileNotFoundError(f"{self.folder}: the dump has no {name!r} files (its formats: {', '.join(files)})")
         return self.folder / files[name]["path"].format(index=self.meta["index"], layer=layer)
 
-    def _raw(self, name: str) -> np.ndarray:
-        return np.fromfile(self.path(name), np.uint8)
+    def _raw(self, name: str, layer: str = "") -> np.ndarray:
+        """A file's bytes (uint8); DumpError naming it when a fixed-size format's has another size."""
+        path = self.path(name, layer)
+        data = np.fromfile(path, np.uint8)
+        expected = self._dump_meta["files"][name].get("bytes")
+        expected = expected.get(layer) if isinstance(expected, dict) else expected
+        if expected is not None and data.size != expected:
+            raise DumpError(f"{path}: {data.size} bytes, expected {expected}; the file is truncated or corrupt")
+        return data
+
+    def _png(self, name: str, flags: int) -> np.ndarray:
+        data = self._raw(name)
+        image = cv2.imdecode(data, flags) if data.size else None
+        if image is None:
+            raise DumpError(f"{self.path(name)}: not a readable PNG; the file is corrupt")
+        return image
 
     @property
     def rgb(self) -> np.ndarray:
-        return cv2.imread(str(self.path("rgb")), cv2.IMREAD_COLOR)[..., ::-1].copy()
+        return self._png("rgb", cv2.IMREAD_COLOR)[..., ::-1].copy()
 
     @property
     def yuv444(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -115,28 +130,35 @@ class DumpFrame:
 
     @property
     def message(self) -> openr_bridge.OFbkImageVectorData:
-        return openr_bridge.OFbkImageVectorData.from_bytes(self.path("openr").read_bytes())
+        try:
+            return openr_bridge.OFbkImageVectorData.from_bytes(self._raw("openr"))
+        except openr_bridge.MessageFormatError as exc:
+            path = self.path("openr")
+            raise DumpError(f"{path}: not an OFbkImageVectorData message ({exc}); the file is corrupt") from None
 
     def bands(self, layer: str | int) -> dict[int, np.ndarray]:
         """The bands of a layer ("H", "M", "L", "C" or ofbkimageLAYER_*) keyed by ofbkimageBAND_*."""
         index = LAYERS[layer] if isinstance(layer, str) else layer
-        data = np.fromfile(self.path("bands", openr_bridge.LAYER_NAMES[index]), np.uint8)
+        data = self._raw("bands", openr_bridge.LAYER_NAMES[index])
         width, height = openr_bridge.LAYER_SIZE[index]
         info = openr_bridge.OFbkImageInfo(openr_bridge.LAYER_TYPE[index], 0, 0, 0, data.size, width, height)
         return {band: openr_bridge.OFbkImage(info, data, band).array for band in BAND_RUNS[info.type][0]}
 
     @property
     def luma(self) -> np.ndarray:
-        return cv2.imread(str(self.path("luma")), cv2.IMREAD_GRAYSCALE)
+        return self._png("luma", cv2.IMREAD_GRAYSCALE)
 
     @property
     def depth(self) -> np.ndarray:
-        return np.load(self.path("depth"))
+        try:
+            return np.load(io.BytesIO(self._raw("depth")))
+        except (ValueError, EOFError):
+            raise DumpError(f"{self.path('depth')}: not a NumPy .npy file; the file is corrupt") from None
 
     @property
     def seg(self) -> np.ndarray:
         """Class ids (h, w) uint8; names in ``Dump.segmentation_classes``."""
-        return cv2.imread(str(self.path("seg")), cv2.IMREAD_GRAYSCALE)
+        return self._png("seg", cv2.IMREAD_GRAYSCALE)
 
 
 class Dump:

@@ -12,15 +12,17 @@ import gymnasium
 import mujoco
 import numpy as np
 
+import openr_bridge
 from openr_bridge import FRAME_RATE_HZ
 
 from ..camera import CameraSettings, camera_size, describe_camera, scene_light
 from ..cbind import compile_controller, controller_sources, is_c_controller
+from ..mtn import MODES as MTN_MODES
 from ..robot import BACKENDS, SimulationEnd
-from ..runner import Progress, run_controller
+from ..runner import Progress, check_python_controller, run_controller
 from ..sim import load_model
 from .formats import DEFAULT_FORMATS, FORMATS
-from .writing import DumpWriter
+from .writing import CONTROLLER_FILES, DumpWriter
 
 POLICIES = ("random", "scripted", "zero")
 ENGINES = ("local", "ray")
@@ -35,7 +37,7 @@ class DumpSummary:
     new_frames: int  # written by this run
     bytes_written: int
     wall_s: float
-    repaired_frames: int = 0  # complete frames whose missing files this run rewrote
+    repaired_frames: int = 0  # complete frames whose missing or wrong-sized files this run rewrote
 
     @property
     def frames_per_s(self) -> float:
@@ -78,12 +80,15 @@ def _dump_controller(parameters: dict, out: Path, resume: bool, **lock) -> DumpW
     with DumpWriter(out, parameters["formats"], parameters, resume=resume, camera=camera, model=model,
                     **lock) as writer:
         listener = _CameraFrames(writer, frames, progress)
+        workdir = out / CONTROLLER_FILES  # the controller's own files: one folder per shard
         try:
+            workdir.mkdir(exist_ok=True)
             run_controller(parameters["controller"], backend=parameters["backend"], duration=frames / FRAME_RATE_HZ,
                            scene=parameters["scene"], seed=parameters["seed"], pose=parameters["pose"],
-                           ball=parameters["ball"], camera_full=camera_full,
+                           ball=parameters["ball"], mtn_mode=parameters["mtn_mode"],
+                           memory_stick=parameters["memory_stick"], camera_full=camera_full,
                            camera_profile=parameters["camera_profile"], camera_settings=settings,
-                           frame_listeners=[listener], progress=False)
+                           frame_listeners=[listener], progress=False, workdir=workdir)
         finally:
             progress.close()
         if listener.error is not None:
@@ -178,10 +183,9 @@ def model_sha256(scene) -> str:
 
 def controller_sha256(path: Path) -> str:
     """The hash of a controller: its file's, or for a C or C++ controller folder, that of its
-    sources' names and hashes (compiled first, so that a compile error stops the dump at once)."""
+    sources' names and hashes (compiled first: a syntax or compile error stops the dump at once)."""
     if not is_c_controller(path):
-        if not path.is_file():
-            raise FileNotFoundError(f"{path}: no such controller file")
+        check_python_controller(path)
         return file_sha256(path)
     compile_controller(path)
     sources = controller_sources(path)[1]
@@ -195,9 +199,12 @@ def dump(out, *, controller: str | Path | None = None, env: str | None = None, p
          pose: tuple[float, float, float] | None = None, ball: tuple[float, float] | None = None,
          formats=DEFAULT_FORMATS, camera_full: bool = False, camera_profile: str = "ers7",
          camera_settings: CameraSettings | None = None, resume: bool = False, workers: int = 1,
-         engine: str = "local", ray_address: str | None = None) -> DumpSummary:
+         engine: str = "local", ray_address: str | None = None, mtn_mode: str | None = None,
+         memory_stick: str | Path | None = None) -> DumpSummary:
     """Dump a controller run (``frames`` camera frames) or an env run (``frames`` steps) to ``out``;
-    ``pose`` (x, y, yaw in degrees) and ``ball`` apply to controller dumps. ``engine="ray"``
+    ``pose`` (x, y, yaw in degrees), ``ball``, ``mtn_mode`` (default openr) and ``memory_stick``
+    apply to controller dumps, as to ``run_controller``; the controller runs in
+    ``out/controller_files`` (a shard's own). ``engine="ray"``
     runs the ``workers`` shards as Ray tasks: on the Ray cluster at ``ray_address``, or on a
     local Ray started for the dump; the files are the same, byte for byte."""
     if (controller is None) == (env is None):
@@ -230,6 +237,13 @@ def dump(out, *, controller: str | Path | None = None, env: str | None = None, p
         raise ValueError("--camera-full applies to controller dumps; environments render their own layer")
     if env is not None and (ball is not None or pose is not None):
         raise ValueError("--ball and --pose apply to controller dumps; environments place the robot and ball themselves")
+    if env is not None and (mtn_mode is not None or memory_stick is not None):
+        raise ValueError("--mtn-mode and --memory-stick apply to controller dumps, not to --env")
+    if mtn_mode is not None and mtn_mode not in MTN_MODES:
+        raise ValueError(f"--mtn-mode must be one of {', '.join(MTN_MODES)}, not {mtn_mode!r}")
+    if memory_stick is not None:
+        memory_stick = Path(memory_stick).resolve()
+        openr_bridge.OpenRSystem.from_memory_stick(memory_stick)  # a ConfigError naming it, before the folder is made
     if env is not None:
         _check_env(env)
     source_sha256 = None
@@ -240,6 +254,7 @@ def dump(out, *, controller: str | Path | None = None, env: str | None = None, p
     parameters = {"controller": controller and str(controller), "env": env, "policy": env and policy,
                   "frames": frames, "backend": backend, "scene": scene and str(Path(scene).resolve()), "seed": seed,
                   "pose": pose and list(pose), "ball": ball and list(ball),
+                  "mtn_mode": controller and (mtn_mode or "openr"), "memory_stick": memory_stick and str(memory_stick),
                   "formats": [f for f in FORMATS if f in formats], "camera_full": camera_full,
                   "camera_profile": camera_profile, "camera_settings": (camera_settings or CameraSettings()).as_dict()}
     if source_sha256 is not None:

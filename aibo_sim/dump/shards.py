@@ -241,10 +241,11 @@ def dump_sharded(parameters: dict, out: Path, resume: bool, workers: int, engine
             results = _run_ray_shards(shards, progress) if engine == "ray" else _run_shards(shards, resume, progress)
         finally:
             progress.close()
-        if "coco" in parameters["formats"]:
-            write_atomic(out / COCO, coco_bytes(out, [folder for _, folder in shards]))
+        coco = coco_bytes(out, [folder for _, folder in shards]) if "coco" in parameters["formats"] else b""
+        if coco:
+            write_atomic(out / COCO, coco)
     finally:
         prepared.lock.release()
     return DumpSummary(str(out), sum(r.frames for r in results), sum(r.new_frames for r in results),
-                       sum(r.bytes_written for r in results), time.perf_counter() - start,
+                       sum(r.bytes_written for r in results) + len(coco), time.perf_counter() - start,
                        sum(r.repaired_frames for r in results))

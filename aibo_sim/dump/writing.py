@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import contextlib
 import datetime
-import io
 import json
 import os
 import re
@@ -24,7 +23,7 @@ from ..field import SEGMENTATION_CLASSES
 from ..sim import Simulation
 from .coco import Objects, coco_bytes
 from .formats import (DUMP_FORMAT, LAYERS, PATHS, DumpError, annex_yuv, file_layouts, frame_files, frame_metadata,
-                      geom_classes, png, yuv420_bytes, yuv444_bytes)
+                      geom_classes, npy, png, yuv420_bytes, yuv444_bytes)
 from .reading import LINES, META, parse_records, read_meta, split_lines
 
 try:
@@ -34,6 +33,7 @@ except ImportError:  # not POSIX: dumps are not locked there
 
 TEMP_PREFIX = ".tmp."  # a file being written: ".tmp." + its final name, in the same folder
 LOCK_NAME = ".dump.lock"  # flock()ed by the writer; holds its pid, command and start time
+CONTROLLER_FILES = "controller_files"  # a controller dump's (or shard's) folder: the controller runs there
 VIDEO, COCO = PATHS["mp4"], PATHS["coco"]
 # What an empty destination may hold: the lock, or the temporary meta.json of a writer killed at once.
 OWN_TOP_FILES = frozenset({LOCK_NAME, TEMP_PREFIX + META, TEMP_PREFIX + VIDEO, TEMP_PREFIX + COCO})
@@ -221,8 +221,9 @@ def prepare_folder(out: Path, meta: dict, resume: bool, *, lock_wait_s: float = 
 
     Refused (DumpError, nothing changed): a non-empty folder that is not a dump, a dump
     without ``resume``, a dump made with other parameters (or another controller file), a
-    dump another process is writing. Frames listed in frames.jsonl whose files are missing
-    are rewritten (``Prepared.missing``); the simulation is deterministic.
+    dump another process is writing. Frames listed in frames.jsonl whose files are missing or
+    of the wrong size (a fixed-size format's) are rewritten (``Prepared.missing``); the
+    simulation is deterministic.
     """
     _check_destination(out)
     try:
@@ -299,8 +300,8 @@ class DumpWriter:
             raise
 
     def needs_frame(self, index: int) -> bool:
-        """Whether frame ``index`` must be rendered: not complete yet, a file of it missing, or
-        wanted by the video."""
+        """Whether frame ``index`` must be rendered: not complete yet, a file of it missing (or
+        of the wrong size), or wanted by the video."""
         return index not in self.complete or index in self.missing or self._video is not None
 
     def write(self, sim: Simulation, index: int, extra: dict | None = None) -> None:
@@ -352,9 +353,7 @@ class DumpWriter:
             if "luma" in wants:
                 yield path("luma"), png(openr_bridge.reconstruct_luma(message))
         if "depth" in wants:
-            buffer = io.BytesIO()
-            np.save(buffer, sim.camera.depth())
-            yield path("depth"), buffer.getvalue()
+            yield path("depth"), npy(sim.camera.depth())
         if "seg" in wants:
             yield path("seg"), png(self._classes[sim.camera.segmentation()])
 
@@ -378,8 +377,11 @@ class DumpWriter:
                 except OSError as exc:
                     remove_temporary_files(self.out, self.layouts)
                     raise DumpError(f"cannot write {final}: {exc.strerror or exc}") from exc
+                self.bytes_written += final.stat().st_size
             if self._objects is not None:
-                write_atomic(self.out / COCO, coco_bytes(self.out, [self.out]))
+                coco = coco_bytes(self.out, [self.out])
+                write_atomic(self.out / COCO, coco)
+                self.bytes_written += len(coco)
         finally:
             self._lock.release()
 

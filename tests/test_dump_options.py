@@ -1,0 +1,98 @@
+"""A dump runs its controller as ``aibo-sim run`` does: ``--mtn-mode`` and ``--memory-stick``
+(recorded, checked on ``--resume``), the controller's files in the dump's ``controller_files/``
+(a shard's own); an mp4-only dump counts its bytes."""
+
+import json
+import shutil
+import textwrap
+from pathlib import Path
+
+import pytest
+
+import openr_bridge
+from aibo_sim.cli import main
+from aibo_sim.dump import DumpError, dump
+from aibo_sim.dump.writing import CONTROLLER_FILES
+
+ROOT = Path(__file__).resolve().parents[1]
+TRACKER = ROOT / "controllers" / "ball_tracker.py"
+ENV = "aibo_sim/HeadTrackBall-v0"
+
+# Writes, in its working folder, the robot's MTN mode and camera backend, then idles.
+WRITER = textwrap.dedent("""\
+    from aibo_sim import controller
+    from aibo_sim.controller import robot_run
+
+    robot = controller.current_robot()
+    with open("where.txt", "w") as file:
+        file.write(f"{robot.mtn_mode} {robot.backend}")
+    robot_run(lambda ms: 32)
+    """)
+
+
+@pytest.fixture
+def writer(tmp_path, monkeypatch):
+    """The controller file; the current folder is an empty one of its own (a file there is a bug)."""
+    path = tmp_path / "writer.py"
+    path.write_text(WRITER)
+    cwd = tmp_path / "cwd"
+    cwd.mkdir()
+    monkeypatch.chdir(cwd)
+    return path
+
+
+def test_mtn_mode_is_passed_recorded_and_checked_on_resume(writer, tmp_path, capsys):
+    out, cwd = tmp_path / "dump", Path.cwd()
+    argv = ["dump", str(writer), "--out", str(out), "--steps", "3", "--formats", "rgb"]
+    assert main(argv + ["--mtn-mode", "webots"]) == 0
+    assert json.loads((out / "meta.json").read_text())["parameters"]["mtn_mode"] == "webots"
+    assert (out / CONTROLLER_FILES / "where.txt").read_text() == "webots sim"
+    assert list(cwd.iterdir()) == []
+    capsys.readouterr()
+    for other in (["--mtn-mode", "openr"], []):  # the default is openr
+        assert main(argv + ["--resume"] + other) == 2
+        assert r"cannot resume, the dump was made with other parameters (mtn_mode)" in capsys.readouterr().err
+    assert main(argv + ["--resume", "--mtn-mode", "webots"]) == 0
+    assert "(0 written now)" in capsys.readouterr().out
+
+
+def test_memory_stick_is_checked_first_recorded_and_checked_on_resume(writer, tmp_path):
+    first, second = tmp_path / "ms1", tmp_path / "ms2"
+    for stick in (first, second):
+        shutil.copytree(openr_bridge.DEFAULT_MEMORY_STICK, stick)
+    out = tmp_path / "dump"
+    with pytest.raises(openr_bridge.ConfigError, match=f"{tmp_path / 'nothing'}: no OPEN-R"):
+        dump(out, controller=writer, frames=2, formats=("rgb",), backend="openr", memory_stick=tmp_path / "nothing")
+    assert not out.exists()
+    dump(out, controller=writer, frames=2, formats=("rgb",), backend="openr", memory_stick=first)
+    assert json.loads((out / "meta.json").read_text())["parameters"]["memory_stick"] == str(first)
+    assert (out / CONTROLLER_FILES / "where.txt").read_text() == "openr openr"
+    with pytest.raises(DumpError, match=r"other parameters \(memory_stick\)"):
+        dump(out, controller=writer, frames=2, formats=("rgb",), backend="openr", memory_stick=second, resume=True)
+    assert dump(out, controller=writer, frames=2, formats=("rgb",), backend="openr", memory_stick=first,
+                resume=True).new_frames == 0
+
+
+@pytest.mark.parametrize("option", [["--memory-stick", str(openr_bridge.DEFAULT_MEMORY_STICK)],
+                                    ["--mtn-mode", "openr"]], ids=["memory-stick", "mtn-mode"])
+def test_controller_options_with_env_are_refused(tmp_path, capsys, option):
+    out = tmp_path / "dump"
+    assert main(["dump", "--env", ENV, "--steps", "2", "--out", str(out), *option]) == 2
+    assert capsys.readouterr().err == ("aibo-sim: error: --mtn-mode and --memory-stick apply to controller dumps, "
+                                       "not to --env\n")
+    assert not out.exists()
+
+
+def test_each_shard_runs_its_controller_in_its_own_folder(writer, tmp_path):
+    out = tmp_path / "dump"
+    dump(out, controller=writer, frames=2, formats=("rgb",), workers=2)
+    for k in range(2):
+        assert (out / f"shard_{k}" / CONTROLLER_FILES / "where.txt").read_text() == "openr sim"
+    assert not (out / CONTROLLER_FILES).exists() and list(Path.cwd().iterdir()) == []
+    assert dump(out, controller=writer, frames=2, formats=("rgb",), workers=2, resume=True).new_frames == 0
+
+
+def test_an_mp4_only_dump_counts_the_video_bytes(tmp_path):
+    out = tmp_path / "dump"
+    summary = dump(out, controller=TRACKER, frames=3, formats=("mp4",))
+    assert summary.bytes_written == (out / "video.mp4").stat().st_size > 0
