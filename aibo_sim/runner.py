@@ -197,14 +197,15 @@ def controller_traceback(error: BaseException) -> str:
     """``error``'s traceback as the controller's author needs it: their own frames, without the
     simulator's and runpy's around them (an API call's error names what was wrong); chained
     exceptions raised inside the simulator alone are left out."""
+    def controllers(exc: traceback.TracebackException) -> list[traceback.FrameSummary]:
+        return [frame for frame in exc.stack if not frame.filename.startswith(_SIMULATOR_CODE)]
+
     def own(exc: traceback.TracebackException) -> traceback.TracebackException:
-        frames = [frame for frame in exc.stack if not frame.filename.startswith(_SIMULATOR_CODE)]
-        exc.stack = traceback.StackSummary.from_list(frames or exc.stack)
+        exc.stack = traceback.StackSummary.from_list(controllers(exc) or exc.stack)
         for link in ("__cause__", "__context__"):
             chained = getattr(exc, link)
             if chained is not None:
-                outside = any(not f.filename.startswith(_SIMULATOR_CODE) for f in chained.stack)
-                setattr(exc, link, own(chained) if outside else None)
+                setattr(exc, link, own(chained) if controllers(chained) else None)
         return exc
 
     return "".join(own(traceback.TracebackException.from_exception(error)).format())
