@@ -173,6 +173,8 @@ def test_a_missing_device_with_control_characters_is_escaped_in_the_error(robot,
 
 def test_an_environment_keeps_no_stepping_after_close():
     env = gymnasium.make("aibo_sim/HeadTrackBall-v0", camera=None)
+    with pytest.raises(gymnasium.error.ResetNeeded, match="step before reset"):
+        env.unwrapped.step(env.action_space.sample())  # without Gymnasium's OrderEnforcing wrapper
     env.reset(seed=0)
     env.step(env.action_space.sample())
     env.close()

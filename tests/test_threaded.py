@@ -1,6 +1,9 @@
 """ThreadedVectorEnv: aibo-sim's environments in threads of one process, as Gymnasium's
 SyncVectorEnv steps them, bit for bit."""
 
+import signal
+import time
+
 import gymnasium as gym
 import numpy as np
 import pytest
@@ -67,7 +70,36 @@ def test_errors_reach_the_caller_and_a_closed_env_refuses():
             envs.step(np.zeros((rows, 3), np.float32))
     envs.close()
     assert all(not thread.is_alive() for thread in envs.unwrapped._threads)
-    with pytest.raises(RuntimeError, match="closed"):
+    with pytest.raises(gym.error.ClosedEnvironmentError, match="closed"):
         envs.step(envs.action_space.sample())
     with pytest.raises(TypeError):
         gym.make_vec(HEAD_TRACK, 2, camera_bogus=1)  # the environment's own error, from its thread
+
+
+def test_an_interrupted_call_needs_a_reset_and_its_late_results_are_dropped():
+    threaded = gym.make_vec(HEAD_TRACK, np.int64(2))  # numpy's integers count, as for "sync"
+    sync = gym.make_vec(HEAD_TRACK, 2, "sync")
+    actions = [threaded.action_space.sample() for _ in range(3)]
+
+    def interrupt(*_):
+        raise KeyboardInterrupt
+
+    previous = signal.signal(signal.SIGALRM, interrupt)
+    try:
+        threaded.reset(seed=1)
+        signal.setitimer(signal.ITIMER_REAL, 0.05)
+        with pytest.raises(KeyboardInterrupt):
+            threaded.unwrapped.call_each(lambda env: time.sleep(0.3) or "late")
+        with pytest.raises(gym.error.ResetNeeded, match="interrupted"):
+            threaded.step(actions[0])
+        assert threaded.get_attr("camera") == ("rgb", "rgb")  # not the interrupted call's "late"
+        for envs in (threaded, sync):
+            envs.reset(seed=1)
+        for action in actions:
+            for part_threaded, part_sync in zip(threaded.step(action), sync.step(action), strict=True):
+                assert_same(part_threaded, part_sync)
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGALRM, previous)
+        threaded.close()
+        sync.close()

@@ -99,6 +99,7 @@ class AiboEnv(gym.Env):
                                 model.vis.headlight.ambient.copy())
         self.camera_robot = RobotColour()  # this episode's camera colour deviation
         self._renderer: Renderer | None = None
+        self._reset_done = False
 
         self.action_space = gym.spaces.Box(-1.0, 1.0, (len(self._actuated),), np.float32)
         spaces = {
@@ -137,11 +138,14 @@ class AiboEnv(gym.Env):
         self._randomize_scene()
         self._reset_task()
         mujoco.mj_forward(self.sim.model, self.sim.data)
+        self._reset_done = True
         return self._observation(), self._info()
 
     def step(self, action):
         if getattr(self, "_closed", False):
             raise gym.error.ClosedEnvironmentError(f"{type(self).__name__}.step after close(): make a new environment")
+        if not self._reset_done:
+            raise gym.error.ResetNeeded(f"{type(self).__name__}.step before reset(): reset the environment first")
         targets = self.action_to_targets(action)
         self.sim.servos.set_target(self._actuated, targets)
         self.sim.step_frames(self.sim.frames_to_camera_frame(), self._before_frame)

@@ -15,6 +15,7 @@ speed against one environment and Gymnasium's ``AsyncVectorEnv``.
 from __future__ import annotations
 
 import copy as copying
+import operator
 import queue
 import threading
 
@@ -43,22 +44,22 @@ class _EnvThread(threading.Thread):
     def __init__(self, index: int, make_env, results: queue.SimpleQueue):
         super().__init__(name=f"aibo-sim env {index}", daemon=True)
         self.index, self._make_env, self._results = index, make_env, results
-        self.calls: queue.SimpleQueue = queue.SimpleQueue()
+        self.calls: queue.SimpleQueue = queue.SimpleQueue()  # (call number, function, args), None to end
         self.start()
 
     def run(self) -> None:
         try:
             env = self._make_env()
         except BaseException as exc:  # reported by the constructor
-            self._results.put((self.index, None, exc))
+            self._results.put((0, self.index, None, exc))
             return
-        self._results.put((self.index, None, None))
+        self._results.put((0, self.index, None, None))
         while (call := self.calls.get()) is not None:
-            function, args = call
+            number, function, args = call
             try:
-                self._results.put((self.index, function(env, *args), None))
+                self._results.put((number, self.index, function(env, *args), None))
             except BaseException as exc:
-                self._results.put((self.index, None, exc))
+                self._results.put((number, self.index, None, exc))
         env.close()
 
 
@@ -66,40 +67,55 @@ class ThreadedVectorEnv(VectorEnv):
     """``num_envs`` environments ``gymnasium.make(env_id, **env_kwargs)``, one thread each.
 
     Step it from one thread at a time. ``copy=False`` returns the batch buffers themselves
-    (valid until the next step), as Gymnasium's vector environments do.
+    (valid until the next step), as Gymnasium's vector environments do. A call interrupted
+    (Ctrl-C) while the threads run leaves the environments a step apart from the batch:
+    ``step`` then raises ``ResetNeeded`` until ``reset``; the interrupted call's results, when
+    they come, are dropped.
     """
 
     def __init__(self, env_id: str, num_envs: int, *, copy: bool = True, **env_kwargs):
-        if not isinstance(num_envs, int) or num_envs < 1:
-            raise ValueError(f"num_envs must be a whole number >= 1, not {num_envs!r}")
-        self.num_envs, self.copy = num_envs, copy
-        self._results: queue.SimpleQueue = queue.SimpleQueue()
-        self._threads = [_EnvThread(i, lambda: gymnasium.make(env_id, **env_kwargs), self._results)
-                         for i in range(num_envs)]
         try:
-            self._collect(range(num_envs))
+            count = operator.index(num_envs) if not isinstance(num_envs, bool) else 0
+        except TypeError:
+            count = 0
+        if count < 1:
+            raise ValueError(f"num_envs must be a whole number >= 1, not {num_envs!r}")
+        self.num_envs, self.copy = count, copy
+        self._results: queue.SimpleQueue = queue.SimpleQueue()  # (call number, env index, result, exception)
+        self._calls, self._interrupted = 0, False
+        self._threads = [_EnvThread(i, lambda: gymnasium.make(env_id, **env_kwargs), self._results)
+                         for i in range(count)]
+        try:
+            self._collect(range(count))
             first = self.call_each(lambda env: (env.observation_space, env.action_space, env.metadata,
                                                 env.render_mode), [0])[0]
         except BaseException:
             self.close()
             raise
         self.single_observation_space, self.single_action_space, env_metadata, self.render_mode = first
-        self.observation_space = batch_space(self.single_observation_space, num_envs)
-        self.action_space = batch_space(self.single_action_space, num_envs)
+        self.observation_space = batch_space(self.single_observation_space, count)
+        self.action_space = batch_space(self.single_action_space, count)
         self.metadata = {**env_metadata, "autoreset_mode": AutoresetMode.NEXT_STEP}
-        self._observations = create_empty_array(self.single_observation_space, num_envs)
-        self._rewards = np.zeros(num_envs, np.float64)
-        self._terminations = np.zeros(num_envs, np.bool_)
-        self._truncations = np.zeros(num_envs, np.bool_)
-        self._autoreset = np.zeros(num_envs, np.bool_)
+        self._observations = create_empty_array(self.single_observation_space, count)
+        self._rewards = np.zeros(count, np.float64)
+        self._terminations = np.zeros(count, np.bool_)
+        self._truncations = np.zeros(count, np.bool_)
+        self._autoreset = np.zeros(count, np.bool_)
 
     # ------------------------------------------------------------------ threads
 
     def _collect(self, indices) -> list:
-        """The results of the calls sent to ``indices``, in that order; the first error raised."""
+        """The results of call number ``self._calls`` sent to ``indices``, in that order; the
+        first error raised. Results of an earlier, interrupted call are dropped."""
         pending, results, error = set(indices), {}, None
         while pending:
-            index, result, exc = self._results.get()
+            try:
+                number, index, result, exc = self._results.get()
+            except BaseException:
+                self._interrupted = True
+                raise
+            if number != self._calls:
+                continue
             pending.discard(index)
             results[index] = result
             if exc is not None and error is None:
@@ -112,10 +128,11 @@ class ThreadedVectorEnv(VectorEnv):
         """``function(env, *args)`` in the threads of the environments ``indices`` (default all),
         in parallel; their results in that order."""
         if self.closed:
-            raise RuntimeError("this ThreadedVectorEnv is closed")
+            raise gymnasium.error.ClosedEnvironmentError("this ThreadedVectorEnv is closed: make a new one")
         indices = list(range(self.num_envs)) if indices is None else list(indices)
+        self._calls += 1
         for k, i in enumerate(indices):
-            self._threads[i].calls.put((function, () if args_per_env is None else args_per_env[k]))
+            self._threads[i].calls.put((self._calls, function, () if args_per_env is None else args_per_env[k]))
         return self._collect(indices)
 
     # ------------------------------------------------------------------ the vector API
@@ -143,6 +160,8 @@ class ThreadedVectorEnv(VectorEnv):
             return info
 
         env_infos = self.call_each(reset_one, indices, [(i, seed[i]) for i in indices])
+        if mask.all():
+            self._interrupted = False
         self._terminations[mask] = self._truncations[mask] = self._autoreset[mask] = False
         infos = {}
         for i, info in zip(indices, env_infos):
@@ -150,6 +169,9 @@ class ThreadedVectorEnv(VectorEnv):
         return (copying.deepcopy(observations) if self.copy else observations), infos
 
     def step(self, actions):
+        if self._interrupted:
+            raise gymnasium.error.ResetNeeded("a call of this ThreadedVectorEnv was interrupted while its environments "
+                                              "ran: reset() all of them before stepping again")
         if isinstance(self.action_space, Box) and np.shape(actions) != self.action_space.shape:
             raise ValueError(f"actions of shape {np.shape(actions)}: want {self.action_space.shape}, "
                              f"one row for each of the {self.num_envs} environments")
