@@ -5,14 +5,19 @@ No MuJoCo here: playback is a pure function of time that yields joint targets.
 
 Decisions where the spec leaves room (also listed in the report that came with this file):
 
-* Version: only 1.2 is accepted (major 1, minor 2); the layout of other versions is unknown,
-  so any other version is an :class:`MtnError`.
+* Version: 1.0, 1.1 and 1.2 are read (Sony's ``MTNFile.cc`` and Webots' reader ignore the
+  field; AIBO MIND's ERS-7 motions, ``DRX-1000``, are 1.1 and 1.2 in the same layout); any
+  other version is an :class:`MtnError`. The writer writes 1.2.
 * Section 0 must be exactly 24 bytes (Sony: "fixed length"; OPEN-R's struct and Webots'
   reader both hard-code it). Sections 1 and 2 are jumped by ``sectionSize``: slack after the
   parsed strings is skipped (its bytes, normally zero padding, are not kept; the writer emits
-  zeros). Section 3's size must equal ``12 + N*4*(3+J) + 4*(N-1)`` exactly; bytes after it
-  are ignored (OPEN-R and Webots stop reading there), so they do not survive a round trip. A motion needs at least one keyframe, one joint, distinct locators, a frame time
-  > 0 and non-negative interpolation counts.
+  zeros). Section 3 holds ``12 + N*4*(3+J) + 4*(N-1)`` bytes for N keyframes of J joints, and
+  they must all be in the file; its size field is not checked (OPEN-R's ``MTNFile`` and Webots
+  compute the offsets from N and J and never read it, and one of Sony's SDK samples,
+  MoNet's ERS-210 ``sit_lose01``, gives the size of 20 joints for its 15). Bytes after it are
+  ignored (OPEN-R and Webots stop reading there), so they do not survive a round trip. A
+  motion needs at least one keyframe, one joint, distinct locators, a frame time > 0 and
+  non-negative interpolation counts.
 * Limits no real motion reaches, so that a corrupt word is an error rather than a motion
   that plays for days or a joint sent to -2147 rad: a motion lasts at most
   ``MAX_LENGTH_MS`` (10 minutes; Sony's motions last seconds, SITDANCE 28 s), and a joint
@@ -47,7 +52,8 @@ import numpy as np
 from . import ers7
 
 MAGIC = b"OMTN"
-VERSION = (1, 2)
+VERSION = (1, 2)  # what the writer writes
+READ_VERSIONS = ((1, 0), (1, 1), (1, 2))
 NUM_SECTIONS = 4
 SECTION0_SIZE = 24
 DEFAULT_FRAME_TIME_MS = 16
@@ -265,8 +271,9 @@ def parse_mtn(data: bytes, source: str = "<bytes>") -> Motion:
     nsec, major, minor, nkey, frame_time, option = r.unpack("<IHHHHI", 12, "section 0")
     if nsec != NUM_SECTIONS:
         raise r.fail(12, f"{nsec} sections, expected {NUM_SECTIONS}")
-    if (major, minor) != VERSION:
-        raise r.fail(16, f"version {major}.{minor} not supported (only {VERSION[0]}.{VERSION[1]})")
+    if (major, minor) not in READ_VERSIONS:
+        known = ", ".join(f"{a}.{b}" for a, b in READ_VERSIONS)
+        raise r.fail(16, f"version {major}.{minor} not supported (only {known})")
     if nkey == 0:
         raise r.fail(20, "zero keyframes")
     if frame_time == 0:
@@ -291,16 +298,14 @@ def parse_mtn(data: bytes, source: str = "<bytes>") -> Motion:
             raise r.fail(at, f"duplicate locator {loc!r}")
         locators.append(loc)
 
-    num, size, dtype = r.unpack("<III", end2, "section 3 header")
+    num, _, dtype = r.unpack("<III", end2, "section 3 header")  # its size field is not read, as OPEN-R's
     if num != 3:
         raise r.fail(end2, f"section number {num}, expected 3")
     kf_words = 3 + njoint
-    want = 12 + nkey * 4 * kf_words + 4 * (nkey - 1)
-    if size != want:
-        raise r.fail(end2 + 4, f"section 3 size {size}, expected {want} for {nkey} keyframes of {njoint} joints")
+    size = 12 + nkey * 4 * kf_words + 4 * (nkey - 1)
     if dtype != 0:
         raise r.fail(end2 + 8, f"data type {dtype}, expected 0")
-    r.need(end2, size, "section 3")  # bytes after section 3 are ignored, as OPEN-R and Webots read
+    r.need(end2, size, f"section 3 ({nkey} keyframes of {njoint} joints)")  # bytes after it are ignored
 
     # Keyframe 0, then (numInterpolate, keyframe) pairs: view as rows of 1 + kf_words s32,
     # with a dummy interpolation word in front of keyframe 0.

@@ -163,6 +163,7 @@ BAD_TINY = {
     "section 0 size": (_patch(TINY, 8, "<I", 25), 8),
     "section count": (_patch(TINY, 12, "<I", 5), 12),
     "version 1.3": (_patch(TINY, 18, "<H", 3), 16),
+    "version 2.2": (_patch(TINY, 16, "<H", 2), 16),
     "zero keyframes": (_patch(TINY, 20, "<H", 0), 20),
     "frame rate 0": (_patch(TINY, 22, "<H", 0), 22),
     "section 1 number": (_patch(TINY, 28, "<I", 7), 28),
@@ -171,8 +172,7 @@ BAD_TINY = {
     "zero joints": (_patch(TINY, 64, "<H", 0), 64),
     "duplicate locator": (TINY[:66] + bytes.fromhex("0161 0161 00") + TINY[71:], 68),
     "section 3 number": (_patch(TINY, 72, "<I", 2), 72),
-    "section 3 size": (_patch(TINY, 76, "<I", 60), 76),
-    "keyframe count vs section 3": (_patch(TINY, 20, "<H", 3), 76),
+    "keyframe count vs section 3": (_patch(TINY, 20, "<H", 3), 72),
     "data type": (_patch(TINY, 80, "<I", 1), 80),
     "negative interpolation": (_patch(TINY, 104, "<i", -1), 104),
     "truncated section 3": (TINY[:127], 72),
@@ -203,6 +203,21 @@ def test_play_errors_name_the_file(tmp_path):
 
 def test_bytes_after_section_3_are_ignored_as_the_robot_reads():
     assert parse_mtn(TINY + b"\0\xff\0\0", "tiny.mtn") == parse_mtn(TINY, "tiny.mtn")
+
+
+@pytest.mark.parametrize("minor", [0, 1])
+def test_versions_1_0_and_1_1_read_as_1_2_and_are_written_as_1_2(minor):
+    """AIBO MIND's ERS-7 motions are 1.1 and 1.2 in one layout; OPEN-R ignores the field."""
+    older = _patch(TINY, 18, "<H", minor)
+    assert parse_mtn(older, "tiny") == tiny_motion()
+    assert serialize_mtn(parse_mtn(older, "tiny")) == TINY
+
+
+@pytest.mark.parametrize("size", [0, 60, 392])
+def test_section_3_size_field_is_not_read_as_openr_reads(size):
+    """OPEN-R's MTNFile and Webots take section 3's layout from the keyframe and joint counts;
+    Sony's own MoNet sample sit_lose01 gives a size that fits 20 joints for its 15."""
+    assert parse_mtn(_patch(TINY, 76, "<I", size), "tiny") == tiny_motion()
 
 
 @pytest.mark.parametrize("case", sorted(BAD_TINY))
