@@ -290,3 +290,16 @@ def test_command_line_env_dump(tmp_path):
     assert frames[0].meta["action"] is None and len(frames[1].meta["action"]) == 3
     assert [f.meta["field_counter"] for f in frames] == list(range(11))
     assert frames[10].message.GetInfo(0).frameNumber == frames[10].meta["frame_number"]
+
+
+def test_a_scene_without_a_ball_dumps_every_format_with_no_ball_record(tmp_path):
+    from aibo_sim.sim import models_dir
+
+    scene = tmp_path / "no_ball.xml"
+    scene.write_text(f"""<mujoco>
+  <include file="{models_dir() / 'ers7.xml'}"/>
+  <worldbody><geom name="floor" type="plane" size="2 2 0.1" rgba="0.3 0.5 0.3 1"/></worldbody>
+</mujoco>""")
+    summary = dump(tmp_path / "out", controller=TRACKER, frames=3, formats=FORMATS, scene=scene)
+    assert summary.frames == 3
+    assert [frame.meta["ball"] for frame in load_dump(tmp_path / "out")] == [None] * 3

@@ -155,15 +155,17 @@ def frame_files(layouts: dict, index: int):
 # ---------------------------------------------------------------- metadata
 
 
-def ball_in_image(sim: Simulation) -> dict:
+def ball_in_image(sim: Simulation) -> dict | None:
     """The ball centre's pixel in the current frame (x right, y down, through the lens; None
-    behind the camera), visibility, distance.
+    behind the camera), visibility, distance; None in a scene without a ball.
 
     Visible: in front of the camera, projected inside the image, and the line of sight to
     the centre hits the ball first (the head camera's geom groups).
     """
     camera, model, data = sim.camera, sim.model, sim.data
     frame, ball = camera.frame(), sim.ball_position()
+    if ball is None:
+        return None
     offset = ball - frame.position
     distance = float(np.linalg.norm(offset))
     (u, v), depth = (a[0] for a in camera.project(ball, frame))
