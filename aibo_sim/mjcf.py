@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import math
 import xml.etree.ElementTree as ET
+from xml.sax.saxutils import escape
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -665,6 +666,7 @@ def webots_scene_xml() -> ET.Element:
 
 
 XML_INDENT, XML_WIDTH = "  ", 120  # MuJoCo Menagerie's layout (its format_xml check)
+QUOTE_ENTITY = {'"': "&quot;"}  # attribute values are written in double quotes
 
 
 def _xml_lines(element: ET.Element, depth: int) -> list[str]:
@@ -674,10 +676,8 @@ def _xml_lines(element: ET.Element, depth: int) -> list[str]:
     if element.tag is ET.Comment:
         return [f"{indent}<!--{element.text}-->"]
     end = ">" if len(element) else "/>"
-    escaped = (" ".join(value.split()).replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;")
-               .replace('"', "&quot;") for value in element.attrib.values())
     lines, line = [], f"{indent}<{element.tag}"
-    attributes = [f'{name}="{value}"' for name, value in zip(element.attrib, escaped)]
+    attributes = [f'{name}="{escape(" ".join(value.split()), QUOTE_ENTITY)}"' for name, value in element.attrib.items()]
     if len(" ".join([line, *attributes]) + end) <= XML_WIDTH:
         attributes, line = [], " ".join([line, *attributes])
     for i, attribute in enumerate(attributes):

@@ -19,7 +19,7 @@ from aibo_sim.dump import (FORMATS, DumpError, add_dump_parser, ball_in_image, d
 from aibo_sim.field import BALL_RADIUS, SEGMENTATION_CLASSES
 from aibo_sim.render import Renderer
 from aibo_sim.camera import HEAD_CAMERA_GROUPS
-from aibo_sim.sim import Simulation
+from aibo_sim.sim import Simulation, models_dir
 
 ROOT = Path(__file__).resolve().parents[1]
 TRACKER = ROOT / "controllers" / "ball_tracker.py"
@@ -293,8 +293,6 @@ def test_command_line_env_dump(tmp_path):
 
 
 def test_a_scene_without_a_ball_dumps_every_format_with_no_ball_record(tmp_path):
-    from aibo_sim.sim import models_dir
-
     scene = tmp_path / "no_ball.xml"
     scene.write_text(f"""<mujoco>
   <include file="{models_dir() / 'ers7.xml'}"/>

@@ -26,7 +26,8 @@ def _dump_command(args) -> int:
                    workers=args.workers, engine=args.engine, ray_address=args.ray_address,
                    mtn_mode=args.mtn_mode, memory_stick=args.memory_stick, **camera_options(args))
     repaired = f", {summary.repaired_frames} with missing or damaged files rewritten" if summary.repaired_frames else ""
-    print(f"dumped {summary.frames} frame{'s' * (summary.frames != 1)} to {summary.out} ({summary.new_frames} written now{repaired}) in "
+    frames = f"{summary.frames} frame{'s' * (summary.frames != 1)}"
+    print(f"dumped {frames} to {summary.out} ({summary.new_frames} written now{repaired}) in "
           f"{summary.wall_s:.1f} s: {summary.frames_per_s:.1f} frames/s, "
           f"{summary.bytes_written / 1e6 / max(summary.wall_s, 1e-9):.2f} MB/s")
     return 0

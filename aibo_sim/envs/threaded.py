@@ -15,7 +15,7 @@ speed against one environment and Gymnasium's ``AsyncVectorEnv``.
 from __future__ import annotations
 
 import copy as copying
-import operator
+import numbers
 import queue
 import threading
 
@@ -74,33 +74,30 @@ class ThreadedVectorEnv(VectorEnv):
     """
 
     def __init__(self, env_id: str, num_envs: int, *, copy: bool = True, **env_kwargs):
-        try:
-            count = operator.index(num_envs) if not isinstance(num_envs, bool) else 0
-        except TypeError:
-            count = 0
-        if count < 1:
+        if not isinstance(num_envs, numbers.Integral) or isinstance(num_envs, bool) or num_envs < 1:
             raise ValueError(f"num_envs must be a whole number >= 1, not {num_envs!r}")
-        self.num_envs, self.copy = count, copy
+        num_envs = int(num_envs)  # numpy's integers too, as Gymnasium's vector envs take them
+        self.num_envs, self.copy = num_envs, copy
         self._results: queue.SimpleQueue = queue.SimpleQueue()  # (call number, env index, result, exception)
         self._calls, self._interrupted = 0, False
         self._threads = [_EnvThread(i, lambda: gymnasium.make(env_id, **env_kwargs), self._results)
-                         for i in range(count)]
+                         for i in range(num_envs)]
         try:
-            self._collect(range(count))
+            self._collect(range(num_envs))
             first = self.call_each(lambda env: (env.observation_space, env.action_space, env.metadata,
                                                 env.render_mode), [0])[0]
         except BaseException:
             self.close()
             raise
         self.single_observation_space, self.single_action_space, env_metadata, self.render_mode = first
-        self.observation_space = batch_space(self.single_observation_space, count)
-        self.action_space = batch_space(self.single_action_space, count)
+        self.observation_space = batch_space(self.single_observation_space, num_envs)
+        self.action_space = batch_space(self.single_action_space, num_envs)
         self.metadata = {**env_metadata, "autoreset_mode": AutoresetMode.NEXT_STEP}
-        self._observations = create_empty_array(self.single_observation_space, count)
-        self._rewards = np.zeros(count, np.float64)
-        self._terminations = np.zeros(count, np.bool_)
-        self._truncations = np.zeros(count, np.bool_)
-        self._autoreset = np.zeros(count, np.bool_)
+        self._observations = create_empty_array(self.single_observation_space, num_envs)
+        self._rewards = np.zeros(num_envs, np.float64)
+        self._terminations = np.zeros(num_envs, np.bool_)
+        self._truncations = np.zeros(num_envs, np.bool_)
+        self._autoreset = np.zeros(num_envs, np.bool_)
 
     # ------------------------------------------------------------------ threads
 
