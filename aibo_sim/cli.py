@@ -44,9 +44,9 @@ def _run(args) -> int:
 
 
 def _render(args) -> int:
-    import cv2
-
+    from .dump.formats import frame_metadata, png
     from .render import Renderer
+    from .runner import write_file_atomic
 
     if args.settle < 0:
         raise ValueError(f"--settle must be at least 0 seconds, not {args.settle}")
@@ -54,6 +54,9 @@ def _render(args) -> int:
     sim = _settled_simulation(args, args.camera_profile)
     try:
         images = {"head_camera.png": sim.camera.frame().rgb}
+        # The picture's camera as run.json and a dump's meta.json record it (profile, lens, settings)
+        # and its frame as frames.jsonl does (camera pose, joints, the ball's pixel).
+        description = {"camera": sim.camera.describe(), "frame": frame_metadata(sim, 0)}
         third = Renderer(sim.model, 640, 480, quality="high")
         try:
             images["tracking.png"] = third.render(sim.data, "tracking")
@@ -65,9 +68,10 @@ def _render(args) -> int:
         images["side_by_side.png"] = _side_by_side(args)
     make_out_folder(out)
     for name, rgb in images.items():
-        if not cv2.imwrite(str(out / name), np.ascontiguousarray(rgb[:, :, ::-1])):
-            raise OSError(f"could not write {out / name}")
+        write_file_atomic(out / name, png(np.ascontiguousarray(rgb[:, :, ::-1])))
         print(f"wrote {out / name} ({rgb.shape[1]}x{rgb.shape[0]})")
+    write_file_atomic(out / "head_camera.json", (json.dumps(description, indent=2) + "\n").encode())
+    print(f"wrote {out / 'head_camera.json'} (the head camera's lens, settings and pose)")
     return 0
 
 
@@ -177,7 +181,7 @@ def build_parser() -> argparse.ArgumentParser:
     render = commands.add_parser("render", help="render the head camera and a third-person view")
     render.add_argument("--keyframe", default="stand", help="the scene's keyframe to start from (default stand)")
     render.add_argument("--settle", type=finite_float, default=0.5, help="seconds to simulate first (default 0.5)")
-    render.add_argument("--out", default="renders", help="folder for head_camera.png and tracking.png")
+    render.add_argument("--out", default="renders", help="folder for head_camera.png, head_camera.json (its lens, settings, pose) and tracking.png")
     render.add_argument("--side-by-side", nargs="?", const="", metavar="EASYTRAIN_PNG",
                         help="also write side_by_side.png: the ers7 and ideal pictures of the view, after a real "
                              "ERS-7 frame when one is given (Tekkotsu EasyTrain PNG, R, G, B = Y, Cb, Cr)")

@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 from aibo_sim.cli import build_parser, main
+from aibo_sim.field import BALL_RADIUS
 from aibo_sim.options import CAMERA_DESTS, WORLD_DESTS
 from aibo_sim.runner import run_controller
 
@@ -185,6 +186,18 @@ def test_render_takes_the_camera_and_world_options(tmp_path, capsys):
                      "--pose", "-0.8", "-1.0", "-5", "--ball", "-0.2", "-0.97"]) == 0
         pictures[profile] = cv2.imread(str(out / "head_camera.png"))
         assert cv2.imread(str(out / "tracking.png")).shape == (480, 640, 3)
+        described = json.loads((out / "head_camera.json").read_text())
+        assert described["camera"]["profile"] == profile and described["camera"]["width"] == 208
+        # The recorded lens and pose put the ball where the frame's label says, through OpenCV (within
+        # 0.3 px: the resting ball sits ~0.5 mm into the carpet's soft contact, below BALL_RADIUS).
+        lens, pose = described["camera"], described["frame"]["camera"]
+        to_opencv = np.array(pose["xmat"]).reshape(3, 3) @ np.diag([1.0, -1.0, -1.0])
+        ball = (np.array([-0.2, -0.97, BALL_RADIUS]) - pose["position"]) @ to_opencv
+        matrix = np.array([[lens["fx"], 0, lens["cx"]], [0, lens["fy"], lens["cy"]], [0, 0, 1]])
+        pixel = cv2.projectPoints(ball[None], np.zeros(3), np.zeros(3), matrix, np.array(lens["distortion"]))[0]
+        assert described["frame"]["ball"]["visible"]
+        assert pixel.ravel() == pytest.approx(described["frame"]["ball"]["pixel"], abs=0.3)
+        assert sorted(p.name for p in out.iterdir()) == ["head_camera.json", "head_camera.png", "tracking.png"]
     assert pictures["ideal"].shape == pictures["ers7"].shape == (160, 208, 3)
     assert np.abs(pictures["ideal"].astype(int) - pictures["ers7"].astype(int)).mean() > 2
     assert main(["render", "--out", str(tmp_path / "full"), "--settle", "0", "--camera-full"]) == 0
