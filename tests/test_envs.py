@@ -78,7 +78,8 @@ def test_make_in_a_fresh_process_by_naming_the_module_in_the_id():
     assert result.stdout.split() == ["(160,", "208,", "3)", "300"]
 
 
-@pytest.mark.parametrize("options", [{}, {"render_mode": "rgb_array"}, {"camera": "openr"}, {"camera": None}])
+@pytest.mark.parametrize("options", [{}, {"render_mode": "rgb_array"}, {"camera": "openr"}, {"camera": None},
+                                     {"image_only": True, "camera_layer": "M"}])
 @pytest.mark.parametrize("env_id", AIBO_IDS)
 def test_check_env_passes_with_warnings_as_errors(env_id, options):
     env = gym.make(env_id, **options)
@@ -86,6 +87,24 @@ def test_check_env_passes_with_warnings_as_errors(env_id, options):
         warnings.simplefilter("error")
         check_env(env.unwrapped)
     env.close()
+
+
+def test_image_only_observes_the_dict_s_image_and_takes_gymnasium_s_image_wrappers():
+    whole, alone = gym.make(HEAD_TRACK), gym.make(HEAD_TRACK, image_only=True)
+    assert alone.observation_space == whole.observation_space["image"]
+    (obs, _), (image, _) = whole.reset(seed=3), alone.reset(seed=3)
+    action = whole.action_space.sample()
+    assert np.array_equal(obs["image"], image) and np.array_equal(whole.step(action)[0]["image"], alone.step(action)[0])
+    wrapped = gym.wrappers.FrameStackObservation(gym.wrappers.GrayscaleObservation(
+        gym.wrappers.ResizeObservation(alone, (80, 104))), 4)
+    stacked, _ = wrapped.reset(seed=3)
+    assert stacked.shape == (4, 80, 104) and wrapped.observation_space.contains(stacked)
+    for env in (whole, wrapped):
+        env.close()
+    with pytest.raises(ValueError, match="image_only"):
+        gym.make(HEAD_TRACK, camera=None, image_only=True)
+    with pytest.raises(ValueError, match="image_only"):
+        gym.make(HEAD_TRACK, image_only="yes")
 
 
 @pytest.mark.parametrize("mode", ["sync", "async"])

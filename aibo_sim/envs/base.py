@@ -16,6 +16,10 @@ Observations (a ``Dict``):
 - ``joint_positions`` (rad, the order of ``ers7.JOINTS``), ``acceleration`` (m/s^2, body
   frame), ``distance_mm`` (IR near, far, chest), ``touch`` (0/1, the order of ``ers7.SENSORS``).
 
+``image_only=True``: the observation is the image alone, a ``Box``, as Gymnasium's image
+wrappers (``ResizeObservation``, ``GrayscaleObservation``, ``FrameStackObservation``) and CNN
+policies take it.
+
 Actions: one number in [-1, 1] per actuated joint, mapped affinely onto the actuator's
 control range, and given to the servos as targets.
 
@@ -67,9 +71,11 @@ class AiboEnv(gym.Env):
 
     def __init__(self, camera: str | None = "rgb", camera_layer: str = "H", render_mode: str | None = None,
                  randomize: dict[str, float] | None = None, *, scene=None, camera_profile: str = "ers7",
-                 camera_wb: str = "fl", camera_gain: str = "mid", camera_shutter: str = "mid"):
+                 camera_wb: str = "fl", camera_gain: str = "mid", camera_shutter: str = "mid", image_only: bool = False):
         if camera not in CAMERA_MODES:
             raise ValueError(f"camera must be one of {CAMERA_MODES}, not {camera!r}")
+        if not isinstance(image_only, bool) or image_only and camera is None:
+            raise ValueError(f"image_only must be True or False, and False with camera=None, not {image_only!r}")
         if camera_layer not in LAYERS:
             raise ValueError(f"camera_layer must be one of {tuple(LAYERS)}, not {camera_layer!r}")
         if render_mode not in (None, *self.metadata["render_modes"]):
@@ -86,7 +92,7 @@ class AiboEnv(gym.Env):
         if camera == "openr" and camera_layer != "H":
             raise ValueError("camera='openr' serves layer H, as the wrapper's camera_get_image does; "
                              "use camera='ycrcb' or 'rgb' for layers M and L")
-        self.camera, self.camera_layer, self.render_mode = camera, camera_layer, render_mode
+        self.camera, self.camera_layer, self.render_mode, self.image_only = camera, camera_layer, render_mode, image_only
         self.camera_message: openr_bridge.OFbkImageVectorData | None = None  # the last one encoded
         self.sim = Simulation(scene, camera_profile=camera_profile,
                               camera_settings=CameraSettings(camera_wb, camera_gain, camera_shutter))
@@ -111,7 +117,8 @@ class AiboEnv(gym.Env):
         if camera is not None:
             width, height = openr_bridge.LAYER_SIZE[LAYERS[camera_layer]]
             spaces["image"] = gym.spaces.Box(0, 255, (height, width, 3), np.uint8)
-        self.observation_space = gym.spaces.Dict(spaces)
+        self._image_shape = spaces["image"].shape if camera is not None else None
+        self.observation_space = spaces["image"] if image_only else gym.spaces.Dict(spaces)
         self._distance_high = spaces["distance_mm"].high.tolist()
 
     # ---------------------------------------------------------------- task hooks
@@ -226,7 +233,9 @@ class AiboEnv(gym.Env):
 
     # ---------------------------------------------------------------- observations
 
-    def _observation(self) -> dict:
+    def _observation(self) -> dict | np.ndarray:
+        if self.image_only:
+            return self._camera_image()
         sim = self.sim
         # Noise can overshoot the range; clamped in Python floats (the bounds are float32 values).
         distances = [min(max(d, 0.0), high) for d, high in zip(sim.distances_mm(), self._distance_high)]
@@ -244,7 +253,7 @@ class AiboEnv(gym.Env):
         frame = self.sim.camera.frame()
         if self.camera == "rgb":
             rgb = frame.rgb
-            height, width, _ = self.observation_space["image"].shape
+            height, width, _ = self._image_shape
             if rgb.shape[0] == height:
                 return rgb.copy()  # the frame's picture is shared and read-only
             scale = rgb.shape[0] // height
