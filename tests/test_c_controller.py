@@ -260,6 +260,34 @@ def test_ctrl_c_runs_the_c_robot_die_functions_then_exits_130(tmp_path):
     assert (out / "die.txt").read_text() == "0\n"  # its robot_step past the end returned, as in Python
 
 
+@pytest.mark.parametrize("signal_name, status", [("SIGINT", 130), ("SIGTERM", 143)])
+def test_a_signal_right_after_a_call_is_read_loses_no_call(tmp_path, signal_name, status):
+    """The signal comes just after a call was read, before it is answered: a KeyboardInterrupt
+    raised there lost the call, and simulator and controller waited for each other forever."""
+    import subprocess
+    import sys
+
+    source = c_file(tmp_path, "loop.c", "static void bye(void) {\n  FILE *f = fopen(\"die.txt\", \"w\");\n"
+                    "  fprintf(f, \"%d\\n\", robot_step(8));\n  fclose(f);\n}\n"
+                    "int main(void) {\n  robot_live(0); robot_die(bye);\n  for (;;) robot_step(8);\n}\n")
+    out = tmp_path / "out"
+    script = (
+        "import signal, sys\n"
+        "from aibo_sim.cbind import serve\n"
+        "from aibo_sim.cli import main\n"
+        "read, reads = serve._Calls._read, []\n"
+        "def read_then_signal(calls):\n"
+        "    chunk = read(calls)\n"
+        "    reads.append(len(chunk))\n"
+        f"    if len(reads) == 30:\n        signal.raise_signal(signal.{signal_name})\n"
+        "    return chunk\n"
+        "serve._Calls._read = read_then_signal\n"
+        f"sys.exit(main(['run', {str(source)!r}, '--duration', '100000', '--out', {str(out)!r}]))\n")
+    run = subprocess.run([sys.executable, "-c", script], cwd=ROOT, capture_output=True, text=True, timeout=120)
+    assert run.returncode == status, run.stderr
+    assert (out / "die.txt").read_text() == "0\n"
+
+
 def test_the_wheel_ships_the_headers_and_the_binding():
     tomllib = pytest.importorskip("tomllib")  # Python 3.11+
     patterns = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]["package-data"]["aibo_sim.cbind"]

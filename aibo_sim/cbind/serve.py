@@ -7,8 +7,11 @@ runner reports it:
 
 - the run's duration is over: ``robot_step`` answers "end", the controller runs its
   ``robot_die`` functions and exits 0 (``SimulationEnd`` here); it returns from ``main`` or
-  calls ``exit(0)``: the run ends there; Ctrl-C: its ``robot_die`` functions run (its own
-  Ctrl-C is ignored), then ``KeyboardInterrupt`` (exit status 130);
+  calls ``exit(0)``: the run ends there; Ctrl-C (or SIGTERM): its ``robot_die`` functions run
+  (its own Ctrl-C is ignored), then the signal acts here as it would have (``KeyboardInterrupt``,
+  exit status 130). A first Ctrl-C is noted and acted on between two calls, never in the middle
+  of reading or answering one (which would lose a call, and leave both sides waiting for the
+  other); a second one acts at once (a ``robot_die`` function that never returns);
 - ``exit(N)``, N not 0: ``SystemExit(N)``, as a Python controller's ``sys.exit(N)``;
 - a call raised (an unknown device, a bad value): the controller is stopped and
   ``CControllerError`` names the call and the error;
@@ -22,7 +25,6 @@ is not taken for a simulator that hangs.
 
 from __future__ import annotations
 
-import contextlib
 import io
 import mmap
 import os
@@ -33,6 +35,7 @@ import struct
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 from pathlib import Path
 
@@ -182,22 +185,23 @@ def run_c_controller(executable: Path, name: str) -> None:
         child = subprocess.Popen([str(executable)], pass_fds=(theirs.fileno(),), env=environment,
                                  preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_IGN))
         theirs.close()
+        signals = _SignalsBetweenCalls()
         try:
-            with memoryview(image) as view:
-                server = _Server(ours, view, name, robot)
+            with memoryview(image) as view, signals:
+                server = _Server(ours, view, name, robot, signals)
                 try:
                     server.serve(child)
-                except KeyboardInterrupt:
-                    server.end_run()
-                    with contextlib.suppress(SimulationEnd):
-                        server.serve(child)
-                    raise
+                except SimulationEnd:
+                    if signals.pending is None:
+                        raise
         finally:
             ours.close()
             if child.poll() is None:
                 child.kill()
             child.wait()
             image.close()
+            if signals.pending is not None:
+                signal.raise_signal(signals.pending)  # under the handler it had before: as if it came now
     status = child.returncode
     if status < 0:
         signal_name = signal.Signals(-status).name
@@ -206,28 +210,54 @@ def run_c_controller(executable: Path, name: str) -> None:
         raise SystemExit(status)
 
 
+class _SignalsBetweenCalls:
+    """SIGINT and SIGTERM in the main thread while a controller is served: the first is noted
+    (``pending``, its number) for the server to act on between two calls; a second one goes to
+    the handler the signal had before. Elsewhere than the main thread, where no signal handler
+    runs, nothing changes."""
+
+    SIGNALS = (signal.SIGINT, signal.SIGTERM)
+
+    def __init__(self):
+        self.pending: int | None = None
+        self._previous: dict[int, object] = {}
+
+    def __enter__(self) -> "_SignalsBetweenCalls":
+        if threading.current_thread() is threading.main_thread():
+            self._previous = {number: signal.signal(number, self._note) for number in self.SIGNALS}
+        return self
+
+    def __exit__(self, *exc_info) -> None:
+        for number, handler in self._previous.items():
+            signal.signal(number, signal.SIG_DFL if handler is None else handler)  # None: not set from Python
+
+    def _note(self, number, frame) -> None:
+        if self.pending is None:
+            self.pending = number
+            return
+        previous = self._previous[number]
+        if callable(previous):
+            previous(number, frame)
+        elif previous != signal.SIG_IGN:
+            signal.signal(number, signal.SIG_DFL)
+            signal.raise_signal(number)
+
+
 class _Server:
     """Answers one controller's calls: its motions, the calls it sent and those read ahead, and
     whether it waits for an answer now."""
 
-    def __init__(self, channel: socket.socket, image: memoryview, name: str, robot):
+    def __init__(self, channel: socket.socket, image: memoryview, name: str, robot, signals: _SignalsBetweenCalls):
         handlers = _handlers(image)
         self._table = [_Call(op_name, arguments, results, handlers[op_name]) for op_name, arguments, results in OPS]
         self._channel, self._calls = channel, _Calls(channel, name, robot)
         self._wanted = {}  # the PREFETCHED calls made so far, by (number, arguments): answered with each step
-        self._owed = False  # the controller waits for the answer to the call being made
-        self._ending = False
-
-    def end_run(self) -> None:
-        """Ctrl-C: the run is over. The call the controller waits for, and every ``robot_step``
-        from now on, is answered "end" (its robot_die functions run, then it exits)."""
-        if self._owed:
-            self._channel.sendall(_Call.END)
-            self._owed = False
-        self._ending = True
+        self._signals = signals
 
     def serve(self, child: subprocess.Popen) -> None:
-        """Answer the controller's calls until it exits; SimulationEnd after a run that ended."""
+        """Answer the controller's calls until it exits; SimulationEnd after a run that ended.
+        Once a signal is pending, every ``robot_step`` is answered "end" (the controller's
+        robot_die functions run, then it exits)."""
         ended = False
         while (payload := self._calls.next()) is not None:
             number = _OP.unpack_from(payload)[0]
@@ -235,16 +265,15 @@ class _Server:
                 raise CControllerError(f"unknown call number {number} (a controller built against other headers?)")
             call = self._table[number]
             args = call.arguments(payload)
-            if self._ending and call.name == "robot_step":
+            if self._signals.pending is not None and call.name == "robot_step":
                 self._channel.sendall(_Call.END)
                 continue
             if call.ahead:
                 self._wanted[number, args] = call
-            self._owed = bool(call.results)
             try:
                 result = call.function(*args)
             except SimulationEnd:
-                ended, self._owed = True, False
+                ended = True
                 self._channel.sendall(_Call.END)
                 continue
             except Exception as exc:
@@ -253,7 +282,6 @@ class _Server:
             if call.results:
                 self._channel.sendall(_with_answers_ahead(call.answer(result), self._wanted)
                                       if call.name == "robot_step" else call.answer(result))
-                self._owed = False
         child.wait()
         if ended and child.returncode == 0:
             raise SimulationEnd()
