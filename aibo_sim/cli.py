@@ -44,9 +44,9 @@ def _run(args) -> int:
 
 
 def _render(args) -> int:
-    from .dump.formats import frame_metadata, png
+    from .dump.formats import frame_metadata
+    from .files import png, write_file_atomic
     from .render import Renderer
-    from .runner import write_file_atomic
 
     if args.settle < 0:
         raise ValueError(f"--settle must be at least 0 seconds, not {args.settle}")

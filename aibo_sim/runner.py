@@ -14,7 +14,6 @@ import traceback
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
-import cv2
 import numpy as np
 
 import openr_bridge
@@ -23,6 +22,7 @@ from . import controller
 from .camera import CameraSettings
 from .cbind import (C_SUFFIXES, CControllerError, compile_controller, controller_sources, is_c_controller,
                     run_c_controller)
+from .files import png, write_file_atomic
 from .options import make_out_folder, place, start_values
 from .robot import Robot, SimulationEnd
 from .sim import Simulation, SimulationDiverged, models_dir
@@ -81,26 +81,6 @@ def check_python_controller(path: Path) -> None:
     except SyntaxError as exc:  # IndentationError too
         code = f" ({exc.text.strip()!r})" if exc.text and exc.text.strip() else ""
         raise ValueError(f"{path}, line {exc.lineno}: {type(exc).__name__}: {exc.msg}{code}") from None
-
-
-def write_file_atomic(path: Path, data: bytes) -> None:
-    """Write ``path`` whole or not at all: as ``.NAME.tmp`` in the same folder (a name no
-    pattern of the final files matches), then renamed. An OSError names ``path``; no
-    temporary file is left, whatever stops the write (a full disk: "cannot write PATH: No space
-    left on device"; Ctrl-C)."""
-    temp = path.with_name(f".{path.name}.tmp")
-    try:
-        with open(temp, "wb") as file:
-            file.write(data)
-        os.replace(temp, path)
-    except BaseException as exc:
-        with contextlib.suppress(OSError):
-            temp.unlink()
-        if not isinstance(exc, OSError):
-            raise
-        error = OSError(f"cannot write {path}: {exc.strerror or exc}")
-        error.errno = exc.errno
-        raise error from exc
 
 
 class FrameWriter:
@@ -172,11 +152,8 @@ class FrameWriter:
         if self.error is not None:
             raise SimulationEnd()
         path = self.directory / f"{index:06d}.png"
-        ok, encoded = cv2.imencode(".png", np.ascontiguousarray(rgb[:, :, ::-1]))
-        if not ok:
-            raise ValueError(f"PNG encoding of a {rgb.shape} {rgb.dtype} frame failed")
         try:
-            write_file_atomic(path, encoded.tobytes())
+            write_file_atomic(path, png(np.ascontiguousarray(rgb[:, :, ::-1])))
         except OSError as exc:
             self.error = exc
             raise SimulationEnd() from exc  # raised in the controller's call: ends the run

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import io
 
-import cv2
 import mujoco
 import numpy as np
 
@@ -80,14 +79,6 @@ def annex_yuv(rgb: np.ndarray) -> np.ndarray:
     u = (0.492 * (b - y) + 128).astype(np.uint8)
     v = (0.5 * (r - y) + 128).astype(np.uint8)
     return np.stack([y, u, v], axis=-1)
-
-
-def png(image: np.ndarray) -> bytes:
-    """PNG bytes of an 8-bit image (BGR when it has three channels, as OpenCV writes)."""
-    ok, encoded = cv2.imencode(".png", image)
-    if not ok:
-        raise ValueError(f"PNG encoding of a {image.shape} {image.dtype} image failed")
-    return encoded.tobytes()
 
 
 def npy(array: np.ndarray) -> bytes:

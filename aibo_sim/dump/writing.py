@@ -20,10 +20,11 @@ import openr_bridge
 from openr_bridge import FRAME_RATE_HZ
 
 from ..field import SEGMENTATION_CLASSES
+from ..files import png, write_file_atomic
 from ..sim import Simulation
 from .coco import Objects, coco_bytes
 from .formats import (DUMP_FORMAT, LAYERS, PATHS, DumpError, annex_yuv, file_layouts, frame_files, frame_metadata,
-                      geom_classes, npy, png, yuv420_bytes, yuv444_bytes)
+                      geom_classes, npy, yuv420_bytes, yuv444_bytes)
 from .reading import LINES, META, parse_records, read_meta, split_lines
 
 try:
@@ -45,15 +46,10 @@ HOLDER_COMMAND_CHARS = 300  # a holder's command line is cut to this in messages
 
 def write_atomic(path: Path, data: bytes) -> None:
     """Write ``path`` whole or not at all (temporary name in the same folder, then rename)."""
-    temp = path.with_name(TEMP_PREFIX + path.name)
     try:
-        with open(temp, "wb") as file:
-            file.write(data)
-        os.replace(temp, path)
+        write_file_atomic(path, data, path.with_name(TEMP_PREFIX + path.name))
     except OSError as exc:
-        with contextlib.suppress(OSError):
-            temp.unlink()
-        raise DumpError(f"cannot write {path}: {exc.strerror or exc}") from exc
+        raise DumpError(str(exc)) from exc
 
 
 def _temporary_name(pattern: str) -> re.Pattern:

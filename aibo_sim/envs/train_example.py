@@ -15,10 +15,13 @@ from __future__ import annotations
 
 import argparse
 import time
+from pathlib import Path
 
 import cv2
 import gymnasium as gym
 import numpy as np
+
+from ..files import png, write_file_atomic
 
 ENV_ID = "aibo_sim.envs:aibo_sim/HeadTrackBall-v0"  # names the module, so workers register it too
 EVAL_SEED = 10_000  # evaluation episodes use seeds EVAL_SEED, EVAL_SEED + 1, ...
@@ -74,8 +77,7 @@ def plot_learning_curve(path: str, steps: np.ndarray, rewards: np.ndarray, rando
         cv2.putText(image, f"{label}: {level:.1f}", (left + 8, y - 6), cv2.FONT_HERSHEY_SIMPLEX, 0.5, colour)
     cv2.putText(image, "HeadTrackBall-v0, PPO: episode reward (300 steps) vs training steps",
                 (left, top - 14), cv2.FONT_HERSHEY_SIMPLEX, 0.5, black)
-    if not cv2.imwrite(path, image[..., ::-1]):
-        raise OSError(f"{path}: could not write the PNG")
+    write_file_atomic(Path(path), png(np.ascontiguousarray(image[..., ::-1])))
 
 
 def main(argv: list[str] | None = None) -> None:

@@ -1,0 +1,38 @@
+"""Files written whole or not at all, and the PNG bytes every writer of pictures uses."""
+
+from __future__ import annotations
+
+import contextlib
+import os
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+
+def write_file_atomic(path: Path, data: bytes, temp: Path | None = None) -> None:
+    """Write ``path`` whole or not at all: as ``temp`` (default ``.NAME.tmp`` in the same folder,
+    a name no pattern of a run's files matches), then renamed. An OSError names ``path``; no
+    temporary file is left, whatever stops the write (a full disk: "cannot write PATH: No space
+    left on device"; Ctrl-C)."""
+    temp = temp or path.with_name(f".{path.name}.tmp")
+    try:
+        with open(temp, "wb") as file:
+            file.write(data)
+        os.replace(temp, path)
+    except BaseException as exc:
+        with contextlib.suppress(OSError):
+            temp.unlink()
+        if not isinstance(exc, OSError):
+            raise
+        error = OSError(f"cannot write {path}: {exc.strerror or exc}")
+        error.errno = exc.errno
+        raise error from exc
+
+
+def png(image: np.ndarray) -> bytes:
+    """PNG bytes of an 8-bit image (BGR when it has three channels, as OpenCV writes)."""
+    ok, encoded = cv2.imencode(".png", image)
+    if not ok:
+        raise ValueError(f"PNG encoding of a {image.shape} {image.dtype} image failed")
+    return encoded.tobytes()
