@@ -542,7 +542,7 @@ def _warp(image: np.ndarray, maps: tuple[np.ndarray, np.ndarray], outer: float =
     warp = Warp.from_maps(*maps, image.shape[1], kernels.SLACK)
     height, width = maps[0].shape
     planes = np.empty((3, image.shape[0], image.shape[1] + kernels.SLACK), np.uint8)
-    kernels.split(image, 0, planes)
+    kernels.split(np.dstack([image, np.full(image.shape[:2], 255, np.uint8)]), 0, planes)
     identity = np.float32([[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0]])
     response = np.float32([[1, 0]] * 3)
     curve, slope, intercept = (np.full((3, 1, width), value, np.float32) for value in (0, 1, 0))
@@ -600,16 +600,17 @@ def test_two_pass_warp_refuses_a_map_that_folds_back():
         Warp.from_maps(map_x, map_y, 8)
 
 
-def test_split_pads_the_edges_and_smear_sums_shifted_rows():
+def test_split_takes_rgb_of_rgba_pads_the_edges_and_smear_sums_shifted_rows():
     from aibo_sim.camera import kernels
 
-    image = np.random.default_rng(3).integers(0, 256, (3, 12, 20), dtype=np.uint8)
+    image = np.random.default_rng(3).integers(0, 256, (4, 12, 20), dtype=np.uint8)  # R, G, B and an unread alpha
     # six taps: a pass of four, then one of two (the rest weighted 0); one reaches past the picture
     dx, dy = np.array([-2, 0, 3, 25, 1, -1]), np.array([1, 0, -1, 0, 4, -30])
     weights = np.array([64, 48, 64, 32, 40, 8], np.uint16)
     pad, slack = 26, kernels.SLACK
     padded = np.empty((3, 12, 20 + 2 * pad + slack), np.uint8)
     kernels.split(image.transpose(1, 2, 0).copy(), pad, padded)
+    image = image[:3]
     assert np.array_equal(padded, np.pad(image, ((0, 0), (0, 0), (pad, pad + slack)), mode="edge"))
     out = np.empty((3, 12, 20 + slack), np.uint16)
     kernels.smear(padded, pad, dx, dy, weights, out)

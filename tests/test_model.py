@@ -350,6 +350,35 @@ def test_renderers_taking_turns_each_draw_in_their_own_context():
     third_person.close()
 
 
+def test_rgba_read_gives_mujocos_own_pixels_top_row_first():
+    """The renderer reads RGBA itself (rows top to bottom through Mesa's pack-invert, or
+    flipped where a driver lacks it): its pixels are MuJoCo's own RGB read, upside down, alpha
+    255; a multisampled renderer's RGBA is its RGB picture."""
+    from aibo_sim.camera import HEAD_CAMERA_GROUPS
+    from aibo_sim.render import Renderer
+
+    sim = Simulation()
+    sim.place_ball(0.35, 0.05)
+    sim.data.qpos[sim.model.joint("neck_tilt").qposadr[0]] = -0.6  # the carpet below, the hall above
+    mujoco.mj_forward(sim.model, sim.data)
+    head = Renderer(sim.model, 214, 165, groups=HEAD_CAMERA_GROUPS)
+    head.render(sim.data, "camera")
+    mujoco_rgb = np.empty((165, 214, 3), np.uint8)
+    mujoco.mjr_readPixels(mujoco_rgb, None, head._rect, head._context)
+    expected = mujoco_rgb[::-1]
+    assert not np.array_equal(expected, mujoco_rgb)  # the picture is not the same upside down
+    for rows_down in (head._rows_down, False):
+        head._rows_down = rows_down
+        rgba = head.render_rgba(sim.data, "camera")
+        assert rgba.shape == (165, 214, 4) and not rgba.flags.writeable
+        assert np.array_equal(rgba[..., :3], expected) and np.all(rgba[..., 3] == 255), rows_down
+        assert np.array_equal(head.render(sim.data, "camera"), expected), rows_down
+    head.close()
+    pictures = Renderer(sim.model, 96, 72, quality="high")
+    assert np.array_equal(pictures.render_rgba(sim.data, "tracking")[..., :3], pictures.render(sim.data, "tracking"))
+    pictures.close()
+
+
 def test_culling_with_a_free_camera_changes_no_pixel():
     """A third-person free camera close to the robot, so that some geoms fall outside the
     picture and others cross its edges."""

@@ -216,10 +216,11 @@ class HeadCamera:
     def _expose(self, exposure: _Exposure) -> CameraFrame:
         data = exposure.data
         pose = (data.cam_xpos[self.camera_id].copy(), data.cam_xmat[self.camera_id].reshape(3, 3).copy())
-        rendered = self._render(data, "rgb")
         if self.sensor is None:
+            rendered = self._render(data, "rgb")
             picture = rendered if self._remap is None else self._lens_remap(rendered, cv2.INTER_LINEAR)
             return CameraFrame(exposure.index, exposure.frame_number, exposure.settings, pose, rgb=picture)
+        rendered = self._render(data, "rgba")
         if self.sensor.settings != exposure.settings:
             self.sensor.configure(exposure.settings, self.sensor.robot)
         motion = self.image_motion(data, exposure.settings.exposure_s)
@@ -249,7 +250,7 @@ class HeadCamera:
     def _render(self, data: mujoco.MjData, kind: str) -> np.ndarray:
         if self._renderer is None:
             self._renderer = Renderer(self.model, *self.render_size, groups=HEAD_CAMERA_GROUPS)
-        render = {"rgb": self._renderer.render, "depth": self._renderer.render_depth,
+        render = {"rgb": self._renderer.render, "rgba": self._renderer.render_rgba, "depth": self._renderer.render_depth,
                   "segmentation": self._renderer.render_segmentation}[kind]
         if self._pinhole is None:
             return render(data, self.camera_id)

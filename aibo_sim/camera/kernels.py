@@ -4,7 +4,7 @@ A frame goes through these passes (``Sensor.expose`` calls them in this order), 
 over contiguous row slices that LLVM vectorises (interleaved channels are indexed 3 x + c,
 which LLVM reads and writes with shuffles):
 
-1. ``split``: the render's interleaved R, G, B into planes, padded for the smear;
+1. ``split``: the render's RGBA pixels into R, G, B planes, padded for the smear;
 2. ``smear``: motion blur on the pinhole render, the sum of shifted copies of each row
    (``motion_taps``: integer taps, weights in 1/256, uint16 sums: twice the SIMD lanes of
    float32);
@@ -82,18 +82,19 @@ def smear_taps(du, dv):
 
 @_compiled
 def split(image, pad, out):
-    """``out[c, y, pad + x]`` = ``image[y, x, c]``: the picture's interleaved channels as planes,
-    the ``pad`` columns each side (and the ``SLACK`` past them) repeating the edge."""
+    """``out[c, y, pad + x]`` = ``image[y, x, c]`` for R, G, B of the render's (h, w, 4) RGBA
+    pixels (alpha unread): the picture's channels as planes, the ``pad`` columns each side (and
+    the ``SLACK`` past them) repeating the edge."""
     height, width, _ = image.shape
-    flat = image.reshape(height, 3 * width)
+    flat = image.reshape(height, 4 * width)
     for y in range(height):
         row = flat[y]
         red, green, blue = out[0, y, pad:pad + width], out[1, y, pad:pad + width], out[2, y, pad:pad + width]
         for x in range(width):
-            red[x], green[x], blue[x] = row[3 * x], row[3 * x + 1], row[3 * x + 2]
+            red[x], green[x], blue[x] = row[4 * x], row[4 * x + 1], row[4 * x + 2]
         for c in range(3):
             out[c, y, :pad] = row[c]
-            out[c, y, pad + width:] = row[3 * width - 3 + c]
+            out[c, y, pad + width:] = row[4 * width - 4 + c]
 
 
 @_compiled
