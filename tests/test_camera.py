@@ -591,6 +591,23 @@ def test_two_pass_warp_is_the_lens_remap():
     assert np.array_equal(_warp(picture[:lens.height, :lens.width].copy(), identity), picture[:lens.height, :lens.width])
 
 
+def test_two_pass_warp_splits_rows_into_runs_of_one_source_offset():
+    """Pass 2's runs: where the source column less the destination column changes (row 1 read
+    1.6 px further right from column 3 on; row 2 read two columns to the right throughout)."""
+    from aibo_sim.camera.lens import Warp
+
+    map_x, map_y = np.meshgrid(np.arange(6.0), np.arange(3.0))
+    map_x[1, 3:] += 1.6
+    map_x[2] = np.minimum(map_x[2] + 2.0, 7.0)
+    warp = Warp.from_maps(map_x, map_y, 8)
+    pointers, runs = warp.columns_runs
+    assert pointers.tolist() == [0, 1, 3, 4]
+    assert runs.tolist() == [[0, 6], [0, 3], [3, 6], [0, 6]]
+    assert warp.columns_base[1].tolist() == [0, 1, 2, 4, 5, 6] and warp.columns_frac[1, 3] == pytest.approx(0.6)
+    pointers, runs = warp.rows_runs  # pass 1: every column of every row reads its own row
+    assert pointers.tolist() == [0, 1, 2, 3] and runs.tolist() == [[0, 8]] * 3
+
+
 def test_two_pass_warp_refuses_a_map_that_folds_back():
     from aibo_sim.camera.lens import Warp
 

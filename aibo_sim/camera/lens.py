@@ -204,9 +204,11 @@ class Warp:
 def _runs(key: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Row pointers and (start, end) of the runs of each row of ``key`` where it stays the same:
     pass 1's source row, pass 2's source column less the destination column."""
-    pointers, runs = [0], []
-    for row in key:
-        cuts = np.flatnonzero(np.diff(row)) + 1
-        runs += zip(np.r_[0, cuts], np.r_[cuts, row.size])
-        pointers.append(len(runs))
-    return np.array(pointers, np.int64), np.array(runs, np.int64).reshape(-1, 2)
+    rows, width = key.shape
+    starts_run = np.ones(key.shape, bool)
+    starts_run[:, 1:] = key[:, 1:] != key[:, :-1]
+    row, start = np.divmod(np.flatnonzero(starts_run), width)
+    pointers = np.concatenate([[0], np.cumsum(np.bincount(row, minlength=rows))])
+    end = np.append(start[1:], width)
+    end[pointers[1:] - 1] = width  # each row's last run ends at the row's end
+    return pointers.astype(np.int64), np.stack([start, end], axis=1).astype(np.int64)
