@@ -192,6 +192,7 @@ class Renderer:
         self._multisampled = quality == "high" and saved[0] > 0
         self._rgba = np.empty((height, width, 4), np.uint8)
         self._rgba.flags.writeable = False  # handed out; only glReadPixels writes it
+        self._rgba_address = ctypes.c_void_p(self._rgba.ctypes.data)
         self._gl_read, self._rows_down = self._rgba_reader()
         self._leave()
         self._camera = mujoco.MjvCamera()
@@ -245,20 +246,22 @@ class Renderer:
         bottom (``GL_PACK_INVERT_MESA`` accepted); called with this renderer's context current."""
         from OpenGL.raw.GL.VERSION.GL_1_0 import glGetError, glPixelStorei, glReadPixels
 
-        while glGetError():  # errors left by others
-            pass
+        for _ in range(8):  # errors left by others (GL keeps one per kind)
+            if not glGetError():
+                break
         glPixelStorei(GL_PACK_INVERT_MESA, 0)
         return (glPixelStorei, glReadPixels), glGetError() == 0
 
     def _read_rgba(self) -> np.ndarray:
         """The drawn picture, (h, w, 4) RGBA rows top to bottom, in the renderer's own buffer (the
-        next read overwrites it; a copy where the driver cannot read rows top to bottom). One ``glReadPixels`` in the framebuffer's own
-        format: ~5 us at 214x165 on llvmpipe, where MuJoCo's RGB read (~23 us) converts each
-        pixel. Not multisampled buffers (MuJoCo's read resolves them first)."""
+        next read overwrites it; a copy where the driver cannot read rows top to bottom). One
+        ``glReadPixels`` in the framebuffer's own format: ~5 us at 214x165 on llvmpipe, where
+        MuJoCo's RGB read (~23 us) converts each pixel. Not for multisampled buffers (MuJoCo's
+        read resolves them first)."""
         store, read = self._gl_read
         if self._rows_down:
             store(GL_PACK_INVERT_MESA, 1)
-        read(0, 0, self.width, self.height, GL_RGBA, GL_UNSIGNED_BYTE, self._rgba.ctypes.data_as(ctypes.c_void_p))
+        read(0, 0, self.width, self.height, GL_RGBA, GL_UNSIGNED_BYTE, self._rgba_address)
         if self._rows_down:
             store(GL_PACK_INVERT_MESA, 0)
         self._leave()
