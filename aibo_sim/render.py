@@ -244,13 +244,17 @@ class Renderer:
         """PyOpenGL's raw ``glPixelStorei`` and ``glReadPixels`` (imported once the context
         exists: MuJoCo chose PyOpenGL's platform) and whether the driver reads rows top to
         bottom (``GL_PACK_INVERT_MESA`` accepted); called with this renderer's context current."""
+        from OpenGL.error import GLError
         from OpenGL.raw.GL.VERSION.GL_1_0 import glGetError, glPixelStorei, glReadPixels
 
-        for _ in range(8):  # errors left by others (GL keeps one per kind)
+        for _ in range(8):  # errors left by others (GL keeps one per kind): PyOpenGL would raise them
             if not glGetError():
                 break
-        glPixelStorei(GL_PACK_INVERT_MESA, 0)
-        return (glPixelStorei, glReadPixels), glGetError() == 0
+        try:
+            glPixelStorei(GL_PACK_INVERT_MESA, 0)
+        except GLError:  # GL_INVALID_ENUM: a driver without the extension
+            return (glPixelStorei, glReadPixels), False
+        return (glPixelStorei, glReadPixels), True
 
     def _read_rgba(self) -> np.ndarray:
         """The drawn picture, (h, w, 4) RGBA rows top to bottom, in the renderer's own buffer (the

@@ -350,10 +350,11 @@ def test_renderers_taking_turns_each_draw_in_their_own_context():
     third_person.close()
 
 
-def test_rgba_read_gives_mujocos_own_pixels_top_row_first():
+def test_rgba_read_gives_mujocos_own_pixels_top_row_first(monkeypatch):
     """The renderer reads RGBA itself (rows top to bottom through Mesa's pack-invert, or
     flipped where a driver lacks it): its pixels are MuJoCo's own RGB read, upside down, alpha
     255; a multisampled renderer's RGBA is its RGB picture."""
+    from aibo_sim import render
     from aibo_sim.camera import HEAD_CAMERA_GROUPS
     from aibo_sim.render import Renderer
 
@@ -374,6 +375,10 @@ def test_rgba_read_gives_mujocos_own_pixels_top_row_first():
         assert np.array_equal(rgba[..., :3], expected) and np.all(rgba[..., 3] == 255), rows_down
         assert np.array_equal(head.render(sim.data, "camera"), expected), rows_down
     head.close()
+    monkeypatch.setattr(render, "GL_PACK_INVERT_MESA", 0x9999)  # an enum no driver knows: the extension missing
+    lacking = Renderer(sim.model, 214, 165, groups=HEAD_CAMERA_GROUPS)
+    assert not lacking._rows_down and np.array_equal(lacking.render_rgba(sim.data, "camera")[..., :3], expected)
+    lacking.close()
     pictures = Renderer(sim.model, 96, 72, quality="high")
     assert np.array_equal(pictures.render_rgba(sim.data, "tracking")[..., :3], pictures.render(sim.data, "tracking"))
     pictures.close()
