@@ -252,9 +252,10 @@ class Renderer:
                 break
         try:
             glPixelStorei(GL_PACK_INVERT_MESA, 0)
+            rows_down = True
         except GLError:  # GL_INVALID_ENUM: a driver without the extension
-            return (glPixelStorei, glReadPixels), False
-        return (glPixelStorei, glReadPixels), True
+            rows_down = False
+        return (glPixelStorei, glReadPixels), rows_down
 
     def _read_rgba(self) -> np.ndarray:
         """The drawn picture, (h, w, 4) RGBA rows top to bottom, in the renderer's own buffer (the

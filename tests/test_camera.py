@@ -650,7 +650,7 @@ def test_rolling_shutter_skews_rows_by_the_motion_during_the_readout():
                             motion_blur=False, readout_ms=1000 * CameraSettings().exposure_s)
     height, width = 21, 32
     maps = tuple(m.astype(np.float64) for m in np.meshgrid(np.arange(width) + 12.0, np.arange(height) + 2.0))
-    render = np.full((height + 4, width + 24, 3), 40, np.uint8)
+    render = np.full((height + 4, width + 24, 4), 40, np.uint8)  # RGBA, as the renderer reads it (alpha unread)
     render[:, 30:] = 200  # an edge between render columns 29 and 30: picture column 17.5 at rest
     sensor = Sensor(profile, CameraSettings(), 5000.0, maps, (width + 24, height + 4), (1.0, 1.0))
 
@@ -682,6 +682,6 @@ def test_exposure_scales_linear_light_through_the_gamma(gain, shutter, factor):
     for code in (0, 5, 40, 100, 180, 250):
         light = factor * ((code / 255 + 0.055) / 1.055) ** 2.4
         expected = min(max(255 * (1.055 * light ** (1 / 2.4) - 0.055), 0), 255)
-        ycrcb = sensor.expose(np.full((height + 4, width + 4, 3), code, np.uint8), (0.0, 0.0), 0, 0)
+        ycrcb = sensor.expose(np.full((height + 4, width + 4, 4), code, np.uint8), (0.0, 0.0), 0, 0)
         y = profile.black_level + (profile.white_level - profile.black_level) / 255 * expected
         assert np.all(ycrcb[..., 0] == math.floor(y + 0.5)) and np.all(ycrcb[..., 1:] == 128), (code, y)

@@ -393,12 +393,10 @@ class Sensor:
 
     def expose(self, render: np.ndarray, motion_px: tuple[float, float], seed: int, index: int,
                light: float = 1.0) -> np.ndarray:
-        """Y, Cr, Cb (h, w, 3) uint8 of the (h', w', 4) uint8 RGBA pinhole render (or RGB,
-        (h', w', 3)), with ``motion_px`` the image motion (image pixels) and ``light`` the
-        scene's light (relative to its mean) during the exposure."""
+        """Y, Cr, Cb (h, w, 3) uint8 of the (h', w', 4) uint8 RGBA pinhole render (alpha unread),
+        with ``motion_px`` the image motion (image pixels) and ``light`` the scene's light
+        (relative to its mean) during the exposure."""
         kernels = self._kernels
-        if render.shape[2] == 3:
-            render = cv2.cvtColor(render, cv2.COLOR_RGB2RGBA)
         warp = self._rolling_warp(motion_px) if self.profile.readout_ms > 0 and any(motion_px) else self.warp
         height, width = render.shape[:2]
         slack = kernels.SLACK
