@@ -14,7 +14,8 @@ Decisions where the spec leaves room (also listed in the report that came with t
   zeros). Section 3 holds ``12 + N*4*(3+J) + 4*(N-1)`` bytes for N keyframes of J joints, and
   they must all be in the file; its size field is not checked (OPEN-R's ``MTNFile`` and Webots
   compute the offsets from N and J and never read it, and one of Sony's SDK samples,
-  MoNet's ERS-210 ``sit_lose01``, gives the size of 20 joints for its 15). Bytes after it are
+  MoNet's ERS-210 ``sit_lose01``, gives the size of 20 joints for its 15); an error in the
+  keyframes names the joint count the field fits where it differs from section 2's. Bytes after it are
   ignored (OPEN-R and Webots stop reading there), so they do not survive a round trip. A
   motion needs at least one keyframe, one joint, distinct locators, a frame time > 0 and
   non-negative interpolation counts.
@@ -298,14 +299,19 @@ def parse_mtn(data: bytes, source: str = "<bytes>") -> Motion:
             raise r.fail(at, f"duplicate locator {loc!r}")
         locators.append(loc)
 
-    num, _, dtype = r.unpack("<III", end2, "section 3 header")  # its size field is not read, as OPEN-R's
+    num, size_field, dtype = r.unpack("<III", end2, "section 3 header")  # the size is not checked, as OPEN-R's
     if num != 3:
         raise r.fail(end2, f"section number {num}, expected 3")
     kf_words = 3 + njoint
     size = 12 + nkey * 4 * kf_words + 4 * (nkey - 1)
+    # A wrong joint count shows as nonsense in the keyframes: the size field's count, where it
+    # differs, is named with the error (a hint only: OPEN-R does not read the field).
+    implied, rest = divmod(size_field - 12 - 4 * (nkey - 1), 4 * nkey)
+    hint = f"; section 3's size field fits {implied - 3} joints, section 2 lists {njoint}" \
+        if not rest and implied > 3 and implied - 3 != njoint else ""
     if dtype != 0:
         raise r.fail(end2 + 8, f"data type {dtype}, expected 0")
-    r.need(end2, size, f"section 3 ({nkey} keyframes of {njoint} joints)")  # bytes after it are ignored
+    r.need(end2, size, f"section 3 ({nkey} keyframes of {njoint} joints{hint})")  # bytes after it are ignored
 
     # Keyframe 0, then (numInterpolate, keyframe) pairs: view as rows of 1 + kf_words s32,
     # with a dummy interpolation word in front of keyframe 0.
@@ -315,12 +321,12 @@ def parse_mtn(data: bytes, source: str = "<bytes>") -> Motion:
     if (interpolate < 0).any():
         k = int(np.argmax(interpolate < 0)) + 1
         offset = body + k * 4 * (1 + kf_words) - 4
-        raise r.fail(offset, f"negative interpolation count {int(interpolate[k - 1])} before keyframe {k}")
+        raise r.fail(offset, f"negative interpolation count {int(interpolate[k - 1])} before keyframe {k}{hint}")
     keyframes = words[:, 4:]
     problem = _beyond_limits(frame_time, interpolate, keyframes, locators)
     if problem is not None:  # at the word: the segment's numInterpolate, or the joint's value
         message, k, j = problem
-        raise r.fail(body + (k * (1 + kf_words) + (0 if j is None else 4 + j)) * 4 - 4, message)
+        raise r.fail(body + (k * (1 + kf_words) + (0 if j is None else 4 + j)) * 4 - 4, message + hint)
     return Motion(
         name=name,
         creator=creator,
@@ -526,7 +532,7 @@ _last_error = ""
 
 def mtn_new(path: str | os.PathLike, available_locators: Iterable[str] | None = None) -> Motion:
     """Webots ``mtn_new``: read ``path`` and check every locator names a device of the robot
-    (default: ``ers7.all_locators()``). Failures raise :class:`MtnError` and are remembered for
+    (default: ``ers7.all_locators()``) and is a joint. Failures raise :class:`MtnError` and are remembered for
     :func:`mtn_get_error`; Webots' own texts are used ("File not found: <path>",
     "Missing device in model: <locator>", without Webots' trailing newline), with the path or
     locator as :func:`printable` shows it (a path cut to ``NAME_LIMIT`` characters). A
@@ -547,6 +553,8 @@ def mtn_new(path: str | os.PathLike, available_locators: Iterable[str] | None = 
         for loc in motion.locators:
             if loc not in available:
                 raise MtnError(None, None, f"Missing device in model: {printable(loc)}")
+            if loc not in ers7.JOINT_BY_LOCATOR:
+                raise MtnError(None, None, f"Not a joint: {printable(loc)} (a motion moves joints only)")
     except MtnError as exc:
         _last_error = str(exc)
         raise

@@ -184,6 +184,18 @@ BAD_TINY = {
 }
 
 
+def test_a_wrong_joint_count_is_named_from_section_3s_size_field():
+    """Section 2 listing one joint fewer than the keyframes hold: keyframe 0's second joint
+    value (-2) is read as an interpolation count; the error names the joint count that section
+    3's size field fits. A right count adds nothing."""
+    with pytest.raises(MtnError) as info:
+        parse_mtn(_patch(TINY, 64, "<H", 1), "tiny")
+    assert str(info.value) == ("tiny: byte 100 (0x64): negative interpolation count -2 before keyframe 1; "
+                               "section 3's size field fits 2 joints, section 2 lists 1")
+    with pytest.raises(MtnError, match=r"before keyframe 1$"):
+        parse_mtn(_patch(TINY, 104, "<i", -1), "tiny")
+
+
 def test_limits_hold_at_their_edges_and_for_motions_built_in_code():
     longest = MAX_LENGTH_MS // 16 - 1  # tiny's one segment lasts n + 1 frames of 16 ms
     assert parse_mtn(_patch(TINY, 104, "<i", longest), "tiny").length_ms == MAX_LENGTH_MS
@@ -425,3 +437,14 @@ def test_mtn_new_checks_devices(tmp_path):
     with pytest.raises(MtnError, match="^File not found: "):
         mtn_new(tmp_path / "nope.mtn")
     assert mtn_get_error().startswith("File not found: ")
+
+
+def test_mtn_new_refuses_a_device_that_is_not_a_joint(tmp_path):
+    """An LED's locator is a device of the robot but nothing a motion can move: refused by
+    mtn_new, not left to fail when the motion plays."""
+    led = ers7.LEDS[0].locator
+    path = tmp_path / "led.mtn"
+    write_mtn(Motion.from_poses("led", [ers7.JOINTS[6].locator, led], [[0.0, 0.0]], []), path)
+    with pytest.raises(MtnError) as info:
+        mtn_new(path)
+    assert str(info.value) == f"Not a joint: {led} (a motion moves joints only)" == mtn_get_error()
