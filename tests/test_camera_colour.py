@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 
 from aibo_sim.camera import CameraSettings, scene_light
+from aibo_sim.camera.sensor import ROBOT_GAIN_SIGMA, ROBOT_OFFSET_SIGMA, ROBOT_PIVOT
 from aibo_sim.sim import Simulation
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -75,13 +76,35 @@ def measured() -> dict[str, np.ndarray]:
         sim.close()
 
 
-def robot_spread() -> dict[str, list[tuple[float, float]]]:
-    """Per target of the data: (low, high) per channel, the mean over the robots +- 2 sample
-    standard deviations of the robots' means."""
+def robot_rows() -> list[dict]:
     if not ROBOT_MEANS.exists():
         pytest.skip(f"{ROBOT_MEANS} is not here")
     with ROBOT_MEANS.open(newline="") as f:
-        rows = list(csv.DictReader(f))
+        return list(csv.DictReader(f))
+
+
+def test_robot_colour_spread_is_the_robots_linear_maps():
+    """``RobotColour``'s sigmas are those of the per-robot lines (gain about the pivot, offset)
+    that map the robots' average of each target to that robot's means, fitted per channel."""
+    rows = robot_rows()
+    targets = sorted({row["target"] for row in rows})
+    by_robot: dict[str, dict[str, list[float]]] = {}
+    for row in rows:
+        by_robot.setdefault(row["robot"], {})[row["target"]] = [float(row[f"{c}_mean"]) for c in CHANNELS]
+    means = np.array([[robot[t] for t in targets] for robot in by_robot.values()])  # robots, targets, channels
+    average = means.mean(axis=0)
+    for c, channel in enumerate(CHANNELS):
+        x = average[:, c] - ROBOT_PIVOT[c]
+        fits = [np.polyfit(x, robot[:, c] - ROBOT_PIVOT[c], 1) for robot in means]
+        gain_sigma, offset_sigma = np.std(fits, axis=0, ddof=1)
+        assert gain_sigma == pytest.approx(ROBOT_GAIN_SIGMA[c], rel=0.05), channel
+        assert offset_sigma == pytest.approx(ROBOT_OFFSET_SIGMA[c], rel=0.05), channel
+
+
+def robot_spread() -> dict[str, list[tuple[float, float]]]:
+    """Per target of the data: (low, high) per channel, the mean over the robots +- 2 sample
+    standard deviations of the robots' means."""
+    rows = robot_rows()
     spread = {}
     for target in {row["target"] for row in rows}:
         spread[target] = []
