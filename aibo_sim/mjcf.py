@@ -25,7 +25,7 @@ PAW_RADIUS = 0.01172  # Tekkotsu BallOfFootRadius; Webots uses 0.017 (see models
 PAW_TOUCH_RADIUS = 0.015  # Webots touch sphere
 MAX_TORQUE = 5.4542  # N m, Webots maxForce for every servo (carried over from the ERS-210)
 SHIN_COLLISION_REACH, SHIN_COLLISION_RADIUS = 0.7, 0.0145  # shin capsule: knee to 70 % of the way to the paw
-TIMESTEP = 0.004  # s: two physics steps per 8 ms OPEN-R joint frame
+TIMESTEP = 0.002  # s: four physics steps per 8 ms OPEN-R joint frame (models/README.md, "Conventions": the timestep)
 
 # The servos: a DC motor behind a gearbox, driven by Sony's PID through a PWM stage that
 # saturates at +-255 (models/README.md, "Servos"). The position actuator is the controller: its

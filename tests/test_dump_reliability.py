@@ -410,7 +410,9 @@ def test_resume_refuses_a_scene_whose_model_changed(tmp_path):
     dump(out, controller=TRACKER, frames=3, scene=scene, formats=("rgb",))
     dump(out, controller=TRACKER, frames=3, scene=scene, formats=("rgb",), resume=True)  # unchanged: fine
     robot = models / "ers7.xml"
-    robot.write_text(robot.read_text().replace('timestep="0.004"', 'timestep="0.002"'))
+    text = robot.read_text()
+    assert 'timestep="0.002"' in text
+    robot.write_text(text.replace('timestep="0.002"', 'timestep="0.001"'))
     with pytest.raises(DumpError, match=r"cannot resume, the dump was made with other parameters \(model_sha256\)"):
         dump(out, controller=TRACKER, frames=3, scene=scene, formats=("rgb",), resume=True)
 

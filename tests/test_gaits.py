@@ -13,6 +13,7 @@ import pytest
 
 from aibo_sim import cli, motions
 from aibo_sim.ers7 import JOINTS, LEGS
+from aibo_sim.mjcf import TIMESTEP
 from aibo_sim.mtn import read_mtn
 from aibo_sim.sim import Simulation, models_dir
 
@@ -26,8 +27,9 @@ def scene_with_timestep(folder: Path, timestep: float) -> Path:
     shutil.copytree(models_dir(), folder, dirs_exist_ok=True)
     robot = folder / "ers7.xml"
     text = robot.read_text()
-    assert 'timestep="0.004"' in text
-    robot.write_text(text.replace('timestep="0.004"', f'timestep="{timestep}"'))
+    default = f'timestep="{TIMESTEP:g}"'
+    assert default in text
+    robot.write_text(text.replace(default, f'timestep="{timestep}"'))
     return folder / "scene.xml"
 
 
@@ -80,6 +82,18 @@ SONY_WALKS = sorted(SONY_MTN.glob("WW*.MTN"))  # Sony's walks: WWFWD, and any ot
 def test_sony_walk_goes_straight_over_the_physics_grid(tmp_path, path):
     walk = read_mtn(path)
     check_walk(walk_grid(tmp_path, walk, 8), direction=1 if motions.kinematic_speed(walk) > 0 else -1)
+
+
+@pytest.mark.skipif(not (SONY_MTN / "WWFWD.MTN").exists(), reason="Sony's WWFWD.MTN not present (../shared/data/mtn)")
+def test_sony_walk_at_the_default_timestep_is_the_converged_walk(tmp_path):
+    """16 cycles of WWFWD, unperturbed: the default timestep walks as 1 ms does (4 ms turned
+    17 deg where 1 ms turns 0.1: a time-step error that grows with every cycle)."""
+    walk = read_mtn(SONY_MTN / "WWFWD.MTN")
+    default = motions.play_motion(walk, repeat=16, ball=None)
+    fine = motions.play_motion(walk, repeat=16, scene=scene_with_timestep(tmp_path, 0.001), ball=None)
+    assert abs(fine["heading_change_deg"]) < 1 and fine["displacement_m"][0] > 1.2, fine
+    assert abs(default["heading_change_deg"] - fine["heading_change_deg"]) < 5, (default, fine)
+    assert abs(default["displacement_m"][0] - fine["displacement_m"][0]) < 0.05, (default, fine)
 
 
 def test_own_trot_converges_with_the_timestep(tmp_path):
