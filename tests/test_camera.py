@@ -544,7 +544,7 @@ def _warp(image: np.ndarray, maps: tuple[np.ndarray, np.ndarray], outer: float =
     planes = np.empty((3, image.shape[0], image.shape[1] + kernels.SLACK), np.uint8)
     kernels.split(np.dstack([image, np.full(image.shape[:2], 255, np.uint8)]), 0, planes)
     identity = np.float32([[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0]])
-    response = np.float32([[1, 0]] * 3)
+    response = np.float32([1, 1, 1])
     curve, slope, intercept = (np.full((3, 1, width), value, np.float32) for value in (0, 1, 0))
     out = np.empty((height, width, 3), np.uint8)
     taps = np.float32(outer), np.float32(centre)
@@ -666,10 +666,26 @@ def test_rolling_shutter_skews_rows_by_the_motion_during_the_readout():
     assert edge(moving, 0) == pytest.approx(17.5 - 8, abs=0.05)
 
 
+@pytest.mark.parametrize("gain", ["mid", "high"])
+def test_a_black_target_reads_the_black_level_above_the_floor(gain):
+    """Section 4: a black target reads 19-24 and Y never falls below 16-19; the noise spreads
+    around the black level, and only its far tail reaches the floor."""
+    from aibo_sim.camera.sensor import Sensor
+
+    profile = CameraProfile("flat", sensor=True, vignetting=False, motion_blur=False)
+    height, width = 48, 64
+    maps = tuple(m.astype(np.float64) for m in np.meshgrid(np.arange(width) + 2.0, np.arange(height) + 2.0))
+    sensor = Sensor(profile, CameraSettings(gain=gain), 5000.0, maps, (width + 4, height + 4), (1.0, 1.0))
+    y = np.concatenate([sensor.expose(np.zeros((height + 4, width + 4, 4), np.uint8), (0.0, 0.0), 0, index)[..., 0]
+                        for index in range(4)])
+    assert 19 <= y.mean() <= 24 and y.min() >= 16, (y.mean(), y.min())
+    assert np.mean(y == profile.y_floor) < 0.02
+
+
 @pytest.mark.parametrize("gain, shutter, factor", [("high", "slow", 4.0), ("low", "fast", 0.25), ("mid", "mid", 1.0)])
 def test_exposure_scales_linear_light_through_the_gamma(gain, shutter, factor):
     """Stage 2 on uniform renders: a code read as linear light through the gamma
-    ((v / 255 + 0.055) / 1.055)^2.4, scaled by the exposure, encoded back and clipped; then
+    (v / 255)^2.2, scaled by the exposure, encoded back and clipped (black stays black); then
     Y = black + (white - black) / 255 x the code for a grey."""
     from aibo_sim.camera.sensor import Sensor
 
@@ -680,8 +696,8 @@ def test_exposure_scales_linear_light_through_the_gamma(gain, shutter, factor):
     sensor = Sensor(profile, CameraSettings(white_balance="fl", gain=gain, shutter=shutter), 5000.0, maps,
                     (width + 4, height + 4), (1.0, 1.0))
     for code in (0, 5, 40, 100, 180, 250):
-        light = factor * ((code / 255 + 0.055) / 1.055) ** 2.4
-        expected = min(max(255 * (1.055 * light ** (1 / 2.4) - 0.055), 0), 255)
+        light = factor * (code / 255) ** 2.2
+        expected = min(255 * light ** (1 / 2.2), 255)
         ycrcb = sensor.expose(np.full((height + 4, width + 4, 4), code, np.uint8), (0.0, 0.0), 0, 0)
         y = profile.black_level + (profile.white_level - profile.black_level) / 255 * expected
         assert np.all(ycrcb[..., 0] == math.floor(y + 0.5)) and np.all(ycrcb[..., 1:] == 128), (code, y)

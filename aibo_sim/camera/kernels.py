@@ -10,7 +10,7 @@ which LLVM reads and writes with shuffles):
    float32);
 3. ``develop``, row by row: the lens remap as two 1-D passes (``lens.Warp``), each a linear
    interpolation convolved with the 3-tap Gaussian of the lens's softness, into a row
-   buffer; then the response (a gain and an offset per channel, clipped), the YCrCb matrix,
+   buffer; then the response (a gain per channel, clipped), the YCrCb matrix,
    vignetting and robot colour, noise, Y's floor and rounding, into the interleaved Y, Cr,
    Cb picture. One pass over the frame: the passes' intermediate rows stay in the cache.
 
@@ -137,7 +137,7 @@ def develop(planes, rows_base, rows_frac, rows_pointers, rows_runs, columns_base
        columns each side repeating the edge;
     2. ``line[c, u]`` = ``across`` at column ``columns_base[v, u] + columns_frac[v, u]``,
        interpolated and convolved the same way;
-    3. per pixel ``min(max(response[c, 0] line + response[c, 1], 0), 255)`` (R, G, B),
+    3. per pixel ``min(max(response[c] line, 0), 255)`` (R, G, B),
        ``matrix`` (3, 4) to Y, Cr, Cb, ``curve v^2 + slope v + intercept`` (vignetting and
        robot colour, planes (3, rows, w), image row v at ``coefficient_row[v]``), plus
        ``noise[c, start + v w + u] * noise_scale[c]``; Y floored at ``black``, all clipped to
@@ -194,9 +194,9 @@ def develop(planes, rows_base, rows_frac, rows_pointers, rows_runs, columns_base
         intercept_y, intercept_cr, intercept_cb = intercept[0, row], intercept[1, row], intercept[2, row]
         red, green, blue, picture = line[0], line[1], line[2], flat[v]
         for u in range(width):
-            r = min(max(response[0, 0] * red[u] + response[0, 1], np.float32(0.0)), np.float32(255.0))
-            g = min(max(response[1, 0] * green[u] + response[1, 1], np.float32(0.0)), np.float32(255.0))
-            b = min(max(response[2, 0] * blue[u] + response[2, 1], np.float32(0.0)), np.float32(255.0))
+            r = min(max(response[0] * red[u], np.float32(0.0)), np.float32(255.0))
+            g = min(max(response[1] * green[u], np.float32(0.0)), np.float32(255.0))
+            b = min(max(response[2] * blue[u], np.float32(0.0)), np.float32(255.0))
             y = m[0, 0] * r + m[0, 1] * g + m[0, 2] * b + m[0, 3]
             cr = m[1, 0] * r + m[1, 1] * g + m[1, 2] * b + m[1, 3]
             cb = m[2, 0] * r + m[2, 1] * g + m[2, 2] * b + m[2, 3]

@@ -15,13 +15,14 @@ Then, per frame:
    scene's ``light_temperature_K``) x white balance gains (von Kries against the preset's
    Planckian, section 6) x exposure (each gain step and each shutter step doubles the
    signal, section 1) x ``sensitivity``, then the on-chip gamma with clipping at 0 and full
-   scale. The gamma (UNCONFIRMED) is sRGB's power segment, 1.055 L^(1/2.4) - 0.055, over the
-   whole range, and the render's codes are read with its inverse: a factor k on the light is
-   then a gain k^(1/2.4) and an offset on the codes, exact for every code (sRGB's linear toe,
-   below code 11, would make dark codes a table lookup; at the default settings k is 1 and
-   both agree);
+   scale. The gamma (UNCONFIRMED) is a pure power, L^(1/2.2) (sRGB's usual approximation),
+   and the render's codes are read with its inverse: a factor k on the light is then a gain
+   k^(1/2.2) on the codes, exact for every code, and black stays black at every exposure
+   (sRGB's own curve read this way, 1.055 L^(1/2.4) - 0.055 without its linear toe, lifted a
+   black target by 4 levels of Y at 2x the light; with the toe, dark codes would need a
+   table lookup);
 3. YCrCb: Y = 0.299 R + 0.587 G + 0.114 B spanning ``black_level`` .. ``white_level``
-   (section 4: Y never below 16-19, white 250-254), Cr and Cb = 128 + ``chroma_gain`` x
+   (section 4: a black target reads 19-24, white 250-254), Cr and Cb = 128 + ``chroma_gain`` x
    (R - Y, B - Y). The gain is UNCONFIRMED; chosen: BT.601's (0.713, 0.564), what a CMOS
    camera's YCbCr output uses. The inverse of Sony's decoder (128/255 on both) cannot give
    what real robots read on the field carpet (Cr 101 at Y 52 would need R < 0): the real
@@ -35,7 +36,8 @@ Then, per frame:
    a fixed pool of normal numbers (bytes, in steps of sigma / ``NOISE_STEPS``) at an offset
    drawn from (seed, frame index): the same frame of the same seed gets the same noise
    whoever asks and in whatever order;
-7. rounding and clipping to bytes (Y floor ``black_level``).
+7. rounding and clipping to bytes (Y floor ``y_floor``, below ``black_level``: a black target
+   reads the black level, its noise reaching down to the floor).
 
 UNCONFIRMED in the spec, chosen here and configurable: rolling shutter (``readout_ms``,
 default 0: off, no source gives the ERS-7's readout time; the last row ends its exposure at
@@ -81,7 +83,7 @@ ROBOT_GAIN_SIGMA = (0.034, 0.046, 0.021)
 ROBOT_OFFSET_SIGMA = (1.5, 1.8, 2.25)
 NOISE_POOL_FRAMES = 8
 NOISE_STEPS = 32  # the noise pool's steps per sigma: bytes reach 127 / 32, ~4 sigma
-GAMMA, GAMMA_OFFSET = 2.4, 0.055  # stage 2's curve: sRGB's power segment
+GAMMA = 2.2  # stage 2's curve: a pure power, black stays black
 MIN_BLUR_PX = 0.25  # image motion below this is left sharp
 
 
@@ -175,7 +177,8 @@ class CameraProfile:
     lens: str = "pinhole"  # a key of lens.LENSES
     sensor: bool = False  # False: the rendered RGB is the picture, untouched
     sensitivity: float = 1.0  # signal at MID / MID relative to the render's light
-    black_level: float = 16.0
+    black_level: float = 20.0  # what a black target reads (section 4: 19-24)
+    y_floor: float = 16.0  # Y never below this (section 4: 16-19)
     white_level: float = 252.0
     vignetting: bool = True
     chroma_gain: tuple[float, float] = (0.5 / 0.701, 0.5 / 0.886)  # Cr, Cb per level of R - Y, B - Y: BT.601
@@ -190,10 +193,11 @@ class CameraProfile:
     robot: RobotColour = field(default_factory=RobotColour)
 
     def __post_init__(self):
-        numbers = (self.sensitivity, self.black_level, self.white_level, *self.chroma_gain, *self.noise_sigma,
-                   self.softness_px, self.readout_ms)
+        numbers = (self.sensitivity, self.black_level, self.y_floor, self.white_level, *self.chroma_gain,
+                   *self.noise_sigma, self.softness_px, self.readout_ms)
         if not all(math.isfinite(v) for v in numbers) or self.sensitivity <= 0 or min(self.noise_sigma) < 0 \
-                or self.softness_px < 0 or self.readout_ms < 0 or not 0 <= self.black_level < self.white_level <= 255:
+                or self.softness_px < 0 or self.readout_ms < 0 \
+                or not 0 <= self.y_floor <= self.black_level < self.white_level <= 255:
             raise ValueError(f"camera profile {self.name!r}: parameters out of range or not finite")
         if not isinstance(self.latency_frames, int) or self.latency_frames < 0:
             raise ValueError(f"camera profile {self.name!r}: latency_frames must be a whole number >= 0")
@@ -357,7 +361,7 @@ class Sensor:
                                    (gain * curve, gain * slope, gain * (intercept - pivot) + pivot + offset))
         sigma = np.asarray(p.noise_sigma) * math.sqrt(2.0 ** GAIN_STEPS[settings.gain])
         self._noise_scale = (sigma / NOISE_STEPS).astype(np.float32)
-        self._black = np.float32(p.black_level)
+        self._black = np.float32(p.y_floor)
 
     def _distinct_rows(self, planes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The planes (coefficients, channels, h, w) holding each distinct image row once,
@@ -369,13 +373,12 @@ class Sensor:
         return distinct.reshape(-1, *planes.shape[:2], self.width).transpose(1, 2, 0, 3), row_of.ravel().astype(np.int64)
 
     def _response(self, light: float) -> np.ndarray:
-        """Stage 2 as (3, 2) float32: each channel's gain and offset on the codes for ``light``
+        """Stage 2 as (3,) float32: each channel's gain on the codes for ``light``
         x the scene's mean light (a flickering light takes a few values, frame after frame:
         each is kept)."""
         response = self._responses.get(light)
         if response is None:
-            gain = (self._gains * light) ** (1 / GAMMA)
-            response = self._responses[light] = np.stack([gain, 255 * GAMMA_OFFSET * (gain - 1)], axis=1).astype(np.float32)
+            response = self._responses[light] = ((self._gains * light) ** (1 / GAMMA)).astype(np.float32)
         return response
 
     def _buffer(self, shape: tuple[int, ...], dtype: type) -> np.ndarray:
