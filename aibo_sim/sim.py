@@ -276,9 +276,13 @@ class Simulation:
         x, y = _placement("place_ball", x=x, y=y)
         if not self.has_ball:
             raise ModelError("this scene has no body named 'ball' to place")
-        joint = self.model.joint("ball")
-        self.data.qpos[joint.qposadr[0]:joint.qposadr[0] + 7] = (x, y, BALL_RADIUS, 1, 0, 0, 0)
-        self.data.qvel[joint.dofadr[0]:joint.dofadr[0] + 6] = 0
+        model, body = self.model, self._ball_body
+        joint = model.body_jntadr[body]
+        if model.body_jntnum[body] != 1 or model.jnt_type[joint] != mujoco.mjtJoint.mjJNT_FREE:
+            raise ModelError("this scene's body 'ball' cannot be placed: it needs one free joint (a freejoint)")
+        qpos, dof = model.jnt_qposadr[joint], model.jnt_dofadr[joint]
+        self.data.qpos[qpos:qpos + 7] = (x, y, BALL_RADIUS, 1, 0, 0, 0)
+        self.data.qvel[dof:dof + 6] = 0
         mujoco.mj_forward(self.model, self.data)
         self.camera.moved()
 

@@ -6,6 +6,7 @@ import json
 import math
 import os
 import re
+import shutil
 import threading
 import time
 from pathlib import Path
@@ -89,6 +90,19 @@ def test_cli_with_a_scene_without_the_robot_exits_2(scenes, command, tmp_path, c
     one_error_line(capsys, str(no_robot), "no ERS-7 robot")
     assert main(command + out + ["--scene", str(no_stand)]) == 2
     one_error_line(capsys, str(no_stand), "no keyframe 'stand'")
+
+
+@pytest.mark.parametrize("command", [["run", str(SCRIPTED), "--duration", "0.1"], ["render", "--settle", "0"],
+                                     ["mtn", "play", "STAND.MTN"]])
+def test_ball_placed_in_a_scene_whose_ball_has_no_free_joint_exits_2(tmp_path, command, capsys):
+    """A scene's 'ball' body fixed to the world (no joint) cannot take ``--ball``: one line, exit 2."""
+    models = tmp_path / "models"
+    shutil.copytree(ROOT / "models", models)
+    scene = models / "scene.xml"
+    scene.write_text(scene.read_text().replace('<freejoint name="ball"/>', ""))
+    out = ["--out", str(tmp_path / "out")] if command[0] == "render" else []
+    assert main(command + out + ["--scene", str(scene), "--ball", "0.3", "0"]) == 2
+    one_error_line(capsys, "body 'ball' cannot be placed: it needs one free joint")
 
 
 def test_a_fifo_as_the_scene_is_refused(tmp_path, capsys):
