@@ -274,6 +274,15 @@ class Simulation:
         """Put the ball at rest on the carpet at (x, y); finite numbers of magnitude at most
         ``MAX_PLACEMENT`` metres, as for ``place_robot``."""
         x, y = _placement("place_ball", x=x, y=y)
+        position, velocity = self.ball_state()
+        position[:] = (x, y, BALL_RADIUS, 1, 0, 0, 0)
+        velocity[:] = 0
+        mujoco.mj_forward(self.model, self.data)
+        self.camera.moved()
+
+    def ball_state(self) -> tuple[np.ndarray, np.ndarray]:
+        """Views into ``data`` of the ball's free joint: position and quaternion (7), velocity
+        (6); ModelError when the scene has no ball or its ball cannot move."""
         if not self.has_ball:
             raise ModelError("this scene has no body named 'ball' to place")
         model, body = self.model, self._ball_body
@@ -281,10 +290,7 @@ class Simulation:
         if model.body_jntnum[body] != 1 or model.jnt_type[joint] != mujoco.mjtJoint.mjJNT_FREE:
             raise ModelError("this scene's body 'ball' cannot be placed: it needs one free joint (a freejoint)")
         qpos, dof = model.jnt_qposadr[joint], model.jnt_dofadr[joint]
-        self.data.qpos[qpos:qpos + 7] = (x, y, BALL_RADIUS, 1, 0, 0, 0)
-        self.data.qvel[dof:dof + 6] = 0
-        mujoco.mj_forward(self.model, self.data)
-        self.camera.moved()
+        return self.data.qpos[qpos:qpos + 7], self.data.qvel[dof:dof + 6]
 
     def ball_position(self) -> np.ndarray | None:
         """The ball's centre, or None in a scene without a ball."""

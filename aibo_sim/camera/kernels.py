@@ -127,7 +127,7 @@ def smear(planes, pad, dx, dy, weights, out):
 @_compiled
 def develop(planes, rows_base, rows_frac, rows_pointers, rows_runs, columns_base, columns_frac, columns_pointers,
             columns_runs, level, outer, centre, response, matrix, curve, slope, intercept, coefficient_row, noise, noise_scale,
-            start, black, across, line, out):
+            start, y_floor, across, line, out):
     """The lens's two passes and the colour, row by row of the picture ``out`` (h, w, 3):
 
     1. ``across[c, 2 + x]`` = the column x of ``planes`` (3, h', w') at row ``rows_base[v, x] +
@@ -140,7 +140,7 @@ def develop(planes, rows_base, rows_frac, rows_pointers, rows_runs, columns_base
     3. per pixel ``min(max(response[c] line, 0), 255)`` (R, G, B),
        ``matrix`` (3, 4) to Y, Cr, Cb, ``curve v^2 + slope v + intercept`` (vignetting and
        robot colour, planes (3, rows, w), image row v at ``coefficient_row[v]``), plus
-       ``noise[c, start + v w + u] * noise_scale[c]``; Y floored at ``black``, all clipped to
+       ``noise[c, start + v w + u] * noise_scale[c]``; Y floored at ``y_floor``, all clipped to
        0..255 and rounded half up.
 
     ``*_pointers`` and ``*_runs`` split each row into runs of one source offset (``lens.Warp``).
@@ -203,6 +203,6 @@ def develop(planes, rows_base, rows_frac, rows_pointers, rows_runs, columns_base
             y = (curve_y[u] * y + slope_y[u]) * y + intercept_y[u] + noise_scale[0] * np.float32(noise_y[u])
             cr = (curve_cr[u] * cr + slope_cr[u]) * cr + intercept_cr[u] + noise_scale[1] * np.float32(noise_cr[u])
             cb = (curve_cb[u] * cb + slope_cb[u]) * cb + intercept_cb[u] + noise_scale[2] * np.float32(noise_cb[u])
-            picture[3 * u] = np.uint8(min(max(y, black), np.float32(255.0)) + np.float32(0.5))
+            picture[3 * u] = np.uint8(min(max(y, y_floor), np.float32(255.0)) + np.float32(0.5))
             picture[3 * u + 1] = np.uint8(min(max(cr, np.float32(0.0)), np.float32(255.0)) + np.float32(0.5))
             picture[3 * u + 2] = np.uint8(min(max(cb, np.float32(0.0)), np.float32(255.0)) + np.float32(0.5))

@@ -361,7 +361,7 @@ class Sensor:
                                    (gain * curve, gain * slope, gain * (intercept - pivot) + pivot + offset))
         sigma = np.asarray(p.noise_sigma) * math.sqrt(2.0 ** GAIN_STEPS[settings.gain])
         self._noise_scale = (sigma / NOISE_STEPS).astype(np.float32)
-        self._black = np.float32(p.y_floor)
+        self._y_floor = np.float32(p.y_floor)
 
     def _distinct_rows(self, planes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The planes (coefficients, channels, h, w) holding each distinct image row once,
@@ -422,7 +422,7 @@ class Sensor:
         ycrcb = np.empty((self.height, self.width, 3), np.uint8)
         kernels.develop(planes, warp.rows_base, warp.rows_frac, *warp.rows_runs, warp.columns_base, warp.columns_frac,
                         *warp.columns_runs, level, *self._taps, self._response(light), self._matrix, *self._coefficients,
-                        self._coefficient_row, self._pool, self._noise_scale, noise_offset(seed, index, self._choices), self._black,
+                        self._coefficient_row, self._pool, self._noise_scale, noise_offset(seed, index, self._choices), self._y_floor,
                         self._buffer((3, width + 4 + slack), np.float32), self._buffer((3, self.width + slack), np.float32),
                         ycrcb)
         return ycrcb

@@ -33,9 +33,7 @@ class HeadTrackBallEnv(AiboEnv):
 
     def __init__(self, **options):
         super().__init__(**options)
-        ball, data = self.sim.model.joint("ball"), self.sim.data
-        self._ball_qpos = data.qpos[ball.qposadr[0]:ball.qposadr[0] + 7]  # views into MjData
-        self._ball_qvel = data.qvel[ball.dofadr[0]:ball.dofadr[0] + 6]
+        self._ball_qpos, self._ball_qvel = self.sim.ball_state()  # views into MjData
 
     def _reset_task(self) -> None:
         rng = self.np_random
