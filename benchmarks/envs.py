@@ -2,7 +2,8 @@
 
 Environment steps per second with camera observations (HeadTrackBall-v0, RGB of layer H,
 208x160; one step = one 30 fps camera frame), for one environment and for ``make_vec`` with 2
-async workers, with Gymnasium's own worker and with ``aibo_sim.envs.vector.BusyWaitWorker``;
+async workers, with Gymnasium's own worker and with ``aibo_sim.envs.vector.BusyWaitWorker``, and
+for ``HybridVectorEnv`` with 2 environments (one stepped in the calling process);
 the reference is ``Ant-v5`` with ``render_mode="rgb_array"`` at 208x160, rendered every step,
 set up the same way. Each rate is the best of ``ROUNDS`` blocks of ``STEPS[env_id]`` steps,
 stepped in a fresh process that alternates block by block with the reference's, so that both
@@ -37,7 +38,7 @@ import gymnasium as gym
 import numpy as np
 
 import aibo_sim.envs  # noqa: F401  (registers the environments; aibo_sim sets MUJOCO_GL for Ant-v5 too)
-from aibo_sim.envs.vector import BusyWaitWorker
+from aibo_sim.envs.vector import BusyWaitWorker, HybridVectorEnv
 
 from .common import row
 
@@ -48,12 +49,14 @@ ANT_KWARGS = {"render_mode": "rgb_array", "width": 208, "height": 160}
 STEPS = {AIBO: 300, AIBO_IDEAL: 300, ANT: 40, "CartPole-v1": 300}
 ROUNDS = 10  # blocks per environment and setting, alternating with the reference's
 SPAWN = {"context": "spawn"}
-THREADS = "threads"
+THREADS, HYBRID = "threads", "hybrid"
 SETTINGS = {  # name: vector_kwargs of make_vec with 2 async workers (None: one env; THREADS: aibo-sim's
-    # ThreadedVectorEnv, 2 envs, against Ant-v5 in Gymnasium's sync vector env), the 40x target applies
+    # ThreadedVectorEnv, 2 envs, against Ant-v5 in Gymnasium's sync vector env; HYBRID: HybridVectorEnv,
+    # 2 envs, Ant-v5's too), the 40x target applies
     "1 env": (None, True),
     "make_vec async, 2 workers": (SPAWN, False),
     "make_vec async, 2 workers, BusyWaitWorker": ({**SPAWN, "worker": BusyWaitWorker()}, True),
+    "HybridVectorEnv, 2 envs (one in this process, one in a BusyWaitWorker)": (HYBRID, True),
     "make_vec threads, 2 envs (ThreadedVectorEnv; Ant-v5: sync)": (THREADS, False),
 }
 MESA_DEFAULT = {"LP_NUM_THREADS": str(os.cpu_count() or 1)}  # what llvmpipe does with the variable unset
@@ -70,6 +73,8 @@ def _make(env_id: str, vector_kwargs: dict | None):
         return gym.make(env_id, **kwargs)
     if vector_kwargs == THREADS:
         return gym.make_vec(env_id, 2, "sync" if env_id == ANT else "vector_entry_point", **kwargs)
+    if vector_kwargs == HYBRID:
+        return HybridVectorEnv(env_id, 2, **kwargs)
     return gym.make_vec(env_id, 2, "async", vector_kwargs=vector_kwargs, **kwargs)
 
 
@@ -197,8 +202,9 @@ def _read_line(process: subprocess.Popen, log) -> str:
 def measure() -> list[dict]:
     """Steps/s (one env, 2 async workers of each kind) and peak RSS, each after the same for Ant-v5.
 
-    The 40x target applies to one env and to 2 workers with the busy-wait worker, the way to
-    run these ~1.5 ms steps on several processes; Gymnasium's own worker is measured beside it.
+    The 40x target applies to one env, to 2 workers with the busy-wait worker and to
+    ``HybridVectorEnv``, the ways to run these ~1 ms steps on several processes; Gymnasium's
+    own worker is measured beside them.
     """
     vector_rate, single_rate = _alternating_best(("CartPole-v1", "make_vec async, 2 workers"), ("CartPole-v1", "1 env"))
     vector_step, two_steps = 2 / vector_rate, 2 / single_rate  # rates count env steps
@@ -220,14 +226,17 @@ def measure() -> list[dict]:
             rows.append(row(f"cost of an ers7 step over an ideal one, {setting} (ratio < 1.3: target)", ideal / aibo,
                             "x", target=("value", "<=", 1.3)))
     one = "1 env"
-    threads, async_ = (name for name in SETTINGS if name.startswith(("make_vec threads", "make_vec async, 2 workers, B")))
-    single, threaded, processes = _alternating_best((AIBO, one), (AIBO, threads), (AIBO, async_))
+    threads, async_, hybrid = (next(name for name in SETTINGS if name.startswith(start))
+                               for start in ("make_vec threads", "make_vec async, 2 workers, B", "HybridVectorEnv"))
+    single, threaded, processes, both = _alternating_best((AIBO, one), (AIBO, threads), (AIBO, async_), (AIBO, hybrid))
     reference = f"{AIBO} steps/s, 1 env (beside the two below)"
     rows += [row(reference, single, "steps/s"),
              row(f"{AIBO} steps/s, 2 envs in threads of one process (ThreadedVectorEnv)", threaded, "steps/s",
                  reference, threaded / single, target=("ratio", ">=", 1.7)),
              row(f"{AIBO} steps/s, 2 envs in 2 processes (make_vec async, BusyWaitWorker)", processes, "steps/s",
                  reference, processes / single),
+             row(f"{AIBO} steps/s, 2 envs, one in this process, one in a worker (HybridVectorEnv)", both, "steps/s",
+                 reference, both / single),
              row("share of a step's time in calls that release the GIL (MuJoCo, OpenCV, numpy; cProfile)",
                  100 * _released_share(), "%")]
     reference = f"{ANT} peak RSS, one env rendering 208x160"

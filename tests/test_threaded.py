@@ -1,5 +1,6 @@
-"""ThreadedVectorEnv: aibo-sim's environments in threads of one process, as Gymnasium's
-SyncVectorEnv steps them, bit for bit."""
+"""ThreadedVectorEnv (aibo-sim's environments in threads of one process) and HybridVectorEnv
+(the first in this process, the others in worker processes) step them as Gymnasium's
+SyncVectorEnv does, bit for bit."""
 
 import signal
 import time
@@ -10,6 +11,7 @@ import pytest
 
 import aibo_sim  # noqa: F401  (registers the environments)
 from aibo_sim.envs.threaded import ThreadedVectorEnv
+from aibo_sim.envs.vector import HybridVectorEnv
 
 HEAD_TRACK = "aibo_sim/HeadTrackBall-v0"
 
@@ -35,11 +37,14 @@ def assert_same(a, b):
         np.testing.assert_array_equal(a, b)
 
 
-def test_threads_step_as_sync_bit_for_bit_through_autoreset_and_reset_mask():
+@pytest.mark.parametrize("make_envs", [lambda: gym.make_vec(HEAD_TRACK, 3, max_episode_steps=4),
+                                       lambda: HybridVectorEnv(HEAD_TRACK, 3, max_episode_steps=4)],
+                         ids=["threads", "hybrid"])
+def test_vector_envs_step_as_sync_bit_for_bit_through_autoreset_and_reset_mask(make_envs):
     # 3 envs, episodes of 4 steps: each autoresets twice within the 12 steps.
-    threaded = gym.make_vec(HEAD_TRACK, 3, max_episode_steps=4)
+    threaded = make_envs()
     sync = gym.make_vec(HEAD_TRACK, 3, "sync", max_episode_steps=4)
-    assert isinstance(threaded.unwrapped, ThreadedVectorEnv)
+    assert isinstance(threaded.unwrapped, (ThreadedVectorEnv, HybridVectorEnv))
     assert threaded.observation_space == sync.observation_space and threaded.action_space == sync.action_space
     threaded.action_space.seed(3)
     actions = [threaded.action_space.sample() for _ in range(12)]

@@ -1,4 +1,4 @@
-"""The busy-waiting worker for Gymnasium's AsyncVectorEnv (aibo_sim.envs.vector)."""
+"""The busy-waiting worker for Gymnasium's AsyncVectorEnv and HybridVectorEnv (aibo_sim.envs.vector)."""
 
 import math
 import multiprocessing
@@ -10,7 +10,7 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
-from aibo_sim.envs.vector import BusyWaitConnection, BusyWaitWorker
+from aibo_sim.envs.vector import BusyWaitConnection, BusyWaitWorker, HybridVectorEnv
 
 HEAD_TRACK = "aibo_sim/HeadTrackBall-v0"
 
@@ -98,3 +98,47 @@ def _cpu_seconds(pid: int) -> float:
     """User + system CPU time of a process, from /proc (Linux)."""
     fields = open(f"/proc/{pid}/stat").read().rsplit(")", 1)[1].split()
     return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")  # utime + stime
+
+
+@pytest.mark.filterwarnings("ignore:.*ERROR:UserWarning")  # Gymnasium's report of the worker's error
+def test_hybrid_env_reports_errors_from_either_side_and_refuses_once_a_worker_or_itself_ended():
+    envs = HybridVectorEnv(HEAD_TRACK, 2, camera_layer="M")
+    zero = np.zeros(envs.action_space.shape, np.float32)
+    try:
+        assert envs.get_attr("camera_layer") == ("M", "M")
+        envs.set_attr("randomize", [{}, {"ball_start": 0.0}])
+        assert envs.get_attr("randomize") == ({}, {"ball_start": 0.0})
+        obs, _ = envs.reset(seed=3)
+        assert obs["image"].shape == (2, 80, 104, 3)
+        for row in (0, 1):  # the first environment's error (this process), then a worker's
+            bad = zero.copy()
+            bad[row, 0] = np.nan
+            with pytest.raises(ValueError, match=r"action\[0\] \(neck_tilt\) is nan: actions must be finite"):
+                envs.step(bad)
+        with pytest.raises(gym.error.ClosedEnvironmentError, match="environment 1's worker process ended"):
+            envs.step(zero)
+    finally:
+        envs.close()
+    with pytest.raises(gym.error.ClosedEnvironmentError, match="this HybridVectorEnv is closed"):
+        envs.reset()
+    with pytest.raises(ValueError, match="num_envs must be a whole number >= 1, not 0"):
+        HybridVectorEnv(HEAD_TRACK, 0)
+
+
+def test_hybrid_env_of_one_runs_in_this_process_as_a_single_env():
+    envs, single = HybridVectorEnv(HEAD_TRACK, 1, max_episode_steps=2), gym.make(HEAD_TRACK, max_episode_steps=2)
+    try:
+        assert envs._workers is None
+        obs, _ = envs.reset(seed=9)
+        single_obs, _ = single.reset(seed=9)
+        action = np.full((1, 3), 0.3, np.float32)
+        for step in range(3):  # the third step is the autoreset
+            obs, reward, terminated, truncated, _ = envs.step(action)
+            if step < 2:
+                single_obs, single_reward, _, single_truncated, _ = single.step(action[0])
+                assert reward[0] == single_reward and truncated[0] == single_truncated == (step == 1)
+                assert np.array_equal(obs["image"][0], single_obs["image"])
+        assert reward[0] == 0.0 and not truncated[0]  # the reset step
+    finally:
+        envs.close()
+        single.close()

@@ -26,16 +26,43 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space, create_empty_array, iterate
 
 
-def _write_row(batch, index: int, value) -> None:
+def write_row(batch, index: int, value) -> None:
     """Put one environment's ``value`` into row ``index`` of the batch arrays ``batch``."""
     if isinstance(batch, dict):
         for key, part in batch.items():
-            _write_row(part, index, value[key])
+            write_row(part, index, value[key])
     elif isinstance(batch, tuple):
         for part, item in zip(batch, value):
-            _write_row(part, index, item)
+            write_row(part, index, item)
     else:
         batch[index] = value
+
+
+def reset_arguments(num_envs: int, seed, options: dict | None) -> tuple[list, dict, np.ndarray]:
+    """A vector ``reset``'s seeds (one per environment: an int seeds them ``seed + i``), options
+    for the environments and ``reset_mask`` (default all), as ``SyncVectorEnv`` takes them;
+    ValueError for a wrong count or mask."""
+    if seed is None:
+        seed = [None] * num_envs
+    elif isinstance(seed, int):
+        seed = [seed + i for i in range(num_envs)]
+    if len(seed) != num_envs:
+        raise ValueError(f"seed: a list of num_envs = {num_envs} seeds, not {len(seed)}")
+    options = dict(options or {})
+    mask = options.pop("reset_mask", None)
+    if mask is None:
+        mask = np.ones(num_envs, np.bool_)
+    elif not (isinstance(mask, np.ndarray) and mask.dtype == np.bool_ and mask.shape == (num_envs,) and mask.any()):
+        raise ValueError(f"options['reset_mask'] must be a bool array of shape ({num_envs},) "
+                         f"with a True value, not {mask!r}")
+    return seed, options, mask
+
+
+def check_actions(action_space, actions) -> None:
+    """ValueError unless a batch of Box actions has one row for each environment."""
+    if isinstance(action_space, Box) and np.shape(actions) != action_space.shape:
+        raise ValueError(f"actions of shape {np.shape(actions)}: want {action_space.shape}, "
+                         f"one row for each of the {action_space.shape[0]} environments")
 
 
 class _EnvThread(threading.Thread):
@@ -135,25 +162,13 @@ class ThreadedVectorEnv(VectorEnv):
     # ------------------------------------------------------------------ the vector API
 
     def reset(self, *, seed: int | list[int | None] | None = None, options: dict | None = None):
-        if seed is None:
-            seed = [None] * self.num_envs
-        elif isinstance(seed, int):
-            seed = [seed + i for i in range(self.num_envs)]
-        if len(seed) != self.num_envs:
-            raise ValueError(f"seed: a list of num_envs = {self.num_envs} seeds, not {len(seed)}")
-        options = dict(options or {})
-        mask = options.pop("reset_mask", None)
-        if mask is None:
-            mask = np.ones(self.num_envs, np.bool_)
-        elif not (isinstance(mask, np.ndarray) and mask.dtype == np.bool_ and mask.shape == (self.num_envs,) and mask.any()):
-            raise ValueError(f"options['reset_mask'] must be a bool array of shape ({self.num_envs},) "
-                             f"with a True value, not {mask!r}")
+        seed, options, mask = reset_arguments(self.num_envs, seed, options)
         indices = np.flatnonzero(mask).tolist()
         observations = self._observations
 
         def reset_one(env, index, single_seed):
             obs, info = env.reset(seed=single_seed, options=options or None)
-            _write_row(observations, index, obs)
+            write_row(observations, index, obs)
             return info
 
         env_infos = self.call_each(reset_one, indices, [(i, seed[i]) for i in indices])
@@ -169,9 +184,7 @@ class ThreadedVectorEnv(VectorEnv):
         if self._interrupted:
             raise gymnasium.error.ResetNeeded("a call of this ThreadedVectorEnv was interrupted while its environments "
                                               "ran: reset() all of them before stepping again")
-        if isinstance(self.action_space, Box) and np.shape(actions) != self.action_space.shape:
-            raise ValueError(f"actions of shape {np.shape(actions)}: want {self.action_space.shape}, "
-                             f"one row for each of the {self.num_envs} environments")
+        check_actions(self.action_space, actions)
         observations, autoreset = self._observations, self._autoreset
 
         def step_one(env, index, action):
@@ -181,7 +194,7 @@ class ThreadedVectorEnv(VectorEnv):
             else:
                 obs, reward, terminated, truncated, info = env.step(action)
                 result = (reward, terminated, truncated, info)
-            _write_row(observations, index, obs)
+            write_row(observations, index, obs)
             return result
 
         results = self.call_each(step_one, None, list(enumerate(iterate(self.action_space, actions))))
