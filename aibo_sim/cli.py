@@ -247,15 +247,19 @@ def _reader_gone(stream) -> bool:
 
 
 def main(argv: list[str] | None = None) -> int:
-    from openr_bridge import OpenRError
+    try:  # the modules a command needs load here: Ctrl-C while they load is an interruption too
+        from openr_bridge import OpenRError
 
-    from .cbind import CompileError
-    from .mtn import MtnError
-    from .render import RenderingUnavailable
-    from .robot import DeviceError, short_repr
-    from .runner import ControllerFailed
-    from .sim import ModelError, SimulationDiverged
-    from .viewer import ViewerUnavailable
+        from .cbind import CompileError
+        from .mtn import MtnError
+        from .render import RenderingUnavailable
+        from .robot import DeviceError, short_repr
+        from .runner import ControllerFailed
+        from .sim import ModelError, SimulationDiverged
+        from .viewer import ViewerUnavailable
+    except KeyboardInterrupt:
+        print("\naibo-sim: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
 
     # Exit status: 0 done; 1 the controller failed (it raised, its robot_die function raised, or
     # it called sys.exit with a status other than 0); 2 bad input (one line naming it); 3 the

@@ -98,7 +98,8 @@ class FrameWriter:
     failed or the physics diverged), so that a killed run's folder is still recognised.
 
     A write that fails (a full disk) ends the run: the error is kept and ``check`` raises it
-    after the run, as the OSError naming the file rather than as the controller's exception.
+    after the run, as the OSError naming the file rather than as the controller's exception;
+    ``run.json`` then says ``"failed"`` with that error, where the disk still takes it.
     """
 
     def __init__(self, directory: Path, controller: Path | None = None, backend: str | None = None):
@@ -343,8 +344,14 @@ def run_controller(path: str | Path, *, backend: str = "sim", duration: float = 
         controller.install(None)
         sim.close()
     wall = time.perf_counter() - start
-    if writer is not None:
-        writer.check()  # a frame that could not be written ended the run
+    if writer is not None and writer.error is not None:  # a frame that could not be written ended the run
+        try:
+            writer.write_run_json({"controller": str(path), "backend": backend, "status": "failed",
+                                   "error": str(writer.error), "simulated_s": robot.time_ms / 1000,
+                                   "camera_frames": writer.count, "camera": camera})
+        except OSError:
+            pass  # the full disk refused this too: run.json still says "incomplete"
+        writer.check()
     position, yaw, _ = sim.body_pose()
     ball_end = sim.ball_position()
     summary = RunSummary(str(path), backend, robot.time_ms / 1000, wall, robot.time_ms / 1000 / max(wall, 1e-9),

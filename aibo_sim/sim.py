@@ -32,6 +32,18 @@ class ModelError(ValueError):
     """A model or scene file is missing or invalid; the message names the file."""
 
 
+def ball_joint(model: mujoco.MjModel) -> int:
+    """The free joint that moves the scene's ball; ModelError when the scene has no body named
+    'ball' or that body cannot be placed."""
+    body = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, "ball")
+    if body < 0:
+        raise ModelError("this scene has no body named 'ball' to place")
+    joint = model.body_jntadr[body]
+    if model.body_jntnum[body] != 1 or model.jnt_type[joint] != mujoco.mjtJoint.mjJNT_FREE:
+        raise ModelError("this scene's body 'ball' cannot be placed: it needs one free joint (a freejoint)")
+    return int(joint)
+
+
 class SimulationDiverged(RuntimeError):
     """The physics produced NaN or unbounded accelerations."""
 
@@ -282,14 +294,9 @@ class Simulation:
 
     def ball_state(self) -> tuple[np.ndarray, np.ndarray]:
         """Views into ``data`` of the ball's free joint: position and quaternion (7), velocity
-        (6); ModelError when the scene has no ball or its ball cannot move."""
-        if not self.has_ball:
-            raise ModelError("this scene has no body named 'ball' to place")
-        model, body = self.model, self._ball_body
-        joint = model.body_jntadr[body]
-        if model.body_jntnum[body] != 1 or model.jnt_type[joint] != mujoco.mjtJoint.mjJNT_FREE:
-            raise ModelError("this scene's body 'ball' cannot be placed: it needs one free joint (a freejoint)")
-        qpos, dof = model.jnt_qposadr[joint], model.jnt_dofadr[joint]
+        (6); ModelError as ``ball_joint``."""
+        joint = ball_joint(self.model)
+        qpos, dof = self.model.jnt_qposadr[joint], self.model.jnt_dofadr[joint]
         return self.data.qpos[qpos:qpos + 7], self.data.qvel[dof:dof + 6]
 
     def ball_position(self) -> np.ndarray | None:

@@ -13,6 +13,7 @@ import pytest
 
 import aibo_sim.envs  # noqa: F401  (registers the environments)
 from aibo_sim import controller as api
+from aibo_sim import ers7
 from aibo_sim.cli import main
 from aibo_sim.mtn import Motion, MtnError, write_mtn
 from aibo_sim.robot import DeviceError, Robot
@@ -84,6 +85,13 @@ def test_a_controller_that_plays_every_step_keeps_one_playback_and_its_speed(rob
     wall = time.perf_counter() - start
     assert len(robot.playing) == 1 and not api.mtn_is_over(motion)
     assert 10.0 / wall > 5  # real-time factor; ~0.4 s of wall time here
+
+
+def test_mtn_play_refuses_a_motion_made_in_code_that_moves_a_device_not_a_joint(robot):
+    led = ers7.LEDS[0].locator
+    with pytest.raises(MtnError, match=rf"^blink: Not a joint: {led} \(a motion moves joints only\)$"):
+        api.mtn_play(Motion.from_poses("blink", [LF_J1, led], [[0.0, 0.0]], []))
+    assert robot.playing == []
 
 
 def test_other_motions_keep_playing_beside_a_restarted_one(robot):

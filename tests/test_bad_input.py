@@ -93,16 +93,26 @@ def test_cli_with_a_scene_without_the_robot_exits_2(scenes, command, tmp_path, c
 
 
 @pytest.mark.parametrize("command", [["run", str(SCRIPTED), "--duration", "0.1"], ["render", "--settle", "0"],
+                                     ["dump", str(SCRIPTED), "--steps", "3"], ["dump", str(SCRIPTED), "--steps", "4",
+                                                                               "--workers", "2"],
                                      ["mtn", "play", "STAND.MTN"]])
 def test_ball_placed_in_a_scene_whose_ball_has_no_free_joint_exits_2(tmp_path, command, capsys):
-    """A scene's 'ball' body fixed to the world (no joint) cannot take ``--ball``: one line, exit 2."""
+    """A scene's 'ball' body fixed to the world (no joint) cannot take ``--ball``: one line, exit 2,
+    and no output folder made."""
     models = tmp_path / "models"
     shutil.copytree(ROOT / "models", models)
     scene = models / "scene.xml"
     scene.write_text(scene.read_text().replace('<freejoint name="ball"/>', ""))
-    out = ["--out", str(tmp_path / "out")] if command[0] == "render" else []
+    out = ["--out", str(tmp_path / "out")] if command[0] in ("render", "dump") else []
     assert main(command + out + ["--scene", str(scene), "--ball", "0.3", "0"]) == 2
     one_error_line(capsys, "body 'ball' cannot be placed: it needs one free joint")
+    assert not (tmp_path / "out").exists()
+
+
+def test_dump_refuses_a_policy_for_a_controller(tmp_path, capsys):
+    assert main(["dump", str(SCRIPTED), "--steps", "3", "--policy", "zero", "--out", str(tmp_path / "out")]) == 2
+    one_error_line(capsys, "--policy applies to --env dumps: a controller chooses its own actions")
+    assert not (tmp_path / "out").exists()
 
 
 def test_a_fifo_as_the_scene_is_refused(tmp_path, capsys):

@@ -399,7 +399,9 @@ def test_run_out_on_a_full_disk_is_exit_2_naming_the_file(tmp_path):
     assert result.returncode == 2, result.stderr
     assert result.stderr == f"aibo-sim: error: cannot write {out / 'frames' / '000000.png'}: File too large\n"
     assert list((out / "frames").iterdir()) == []  # no partial file
-    assert json.loads((out / "run.json").read_text())["status"] == "incomplete"
+    record = json.loads((out / "run.json").read_text())  # small enough for the limit: says why the run ended
+    assert (record["status"], record["camera_frames"]) == ("failed", 0)
+    assert record["error"] == f"cannot write {out / 'frames' / '000000.png'}: File too large"
 
 
 def test_resume_refuses_a_scene_whose_model_changed(tmp_path):

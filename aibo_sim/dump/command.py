@@ -40,7 +40,7 @@ def add_dump_parser(subcommands) -> argparse.ArgumentParser:
                                     formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("controller", nargs="?", help="controller file (or use --env)")
     parser.add_argument("--env", help="gymnasium environment id, e.g. aibo_sim/HeadTrackBall-v0")
-    parser.add_argument("--policy", choices=POLICIES, default="random", help="environment policy (default random)")
+    parser.add_argument("--policy", choices=POLICIES, help="environment dumps: the policy (default random)")
     parser.add_argument("--out", required=True, help="dump folder: new, empty, or a dump to --resume")
     length = parser.add_mutually_exclusive_group()
     length.add_argument("--duration", type=finite_float, help="simulated seconds, 30 frames each (default 10)")

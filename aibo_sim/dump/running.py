@@ -20,7 +20,7 @@ from ..cbind import compile_controller, controller_sources, is_c_controller
 from ..mtn import MODES as MTN_MODES
 from ..robot import BACKENDS, SimulationEnd
 from ..runner import Progress, check_python_controller, run_controller
-from ..sim import load_model
+from ..sim import ball_joint, load_model
 from .formats import DEFAULT_FORMATS, FORMATS
 from .writing import CONTROLLER_FILES, DumpWriter
 
@@ -194,14 +194,15 @@ def controller_sha256(path: Path) -> str:
     return hashlib.sha256("".join(f"{s.name}\0{file_sha256(s)}\0" for s in sources).encode()).hexdigest()
 
 
-def dump(out, *, controller: str | Path | None = None, env: str | None = None, policy: str = "random",
+def dump(out, *, controller: str | Path | None = None, env: str | None = None, policy: str | None = None,
          frames: int = 300, backend: str = "sim", scene: str | Path | None = None, seed: int = 0,
          pose: tuple[float, float, float] | None = None, ball: tuple[float, float] | None = None,
          formats=DEFAULT_FORMATS, camera_full: bool = False, camera_profile: str = "ers7",
          camera_settings: CameraSettings | None = None, resume: bool = False, workers: int = 1,
          engine: str = "local", ray_address: str | None = None, mtn_mode: str | None = None,
          memory_stick: str | Path | None = None) -> DumpSummary:
-    """Dump a controller run (``frames`` camera frames) or an env run (``frames`` steps) to ``out``;
+    """Dump a controller run (``frames`` camera frames) or an env run (``frames`` steps of
+    ``policy``, default random) to ``out``;
     ``pose`` (x, y, yaw in degrees), ``ball``, ``mtn_mode`` (default openr) and ``memory_stick``
     apply to controller dumps, as to ``run_controller``; the controller runs in
     ``out/controller_files`` (a shard's own). ``engine="ray"``
@@ -214,6 +215,9 @@ def dump(out, *, controller: str | Path | None = None, env: str | None = None, p
         raise ValueError(f"unknown formats {unknown or '(none given)'}; known: {', '.join(FORMATS)}")
     if backend not in BACKENDS:
         raise ValueError(f"backend must be one of {BACKENDS}, not {backend!r}")
+    if policy is not None and controller is not None:
+        raise ValueError("--policy applies to --env dumps: a controller chooses its own actions")
+    policy = policy or "random"
     if policy not in POLICIES:
         raise ValueError(f"policy must be one of {POLICIES}, not {policy!r}")
     if frames < 1:
@@ -246,6 +250,8 @@ def dump(out, *, controller: str | Path | None = None, env: str | None = None, p
         openr_bridge.OpenRSystem.from_memory_stick(memory_stick)  # a ConfigError naming it, before the folder is made
     if env is not None:
         _check_env(env)
+    if ball is not None:
+        ball_joint(load_model(scene))  # the scene's ModelError before the folder is made
     source_sha256 = None
     if controller is not None:
         controller = Path(controller).resolve()
