@@ -231,6 +231,23 @@ def test_dots_appear_where_the_calibrated_lens_projects_them(tmp_path, lens):
     sim.close()
 
 
+@pytest.mark.parametrize("lens, focal_fov, picture_fov", [("tekkotsu", (55.23, 43.52), (55.75, 44.03)),
+                                                          ("sony", (56.9, 45.2), (57.36, 45.78)),
+                                                          ("pinhole", (56.9, 45.2), (56.9, 45.2))])
+def test_each_lens_spans_the_field_of_view_its_docstring_states(lens, focal_fov, picture_fov):
+    """OpenCV's calibrationMatrixValues gives the focal lengths' field of view; the picture's,
+    between the outer pixel edges, comes from OpenCV's undistortPoints, not from our lens code."""
+    lens = LENSES[lens]
+    fov_x, fov_y, *_ = cv2.calibrationMatrixValues(lens.camera_matrix(), (lens.width, lens.height), 1.0, 1.0)
+    assert (fov_x, fov_y) == pytest.approx(focal_fov, abs=0.01)
+    edges = np.array([[[-0.5, lens.cy]], [[lens.width - 0.5, lens.cy]], [[lens.cx, -0.5]], [[lens.cx, lens.height - 0.5]]])
+    (left, _), (right, _), (_, top), (_, bottom) = cv2.undistortPoints(
+        edges, lens.camera_matrix(), np.array(lens.distortion), criteria=(cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 100, 1e-12))[:, 0]
+    picture = (math.degrees(math.atan(right) - math.atan(left)), math.degrees(math.atan(bottom) - math.atan(top)))
+    assert picture == pytest.approx(picture_fov, abs=0.01)
+    assert lens.field_of_view_deg() == pytest.approx(picture, abs=1e-3)
+
+
 def test_segmentation_and_projection_follow_the_lens():
     sim = Simulation()
     ball = sim.model.geom("ball").id

@@ -12,11 +12,17 @@ distortion on normalised coordinates (x, y) = (X / Z, Y / Z) with r^2 = x^2 + y^
 Lenses (``LENSES``), all at layer H's 208 x 160 and scaled for 416 x 320:
 - ``tekkotsu`` (the ``ers7`` profile's default): Tekkotsu's Bouguet calibration of a real
   ERS-7 (fx 198.807, fy 200.333, principal point 102.689, 85.0399, k1 -0.147005, k2 0.38485,
-  p1 -0.00347777, p2 0.00012873): the only measured lens of the robot. Its field of view is
-  55.2 x 43.5 deg, 3.6 % narrower than Sony's 56.9 x 45.2 deg (a nominal figure).
-- ``sony``: Sony's field of view (fx 191.9, fy 192.2, centred) with Tekkotsu's distortion.
+  p1 -0.00347777, p2 0.00012873): the only measured lens of the robot. Its focal lengths
+  alone give 55.2 x 43.5 deg, 3 % narrower than Sony's 56.9 x 45.2 deg (a nominal figure);
+  with its distortion the picture spans 55.75 x 44.03 deg between the outer pixel edges
+  (``Lens.field_of_view_deg``).
+- ``sony``: Sony's field of view in the focal lengths (fx 191.9, fy 192.2, centred) with
+  Tekkotsu's distortion, which widens the picture to 57.36 x 45.78 deg edge to edge.
 - ``pinhole``: Sony's field of view without distortion, the ``ideal`` profile's lens (what
-  the model's camera renders directly).
+  the model's camera renders directly): 56.9 x 45.2 deg.
+
+``camera_get_fov()`` answers Sony's 56.9 deg (0.993092 rad) with every lens, as the OPEN-R
+wrapper does on the robot: it is the wrapper's constant, not a measurement.
 """
 
 from __future__ import annotations
