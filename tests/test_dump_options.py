@@ -96,3 +96,28 @@ def test_an_mp4_only_dump_counts_the_video_bytes(tmp_path):
     out = tmp_path / "dump"
     summary = dump(out, controller=TRACKER, frames=3, formats=("mp4",))
     assert summary.bytes_written == (out / "video.mp4").stat().st_size > 0
+
+
+def test_a_camera_profile_changed_in_code_is_recorded_and_dumped_as_run_shows_it(tmp_path):
+    """A preset with options (here a rolling shutter and Sony's lens) is what the dump renders,
+    what meta.json and run.json record beside the name, and what a resume must match."""
+    import cv2
+
+    from aibo_sim.camera import PROFILES
+    from aibo_sim.runner import run_controller
+
+    profile = PROFILES["ers7"].with_options(readout_ms=6.0, lens="sony")
+    out = tmp_path / "dump"
+    dump(out, controller=TRACKER, frames=3, camera_profile=profile, formats=("rgb",))
+    meta = json.loads((out / "meta.json").read_text())
+    assert meta["parameters"]["camera_profile_options"] == {"lens": "sony", "readout_ms": 6.0}
+    assert meta["camera"]["profile_options"] == {"lens": "sony", "readout_ms": 6.0} and meta["camera"]["lens"] == "sony"
+    run = run_controller(TRACKER, duration=0.1, camera_profile=profile, out=tmp_path / "run")
+    preset = run_controller(TRACKER, duration=0.1, out=tmp_path / "preset")
+    assert run.camera["profile_options"] == meta["camera"]["profile_options"] and preset.camera["profile_options"] == {}
+    for name in ("000000.png", "000002.png"):
+        dumped, ran = (cv2.imread(str(folder / name)) for folder in (out / "rgb", tmp_path / "run" / "frames"))
+        assert (dumped == ran).all() and not (ran == cv2.imread(str(tmp_path / "preset" / "frames" / name))).all()
+    with pytest.raises(DumpError, match=r"other parameters \(camera_profile_options\)"):
+        dump(out, controller=TRACKER, frames=3, formats=("rgb",), resume=True)
+    dump(out, controller=TRACKER, frames=3, camera_profile=profile, formats=("rgb",), resume=True)

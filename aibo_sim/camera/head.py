@@ -51,11 +51,12 @@ def scene_light(model: mujoco.MjModel) -> SceneLight:
 
 def describe_camera(profile: str | CameraProfile, settings: CameraSettings, size: tuple[int, int],
                     light: SceneLight) -> dict:
-    """The head camera's profile, lens (OpenCV intrinsics and distortion at ``size``) and
-    settings, as run.json and a dump's meta.json record them."""
+    """The head camera's profile (its name, and ``profile_options``: where it differs from the
+    preset of that name), lens (OpenCV intrinsics and distortion at ``size``) and settings,
+    as run.json and a dump's meta.json record them."""
     profile = camera_profile(profile)
     lens = LENSES[profile.lens].scaled(*size)
-    return {"profile": profile.name, "lens": lens.name, "width": lens.width, "height": lens.height,
+    return {"profile": profile.name, "profile_options": profile.options(), "lens": lens.name, "width": lens.width, "height": lens.height,
             "fx": lens.fx, "fy": lens.fy, "cx": lens.cx, "cy": lens.cy, "distortion": list(lens.distortion),
             "distortion_model": "OpenCV k1, k2, p1, p2, k3", **settings.as_dict(), **light.as_dict()}
 

@@ -48,7 +48,7 @@ vignetting's dependence on settings (the measured table, FL / HIGH / FAST, is us
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, replace
+from dataclasses import asdict, dataclass, field, fields, replace
 from functools import cache
 
 import cv2
@@ -205,6 +205,16 @@ class CameraProfile:
     def with_options(self, **options) -> "CameraProfile":
         return replace(self, **options)
 
+    def options(self) -> dict:
+        """The parameters in which this profile differs from the preset of its name (all of
+        them for a name that is no preset), as JSON takes them: what run.json and meta.json
+        record beside the name."""
+        preset = PROFILES.get(self.name)
+        changed = {f.name: getattr(self, f.name) for f in fields(self)
+                   if f.name != "name" and (preset is None or getattr(self, f.name) != getattr(preset, f.name))}
+        return {name: asdict(value) if name == "robot" else list(value) if isinstance(value, tuple) else value
+                for name, value in changed.items()}
+
 
 PROFILES = {
     "ideal": CameraProfile("ideal"),
@@ -212,10 +222,15 @@ PROFILES = {
 }
 
 
-def camera_profile(profile: str | CameraProfile) -> CameraProfile:
-    """A profile by name (``PROFILES``), or the profile itself."""
+def camera_profile(profile: str | CameraProfile, options: dict | None = None) -> CameraProfile:
+    """A profile by name (``PROFILES``), or the profile itself; with ``options`` (what
+    ``CameraProfile.options`` gave), the profile they describe."""
     if isinstance(profile, CameraProfile):
         return profile
+    if options:
+        values = {name: RobotColour(**value) if name == "robot" else tuple(value) if isinstance(value, list) else value
+                  for name, value in options.items()}
+        return PROFILES[profile].with_options(**values) if profile in PROFILES else CameraProfile(profile, **values)
     if profile not in PROFILES:
         raise ValueError(f"camera profile must be one of {', '.join(PROFILES)}, not {profile!r}")
     return PROFILES[profile]

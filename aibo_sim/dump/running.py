@@ -15,7 +15,8 @@ import numpy as np
 import openr_bridge
 from openr_bridge import FRAME_RATE_HZ
 
-from ..camera import CameraSettings, camera_size, describe_camera, scene_light
+from ..camera import CameraProfile, CameraSettings, camera_size, describe_camera, scene_light
+from ..camera import camera_profile as resolve_profile  # dump's argument of that name shadows it
 from ..cbind import compile_controller, controller_sources, is_c_controller
 from ..mtn import MODES as MTN_MODES
 from ..robot import BACKENDS, SimulationEnd
@@ -70,11 +71,16 @@ class _CameraFrames:
                 raise SimulationEnd() from exc
 
 
+def _profile(parameters: dict) -> CameraProfile:
+    """The dump's camera profile: its name, and its options where it differs from the preset."""
+    return resolve_profile(parameters["camera_profile"], parameters.get("camera_profile_options"))
+
+
 def _dump_controller(parameters: dict, out: Path, resume: bool, **lock) -> DumpWriter:
     frames, camera_full = parameters["frames"], parameters["camera_full"]
     settings = CameraSettings(**parameters["camera_settings"])
     model = load_model(parameters["scene"])
-    camera = describe_camera(parameters["camera_profile"], settings, camera_size(camera_full),
+    camera = describe_camera(_profile(parameters), settings, camera_size(camera_full),
                              scene_light(model))
     progress = Progress(frames / FRAME_RATE_HZ, enabled=parameters.get("progress", True))
     with DumpWriter(out, parameters["formats"], parameters, resume=resume, camera=camera, model=model,
@@ -87,7 +93,7 @@ def _dump_controller(parameters: dict, out: Path, resume: bool, **lock) -> DumpW
                            scene=parameters["scene"], seed=parameters["seed"], pose=parameters["pose"],
                            ball=parameters["ball"], mtn_mode=parameters["mtn_mode"],
                            memory_stick=parameters["memory_stick"], camera_full=camera_full,
-                           camera_profile=parameters["camera_profile"], camera_settings=settings,
+                           camera_profile=_profile(parameters), camera_settings=settings,
                            frame_listeners=[listener], progress=False, workdir=workdir)
         finally:
             progress.close()
@@ -111,7 +117,7 @@ def _dump_env(parameters: dict, out: Path, resume: bool, **lock) -> DumpWriter:
     camera, settings = "openr" if parameters["backend"] == "openr" else "rgb", parameters["camera_settings"]
     try:
         env = gymnasium.make(parameters["env"], camera=camera, scene=parameters["scene"],
-                             camera_profile=parameters["camera_profile"], camera_wb=settings["white_balance"],
+                             camera_profile=_profile(parameters), camera_wb=settings["white_balance"],
                              camera_gain=settings["gain"], camera_shutter=settings["shutter"])
     except gymnasium.error.Error as exc:
         raise ValueError(f"environment {parameters['env']!r}: {exc}") from None
@@ -197,7 +203,7 @@ def controller_sha256(path: Path) -> str:
 def dump(out, *, controller: str | Path | None = None, env: str | None = None, policy: str | None = None,
          frames: int = 300, backend: str = "sim", scene: str | Path | None = None, seed: int = 0,
          pose: tuple[float, float, float] | None = None, ball: tuple[float, float] | None = None,
-         formats=DEFAULT_FORMATS, camera_full: bool = False, camera_profile: str = "ers7",
+         formats=DEFAULT_FORMATS, camera_full: bool = False, camera_profile: str | CameraProfile = "ers7",
          camera_settings: CameraSettings | None = None, resume: bool = False, workers: int = 1,
          engine: str = "local", ray_address: str | None = None, mtn_mode: str | None = None,
          memory_stick: str | Path | None = None) -> DumpSummary:
@@ -248,6 +254,7 @@ def dump(out, *, controller: str | Path | None = None, env: str | None = None, p
     if memory_stick is not None:
         memory_stick = Path(memory_stick).resolve()
         openr_bridge.OpenRSystem.from_memory_stick(memory_stick)  # a ConfigError naming it, before the folder is made
+    profile = resolve_profile(camera_profile)
     if env is not None:
         _check_env(env)
     if ball is not None:
@@ -262,7 +269,9 @@ def dump(out, *, controller: str | Path | None = None, env: str | None = None, p
                   "pose": pose and list(pose), "ball": ball and list(ball),
                   "mtn_mode": controller and (mtn_mode or "openr"), "memory_stick": memory_stick and str(memory_stick),
                   "formats": [f for f in FORMATS if f in formats], "camera_full": camera_full,
-                  "camera_profile": camera_profile, "camera_settings": (camera_settings or CameraSettings()).as_dict()}
+                  "camera_profile": profile.name, "camera_settings": (camera_settings or CameraSettings()).as_dict()}
+    if profile.options():  # only then: a dump of a preset resumes one made before options were recorded
+        parameters["camera_profile_options"] = profile.options()
     if source_sha256 is not None:
         parameters["controller_sha256"] = source_sha256  # a resume refuses another controller
     parameters["model_sha256"] = model_sha256(scene)
