@@ -45,7 +45,7 @@ def _run(args) -> int:
 
 def _render(args) -> int:
     from .dump.formats import frame_metadata
-    from .files import png, write_file_atomic
+    from .files import png, write_files_atomic
     from .render import Renderer
 
     if args.settle < 0:
@@ -67,10 +67,11 @@ def _render(args) -> int:
     if args.side_by_side is not None:
         images["side_by_side.png"] = _side_by_side(args)
     make_out_folder(out)
+    files = {out / name: png(np.ascontiguousarray(rgb[:, :, ::-1])) for name, rgb in images.items()}
+    files[out / "head_camera.json"] = (json.dumps(description, indent=2) + "\n").encode()
+    write_files_atomic(files)  # all of them or, on a full disk, none: an earlier set stays whole
     for name, rgb in images.items():
-        write_file_atomic(out / name, png(np.ascontiguousarray(rgb[:, :, ::-1])))
         print(f"wrote {out / name} ({rgb.shape[1]}x{rgb.shape[0]})")
-    write_file_atomic(out / "head_camera.json", (json.dumps(description, indent=2) + "\n").encode())
     print(f"wrote {out / 'head_camera.json'} (the head camera's lens, settings and pose)")
     return 0
 

@@ -15,14 +15,24 @@ def write_file_atomic(path: Path, data: bytes, temp: Path | None = None) -> None
     a name no pattern of a run's files matches), then renamed. An OSError names ``path``; no
     temporary file is left, whatever stops the write (a full disk: "cannot write PATH: No space
     left on device"; Ctrl-C)."""
-    temp = temp or path.with_name(f".{path.name}.tmp")
+    write_files_atomic({path: data}, {path: temp} if temp else None)
+
+
+def write_files_atomic(files: dict[Path, bytes], temps: dict[Path, Path] | None = None) -> None:
+    """Write several files as one set, each as ``write_file_atomic`` writes one: all of them are
+    renamed into place once every one is on disk, so a failure leaves the earlier set as it was."""
+    temps = {path: (temps or {}).get(path) or path.with_name(f".{path.name}.tmp") for path in files}
+    path = None
     try:
-        with open(temp, "wb") as file:
-            file.write(data)
-        os.replace(temp, path)
+        for path, data in files.items():
+            with open(temps[path], "wb") as file:
+                file.write(data)
+        for path, temp in temps.items():
+            os.replace(temp, path)
     except BaseException as exc:
-        with contextlib.suppress(OSError):
-            temp.unlink()
+        for temp in temps.values():
+            with contextlib.suppress(OSError):
+                temp.unlink()
         if not isinstance(exc, OSError):
             raise
         error = OSError(f"cannot write {path}: {exc.strerror or exc}")

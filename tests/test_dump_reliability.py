@@ -427,3 +427,27 @@ def test_a_shards_error_names_the_shard(tmp_path):
     with pytest.raises(ControllerFailed, match=r"^shard_\d: controller bad\.py raised at simulated t = 0\.064 s") as failed:
         dump(tmp_path / "dump", controller=bad, frames=8, workers=2, formats=("rgb",))
     assert "lost the ball" in str(failed.value)
+
+
+def test_render_on_a_full_disk_leaves_the_earlier_set_whole(tmp_path, monkeypatch, capsys):
+    """render writes its pictures and head_camera.json as one set: a write refused part way (the
+    disk full at tracking.png, after head_camera.png is on disk) leaves the earlier set untouched."""
+    import errno
+
+    import aibo_sim.files
+
+    out = tmp_path / "render"
+    assert main(["render", "--settle", "0", "--out", str(out)]) == 0
+    before = _snapshot(out)
+    real_open = open
+
+    def open_until_full(path, *args, **kwargs):
+        if "tracking" in Path(path).name:
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+        return real_open(path, *args, **kwargs)
+
+    monkeypatch.setattr(aibo_sim.files, "open", open_until_full, raising=False)
+    capsys.readouterr()
+    assert main(["render", "--settle", "0", "--seed", "5", "--pose", "0.2", "0", "30", "--out", str(out)]) == 2
+    assert capsys.readouterr().err == f"aibo-sim: error: cannot write {out / 'tracking.png'}: No space left on device\n"
+    assert _snapshot(out) == before  # no new head_camera.png beside the old tracking.png, no temporary file
