@@ -396,3 +396,14 @@ def test_an_out_that_is_a_file_and_a_missing_side_by_side_frame_are_named(tmp_pa
     assert main(["render", "--side-by-side", str(tmp_path / "real.png"), "--out", str(tmp_path / "out")]) == 2
     one_error_line(capsys, f"--side-by-side {tmp_path / 'real.png'}: no such file")
     assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("length, message", [
+    (["--steps", "-5"], "--steps must be a whole number >= 1, not -5"),
+    (["--duration", "-2"], "--duration must be positive and finite, not -2.0"),
+    (["--duration", "0.01"], "--duration 0.01 s holds no camera frame: give at least 0.017 s (frames are 1/30 s apart)"),
+])
+def test_dump_names_a_length_that_holds_no_frame(tmp_path, capsys, length, message):
+    assert main(["dump", str(SCRIPTED), *length, "--out", str(tmp_path / "out")]) == 2
+    assert one_error_line(capsys) == f"aibo-sim: error: {message}"
+    assert not (tmp_path / "out").exists()

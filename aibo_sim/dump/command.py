@@ -16,9 +16,14 @@ from .running import ENGINES, POLICIES, dump
 
 def _dump_command(args) -> int:
     formats = FORMATS if args.formats == "all" else tuple(f.strip() for f in args.formats.split(",") if f.strip())
-    if args.steps is not None and args.steps <= 0 or args.duration is not None and args.duration <= 0:
-        raise ValueError("--steps and --duration must be positive")
+    if args.steps is not None and args.steps <= 0:
+        raise ValueError(f"--steps must be a whole number >= 1, not {args.steps}")
+    if args.duration is not None and args.duration <= 0:
+        raise ValueError(f"--duration must be positive and finite, not {args.duration}")  # as run says it
     frames = args.steps if args.steps is not None else round((args.duration or 10.0) * FRAME_RATE_HZ)
+    if frames < 1:
+        raise ValueError(f"--duration {args.duration:g} s holds no camera frame: give at least "
+                         f"{0.5 / FRAME_RATE_HZ:.3f} s (frames are 1/{FRAME_RATE_HZ} s apart)")
     # Ctrl-C and SIGTERM (``cli.sigterm_stops_cleanly``) stop it cleanly: writers abort, workers stop.
     summary = dump(args.out, controller=args.controller, env=args.env, policy=args.policy, frames=frames,
                    backend=args.backend, scene=args.scene, seed=args.seed, pose=args.pose and tuple(args.pose),
