@@ -45,7 +45,7 @@ class RunSummary:
     wall_s: float
     real_time_factor: float
     camera_frames: int
-    robot_xy_yaw: tuple[float, float, float]  # at the end: metres, metres, radians
+    robot_pose: tuple[float, float, float]  # at the end, as --pose takes it: x, y in metres, yaw in degrees
     ball_xy: tuple[float, float] | None  # at the end; None in a scene without a ball
     # What the run started from, as given (run.json records these too): the options
     # ``--scene`` (resolved path; None: the RoboCup field), ``--seed``, ``--pose`` (x, y in
@@ -355,7 +355,7 @@ def run_controller(path: str | Path, *, backend: str = "sim", duration: float = 
     position, yaw, _ = sim.body_pose()
     ball_end = sim.ball_position()
     summary = RunSummary(str(path), backend, robot.time_ms / 1000, wall, robot.time_ms / 1000 / max(wall, 1e-9),
-                         writer.count if writer else 0, (float(position[0]), float(position[1]), yaw),
+                         writer.count if writer else 0, (float(position[0]), float(position[1]), math.degrees(yaw)),
                          None if ball_end is None else (float(ball_end[0]), float(ball_end[1])),
                          scene=None if scene is None else str(Path(scene).resolve()), seed=seed, pose=pose, ball=ball,
                          camera=camera)

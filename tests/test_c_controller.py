@@ -51,7 +51,7 @@ def test_every_api_function_gives_in_c_what_it_gives_in_python(tmp_path):
     assert tour == (tmp_path / "python" / "tour.txt").read_text()
     assert "missing 1 error File not found: no_such_motion.mtn" in tour and "walk a_walk#walk_fwd length 320" in tour
     assert tour.count("\nt ") == 8 and tour.endswith("die at 0.504\n")
-    assert runs["c"].robot_xy_yaw == runs["python"].robot_xy_yaw and runs["c"].camera_frames == 15
+    assert runs["c"].robot_pose == runs["python"].robot_pose and runs["c"].camera_frames == 15
     for frame in sorted((tmp_path / "python" / "frames").iterdir()):
         assert (tmp_path / "c" / "frames" / frame.name).read_bytes() == frame.read_bytes(), frame.name
 

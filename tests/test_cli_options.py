@@ -145,7 +145,7 @@ def test_run_camera_profile_changes_the_frames_and_run_json_records_it(tmp_path)
         assert (camera["white_balance"], camera["gain"], camera["shutter"]) == ("outdoor", "high", "fast")
         assert record["seed"] == 0 and record["pose"] is None and record["ball"] is None and record["scene"] is None
         for key in ("controller", "backend", "simulated_s", "wall_s", "real_time_factor", "camera_frames",
-                    "robot_xy_yaw", "ball_xy"):  # the summary's fields are all still there
+                    "robot_pose", "ball_xy"):  # the summary's fields are all still there
             assert key in record
     assert records["ers7"]["camera"]["lens"] != records["ideal"]["camera"]["lens"]
 
@@ -156,11 +156,11 @@ def test_run_pose_ball_and_seed_are_applied_and_recorded(tmp_path):
                        "--camera-full")
     # The controller's leg motion shifts the robot a little; the same shift, turned by the pose,
     # from where --pose put it (the carpet is flat and uniform).
-    dx, dy, dyaw = default["robot_xy_yaw"]
-    assert math.hypot(dx, dy) < 0.05 and abs(dyaw) < 0.3  # the field's start: the centre, heading +x
-    x, y, yaw = placed["robot_xy_yaw"]
+    dx, dy, dyaw = default["robot_pose"]  # yaw in degrees, as --pose takes it
+    assert math.hypot(dx, dy) < 0.05 and abs(dyaw) < 17  # the field's start: the centre, heading +x
+    x, y, yaw = placed["robot_pose"]
     assert x == pytest.approx(1.0 - dy, abs=0.02) and y == pytest.approx(-0.5 + dx, abs=0.02)
-    assert abs(math.remainder(yaw - math.pi / 2 - dyaw, math.tau)) < 0.05
+    assert abs(math.remainder(yaw - 90 - dyaw, 360)) < 3
     assert placed["ball_xy"] == pytest.approx([-0.3, 0.4], abs=0.02)
     assert placed["pose"] == [1.0, -0.5, 90.0] and placed["ball"] == [-0.3, 0.4] and placed["seed"] == 5
     assert (placed["camera"]["width"], placed["camera"]["height"]) == (416, 320)

@@ -150,7 +150,7 @@ def test_annex_port_writes_image_raw_of_the_last_frame(tmp_path):
 def test_walk_to_ball_reaches_the_ball(capsys):
     summary = run_controller(ROOT / "controllers" / "walk_to_ball.py", duration=20.0, ball=(1.2, 0.5))
     assert "reached the ball at t =" in capsys.readouterr().out
-    x, y, _ = summary.robot_xy_yaw
+    x, y, _ = summary.robot_pose
     assert np.hypot(summary.ball_xy[0] - x, summary.ball_xy[1] - y) < 0.5  # body centre to ball
     assert np.hypot(x, y) > 0.8  # it walked there
 
@@ -158,7 +158,7 @@ def test_walk_to_ball_reaches_the_ball(capsys):
 def test_ball_tracker_centres_the_ball_on_the_openr_backend(tmp_path):
     summary = run_controller(ROOT / "controllers" / "ball_tracker.py", backend="openr", duration=2.0,
                              ball=(0.6, 0.25), out=tmp_path)
-    assert np.hypot(*summary.robot_xy_yaw[:2]) < 0.02  # it stood still
+    assert np.hypot(*summary.robot_pose[:2]) < 0.02  # it stood still
     frames = sorted((tmp_path / "frames").iterdir())
     first, last = (cv2.imread(str(p)).astype(np.int16)[:, :, ::-1] for p in (frames[0], frames[-1]))
     start, end = _ball_centre(first), _ball_centre(last)
