@@ -16,6 +16,7 @@ import pytest
 import openr_bridge
 from aibo_sim.dump import (FORMATS, DumpError, add_dump_parser, ball_in_image, dump, geom_classes, load_dump,
                            yuv420_bytes, yuv444_bytes)
+from aibo_sim.dump.formats import mp4_boxes, mp4_faststart
 from aibo_sim.field import BALL_RADIUS, SEGMENTATION_CLASSES
 from aibo_sim.render import Renderer
 from aibo_sim.camera import HEAD_CAMERA_GROUPS
@@ -67,6 +68,8 @@ def test_every_format_holds_every_frame_at_its_size(full_dump):
 
 def test_video_has_every_frame(full_dump):
     out, _ = full_dump
+    data = (out / "video.mp4").read_bytes()
+    assert [kind for kind, _, _ in mp4_boxes(data, 0, len(data))] == [b"ftyp", b"free", b"moov", b"mdat"]  # faststart
     video = cv2.VideoCapture(str(out / "video.mp4"))
     assert video.isOpened()
     count = 0
@@ -301,3 +304,33 @@ def test_a_scene_without_a_ball_dumps_every_format_with_no_ball_record(tmp_path)
     summary = dump(tmp_path / "out", controller=TRACKER, frames=3, formats=FORMATS, scene=scene)
     assert summary.frames == 3
     assert [frame.meta["ball"] for frame in load_dump(tmp_path / "out")] == [None] * 3
+
+
+def test_faststart_moves_the_index_ahead_and_every_frame_decodes_the_same(tmp_path):
+    """OpenCV's writer puts moov after mdat; moved ahead, with its chunk offsets shifted by its
+    size, the file decodes (through FFmpeg's demuxer in OpenCV) to the same frames, bit for bit."""
+    rng = np.random.default_rng(3)
+    path = tmp_path / "written.mp4"
+    writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"mp4v"), 30, (208, 160))
+    for k in range(40):  # noise and flat frames: chunks of very different sizes
+        writer.write(rng.integers(0, 256, (160, 208, 3), np.uint8) if k % 2 else np.full((160, 208, 3), 5 * k, np.uint8))
+    writer.release()
+    moved = tmp_path / "moved.mp4"
+    shutil.copy(path, moved)
+    mp4_faststart(moved)
+    before, after = path.read_bytes(), moved.read_bytes()
+    kinds = [[kind for kind, _, _ in mp4_boxes(data, 0, len(data))] for data in (before, after)]
+    assert kinds == [[b"ftyp", b"free", b"mdat", b"moov"], [b"ftyp", b"free", b"moov", b"mdat"]]
+    assert len(after) == len(before) and after != before
+
+    def frames(file):
+        video, decoded = cv2.VideoCapture(str(file)), []
+        while (read := video.read())[0]:
+            decoded.append(read[1])
+        return decoded
+
+    original, faststarted = frames(path), frames(moved)
+    assert len(original) == len(faststarted) == 40
+    assert all(np.array_equal(a, b) for a, b in zip(original, faststarted))
+    mp4_faststart(moved)  # already ahead: left as it is
+    assert moved.read_bytes() == after

@@ -33,7 +33,8 @@ controller is the camera frame index, k / 30 s)::
     luma/000123.png      the 416x320 luma reconstructed from layer H (reconstruct_luma)
     depth/000123.npy     float32 metres along the optical axis, through the same lens
     seg/000123.png       uint8 class ids, names in meta.json (field.SEGMENTATION_CLASSES), same lens
-    video.mp4            30 fps, codec mp4v (MPEG-4 part 2: OpenCV's wheels lack H.264)
+    video.mp4            30 fps, codec mp4v (MPEG-4 part 2: OpenCV's wheels lack H.264), its index
+                         (moov) ahead of the frames, as ffmpeg's +faststart leaves it
     coco.json            COCO detection annotations of the rgb files (needs rgb): a box per
                          visible ball, goal, beacon and robot, with its visibility (``coco.py``)
 

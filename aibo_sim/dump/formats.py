@@ -183,3 +183,53 @@ def frame_metadata(sim: Simulation, index: int) -> dict:
         "joints": dict(zip((j.name for j in JOINTS), sim.joint_positions().tolist())),
         "ball": ball_in_image(sim),
     }
+
+
+_MP4_CONTAINERS = {b"moov", b"trak", b"mdia", b"minf", b"stbl"}  # the boxes on the way to the chunk offsets
+
+
+def mp4_boxes(data: bytes | memoryview, start: int, end: int):
+    """(type, start, end) of each box in ``data[start:end]`` (ISO/IEC 14496-12, 4.2)."""
+    while start + 8 <= end:
+        size, kind = int.from_bytes(data[start:start + 4], "big"), bytes(data[start + 4:start + 8])
+        if size == 1:
+            size = int.from_bytes(data[start + 8:start + 16], "big")
+        elif size == 0:
+            size = end - start
+        if size < 8 or start + size > end:
+            raise ValueError(f"MP4 box {kind!r} at byte {start} runs past its parent")
+        yield kind, start, start + size
+        start += size
+
+
+def _shift_chunk_offsets(moov: bytearray, start: int, end: int, shift: int) -> None:
+    """Add ``shift`` to every chunk offset (stco, co64) inside ``moov[start:end]``."""
+    for kind, box_start, box_end in mp4_boxes(moov, start, end):
+        if kind in _MP4_CONTAINERS:
+            _shift_chunk_offsets(moov, box_start + 8, box_end, shift)
+        elif kind in (b"stco", b"co64"):
+            width = 4 if kind == b"stco" else 8
+            count = int.from_bytes(moov[box_start + 12:box_start + 16], "big")
+            for at in range(box_start + 16, box_start + 16 + count * width, width):
+                offset = int.from_bytes(moov[at:at + width], "big") + shift
+                if offset >= 1 << (8 * width):
+                    raise ValueError("a chunk offset no longer fits its stco box")
+                moov[at:at + width] = offset.to_bytes(width, "big")
+
+
+def mp4_faststart(path) -> None:
+    """Move an MP4's ``moov`` box (its index, which OpenCV's writer puts last) ahead of ``mdat``,
+    in place and at the same size, as ``ffmpeg -movflags +faststart`` does: a player can then
+    start before the whole file is read. A file whose index already leads is left as it is."""
+    with open(path, "r+b") as file:
+        data = file.read()
+        boxes = list(mp4_boxes(data, 0, len(data)))
+        kinds = [kind for kind, _, _ in boxes]
+        if b"moov" not in kinds or b"mdat" not in kinds or kinds.index(b"moov") < kinds.index(b"mdat"):
+            return
+        _, moov_start, moov_end = boxes[kinds.index(b"moov")]
+        moov = bytearray(data[moov_start:moov_end])
+        _shift_chunk_offsets(moov, 8, len(moov), len(moov))
+        mdat_start = boxes[kinds.index(b"mdat")][1]
+        file.seek(mdat_start)
+        file.write(moov + data[mdat_start:moov_start] + data[moov_end:])

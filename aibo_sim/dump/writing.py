@@ -24,7 +24,7 @@ from ..files import png, write_file_atomic
 from ..sim import Simulation
 from .coco import Objects, coco_bytes
 from .formats import (DUMP_FORMAT, LAYERS, PATHS, DumpError, annex_yuv, file_layouts, frame_files, frame_metadata,
-                      geom_classes, npy, yuv420_bytes, yuv444_bytes)
+                      geom_classes, mp4_faststart, npy, yuv420_bytes, yuv444_bytes)
 from .reading import LINES, META, parse_records, read_meta, split_lines
 
 try:
@@ -369,6 +369,7 @@ class DumpWriter:
             if self._video_path is not None:
                 final = self.out / VIDEO
                 try:
+                    mp4_faststart(self._video_path)  # its index ahead of the frames: players start at once
                     os.replace(self._video_path, final)
                 except OSError as exc:
                     remove_temporary_files(self.out, self.layouts)
