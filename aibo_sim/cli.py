@@ -173,7 +173,7 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--out", help="folder for camera frames, the controller's files and run.json")
     run.add_argument("--mtn-mode", choices=MTN_MODES, default="openr",
                      help="MTN playback: OPEN-R interpolation (default) or Webots keyframe stepping")
-    run.add_argument("--memory-stick", help="OPEN-R memory stick folder for the openr backend")
+    run.add_argument("--memory-stick", metavar="DIR", help="OPEN-R memory stick folder for the openr backend")
     run.add_argument("--view", action="store_true",
                      help="watch it in MuJoCo's viewer, in real time (needs a display; space pauses, right arrow steps)")
     add_world_options(run)

@@ -257,6 +257,13 @@ def find_file(path: str | Path, search_dirs) -> Path:
     return found if found is not None else Path(path)
 
 
+def check_memory_stick(backend: str, memory_stick) -> None:
+    """ValueError for a memory stick given to a backend that reads none."""
+    if memory_stick is not None and backend != "openr":
+        raise ValueError(f"--memory-stick applies to the openr backend (--backend openr): the {backend} backend "
+                         "reads no OPEN-R configuration")
+
+
 class Robot:
     """A simulated ERS-7 seen through the controller API, on one backend."""
 
@@ -266,6 +273,7 @@ class Robot:
             raise ValueError(f"backend must be one of {BACKENDS}, not {backend!r}")
         if mtn_mode not in MTN_MODES:
             raise ValueError(f"mtn_mode must be one of {MTN_MODES}, not {mtn_mode!r}")
+        check_memory_stick(backend, memory_stick)
         self.sim = sim or Simulation()
         self.backend, self.mtn_mode = backend, mtn_mode
         self.search_dirs = tuple(search_dirs)

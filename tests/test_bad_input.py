@@ -407,3 +407,13 @@ def test_dump_names_a_length_that_holds_no_frame(tmp_path, capsys, length, messa
     assert main(["dump", str(SCRIPTED), *length, "--out", str(tmp_path / "out")]) == 2
     assert one_error_line(capsys) == f"aibo-sim: error: {message}"
     assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("command", [["run", str(SCRIPTED), "--duration", "0.1"], ["dump", str(SCRIPTED), "--steps", "2"]])
+def test_a_memory_stick_for_the_sim_backend_is_refused_not_ignored(tmp_path, capsys, command):
+    stick = tmp_path / "stick"
+    (stick / "OPEN-R" / "MW" / "CONF").mkdir(parents=True)
+    out = tmp_path / "out"
+    assert main(command + ["--memory-stick", str(stick), "--out", str(out)]) == 2
+    one_error_line(capsys, "--memory-stick applies to the openr backend (--backend openr): the sim backend")
+    assert not out.exists()

@@ -19,7 +19,7 @@ from ..camera import CameraProfile, CameraSettings, camera_size, describe_camera
 from ..camera import camera_profile as resolve_profile  # dump's argument of that name shadows it
 from ..cbind import compile_controller, controller_sources, is_c_controller
 from ..mtn import MODES as MTN_MODES
-from ..robot import BACKENDS, SimulationEnd
+from ..robot import BACKENDS, SimulationEnd, check_memory_stick
 from ..runner import Progress, check_python_controller, run_controller
 from ..sim import ball_joint, load_model
 from .formats import DEFAULT_FORMATS, FORMATS
@@ -251,6 +251,7 @@ def dump(out, *, controller: str | Path | None = None, env: str | None = None, p
         raise ValueError("--mtn-mode and --memory-stick apply to controller dumps, not to --env")
     if mtn_mode is not None and mtn_mode not in MTN_MODES:
         raise ValueError(f"--mtn-mode must be one of {', '.join(MTN_MODES)}, not {mtn_mode!r}")
+    check_memory_stick(backend, memory_stick)
     if memory_stick is not None:
         memory_stick = Path(memory_stick).resolve()
         openr_bridge.OpenRSystem.from_memory_stick(memory_stick)  # a ConfigError naming it, before the folder is made
