@@ -142,3 +142,39 @@ def test_hybrid_env_of_one_runs_in_this_process_as_a_single_env():
     finally:
         envs.close()
         single.close()
+
+
+@pytest.mark.parametrize("interrupted", ["first env's step", "wait for the worker"])
+def test_hybrid_env_after_ctrl_c_needs_a_reset_and_then_steps_as_sync(monkeypatch, interrupted):
+    """Ctrl-C in the first environment's step, or while the worker's step is awaited (its result
+    then still in the pipe): step raises ResetNeeded, reset collects what is pending, and from
+    there the environments step as Gymnasium's SyncVectorEnv does."""
+    envs, sync = HybridVectorEnv(HEAD_TRACK, 2), gym.make_vec(HEAD_TRACK, 2, "sync")
+    try:
+        envs.action_space.seed(2)
+        actions = [envs.action_space.sample() for _ in range(3)]
+        envs.reset(seed=4)
+        step_first, wait = envs._env.step, envs._wait_for_workers
+
+        def ctrl_c(*_):
+            raise KeyboardInterrupt
+
+        if interrupted == "first env's step":
+            monkeypatch.setattr(envs._env, "step", ctrl_c)
+        else:
+            monkeypatch.setattr(envs, "_wait_for_workers", ctrl_c)
+        with pytest.raises(KeyboardInterrupt):
+            envs.step(actions[0])
+        monkeypatch.setattr(envs._env, "step", step_first)
+        monkeypatch.setattr(envs, "_wait_for_workers", wait)
+        with pytest.raises(gym.error.ResetNeeded, match="interrupted"):
+            envs.step(actions[0])
+        assert envs.get_attr("camera") == ("rgb", "rgb")  # the pending step collected first
+        for vector_env in (envs, sync):
+            vector_env.reset(seed=4)
+        for action in actions:
+            ours, theirs = envs.step(action), sync.step(action)
+            assert np.array_equal(ours[1], theirs[1]) and np.array_equal(ours[0]["image"], theirs[0]["image"])
+    finally:
+        envs.close()
+        sync.close()

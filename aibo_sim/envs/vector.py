@@ -40,7 +40,7 @@ from multiprocessing.connection import Connection
 import gymnasium
 import numpy as np
 from gymnasium.vector import AsyncVectorEnv, AutoresetMode, VectorEnv
-from gymnasium.vector.async_vector_env import _async_worker  # private, but what AsyncVectorEnv runs by default
+from gymnasium.vector.async_vector_env import AsyncState, _async_worker  # private, but AsyncVectorEnv's own
 from gymnasium.vector.utils import batch_space, concatenate, create_empty_array, iterate
 
 from .threaded import write_row, check_actions, reset_arguments
@@ -106,7 +106,8 @@ class HybridVectorEnv(VectorEnv):
     (next-step autoreset, ``reset_mask``), bit for bit. ``copy=False`` returns the batch
     buffers themselves (valid until the next step). An error in one environment's step is
     raised once the others have finished theirs (they have stepped: reset before going on);
-    a worker that raised has ended (Gymnasium's way): make a new one. Spawned workers import
+    a worker that raised has ended (Gymnasium's way): make a new one. After Ctrl-C during a
+    step, ``step`` raises ``ResetNeeded`` until ``reset`` (of all of them). Spawned workers import
     the calling script: guard its top level with ``if __name__ == "__main__":``.
     """
 
@@ -131,15 +132,22 @@ class HybridVectorEnv(VectorEnv):
         self.render_mode = self._env.render_mode
         self._observations = create_empty_array(self.single_observation_space, self.num_envs)
         self._autoreset = False  # the first environment's episode ended in the last step
+        self._interrupted = False  # Ctrl-C stopped a step: the environments may be a step apart
         self._workers_actions = create_empty_array(self.single_action_space, self.num_envs - 1)
 
     def _check_running(self) -> None:
+        """ClosedEnvironmentError once closed or a worker ended; first collects a call the
+        workers were left running when Ctrl-C interrupted the wait for it."""
         if self.closed:
             raise gymnasium.error.ClosedEnvironmentError("this HybridVectorEnv is closed: make a new one")
         if self._workers is not None and None in self._workers.parent_pipes:  # Gymnasium ends a worker that raised
             index = self._workers.parent_pipes.index(None) + 1
             raise gymnasium.error.ClosedEnvironmentError(
                 f"environment {index}'s worker process ended after the error it raised: make a new HybridVectorEnv")
+        if self._workers is not None and self._workers._state is not AsyncState.DEFAULT:
+            self._wait_for_workers()
+            {AsyncState.WAITING_STEP: self._workers.step_wait, AsyncState.WAITING_RESET: self._workers.reset_wait,
+             AsyncState.WAITING_CALL: self._workers.call_wait}[self._workers._state]()
 
     def _wait_for_workers(self) -> None:
         """Poll the workers' pipes, yielding the core, for up to ``spin_s``: a process that sleeps
@@ -173,11 +181,23 @@ class HybridVectorEnv(VectorEnv):
             if workers_busy:
                 self._wait_for_workers()
                 workers_result = self._workers.reset_wait()
+        if mask.all():
+            self._interrupted = False
         return self._batched(infos, *workers_result)
 
     def step(self, actions):
         self._check_running()
+        if self._interrupted:
+            raise gymnasium.error.ResetNeeded("a step of this HybridVectorEnv was interrupted: reset() all of its "
+                                              "environments before stepping again")
         check_actions(self.action_space, actions)
+        try:
+            return self._step(actions)
+        except KeyboardInterrupt:
+            self._interrupted = True
+            raise
+
+    def _step(self, actions):
         rows = list(iterate(self.action_space, actions))
         if self._workers is not None:
             self._workers.step_async(concatenate(self.single_action_space, rows[1:], self._workers_actions))
@@ -204,18 +224,22 @@ class HybridVectorEnv(VectorEnv):
                 np.array([truncated, *workers_truncations], np.bool_), infos)
 
     def render(self):
+        self._check_running()
         return (self._env.render(), *(self._workers.render() if self._workers is not None else ()))
 
     def call(self, name: str, *args, **kwargs) -> tuple:
         """Each environment's method ``name`` called with the arguments (or its attribute)."""
+        self._check_running()
         value = self._env.get_wrapper_attr(name)
         first = value(*args, **kwargs) if callable(value) else value
         return (first, *(self._workers.call(name, *args, **kwargs) if self._workers is not None else ()))
 
     def get_attr(self, name: str) -> tuple:
+        self._check_running()
         return (self._env.get_wrapper_attr(name), *(self._workers.get_attr(name) if self._workers is not None else ()))
 
     def set_attr(self, name: str, values) -> None:
+        self._check_running()
         if not isinstance(values, (list, tuple)):
             values = [values] * self.num_envs
         if len(values) != self.num_envs:
