@@ -10,7 +10,8 @@ loading): ``gymnasium.make("aibo_sim.envs:aibo_sim/HeadTrackBall-v0")``.
 The classes live in ``aibo_sim.envs.head_track`` and ``aibo_sim.envs.reach_ball``; the options
 and observations are described in ``aibo_sim.envs.base``.
 ``aibo_sim.envs.vector.BusyWaitWorker`` is a worker for ``make_vec(..., "async")`` that keeps
-its process awake between steps. ``make_vec(id, num_envs)`` without a mode (or with
+its process awake between steps; ``aibo_sim.envs.vector.HybridVectorEnv(id, N)`` steps the first
+environment in the calling process and the others in such workers. ``make_vec(id, num_envs)`` without a mode (or with
 ``vectorization_mode="vector_entry_point"``) makes a ``ThreadedVectorEnv``
 (``aibo_sim.envs.threaded``): the environments in threads of this process.
 """
