@@ -35,6 +35,7 @@ def assert_same(a, b):
             assert_same(a[key], b[key])
     elif a is not None:
         np.testing.assert_array_equal(a, b)
+        assert np.asarray(a).dtype == np.asarray(b).dtype
 
 
 @pytest.mark.parametrize("make_envs", [lambda: gym.make_vec(HEAD_TRACK, 3, max_episode_steps=4),

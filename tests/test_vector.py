@@ -3,6 +3,7 @@
 import math
 import multiprocessing
 import os
+import signal
 import threading
 import time
 
@@ -13,6 +14,29 @@ import pytest
 from aibo_sim.envs.vector import BusyWaitConnection, BusyWaitWorker, HybridVectorEnv
 
 HEAD_TRACK = "aibo_sim/HeadTrackBall-v0"
+INFO_ENV = "aibo_sim_tests/Infos-v0"
+
+
+class _InfoEnv(gym.Env):
+    """Infos that test the merge: an env's own "_private" key, one key only some steps have,
+    and whether reset saw ``options=None``; episodes of 2 steps."""
+
+    observation_space = gym.spaces.Box(0.0, 1.0, (2,), np.float32)
+    action_space = gym.spaces.Box(-1.0, 1.0, (1,), np.float32)
+
+    def reset(self, *, seed=None, options=None):
+        super().reset(seed=seed)
+        self.steps = 0
+        return np.zeros(2, np.float32), {"options_was_none": options is None, "_private": 7}
+
+    def step(self, action):
+        self.steps += 1
+        info = {"_private": self.steps, **({"odd": float(action[0])} if self.steps % 2 else {})}
+        return np.full(2, self.steps / 10, np.float32), float(action[0]), False, self.steps >= 2, info
+
+
+if INFO_ENV not in gym.registry:
+    gym.register(INFO_ENV, entry_point=_InfoEnv)
 
 
 def test_recv_returns_waiting_messages_in_order():
@@ -178,3 +202,38 @@ def test_hybrid_env_after_ctrl_c_needs_a_reset_and_then_steps_as_sync(monkeypatc
     finally:
         envs.close()
         sync.close()
+
+
+
+def test_hybrid_env_infos_and_reset_options_are_sync_ones():
+    from test_threaded import assert_same  # noqa: I001  (the threaded env's comparison, dtypes included)
+
+    hybrid, sync = HybridVectorEnv(INFO_ENV, 3), gym.make_vec(INFO_ENV, 3, "sync")
+    try:
+        actions = np.linspace(-0.9, 0.9, 15, dtype=np.float32).reshape(5, 3, 1)
+        results = []
+        for envs in (hybrid, sync):
+            steps = [envs.reset(seed=1), envs.reset(options={"reset_mask": np.array([False, True, True])})]
+            steps += [envs.step(action) for action in actions]
+            results.append(steps)
+        for ours, theirs in zip(*results, strict=True):
+            for part_ours, part_theirs in zip(ours, theirs, strict=True):
+                assert_same(part_ours, part_theirs)
+        assert results[0][0][1]["options_was_none"].tolist() == [True, True, True]
+        assert results[0][2][4]["_private"].tolist() == [1, 1, 1] and "__private" in results[0][2][4]
+    finally:
+        hybrid.close()
+        sync.close()
+
+
+def test_ctrl_c_in_a_terminal_leaves_busy_wait_workers_running():
+    """A terminal's Ctrl-C reaches the workers too: they ignore it, the caller decides."""
+    envs = HybridVectorEnv(INFO_ENV, 2)
+    try:
+        envs.reset(seed=0)
+        os.kill(envs._workers.processes[0].pid, signal.SIGINT)
+        time.sleep(0.3)
+        assert envs._workers.processes[0].is_alive()
+        assert envs.step(np.zeros((2, 1), np.float32))[1].tolist() == [0.0, 0.0]
+    finally:
+        envs.close()

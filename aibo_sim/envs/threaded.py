@@ -38,24 +38,33 @@ def write_row(batch, index: int, value) -> None:
         batch[index] = value
 
 
-def reset_arguments(num_envs: int, seed, options: dict | None) -> tuple[list, dict, np.ndarray]:
-    """A vector ``reset``'s seeds (one per environment: an int seeds them ``seed + i``), options
-    for the environments and ``reset_mask`` (default all), as ``SyncVectorEnv`` takes them;
-    ValueError for a wrong count or mask."""
+def reset_arguments(num_envs: int, seed, options: dict | None) -> tuple[list, dict | None, np.ndarray | None]:
+    """A vector ``reset``'s seeds (one per environment: an int seeds them ``seed + i``), the
+    options each environment gets (``SyncVectorEnv``'s: None stays None, ``reset_mask`` is taken
+    out) and that mask (None when not given); ValueError for a wrong count or mask."""
     if seed is None:
         seed = [None] * num_envs
     elif isinstance(seed, int):
         seed = [seed + i for i in range(num_envs)]
     if len(seed) != num_envs:
         raise ValueError(f"seed: a list of num_envs = {num_envs} seeds, not {len(seed)}")
-    options = dict(options or {})
-    mask = options.pop("reset_mask", None)
-    if mask is None:
-        mask = np.ones(num_envs, np.bool_)
-    elif not (isinstance(mask, np.ndarray) and mask.dtype == np.bool_ and mask.shape == (num_envs,) and mask.any()):
-        raise ValueError(f"options['reset_mask'] must be a bool array of shape ({num_envs},) "
-                         f"with a True value, not {mask!r}")
+    mask = None
+    if options is not None and "reset_mask" in options:
+        options = dict(options)
+        mask = options.pop("reset_mask")
+        if not (isinstance(mask, np.ndarray) and mask.dtype == np.bool_ and mask.shape == (num_envs,) and mask.any()):
+            raise ValueError(f"options['reset_mask'] must be a bool array of shape ({num_envs},) "
+                             f"with a True value, not {mask!r}")
     return seed, options, mask
+
+
+def values_per_env(name: str, values, num_envs: int) -> list:
+    """``set_attr``'s values: one for each environment, or one value for all of them."""
+    if not isinstance(values, (list, tuple)):
+        return [values] * num_envs
+    if len(values) != num_envs:
+        raise ValueError(f"set_attr({name!r}): {num_envs} values, one per environment, not {len(values)}")
+    return list(values)
 
 
 def check_actions(action_space, actions) -> None:
@@ -163,11 +172,13 @@ class ThreadedVectorEnv(VectorEnv):
 
     def reset(self, *, seed: int | list[int | None] | None = None, options: dict | None = None):
         seed, options, mask = reset_arguments(self.num_envs, seed, options)
+        if mask is None:
+            mask = np.ones(self.num_envs, np.bool_)
         indices = np.flatnonzero(mask).tolist()
         observations = self._observations
 
         def reset_one(env, index, single_seed):
-            obs, info = env.reset(seed=single_seed, options=options or None)
+            obs, info = env.reset(seed=single_seed, options=options)
             write_row(observations, index, obs)
             return info
 
@@ -220,10 +231,7 @@ class ThreadedVectorEnv(VectorEnv):
         return tuple(self.call_each(lambda env: env.get_wrapper_attr(name)))
 
     def set_attr(self, name: str, values) -> None:
-        if not isinstance(values, (list, tuple)):
-            values = [values] * self.num_envs
-        if len(values) != self.num_envs:
-            raise ValueError(f"set_attr: {self.num_envs} values, one per environment, not {len(values)}")
+        values = values_per_env(name, values, self.num_envs)
         self.call_each(lambda env, value: env.set_wrapper_attr(name, value), None, [(v,) for v in values])
 
     def close_extras(self, **kwargs) -> None:

@@ -34,6 +34,7 @@ import copy as copying
 import math
 import numbers
 import os
+import signal
 import time
 from multiprocessing.connection import Connection
 
@@ -43,10 +44,18 @@ from gymnasium.vector import AsyncVectorEnv, AutoresetMode, VectorEnv
 from gymnasium.vector.async_vector_env import AsyncState, _async_worker  # private, but AsyncVectorEnv's own
 from gymnasium.vector.utils import batch_space, concatenate, create_empty_array, iterate
 
-from .threaded import write_row, check_actions, reset_arguments
+from .threaded import check_actions, reset_arguments, values_per_env, write_row
 
 SPIN_S = 0.005  # a step loop with the camera turns around in well under this
 _yield_core = getattr(os, "sched_yield", lambda: time.sleep(0))  # sched_yield is POSIX-only
+
+
+def poll_until(connection: Connection | None, deadline: float) -> None:
+    """Poll ``connection`` (a pipe's end; None or closed: return) until it has something to read
+    or ``time.perf_counter()`` passes ``deadline``, yielding the core between polls."""
+    while connection is not None and not connection.closed and not connection.poll() \
+            and time.perf_counter() < deadline:
+        _yield_core()
 
 
 class BusyWaitConnection:
@@ -56,9 +65,7 @@ class BusyWaitConnection:
         self._connection, self._spin_s = connection, spin_s
 
     def recv(self):
-        deadline = time.perf_counter() + self._spin_s
-        while not self._connection.poll() and time.perf_counter() < deadline:
-            _yield_core()
+        poll_until(self._connection, time.perf_counter() + self._spin_s)
         return self._connection.recv()
 
     def __getattr__(self, name):
@@ -66,7 +73,11 @@ class BusyWaitConnection:
 
 
 class BusyWaitWorker:
-    """``AsyncVectorEnv(worker=...)``: Gymnasium's worker, waiting for commands by polling."""
+    """``AsyncVectorEnv(worker=...)``: Gymnasium's worker, waiting for commands by polling.
+
+    It ignores SIGINT: Ctrl-C in a terminal reaches the whole process group, and Gymnasium's
+    worker would end on it; the calling process gets the KeyboardInterrupt and decides (its
+    ``close`` ends the workers; a ``HybridVectorEnv`` can be reset and used again)."""
 
     def __init__(self, spin_s: float = SPIN_S):
         if not (isinstance(spin_s, (int, float)) and math.isfinite(spin_s) and spin_s >= 0):
@@ -74,6 +85,7 @@ class BusyWaitWorker:
         self.spin_s = float(spin_s)
 
     def __call__(self, index, env_fn, pipe, *worker_args) -> None:
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
         _async_worker(index, env_fn, BusyWaitConnection(pipe, self.spin_s), *worker_args)
 
 
@@ -81,7 +93,7 @@ def _with_workers_infos(infos: dict, workers_infos: dict, num_envs: int) -> dict
     """``infos`` of environment 0 (as ``VectorEnv._add_info`` made them) with the vector infos of
     environments 1 to ``num_envs`` - 1 added: what ``_add_info`` would make of all of them."""
     for key, value in workers_infos.items():
-        if key.startswith("_"):
+        if key.startswith("_") and key[1:] in workers_infos:  # a mask (an env's own "_x" is data)
             continue
         if isinstance(value, dict):
             merged = _with_workers_infos(infos.get(key, {}), value, num_envs)
@@ -122,18 +134,18 @@ class HybridVectorEnv(VectorEnv):
             if self.num_envs > 1:
                 self._workers = AsyncVectorEnv([lambda: gymnasium.make(spec, **env_kwargs)] * (self.num_envs - 1),
                                                copy=False, context="spawn", worker=BusyWaitWorker(spin_s))
+            self.single_observation_space, self.single_action_space = self._env.observation_space, self._env.action_space
+            self.observation_space = batch_space(self.single_observation_space, self.num_envs)
+            self.action_space = batch_space(self.single_action_space, self.num_envs)
+            self._observations = create_empty_array(self.single_observation_space, self.num_envs)
+            self._workers_actions = create_empty_array(self.single_action_space, self.num_envs - 1)
         except BaseException:
-            self._env.close()
+            self.close_extras()
             raise
-        self.single_observation_space, self.single_action_space = self._env.observation_space, self._env.action_space
-        self.observation_space = batch_space(self.single_observation_space, self.num_envs)
-        self.action_space = batch_space(self.single_action_space, self.num_envs)
         self.metadata = {**self._env.metadata, "autoreset_mode": AutoresetMode.NEXT_STEP}
         self.render_mode = self._env.render_mode
-        self._observations = create_empty_array(self.single_observation_space, self.num_envs)
         self._autoreset = False  # the first environment's episode ended in the last step
         self._interrupted = False  # Ctrl-C stopped a step: the environments may be a step apart
-        self._workers_actions = create_empty_array(self.single_action_space, self.num_envs - 1)
 
     def _check_running(self) -> None:
         """ClosedEnvironmentError once closed or a worker ended; first collects a call the
@@ -154,8 +166,7 @@ class HybridVectorEnv(VectorEnv):
         in ``recv`` wakes slowly (see ``BusyWaitWorker``)."""
         deadline = time.perf_counter() + self._spin_s
         for pipe in self._workers.parent_pipes:
-            while pipe is not None and not pipe.closed and not pipe.poll() and time.perf_counter() < deadline:
-                _yield_core()
+            poll_until(pipe, deadline)
 
     def _batched(self, infos: dict, workers_obs, workers_info: dict | None):
         """The batch's observations and infos, with the workers' (None: they had nothing to do)
@@ -168,20 +179,20 @@ class HybridVectorEnv(VectorEnv):
     def reset(self, *, seed: int | list[int | None] | None = None, options: dict | None = None):
         self._check_running()
         seed, options, mask = reset_arguments(self.num_envs, seed, options)
-        workers_busy = self._workers is not None and bool(mask[1:].any())
-        if workers_busy:
-            self._workers.reset_async(seed[1:], {**options, "reset_mask": mask[1:]})
+        workers_busy = self._workers is not None and (mask is None or bool(mask[1:].any()))
+        if workers_busy:  # the options as given: an environment sees None where SyncVectorEnv passes None
+            self._workers.reset_async(seed[1:], options if mask is None else {**options, "reset_mask": mask[1:]})
         infos, workers_result = {}, (None, None)
         try:
-            if mask[0]:
-                obs, info = self._env.reset(seed=seed[0], options=options or None)
+            if mask is None or mask[0]:
+                obs, info = self._env.reset(seed=seed[0], options=options)
                 write_row(self._observations, 0, obs)
                 infos, self._autoreset = self._add_info(infos, info, 0), False
         finally:
             if workers_busy:
                 self._wait_for_workers()
                 workers_result = self._workers.reset_wait()
-        if mask.all():
+        if mask is None or mask.all():
             self._interrupted = False
         return self._batched(infos, *workers_result)
 
@@ -218,7 +229,7 @@ class HybridVectorEnv(VectorEnv):
         workers_obs, workers_rewards, workers_terminations, workers_truncations, workers_info = workers_result
         observations, infos = self._batched(infos, workers_obs, workers_info)
         if self._workers is None:
-            return observations, np.array([reward], np.float64), np.array([terminated]), np.array([truncated]), infos
+            workers_rewards = workers_terminations = workers_truncations = ()
         return (observations, np.array([reward, *workers_rewards], np.float64),
                 np.array([terminated, *workers_terminations], np.bool_),
                 np.array([truncated, *workers_truncations], np.bool_), infos)
@@ -240,16 +251,15 @@ class HybridVectorEnv(VectorEnv):
 
     def set_attr(self, name: str, values) -> None:
         self._check_running()
-        if not isinstance(values, (list, tuple)):
-            values = [values] * self.num_envs
-        if len(values) != self.num_envs:
-            raise ValueError(f"set_attr: {self.num_envs} values, one per environment, not {len(values)}")
+        values = values_per_env(name, values, self.num_envs)
         self._env.set_wrapper_attr(name, values[0])
         if self._workers is not None:
             self._workers.set_attr(name, list(values[1:]))
 
     def close_extras(self, **kwargs) -> None:
-        """Close the first environment and the workers (each closes its own)."""
-        self._env.close()
-        if self._workers is not None:
-            self._workers.close(**kwargs)
+        """Close the workers (each closes its own environment) and the first environment."""
+        try:
+            if self._workers is not None:
+                self._workers.close(**kwargs)
+        finally:
+            self._env.close()
