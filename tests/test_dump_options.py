@@ -99,19 +99,24 @@ def test_an_mp4_only_dump_counts_the_video_bytes(tmp_path):
 
 
 def test_a_camera_profile_changed_in_code_is_recorded_and_dumped_as_run_shows_it(tmp_path):
-    """A preset with options (here a rolling shutter and Sony's lens) is what the dump renders,
+    """A preset with options (a rolling shutter, Sony's lens, a robot's colour) is what the dump renders,
     what meta.json and run.json record beside the name, and what a resume must match."""
     import cv2
 
     from aibo_sim.camera import PROFILES
     from aibo_sim.runner import run_controller
 
-    profile = PROFILES["ers7"].with_options(readout_ms=6.0, lens="sony")
+    from aibo_sim.camera import RobotColour, camera_profile
+
+    robot = RobotColour(gain=(1.02, 0.97, 1.0), offset=(1.0, -2.0, 0.5))
+    profile = PROFILES["ers7"].with_options(readout_ms=6.0, lens="sony", robot=robot)
+    options = {"lens": "sony", "readout_ms": 6.0, "robot": {"gain": [1.02, 0.97, 1.0], "offset": [1.0, -2.0, 0.5]}}
+    assert camera_profile("ers7", options) == profile and hash(camera_profile("ers7", options).robot) == hash(robot)
     out = tmp_path / "dump"
     dump(out, controller=TRACKER, frames=3, camera_profile=profile, formats=("rgb",))
     meta = json.loads((out / "meta.json").read_text())
-    assert meta["parameters"]["camera_profile_options"] == {"lens": "sony", "readout_ms": 6.0}
-    assert meta["camera"]["profile_options"] == {"lens": "sony", "readout_ms": 6.0} and meta["camera"]["lens"] == "sony"
+    assert meta["parameters"]["camera_profile_options"] == options
+    assert meta["camera"]["profile_options"] == options and meta["camera"]["lens"] == "sony"
     run = run_controller(TRACKER, duration=0.1, camera_profile=profile, out=tmp_path / "run")
     preset = run_controller(TRACKER, duration=0.1, out=tmp_path / "preset")
     assert run.camera["profile_options"] == meta["camera"]["profile_options"] and preset.camera["profile_options"] == {}

@@ -212,8 +212,10 @@ class CameraProfile:
         preset = PROFILES.get(self.name)
         changed = {f.name: getattr(self, f.name) for f in fields(self)
                    if f.name != "name" and (preset is None or getattr(self, f.name) != getattr(preset, f.name))}
-        return {name: asdict(value) if name == "robot" else list(value) if isinstance(value, tuple) else value
-                for name, value in changed.items()}
+        as_json = {name: asdict(value) if name == "robot" else value for name, value in changed.items()}
+        if "robot" in as_json:
+            as_json["robot"] = {name: list(values) for name, values in as_json["robot"].items()}
+        return {name: list(value) if isinstance(value, tuple) else value for name, value in as_json.items()}
 
 
 PROFILES = {
@@ -228,8 +230,8 @@ def camera_profile(profile: str | CameraProfile, options: dict | None = None) ->
     if isinstance(profile, CameraProfile):
         return profile
     if options:
-        values = {name: RobotColour(**value) if name == "robot" else tuple(value) if isinstance(value, list) else value
-                  for name, value in options.items()}
+        values = {name: RobotColour(**{part: tuple(v) for part, v in value.items()}) if name == "robot"
+                  else tuple(value) if isinstance(value, list) else value for name, value in options.items()}
         return PROFILES[profile].with_options(**values) if profile in PROFILES else CameraProfile(profile, **values)
     if profile not in PROFILES:
         raise ValueError(f"camera profile must be one of {', '.join(PROFILES)}, not {profile!r}")
