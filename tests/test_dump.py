@@ -16,6 +16,7 @@ import pytest
 import openr_bridge
 from aibo_sim.dump import (FORMATS, DumpError, add_dump_parser, ball_in_image, dump, geom_classes, load_dump,
                            yuv420_bytes, yuv444_bytes)
+from aibo_sim.dump import formats as dump_formats
 from aibo_sim.dump.formats import mp4_boxes, mp4_faststart
 from aibo_sim.field import BALL_RADIUS, SEGMENTATION_CLASSES
 from aibo_sim.render import Renderer
@@ -69,7 +70,7 @@ def test_every_format_holds_every_frame_at_its_size(full_dump):
 def test_video_has_every_frame(full_dump):
     out, _ = full_dump
     data = (out / "video.mp4").read_bytes()
-    assert [kind for kind, _, _ in mp4_boxes(data, 0, len(data))] == [b"ftyp", b"free", b"moov", b"mdat"]  # faststart
+    assert [box[0] for box in mp4_boxes(data, 0, len(data))] == [b"ftyp", b"free", b"moov", b"mdat"]  # faststart
     video = cv2.VideoCapture(str(out / "video.mp4"))
     assert video.isOpened()
     count = 0
@@ -319,7 +320,7 @@ def test_faststart_moves_the_index_ahead_and_every_frame_decodes_the_same(tmp_pa
     shutil.copy(path, moved)
     mp4_faststart(moved)
     before, after = path.read_bytes(), moved.read_bytes()
-    kinds = [[kind for kind, _, _ in mp4_boxes(data, 0, len(data))] for data in (before, after)]
+    kinds = [[box[0] for box in mp4_boxes(data, 0, len(data))] for data in (before, after)]
     assert kinds == [[b"ftyp", b"free", b"mdat", b"moov"], [b"ftyp", b"free", b"moov", b"mdat"]]
     assert len(after) == len(before) and after != before
 
@@ -334,3 +335,73 @@ def test_faststart_moves_the_index_ahead_and_every_frame_decodes_the_same(tmp_pa
     assert all(np.array_equal(a, b) for a, b in zip(original, faststarted))
     mp4_faststart(moved)  # already ahead: left as it is
     assert moved.read_bytes() == after
+
+
+
+def _box(kind: bytes, payload: bytes, large: bool = False) -> bytes:
+    """An MP4 box: 32-bit size, or (``large``) size 1 and a 64-bit size after the type."""
+    if large:
+        return (1).to_bytes(4, "big") + kind + (16 + len(payload)).to_bytes(8, "big") + payload
+    return (8 + len(payload)).to_bytes(4, "big") + kind + payload
+
+
+def _chunk_offsets(data: bytes) -> list[int]:
+    found = []
+
+    def walk(start, end):
+        for kind, box_start, box_end, header in mp4_boxes(data, start, end):
+            if kind in (b"moov", b"trak", b"mdia", b"minf", b"stbl"):
+                walk(box_start + header, box_end)
+            elif kind in (b"stco", b"co64"):
+                width, at = (4 if kind == b"stco" else 8), box_start + header + 8
+                count = int.from_bytes(data[at - 4:at], "big")
+                found.extend(int.from_bytes(data[at + k * width:at + (k + 1) * width], "big") for k in range(count))
+
+    walk(0, len(data))
+    return found
+
+
+@pytest.mark.parametrize("table, large_moov, large_stbl", [(b"stco", False, False), (b"co64", False, False),
+                                                           (b"stco", True, False), (b"stco", False, True)])
+def test_faststart_shifts_each_kind_of_chunk_table_behind_any_box_header(tmp_path, monkeypatch, table, large_moov,
+                                                                        large_stbl):
+    monkeypatch.setattr(dump_formats, "_MOVE_BLOCK", 7)  # many overlapping blocks
+    ftyp, frames = _box(b"ftyp", b"isom\0\0\0\0isom"), bytes(range(200))
+    offsets = [len(ftyp) + 8, len(ftyp) + 8 + 150]
+    width = 4 if table == b"stco" else 8
+    chunks = _box(table, bytes(4) + len(offsets).to_bytes(4, "big") + b"".join(o.to_bytes(width, "big") for o in offsets))
+    moov = _box(b"moov", _box(b"trak", _box(b"mdia", _box(b"minf", _box(b"stbl", chunks, large_stbl)))), large_moov)
+    path = tmp_path / "synthetic.mp4"
+    before = ftyp + _box(b"mdat", frames) + moov
+    path.write_bytes(before)
+    assert mp4_faststart(path)
+    after = path.read_bytes()
+    assert [box[0] for box in mp4_boxes(after, 0, len(after))] == [b"ftyp", b"moov", b"mdat"] and len(after) == len(before)
+    moved = _chunk_offsets(after)
+    assert moved == [o + len(moov) for o in offsets]
+    assert all(after[new:new + 20] == before[old:old + 20] for new, old in zip(moved, offsets))
+
+
+def test_faststart_leaves_a_file_it_cannot_move_as_it_was(tmp_path):
+    ftyp = _box(b"ftyp", b"isom\0\0\0\0isom")
+    chunks = _box(b"stco", bytes(4) + (1).to_bytes(4, "big") + (len(ftyp) + 8).to_bytes(4, "big"))
+    moov = _box(b"moov", _box(b"trak", _box(b"mdia", _box(b"minf", _box(b"stbl", chunks)))))
+    for name, data in {"index first": ftyp + moov + _box(b"mdat", bytes(64)),
+                       "truncated": (ftyp + _box(b"mdat", bytes(64)) + moov)[:-3]}.items():
+        path = tmp_path / f"{name}.mp4"
+        path.write_bytes(data)
+        assert not mp4_faststart(path), name
+        assert path.read_bytes() == data, name
+    # A chunk at 0xFFFFFFF0 of a ~4 GiB file (sparse: no disk used) would pass 32 bits once moved.
+    mdat_size = 0xFFFFFFF8 - len(ftyp)
+    chunks = _box(b"stco", bytes(4) + (1).to_bytes(4, "big") + (0xFFFFFFF0).to_bytes(4, "big"))
+    moov = _box(b"moov", _box(b"trak", _box(b"mdia", _box(b"minf", _box(b"stbl", chunks)))))
+    path = tmp_path / "large.mp4"
+    with open(path, "wb") as file:
+        file.write(ftyp + mdat_size.to_bytes(4, "big") + b"mdat")
+        file.seek(len(ftyp) + mdat_size)
+        file.write(moov)
+    assert not mp4_faststart(path)
+    with open(path, "rb") as file:
+        file.seek(len(ftyp) + mdat_size)
+        assert file.read() == moov

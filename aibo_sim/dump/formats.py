@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import io
+import os
 
 import mujoco
 import numpy as np
@@ -186,50 +187,85 @@ def frame_metadata(sim: Simulation, index: int) -> dict:
 
 
 _MP4_CONTAINERS = {b"moov", b"trak", b"mdia", b"minf", b"stbl"}  # the boxes on the way to the chunk offsets
+_MOVE_BLOCK = 1 << 20  # faststart moves the frames in blocks of this many bytes
+
+
+def _box_header(data: bytes | memoryview, start: int, end: int) -> tuple[bytes, int, int]:
+    """(type, size, header length) of the box at ``data[start:]`` (ISO/IEC 14496-12, 4.2: a
+    32-bit size, or 1 and a 64-bit size after the type, or 0: up to ``end``)."""
+    size, kind, header = int.from_bytes(data[start:start + 4], "big"), bytes(data[start + 4:start + 8]), 8
+    if size == 1:
+        size, header = int.from_bytes(data[start + 8:start + 16], "big"), 16
+    elif size == 0:
+        size = end - start
+    return kind, size, header
 
 
 def mp4_boxes(data: bytes | memoryview, start: int, end: int):
-    """(type, start, end) of each box in ``data[start:end]`` (ISO/IEC 14496-12, 4.2)."""
+    """(type, start, end, header length) of each box in ``data[start:end]``; ValueError for a box
+    that runs past its parent."""
     while start + 8 <= end:
-        size, kind = int.from_bytes(data[start:start + 4], "big"), bytes(data[start + 4:start + 8])
-        if size == 1:
-            size = int.from_bytes(data[start + 8:start + 16], "big")
-        elif size == 0:
-            size = end - start
-        if size < 8 or start + size > end:
+        kind, size, header = _box_header(data, start, end)
+        if size < header or start + size > end:
             raise ValueError(f"MP4 box {kind!r} at byte {start} runs past its parent")
-        yield kind, start, start + size
+        yield kind, start, start + size, header
         start += size
 
 
-def _shift_chunk_offsets(moov: bytearray, start: int, end: int, shift: int) -> None:
-    """Add ``shift`` to every chunk offset (stco, co64) inside ``moov[start:end]``."""
-    for kind, box_start, box_end in mp4_boxes(moov, start, end):
+def _shift_chunk_offsets(moov: bytearray, start: int, end: int, moved: range, shift: int) -> None:
+    """Add ``shift`` to the chunk offsets (stco, co64) inside ``moov[start:end]`` that lie in
+    ``moved``; ValueError where one no longer fits its 32 bits or its box."""
+    for kind, box_start, box_end, header in mp4_boxes(moov, start, end):
         if kind in _MP4_CONTAINERS:
-            _shift_chunk_offsets(moov, box_start + 8, box_end, shift)
+            _shift_chunk_offsets(moov, box_start + header, box_end, moved, shift)
         elif kind in (b"stco", b"co64"):
-            width = 4 if kind == b"stco" else 8
-            count = int.from_bytes(moov[box_start + 12:box_start + 16], "big")
-            for at in range(box_start + 16, box_start + 16 + count * width, width):
-                offset = int.from_bytes(moov[at:at + width], "big") + shift
-                if offset >= 1 << (8 * width):
-                    raise ValueError("a chunk offset no longer fits its stco box")
-                moov[at:at + width] = offset.to_bytes(width, "big")
+            width, entries = (4 if kind == b"stco" else 8), box_start + header + 8  # after version, flags, count
+            count = int.from_bytes(moov[entries - 4:entries], "big")
+            if entries + count * width > box_end:
+                raise ValueError(f"{kind!r} lists more offsets than it holds")
+            for at in range(entries, entries + count * width, width):
+                offset = int.from_bytes(moov[at:at + width], "big")
+                if offset in moved:
+                    if offset + shift >= 1 << (8 * width):
+                        raise ValueError("a chunk offset no longer fits its stco box")
+                    moov[at:at + width] = (offset + shift).to_bytes(width, "big")
 
 
-def mp4_faststart(path) -> None:
+def mp4_faststart(path) -> bool:
     """Move an MP4's ``moov`` box (its index, which OpenCV's writer puts last) ahead of ``mdat``,
     in place and at the same size, as ``ffmpeg -movflags +faststart`` does: a player can then
-    start before the whole file is read. A file whose index already leads is left as it is."""
+    start before the whole file is read. The frames move in blocks, so memory stays small.
+    False, the file untouched, where the index already leads or cannot be moved (a chunk
+    offset that would outgrow 32 bits, boxes it cannot read)."""
     with open(path, "r+b") as file:
-        data = file.read()
-        boxes = list(mp4_boxes(data, 0, len(data)))
-        kinds = [kind for kind, _, _ in boxes]
-        if b"moov" not in kinds or b"mdat" not in kinds or kinds.index(b"moov") < kinds.index(b"mdat"):
-            return
-        _, moov_start, moov_end = boxes[kinds.index(b"moov")]
-        moov = bytearray(data[moov_start:moov_end])
-        _shift_chunk_offsets(moov, 8, len(moov), len(moov))
-        mdat_start = boxes[kinds.index(b"mdat")][1]
+        size = file.seek(0, os.SEEK_END)
+        boxes, start = {}, 0  # the first box of each type at the top level: (start, end)
+        while start + 8 <= size:
+            file.seek(start)
+            kind, length, header = _box_header(file.read(16), 0, size - start)
+            if length < header or start + length > size:
+                return False
+            boxes.setdefault(kind, (start, start + length))
+            start += length
+        if b"moov" not in boxes or b"mdat" not in boxes or boxes[b"moov"][0] < boxes[b"mdat"][0] or start != size:
+            return False
+        (mdat_start, _), (moov_start, moov_end) = boxes[b"mdat"], boxes[b"moov"]
+        file.seek(moov_start)
+        moov = bytearray(file.read(moov_end - moov_start))
+        try:
+            _shift_chunk_offsets(moov, _box_header(moov, 0, len(moov))[2], len(moov), range(mdat_start, moov_start),
+                                 len(moov))
+        except ValueError:
+            return False
+        # Everything from mdat to moov moves up by moov's length, last block first (they overlap).
+        end = moov_start
+        while end > mdat_start:
+            block = max(mdat_start, end - _MOVE_BLOCK)
+            file.seek(block)
+            data = file.read(end - block)
+            file.seek(block + len(moov))
+            file.write(data)
+            end = block
         file.seek(mdat_start)
-        file.write(moov + data[mdat_start:moov_start] + data[moov_end:])
+        file.write(moov)
+    return True

@@ -369,7 +369,7 @@ class DumpWriter:
             if self._video_path is not None:
                 final = self.out / VIDEO
                 try:
-                    mp4_faststart(self._video_path)  # its index ahead of the frames: players start at once
+                    mp4_faststart(self._video_path)  # its index ahead of the frames (or left as written)
                     os.replace(self._video_path, final)
                 except OSError as exc:
                     remove_temporary_files(self.out, self.layouts)
