@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import contextlib
+import errno
 import os
 from pathlib import Path
 
@@ -20,13 +21,17 @@ def write_file_atomic(path: Path, data: bytes, temp: Path | None = None) -> None
 
 def write_files_atomic(files: dict[Path, bytes], temps: dict[Path, Path] | None = None) -> None:
     """Write several files as one set, each as ``write_file_atomic`` writes one: all of them are
-    renamed into place once every one is on disk, so a failure leaves the earlier set as it was."""
+    renamed into place once every one is on disk and no target is a folder, so a write that
+    fails (a full disk) leaves the earlier set as it was."""
     temps = {path: (temps or {}).get(path) or path.with_name(f".{path.name}.tmp") for path in files}
     path = None
     try:
         for path, data in files.items():
             with open(temps[path], "wb") as file:
                 file.write(data)
+        for path in files:
+            if path.is_dir():  # os.replace would refuse it after renaming the others
+                raise IsADirectoryError(errno.EISDIR, os.strerror(errno.EISDIR), str(path))
         for path, temp in temps.items():
             os.replace(temp, path)
     except BaseException as exc:

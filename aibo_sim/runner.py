@@ -294,6 +294,12 @@ def run_controller(path: str | Path, *, backend: str = "sim", duration: float = 
     # 1, ControllerFailed quoting its traceback or its status (never read as a divergence).
     # The physics diverges: SimulationDiverged (exit status 3). Its robot_die functions run in
     # every case (Ctrl-C too); one that raises is reported after the controller's own error.
+    def record_end(writer: FrameWriter, status: str, error: BaseException) -> None:
+        """run.json of a run that did not reach its end: how it ended, the time and frames so far."""
+        writer.write_run_json({"controller": str(path), "backend": backend, "status": status,
+                               **({"error": str(error)} if status == "failed" else {}),
+                               "simulated_s": robot.time_ms / 1000, "camera_frames": writer.count, "camera": camera})
+
     try:
         with _controller_context(path.parent, out if workdir is None else Path(workdir).resolve()):
             error: BaseException | None = None
@@ -334,10 +340,7 @@ def run_controller(path: str | Path, *, backend: str = "sim", duration: float = 
                 raise ControllerFailed(f"controller {path.name} ended {where};{die_report}")
     except (ControllerFailed, SimulationDiverged, KeyboardInterrupt) as failure:
         if writer is not None:  # the frames so far stay, and run.json says how the run ended
-            ended = {"status": "interrupted"} if isinstance(failure, KeyboardInterrupt) else \
-                {"status": "failed", "error": str(failure)}
-            writer.write_run_json({"controller": str(path), "backend": backend, **ended,
-                                   "simulated_s": robot.time_ms / 1000, "camera_frames": writer.count, "camera": camera})
+            record_end(writer, "interrupted" if isinstance(failure, KeyboardInterrupt) else "failed", failure)
         raise
     finally:
         progress_bar.close()
@@ -346,9 +349,7 @@ def run_controller(path: str | Path, *, backend: str = "sim", duration: float = 
     wall = time.perf_counter() - start
     if writer is not None and writer.error is not None:  # a frame that could not be written ended the run
         try:
-            writer.write_run_json({"controller": str(path), "backend": backend, "status": "failed",
-                                   "error": str(writer.error), "simulated_s": robot.time_ms / 1000,
-                                   "camera_frames": writer.count, "camera": camera})
+            record_end(writer, "failed", writer.error)
         except OSError:
             pass  # the full disk refused this too: run.json still says "incomplete"
         writer.check()

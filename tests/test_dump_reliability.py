@@ -451,3 +451,14 @@ def test_render_on_a_full_disk_leaves_the_earlier_set_whole(tmp_path, monkeypatc
     assert main(["render", "--settle", "0", "--seed", "5", "--pose", "0.2", "0", "30", "--out", str(out)]) == 2
     assert capsys.readouterr().err == f"aibo-sim: error: cannot write {out / 'tracking.png'}: No space left on device\n"
     assert _snapshot(out) == before  # no new head_camera.png beside the old tracking.png, no temporary file
+
+
+
+def test_a_set_whose_target_is_a_folder_is_not_half_replaced(tmp_path):
+    from aibo_sim.files import write_files_atomic
+
+    (tmp_path / "a.png").write_bytes(b"old")
+    (tmp_path / "b.png").mkdir()
+    with pytest.raises(OSError, match=rf"^cannot write {tmp_path / 'b.png'}: Is a directory$"):
+        write_files_atomic({tmp_path / "a.png": b"new", tmp_path / "b.png": b"new"})
+    assert (tmp_path / "a.png").read_bytes() == b"old" and sorted(p.name for p in tmp_path.iterdir()) == ["a.png", "b.png"]
