@@ -553,12 +553,17 @@ def mtn_new(path: str | os.PathLike, available_locators: Iterable[str] | None = 
         for loc in motion.locators:
             if loc not in available:
                 raise MtnError(None, None, f"Missing device in model: {printable(loc)}")
-            if loc not in ers7.JOINT_BY_LOCATOR:
-                raise MtnError(None, None, f"Not a joint: {printable(loc)} (a motion moves joints only)")
+            check_joint(loc)
     except MtnError as exc:
         _last_error = str(exc)
         raise
     return motion
+
+
+def check_joint(locator: str, source: str | None = None) -> None:
+    """MtnError unless ``locator`` is a joint's (a motion moves joints only)."""
+    if locator not in ers7.JOINT_BY_LOCATOR:
+        raise MtnError(source, None, f"Not a joint: {printable(locator)} (a motion moves joints only)")
 
 
 def mtn_get_error() -> str:

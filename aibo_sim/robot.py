@@ -25,7 +25,7 @@ import numpy as np
 
 from . import ers7
 from .mtn import MODES as MTN_MODES
-from .mtn import Motion, MotionPlayer, MtnError, mtn_new, printable
+from .mtn import Motion, MotionPlayer, MtnError, check_joint, mtn_new
 from .sim import FRAME_MS, Simulation
 
 BACKENDS = ("sim", "openr")
@@ -343,9 +343,8 @@ class Robot:
         """Start ``motion``; one that is already playing restarts from its start (a motion has one
         playback, as in OPEN-R's MTN object and Webots' MTN struct: never two at once)."""
         motion = self._motion("mtn_play", motion)
-        unknown = [loc for loc in motion.locators if loc not in ers7.JOINT_BY_LOCATOR]
-        if unknown:  # a Motion made in code: mtn_new refuses such files
-            raise MtnError(motion.source, None, f"Not a joint: {printable(unknown[0])} (a motion moves joints only)")
+        for locator in motion.locators:  # a Motion made in code: mtn_new refuses such files
+            check_joint(locator, motion.source)
         player = MotionPlayer(motion, mode=self.mtn_mode)
         self.playing = [p for p in self.playing if p.motion is not motion]
         self.playing.append(_Playing(motion, player, ers7.joint_indices(motion.locators), self.time_ms))

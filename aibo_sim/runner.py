@@ -289,17 +289,18 @@ def run_controller(path: str | Path, *, backend: str = "sim", duration: float = 
     robot.frame_listeners.append(progress_bar)
     controller.install(robot)
     start = time.perf_counter()
-    # How a controller ends: its run is over (SimulationEnd) or it calls sys.exit(0) or
-    # sys.exit(): a normal end. It raises, or calls sys.exit with another status: exit status
-    # 1, ControllerFailed quoting its traceback or its status (never read as a divergence).
-    # The physics diverges: SimulationDiverged (exit status 3). Its robot_die functions run in
-    # every case (Ctrl-C too); one that raises is reported after the controller's own error.
-    def record_end(writer: FrameWriter, status: str, error: BaseException) -> None:
+
+    def record_end(status: str, error: BaseException) -> None:
         """run.json of a run that did not reach its end: how it ended, the time and frames so far."""
         writer.write_run_json({"controller": str(path), "backend": backend, "status": status,
                                **({"error": str(error)} if status == "failed" else {}),
                                "simulated_s": robot.time_ms / 1000, "camera_frames": writer.count, "camera": camera})
 
+    # How a controller ends: its run is over (SimulationEnd) or it calls sys.exit(0) or
+    # sys.exit(): a normal end. It raises, or calls sys.exit with another status: exit status
+    # 1, ControllerFailed quoting its traceback or its status (never read as a divergence).
+    # The physics diverges: SimulationDiverged (exit status 3). Its robot_die functions run in
+    # every case (Ctrl-C too); one that raises is reported after the controller's own error.
     try:
         with _controller_context(path.parent, out if workdir is None else Path(workdir).resolve()):
             error: BaseException | None = None
@@ -340,7 +341,7 @@ def run_controller(path: str | Path, *, backend: str = "sim", duration: float = 
                 raise ControllerFailed(f"controller {path.name} ended {where};{die_report}")
     except (ControllerFailed, SimulationDiverged, KeyboardInterrupt) as failure:
         if writer is not None:  # the frames so far stay, and run.json says how the run ended
-            record_end(writer, "interrupted" if isinstance(failure, KeyboardInterrupt) else "failed", failure)
+            record_end("interrupted" if isinstance(failure, KeyboardInterrupt) else "failed", failure)
         raise
     finally:
         progress_bar.close()
@@ -349,7 +350,7 @@ def run_controller(path: str | Path, *, backend: str = "sim", duration: float = 
     wall = time.perf_counter() - start
     if writer is not None and writer.error is not None:  # a frame that could not be written ended the run
         try:
-            record_end(writer, "failed", writer.error)
+            record_end("failed", writer.error)
         except OSError:
             pass  # the full disk refused this too: run.json still says "incomplete"
         writer.check()

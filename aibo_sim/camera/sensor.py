@@ -209,13 +209,14 @@ class CameraProfile:
         """The parameters in which this profile differs from the preset of its name (all of
         them for a name that is no preset), as JSON takes them: what run.json and meta.json
         record beside the name."""
+        def as_json(value):
+            if isinstance(value, RobotColour):
+                return {part: list(values) for part, values in asdict(value).items()}
+            return list(value) if isinstance(value, tuple) else value
+
         preset = PROFILES.get(self.name)
-        changed = {f.name: getattr(self, f.name) for f in fields(self)
-                   if f.name != "name" and (preset is None or getattr(self, f.name) != getattr(preset, f.name))}
-        as_json = {name: asdict(value) if name == "robot" else value for name, value in changed.items()}
-        if "robot" in as_json:
-            as_json["robot"] = {name: list(values) for name, values in as_json["robot"].items()}
-        return {name: list(value) if isinstance(value, tuple) else value for name, value in as_json.items()}
+        return {f.name: as_json(getattr(self, f.name)) for f in fields(self)
+                if f.name != "name" and (preset is None or getattr(self, f.name) != getattr(preset, f.name))}
 
 
 PROFILES = {

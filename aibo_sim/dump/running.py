@@ -79,8 +79,8 @@ def _profile(parameters: dict) -> CameraProfile:
 def _dump_controller(parameters: dict, out: Path, resume: bool, **lock) -> DumpWriter:
     frames, camera_full = parameters["frames"], parameters["camera_full"]
     settings = CameraSettings(**parameters["camera_settings"])
-    model = load_model(parameters["scene"])
-    camera = describe_camera(_profile(parameters), settings, camera_size(camera_full),
+    model, profile = load_model(parameters["scene"]), _profile(parameters)
+    camera = describe_camera(profile, settings, camera_size(camera_full),
                              scene_light(model))
     progress = Progress(frames / FRAME_RATE_HZ, enabled=parameters.get("progress", True))
     with DumpWriter(out, parameters["formats"], parameters, resume=resume, camera=camera, model=model,
@@ -93,7 +93,7 @@ def _dump_controller(parameters: dict, out: Path, resume: bool, **lock) -> DumpW
                            scene=parameters["scene"], seed=parameters["seed"], pose=parameters["pose"],
                            ball=parameters["ball"], mtn_mode=parameters["mtn_mode"],
                            memory_stick=parameters["memory_stick"], camera_full=camera_full,
-                           camera_profile=_profile(parameters), camera_settings=settings,
+                           camera_profile=profile, camera_settings=settings,
                            frame_listeners=[listener], progress=False, workdir=workdir)
         finally:
             progress.close()
@@ -271,8 +271,9 @@ def dump(out, *, controller: str | Path | None = None, env: str | None = None, p
                   "mtn_mode": controller and (mtn_mode or "openr"), "memory_stick": memory_stick and str(memory_stick),
                   "formats": [f for f in FORMATS if f in formats], "camera_full": camera_full,
                   "camera_profile": profile.name, "camera_settings": (camera_settings or CameraSettings()).as_dict()}
-    if profile.options():  # only then: a dump of a preset resumes one made before options were recorded
-        parameters["camera_profile_options"] = profile.options()
+    options = profile.options()
+    if options:  # only then: a dump of a preset resumes one made before options were recorded
+        parameters["camera_profile_options"] = options
     if source_sha256 is not None:
         parameters["controller_sha256"] = source_sha256  # a resume refuses another controller
     parameters["model_sha256"] = model_sha256(scene)
