@@ -229,7 +229,7 @@ def measure() -> list[dict]:
     threads, async_, hybrid = (next(name for name in SETTINGS if name.startswith(start))
                                for start in ("make_vec threads", "make_vec async, 2 workers, B", "HybridVectorEnv"))
     single, threaded, processes, both = _alternating_best((AIBO, one), (AIBO, threads), (AIBO, async_), (AIBO, hybrid))
-    reference = f"{AIBO} steps/s, 1 env (beside the two below)"
+    reference = f"{AIBO} steps/s, 1 env (beside the 2-env rows below)"
     rows += [row(reference, single, "steps/s"),
              row(f"{AIBO} steps/s, 2 envs in threads of one process (ThreadedVectorEnv)", threaded, "steps/s",
                  reference, threaded / single, target=("ratio", ">=", 1.7)),
