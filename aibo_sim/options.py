@@ -3,8 +3,8 @@ same names, defaults and meanings: the world (``--scene``, ``--pose``, ``--ball`
 and the head camera (``--camera-profile``, ``--camera-wb``, ``--camera-gain``,
 ``--camera-shutter``, ``--camera-full``).
 
-A bad value (an unknown profile or setting, a pose or ball that is not a finite number, a
-negative seed) stops the command with exit status 2 and one line that names the option:
+A bad value (an unknown profile or setting, a pose or ball that is not a finite number or that
+puts the robot or ball into something, a negative seed) stops the command with exit status 2 and one line that names the option:
 ``ArgumentParser`` below is the parser class of ``aibo-sim`` and, through ``add_subparsers``,
 of every subcommand.
 """
@@ -18,8 +18,9 @@ from pathlib import Path
 from openr_bridge import CAMERA_DEFAULTS, CAMERA_SETTINGS
 
 from .camera import PROFILES, CameraSettings
-from .sim import SEED_LIMIT
+from .sim import SEED_LIMIT, Simulation
 
+PLACEMENT_OVERLAP_M = 0.005  # a placed robot or ball sunk deeper than this into something is an error
 MAX_MAGNITUDE = 1e6  # |value| beyond this is a typo, not a position (metres) or an angle (degrees)
 CAMERA_SETTING_OPTIONS = (("white_balance", "--camera-wb"), ("gain", "--camera-gain"), ("shutter", "--camera-shutter"))
 WORLD_DESTS = ("scene", "pose", "ball", "seed")
@@ -115,11 +116,29 @@ def make_out_folder(path) -> Path:
     return path
 
 
+def check_place(scene, pose: tuple[float, float, float] | None, ball: tuple[float, float] | None) -> None:
+    """``place``'s errors for these placements in ``scene``, before a command writes anything."""
+    sim = Simulation(scene, camera_profile="ideal")
+    try:
+        place(sim, pose, ball)
+    finally:
+        sim.close()
+
+
 def place(sim, pose: tuple[float, float, float] | None = None, ball: tuple[float, float] | None = None) -> None:
     """Put the robot at ``pose`` (x, y in metres, yaw in degrees) and the ball at ``ball`` (x, y),
-    each when given; the scene's start otherwise."""
+    each when given; the scene's start otherwise. ValueError naming the option when what it
+    placed would sink more than ``PLACEMENT_OVERLAP_M`` into something (a wall, a goal, the
+    robot or the ball), which the first step would fling apart."""
     if pose is not None:
         x, y, yaw_deg = pose
         sim.place_robot(x, y, math.radians(yaw_deg))
     if ball is not None:
         sim.place_ball(*ball)
+    placed = {"the robot": ("--pose", pose), "the ball": ("--ball", ball)}
+    for first, second, depth in sim.overlaps(PLACEMENT_OVERLAP_M):
+        for subject, other in ((first, second), (second, first)):
+            option, values = placed.get(subject, (None, None))
+            if values is not None:
+                raise ValueError(f"{option} {' '.join(f'{v:g}' for v in values)}: {subject} would overlap {other} "
+                                 f"by {depth * 100:.1f} cm")

@@ -303,6 +303,25 @@ class Simulation:
         """The ball's centre, or None in a scene without a ball."""
         return self.data.xpos[self._ball_body].copy() if self.has_ball else None
 
+    def overlaps(self, depth: float) -> list[tuple[str, str, float]]:
+        """Pairs that penetrate each other deeper than ``depth`` metres in the current state
+        (MuJoCo's contacts), deepest first: (first, second, metres), each "the robot", "the
+        ball" or the other geom's name (its body's, or its number, when it has none)."""
+        model, contacts = self.model, self.data.contact
+        robot = model.body_rootid[model.body("body").id]
+
+        def name(geom: int) -> str:
+            body = model.geom_bodyid[geom]
+            if model.body_rootid[body] == robot:
+                return "the robot"
+            if body == self._ball_body:
+                return "the ball"
+            return model.geom(geom).name or model.body(body).name or f"geom {geom}"
+
+        order = np.argsort(contacts.dist)
+        return [(name(contacts.geom1[i]), name(contacts.geom2[i]), -float(contacts.dist[i]))
+                for i in order if contacts.dist[i] < -depth]
+
     @property
     def time_ms(self) -> int:
         return self.frame * FRAME_MS

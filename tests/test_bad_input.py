@@ -152,6 +152,38 @@ def test_placements_that_are_not_finite_are_refused_naming_the_argument(function
         sim.close()
 
 
+PLACED = [["run", str(SCRIPTED), "--duration", "0.1"], ["render", "--settle", "0"], ["dump", str(SCRIPTED), "--steps", "3"]]
+
+
+@pytest.mark.parametrize("command", PLACED + [["mtn", "play", "STAND.MTN"]])
+@pytest.mark.parametrize("placement, message", [
+    (["--pose", "3", "0", "0"], r"--pose 3 0 0: the robot would overlap wall_skyblue by \d+\.\d cm"),
+    (["--ball", "-0.12", "0.06"], r"--ball -0.12 0.06: the ball would overlap the robot by \d+\.\d cm"),
+])
+def test_a_robot_or_ball_placed_into_something_exits_2_naming_the_option(tmp_path, command, placement, message, capsys):
+    """Placed into a wall or into each other, the robot and ball would be flung apart at the
+    first step: one line naming the option, exit 2, no output folder."""
+    out = ["--out", str(tmp_path / "out")] if command[0] in ("render", "dump") else []
+    assert main(command + out + placement) == 2
+    assert re.fullmatch(rf"aibo-sim: error: {message}\n", capsys.readouterr().err)
+    assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("command", PLACED)
+def test_a_robot_placed_onto_the_scenes_ball_exits_2(tmp_path, command, capsys):
+    """The ball rests at (0.5, 0) in the scene: a pose that puts a leg through it is refused."""
+    out = ["--out", str(tmp_path / "out")] if command[0] in ("render", "dump") else []
+    assert main(command + out + ["--pose", "0.62", "-0.06", "0"]) == 2
+    one_error_line(capsys, "--pose 0.62 -0.06 0: the robot would overlap the ball by")
+    assert not (tmp_path / "out").exists()
+
+
+def test_placements_clear_of_everything_are_accepted(tmp_path):
+    """Beside the wall, beside the robot: no overlap, so no error (the check is not a fence)."""
+    assert main(["mtn", "play", "STAND.MTN", "--pose", "2.5", "0", "0", "--ball", "2.5", "0.3"]) == 0
+    assert main(["mtn", "play", "STAND.MTN", "--ball", "-0.25", "0"]) == 0
+
+
 # ----------------------------------------------------------------------------- memory sticks
 
 

@@ -19,9 +19,10 @@ from ..camera import CameraProfile, CameraSettings, camera_size, describe_camera
 from ..camera import camera_profile as resolve_profile  # dump's argument of that name shadows it
 from ..cbind import compile_controller, controller_sources, is_c_controller
 from ..mtn import MODES as MTN_MODES
+from ..options import check_place, start_values
 from ..robot import BACKENDS, SimulationEnd, check_memory_stick
 from ..runner import Progress, check_python_controller, run_controller
-from ..sim import ball_joint, load_model
+from ..sim import load_model
 from .formats import DEFAULT_FORMATS, FORMATS
 from .writing import CONTROLLER_FILES, DumpWriter
 
@@ -258,8 +259,9 @@ def dump(out, *, controller: str | Path | None = None, env: str | None = None, p
     profile = resolve_profile(camera_profile)
     if env is not None:
         _check_env(env)
-    if ball is not None:
-        ball_joint(load_model(scene))  # the scene's ModelError before the folder is made
+    pose, ball = start_values("--pose", pose, 3), start_values("--ball", ball, 2)
+    if ball is not None or pose is not None:
+        check_place(scene, pose, ball)  # the scene's ModelError, or a placement's ValueError, before the folder is made
     source_sha256 = None
     if controller is not None:
         controller = Path(controller).resolve()
