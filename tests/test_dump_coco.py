@@ -6,12 +6,13 @@ import math
 import shutil
 from pathlib import Path
 
+import numpy as np
 import pytest
 from pycocotools.coco import COCO
 
 from aibo_sim.cli import main
 from aibo_sim.dump import dump, load_dump
-from aibo_sim.dump.coco import Objects
+from aibo_sim.dump.coco import Objects, coco_bytes, mask_rle
 from aibo_sim.field import SEGMENTATION_CLASSES
 from aibo_sim.sim import Simulation
 
@@ -25,7 +26,7 @@ FORMATS = ("rgb", "coco")
 @pytest.fixture(scope="module")
 def coco_dump(tmp_path_factory):
     out = tmp_path_factory.mktemp("coco") / "dump"
-    dump(out, controller=TRACKER, frames=30, formats=FORMATS)  # the ers7 lens: distorted
+    dump(out, controller=TRACKER, frames=30, formats=FORMATS + ("seg",))  # the ers7 lens: distorted
     return out
 
 
@@ -54,6 +55,46 @@ def test_coco_file_loads_and_the_ball_box_is_centred_on_its_projection(coco_dump
     assert centred >= 20
     goals = [a for a in coco.dataset["annotations"] if a["object"] == "goal_skyblue"]
     assert goals and all(a["category_id"] == SEGMENTATION_CLASSES.index("goal") for a in goals)
+
+
+def test_coco_masks_decode_to_the_pixels_of_each_box_and_the_ball_to_its_segmentation(coco_dump):
+    """pycocotools decodes each mask (run-length, column-major) to ``area`` pixels filling
+    ``bbox``; the ball's is the segmentation file's ball class, pixel for pixel."""
+    coco = COCO(str(coco_dump / "coco.json"))
+    ball_id = SEGMENTATION_CLASSES.index("ball")
+    for image_id, frame in zip(range(1, 31), load_dump(coco_dump)):
+        for a in coco.loadAnns(coco.getAnnIds(imgIds=image_id)):
+            mask = coco.annToMask(a)
+            ys, xs = np.nonzero(mask)
+            assert mask.shape == (H, W) and mask.sum() == a["area"]
+            assert [xs.min(), ys.min(), xs.max() - xs.min() + 1, ys.max() - ys.min() + 1] == a["bbox"]
+            if a["category_id"] == ball_id:
+                np.testing.assert_array_equal(mask, frame.seg == ball_id)
+
+
+def test_records_without_masks_still_give_boxes(coco_dump, tmp_path):
+    """A dump recorded before masks were (its frames.jsonl has none) still gets its coco.json."""
+    old = tmp_path / "old"
+    old.mkdir()
+    shutil.copy(coco_dump / "meta.json", old)
+    records = [json.loads(line) for line in (coco_dump / "frames.jsonl").read_text().splitlines()]
+    for record in records:
+        for item in record["objects"]:
+            del item["segmentation"]
+    (old / "frames.jsonl").write_text("".join(json.dumps(r) + "\n" for r in records))
+    boxes = json.loads(coco_bytes(old, [old]))["annotations"]
+    masked = json.loads((coco_dump / "coco.json").read_bytes())["annotations"]
+    assert boxes == [{k: v for k, v in a.items() if k != "segmentation"} for a in masked] and boxes
+
+
+@pytest.mark.parametrize("mask, counts", [
+    ([[0, 1], [0, 1], [0, 0]], [3, 2, 1]),  # column-major: down the first column, then the second
+    ([[1, 0], [1, 0], [0, 1]], [0, 2, 3, 1]),  # set at (0, 0): a first run of no zeros
+    ([[1, 1]], [0, 2]), ([[0, 0]], [2]),
+])
+def test_mask_rle_counts_runs_down_the_columns_from_zeros(mask, counts):
+    mask = np.array(mask, bool)
+    assert mask_rle(mask) == {"size": list(mask.shape), "counts": counts}
 
 
 @pytest.mark.parametrize("profile", ["ideal", "ers7"])

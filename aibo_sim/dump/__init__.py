@@ -35,8 +35,8 @@ controller is the camera frame index, k / 30 s)::
     seg/000123.png       uint8 class ids, names in meta.json (field.SEGMENTATION_CLASSES), same lens
     video.mp4            30 fps, codec mp4v (MPEG-4 part 2: OpenCV's wheels lack H.264), its index
                          (moov) ahead of the frames, as ffmpeg's +faststart leaves it
-    coco.json            COCO detection annotations of the rgb files (needs rgb): a box per
-                         visible ball, goal, beacon and robot, with its visibility (``coco.py``)
+    coco.json            COCO detection annotations of the rgb files (needs rgb): a box and a
+                         mask per visible ball, goal, beacon and robot, with its visibility (``coco.py``)
 
 Colour: the yuv444 and yuv420 files are BT.601 limited range (Y 16-235, Cb/Cr 16-240), what
 ffmpeg, ffplay and OpenCV's ``COLOR_YUV2RGB_I420`` assume for raw yuv420p; 4:2:0 chroma is

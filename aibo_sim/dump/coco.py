@@ -12,7 +12,9 @@ the picture's lens and exposure), the model's geom groups set for each render an
 - one with every object told apart: an object's visible pixels are those it is seen at;
   its box is their bounding box, ``[x, y, width, height]`` in COCO's pixel edges (pixel
   (i, j) spans x i .. i + 1, y j .. j + 1; its centre is at x + w / 2 - 0.5 in the camera's
-  pixel-centre coordinates), ``area`` their count;
+  pixel-centre coordinates), ``area`` their count, ``segmentation`` their mask (``mask_rle``:
+  COCO's run-length encoding, exact where polygons would fill the holes that nearer objects
+  make, and read by pycocotools' ``annToMask``);
 - one per visible object alone: the pixels it would cover with nothing in front of it,
   inside the image. ``visibility`` = visible pixels / those (1.0: nothing hides any of it;
   the image border cuts both alike).
@@ -80,8 +82,19 @@ class Objects:
             detections.append({
                 "category": self.category[body], "object": self.name[body],
                 "bbox": [x, y, int(xs.max()) - x + 1, int(ys.max()) - y + 1], "area": int(xs.size),
-                "visibility": round(xs.size / int((alone >= 0).sum()), VISIBILITY_DIGITS)})
+                "visibility": round(xs.size / int((alone >= 0).sum()), VISIBILITY_DIGITS),
+                "segmentation": mask_rle(owners == body)})
         return detections
+
+
+def mask_rle(mask: np.ndarray) -> dict:
+    """A (h, w) boolean mask as COCO's uncompressed run-length encoding: ``size`` [h, w] and
+    ``counts``, the lengths of alternating runs of 0 and 1 down the columns, left to right
+    (column-major order), starting with the 0s (a first count of 0 when pixel (0, 0) is set)."""
+    flat = mask.ravel(order="F")
+    edges = np.flatnonzero(flat[1:] != flat[:-1]) + 1
+    counts = np.diff(np.concatenate(([0], edges, [flat.size]))).tolist()
+    return {"size": list(mask.shape), "counts": [0, *counts] if flat[0] else counts}
 
 
 def coco_dataset(out: Path, folders: list[Path]) -> dict:
@@ -101,7 +114,9 @@ def coco_dataset(out: Path, folders: list[Path]) -> dict:
                 annotations.append({"id": len(annotations) + 1, "image_id": image_id,
                                     "category_id": SEGMENTATION_CLASSES.index(item["category"]), "bbox": item["bbox"],
                                     "area": item["area"], "iscrowd": 0, "visibility": item["visibility"],
-                                    "object": item["object"]})
+                                    "object": item["object"],
+                                    # the records of dumps made before masks were recorded have none
+                                    **({"segmentation": item["segmentation"]} if "segmentation" in item else {})})
     categories = [{"id": SEGMENTATION_CLASSES.index(name), "name": name} for name in LABELLED]
     return {"info": {"description": "aibo-sim dump: head-camera detections"}, "images": images,
             "annotations": annotations, "categories": categories}
