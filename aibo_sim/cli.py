@@ -182,7 +182,8 @@ def build_parser() -> argparse.ArgumentParser:
     render = commands.add_parser("render", help="render the head camera and a third-person view")
     render.add_argument("--keyframe", default="stand", help="the scene's keyframe to start from (default stand)")
     render.add_argument("--settle", type=finite_float, default=0.5, help="seconds to simulate first (default 0.5)")
-    render.add_argument("--out", default="renders", help="folder for head_camera.png, head_camera.json (its lens, settings, pose) and tracking.png")
+    render.add_argument("--out", default="renders",
+                        help="folder for head_camera.png, head_camera.json (its lens, settings, pose) and tracking.png")
     render.add_argument("--side-by-side", nargs="?", const="", metavar="EASYTRAIN_PNG",
                         help="also write side_by_side.png: the ers7 and ideal pictures of the view, after a real "
                              "ERS-7 frame when one is given (Tekkotsu EasyTrain PNG, R, G, B = Y, Cb, Cr)")

@@ -5,8 +5,8 @@ and the head camera (``--camera-profile``, ``--camera-wb``, ``--camera-gain``,
 
 A bad value (an unknown profile or setting, a pose or ball that is not a finite number or that
 puts the robot or ball into something, a negative seed) stops the command with exit status 2
-and one line that names the option: ``ArgumentParser`` below is the parser class of ``aibo-sim`` and, through ``add_subparsers``,
-of every subcommand.
+and one line that names the option: ``ArgumentParser`` below is the parser class of
+``aibo-sim`` and, through ``add_subparsers``, of every subcommand.
 """
 
 from __future__ import annotations

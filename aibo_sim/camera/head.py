@@ -57,7 +57,8 @@ def describe_camera(profile: str | CameraProfile, settings: CameraSettings, size
     profile = camera_profile(profile)
     lens = LENSES[profile.lens].scaled(*size)
     return {"profile": profile.name, "profile_options": profile.options(), "lens": lens.name,
-            "width": lens.width, "height": lens.height, "fx": lens.fx, "fy": lens.fy, "cx": lens.cx, "cy": lens.cy, "distortion": list(lens.distortion),
+            "width": lens.width, "height": lens.height, "fx": lens.fx, "fy": lens.fy, "cx": lens.cx, "cy": lens.cy,
+            "distortion": list(lens.distortion),
             "distortion_model": "OpenCV k1, k2, p1, p2, k3", **settings.as_dict(), **light.as_dict()}
 
 

@@ -125,8 +125,8 @@ def file_layouts(formats, width: int, height: int) -> dict:
                   len(npy(np.zeros((height, width), np.float32)))),
         "seg": (f"PNG, 8-bit class ids (segmentation_classes), {size}", None),
         "mp4": (f"MP4 (mp4v), 30 fps, {size}", None),
-        "coco": ("COCO detection annotations (ball, goal, beacon, robot boxes and masks with visibility) of the rgb files, "
-                 "written at the end from frames.jsonl's \"objects\"", None),
+        "coco": ("COCO detection annotations (ball, goal, beacon, robot boxes and masks with visibility) "
+                 "of the rgb files, written at the end from frames.jsonl's \"objects\"", None),
     }
     return {f: dict(zip(("path", "layout", "bytes"), (PATHS[f], *layouts[f]))) for f in formats}
 
