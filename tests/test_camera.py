@@ -99,6 +99,7 @@ def test_vignetting_reproduces_the_measured_table():
     for c, (centres, rows) in enumerate(VIGNETTING_TABLE.values()):
         for i, raw in enumerate(rows):
             assert np.polyval(fit[c, i], centres) == pytest.approx(raw, abs=0.7)
+    assert not fit[1, :, 0].any()  # Cr's two columns give a line: the sensor's develop pass reads no Cr curve
     # Between the radii the maps are linear in r: the top right pixel lies at r = 124.6 from Y's
     # ring centre, between the rows for 120 and 130.
     r = math.hypot(206 - RING_CENTRES[0][0], 0 - RING_CENTRES[0][1])
@@ -565,7 +566,7 @@ def _warp(image: np.ndarray, maps: tuple[np.ndarray, np.ndarray], outer: float =
     curve, slope, intercept = (np.full((3, 1, width), value, np.float32) for value in (0, 1, 0))
     out = np.empty((height, width, 3), np.uint8)
     taps = np.float32(outer), np.float32(centre)
-    kernels.develop(planes, warp.rows_base, warp.rows_frac, *warp.rows_runs, warp.columns_base, warp.columns_frac,
+    kernels.develop(planes, warp.rows_frac, *warp.rows_runs, warp.columns_frac,
                     *warp.columns_runs, np.float32(1), *taps, response, identity, curve, slope, intercept,
                     np.zeros(height, np.int64), np.zeros((3, height * width), np.int8), np.zeros(3, np.float32), 0,
                     np.float32(0), np.zeros((3, image.shape[1] + 4 + kernels.SLACK), np.float32),
@@ -619,10 +620,10 @@ def test_two_pass_warp_splits_rows_into_runs_of_one_source_offset():
     warp = Warp.from_maps(map_x, map_y, 8)
     pointers, runs = warp.columns_runs
     assert pointers.tolist() == [0, 1, 3, 4]
-    assert runs.tolist() == [[0, 6], [0, 3], [3, 6], [0, 6]]
-    assert warp.columns_base[1].tolist() == [0, 1, 2, 4, 5, 6] and warp.columns_frac[1, 3] == pytest.approx(0.6)
+    assert runs.tolist() == [[0, 6, 0], [0, 3, 0], [3, 6, 1], [0, 6, 2]]
+    assert warp.columns_frac[1, 3] == pytest.approx(0.6)
     pointers, runs = warp.rows_runs  # pass 1: every column of every row reads its own row
-    assert pointers.tolist() == [0, 1, 2, 3] and runs.tolist() == [[0, 8]] * 3
+    assert pointers.tolist() == [0, 1, 2, 3] and runs.tolist() == [[0, 8, 0], [0, 8, 1], [0, 8, 2]]
 
 
 def test_two_pass_warp_refuses_a_map_that_folds_back():

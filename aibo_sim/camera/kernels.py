@@ -125,27 +125,29 @@ def smear(planes, pad, dx, dy, weights, out):
 
 
 @_compiled
-def develop(planes, rows_base, rows_frac, rows_pointers, rows_runs, columns_base, columns_frac, columns_pointers,
-            columns_runs, level, outer, centre, response, matrix, curve, slope, intercept, coefficient_row, noise, noise_scale,
-            start, y_floor, across, line, out):
+def develop(planes, rows_frac, rows_pointers, rows_runs, columns_frac, columns_pointers, columns_runs, level, outer,
+            centre, response, matrix, curve, slope, intercept, coefficient_row, noise, noise_scale, start, y_floor, across,
+            line, out):
     """The lens's two passes and the colour, row by row of the picture ``out`` (h, w, 3):
 
-    1. ``across[c, 2 + x]`` = the column x of ``planes`` (3, h', w') at row ``rows_base[v, x] +
-       rows_frac[v, x]``, interpolated linearly and convolved with the taps (``outer``,
+    1. ``across[c, 2 + x]`` = the column x of ``planes`` (3, h', w') at row ``k + rows_frac[v,
+       x]``, k the source row of x's run in ``rows_runs``, interpolated linearly and convolved with the taps (``outer``,
        ``centre``, ``outer``) along the column (rows clamped at the edges), times ``level``
        (what a unit of ``planes`` is worth: 1 for bytes, 1/256 for ``smear``'s sums), two
        columns each side repeating the edge;
-    2. ``line[c, u]`` = ``across`` at column ``columns_base[v, u] + columns_frac[v, u]``,
-       interpolated and convolved the same way;
+    2. ``line[c, u]`` = ``across`` at column ``u + k + columns_frac[v, u]``, k the offset of u's
+       run in ``columns_runs``, interpolated and convolved the same way;
     3. per pixel ``min(max(response[c] line, 0), 255)`` (R, G, B),
        ``matrix`` (3, 4) to Y, Cr, Cb, ``curve v^2 + slope v + intercept`` (vignetting and
-       robot colour, planes (3, rows, w), image row v at ``coefficient_row[v]``), plus
+       robot colour, planes (3, rows, w), image row v at ``coefficient_row[v]``; Cr's curve is
+       not read: its table has two columns, so Cr's fit is a line), plus
        ``noise[c, start + v w + u] * noise_scale[c]``; Y floored at ``y_floor``, all clipped to
        0..255 and rounded half up.
 
-    ``*_pointers`` and ``*_runs`` split each row into runs of one source offset (``lens.Warp``).
+    ``*_pointers`` and ``*_runs`` split each row into runs of one source offset (``lens.Warp``:
+    (start, end, offset) triples).
     ``planes``, the fractions, ``across`` and ``line`` carry ``SLACK`` columns past each row."""
-    height, width = columns_base.shape
+    height, width = out.shape[:2]
     source_width, last = across.shape[1] - 4 - SLACK, planes.shape[1] - 1
     flat = out.reshape(height, 3 * width)  # indexed 3 u + c: LLVM vectorises the interleaved stores
     m = matrix
@@ -154,7 +156,7 @@ def develop(planes, rows_base, rows_frac, rows_pointers, rows_runs, columns_base
         for k in range(rows_pointers[v], rows_pointers[v + 1]):
             first = rows_runs[k, 0]
             end = first + _in_vectors(rows_runs[k, 1] - first)
-            top = rows_base[v, first]
+            top = rows_runs[k, 2]
             r0, r1 = min(max(top - 1, 0), last), min(max(top, 0), last)
             r2, r3 = min(max(top + 1, 0), last), min(max(top + 2, 0), last)
             f = rows_frac[v, first:end]
@@ -174,7 +176,7 @@ def develop(planes, rows_base, rows_frac, rows_pointers, rows_runs, columns_base
         for k in range(columns_pointers[v], columns_pointers[v + 1]):
             first = columns_runs[k, 0]
             end = first + _in_vectors(columns_runs[k, 1] - first)
-            shift = columns_base[v, first] - first + 1  # tap -1 of column ``first``, in ``across``'s columns
+            shift = columns_runs[k, 2] + 1  # tap -1 of column ``first``, in ``across``'s columns
             f = columns_frac[v, first:end]
             for c in range(3):
                 row = across[c]
@@ -189,7 +191,7 @@ def develop(planes, rows_base, rows_frac, rows_pointers, rows_runs, columns_base
         at = start + v * width
         noise_y, noise_cr, noise_cb = noise[0, at:at + width], noise[1, at:at + width], noise[2, at:at + width]
         row = coefficient_row[v]
-        curve_y, curve_cr, curve_cb = curve[0, row], curve[1, row], curve[2, row]
+        curve_y, curve_cb = curve[0, row], curve[2, row]
         slope_y, slope_cr, slope_cb = slope[0, row], slope[1, row], slope[2, row]
         intercept_y, intercept_cr, intercept_cb = intercept[0, row], intercept[1, row], intercept[2, row]
         red, green, blue, picture = line[0], line[1], line[2], flat[v]
@@ -201,7 +203,7 @@ def develop(planes, rows_base, rows_frac, rows_pointers, rows_runs, columns_base
             cr = m[1, 0] * r + m[1, 1] * g + m[1, 2] * b + m[1, 3]
             cb = m[2, 0] * r + m[2, 1] * g + m[2, 2] * b + m[2, 3]
             y = (curve_y[u] * y + slope_y[u]) * y + intercept_y[u] + noise_scale[0] * np.float32(noise_y[u])
-            cr = (curve_cr[u] * cr + slope_cr[u]) * cr + intercept_cr[u] + noise_scale[1] * np.float32(noise_cr[u])
+            cr = slope_cr[u] * cr + intercept_cr[u] + noise_scale[1] * np.float32(noise_cr[u])
             cb = (curve_cb[u] * cb + slope_cb[u]) * cb + intercept_cb[u] + noise_scale[2] * np.float32(noise_cb[u])
             picture[3 * u] = np.uint8(min(max(y, y_floor), np.float32(255.0)) + np.float32(0.5))
             picture[3 * u + 1] = np.uint8(min(max(cr, np.float32(0.0)), np.float32(255.0)) + np.float32(0.5))

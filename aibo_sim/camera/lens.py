@@ -179,17 +179,16 @@ class Warp:
     """A remap (output pixel (u, v) reads the render at ``map_x``, ``map_y``) as Catmull and
     Smith's two 1-D passes: pass 1 resamples each render column x at the row where the map's
     row v crosses x (``rows_*``: (h, render width)), pass 2 resamples each output row along x
-    (``columns_*``: (h, w)). A pass stores, per sample, the first of its source pixels
-    (``*_base``) and the fraction past it (``*_frac``); ``*_runs`` (row pointers, then (start,
-    end) pairs) split each row into runs where the source is the destination shifted by one
-    constant offset, so that every run is a contiguous slice. The lens's mild barrel keeps
+    (``columns_*``: (h, w)). A pass stores, per sample, the fraction past the first of its
+    source pixels (``*_frac``); ``*_runs`` (row pointers, then (start, end, offset) triples)
+    split each row into runs where the source is the destination shifted by one constant
+    offset (pass 1: the source row; pass 2: the source column less the destination column),
+    so that every run is a contiguous slice. The lens's mild barrel keeps
     both passes single-valued and smooth (a few runs per row). The fractions carry ``slack``
     zero columns past each row's end (what ``kernels`` reads past a run)."""
 
-    rows_base: np.ndarray
     rows_frac: np.ndarray
     rows_runs: tuple[np.ndarray, np.ndarray]
-    columns_base: np.ndarray
     columns_frac: np.ndarray
     columns_runs: tuple[np.ndarray, np.ndarray]
 
@@ -204,12 +203,12 @@ class Warp:
         columns_base = np.floor(map_x).astype(np.int64)
         rows_frac, columns_frac = (np.pad((position - base).astype(np.float32), ((0, 0), (0, slack)))
                                    for position, base in ((row_at_column, rows_base), (map_x, columns_base)))
-        return cls(rows_base, rows_frac, _runs(rows_base), columns_base, columns_frac, _runs(columns_base - np.arange(width)))
+        return cls(rows_frac, _runs(rows_base), columns_frac, _runs(columns_base - np.arange(width)))
 
 
 def _runs(key: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Row pointers and (start, end) of the runs of each row of ``key`` where it stays the same:
-    pass 1's source row, pass 2's source column less the destination column."""
+    """Row pointers and (start, end, key) of the runs of each row of ``key`` where it stays the
+    same: pass 1's source row, pass 2's source column less the destination column."""
     rows, width = key.shape
     starts_run = np.ones(key.shape, bool)
     starts_run[:, 1:] = key[:, 1:] != key[:, :-1]
@@ -217,4 +216,4 @@ def _runs(key: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     pointers = np.concatenate([[0], np.cumsum(np.bincount(row, minlength=rows))])
     end = np.append(start[1:], width)
     end[pointers[1:] - 1] = width  # each row's last run ends at the row's end
-    return pointers.astype(np.int64), np.stack([start, end], axis=1).astype(np.int64)
+    return pointers.astype(np.int64), np.stack([start, end, key[row, start]], axis=1).astype(np.int64)
