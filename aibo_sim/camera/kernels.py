@@ -125,16 +125,16 @@ def smear(planes, pad, dx, dy, weights, out):
 
 
 @_compiled
-def develop(planes, rows_frac, rows_pointers, rows_runs, columns_frac, columns_pointers, columns_runs, level, outer,
-            centre, response, matrix, curve, slope, intercept, coefficient_row, noise, noise_scale, start, y_floor, across,
-            line, out):
+def develop(planes, rows_frac, rows_pointers, rows_runs, columns_frac, columns_pointers, columns_runs, level,
+            outer, centre, response, matrix, curve, slope, intercept, coefficient_row, noise, noise_scale, start,
+            y_floor, across, line, out):
     """The lens's two passes and the colour, row by row of the picture ``out`` (h, w, 3):
 
     1. ``across[c, 2 + x]`` = the column x of ``planes`` (3, h', w') at row ``k + rows_frac[v,
-       x]``, k the source row of x's run in ``rows_runs``, interpolated linearly and convolved with the taps (``outer``,
-       ``centre``, ``outer``) along the column (rows clamped at the edges), times ``level``
-       (what a unit of ``planes`` is worth: 1 for bytes, 1/256 for ``smear``'s sums), two
-       columns each side repeating the edge;
+       x]``, k the source row of x's run in ``rows_runs``, interpolated linearly and convolved
+       with the taps (``outer``, ``centre``, ``outer``) along the column (rows clamped at the
+       edges), times ``level`` (what a unit of ``planes`` is worth: 1 for bytes, 1/256 for
+       ``smear``'s sums), two columns each side repeating the edge;
     2. ``line[c, u]`` = ``across`` at column ``u + k + columns_frac[v, u]``, k the offset of u's
        run in ``columns_runs``, interpolated and convolved the same way;
     3. per pixel ``min(max(response[c] line, 0), 255)`` (R, G, B),

@@ -183,9 +183,9 @@ class Warp:
     source pixels (``*_frac``); ``*_runs`` (row pointers, then (start, end, offset) triples)
     split each row into runs where the source is the destination shifted by one constant
     offset (pass 1: the source row; pass 2: the source column less the destination column),
-    so that every run is a contiguous slice. The lens's mild barrel keeps
-    both passes single-valued and smooth (a few runs per row). The fractions carry ``slack``
-    zero columns past each row's end (what ``kernels`` reads past a run)."""
+    so that every run is a contiguous slice. The lens's mild barrel keeps both passes
+    single-valued and smooth (a few runs per row). The fractions carry ``slack`` zero columns
+    past each row's end (what ``kernels`` reads past a run)."""
 
     rows_frac: np.ndarray
     rows_runs: tuple[np.ndarray, np.ndarray]

@@ -438,9 +438,9 @@ class Sensor:
             planes, level = self._buffer((3, height, width + slack), np.uint8), np.float32(1)
             kernels.split(render, 0, planes)
         ycrcb = np.empty((self.height, self.width, 3), np.uint8)
-        kernels.develop(planes, warp.rows_frac, *warp.rows_runs, warp.columns_frac, *warp.columns_runs, level, *self._taps,
-                        self._response(light), self._matrix, *self._coefficients, self._coefficient_row, self._pool,
-                        self._noise_scale, noise_offset(seed, index, self._choices), self._y_floor,
-                        self._buffer((3, width + 4 + slack), np.float32), self._buffer((3, self.width + slack), np.float32),
-                        ycrcb)
+        kernels.develop(planes, warp.rows_frac, *warp.rows_runs, warp.columns_frac, *warp.columns_runs, level,
+                        *self._taps, self._response(light), self._matrix, *self._coefficients, self._coefficient_row,
+                        self._pool, self._noise_scale, noise_offset(seed, index, self._choices), self._y_floor,
+                        self._buffer((3, width + 4 + slack), np.float32),
+                        self._buffer((3, self.width + slack), np.float32), ycrcb)
         return ycrcb
