@@ -337,7 +337,6 @@ def test_faststart_moves_the_index_ahead_and_every_frame_decodes_the_same(tmp_pa
     assert moved.read_bytes() == after
 
 
-
 def _box(kind: bytes, payload: bytes, large: bool = False) -> bytes:
     """An MP4 box: 32-bit size, or (``large``) size 1 and a 64-bit size after the type."""
     if large:

@@ -103,10 +103,8 @@ def test_a_camera_profile_changed_in_code_is_recorded_and_dumped_as_run_shows_it
     what meta.json and run.json record beside the name, and what a resume must match."""
     import cv2
 
-    from aibo_sim.camera import PROFILES
+    from aibo_sim.camera import PROFILES, RobotColour, camera_profile
     from aibo_sim.runner import run_controller
-
-    from aibo_sim.camera import RobotColour, camera_profile
 
     robot = RobotColour(gain=(1.02, 0.97, 1.0), offset=(1.0, -2.0, 0.5))
     profile = PROFILES["ers7"].with_options(readout_ms=6.0, lens="sony", robot=robot)

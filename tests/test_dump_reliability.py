@@ -453,7 +453,6 @@ def test_render_on_a_full_disk_leaves_the_earlier_set_whole(tmp_path, monkeypatc
     assert _snapshot(out) == before  # no new head_camera.png beside the old tracking.png, no temporary file
 
 
-
 def test_a_set_whose_target_is_a_folder_is_not_half_replaced(tmp_path):
     from aibo_sim.files import write_files_atomic
 
