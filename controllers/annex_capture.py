@@ -20,7 +20,6 @@ from aibo_sim.controller import *  # noqa: F403
 from aibo_sim.dump import annex_yuv  # the Annex's three formulas, shared with `aibo-sim dump`
 
 SIMULATION_STEP = 16
-IMAGE_SIZE = 208 * 160
 MTN_REPLAY = 15
 MTN_FILE = "WALKFWD.MTN"
 IMAGE_FILE = "image.raw"

@@ -58,7 +58,6 @@ from openr_bridge import CAMERA_DEFAULTS, CAMERA_SETTINGS
 
 from .lens import Warp
 
-PROFILES_DOC = "ideal: the rendered picture unchanged; ers7: the calibrated ERS-7 sensor"
 GAIN_STEPS = {"low": -1, "mid": 0, "high": 1}  # -6, 0, +6 dB: each step doubles the signal
 SHUTTER_S = {"slow": 1 / 50, "mid": 1 / 100, "fast": 1 / 200}
 WHITE_BALANCE_K = {"indoor": 2856.0, "fl": 5000.0, "outdoor": 6500.0}
