@@ -112,6 +112,26 @@ def test_yuv_files_decode_back_to_the_png(full_dump):
         assert np.abs(decoded - rgb)[flat].max() <= YUV420_FLAT_BOUND
 
 
+@pytest.mark.skipif(not shutil.which("ffmpeg"), reason="ffmpeg is not installed (.ci/run installs it)")
+def test_ffmpeg_reads_the_yuv_files_as_their_layout_says(full_dump):
+    """ffmpeg's own rawvideo reader and BT.601 conversion, given the pixel format and size that
+    meta.json names, gives back the PNG's picture."""
+    out, _ = full_dump
+    frame = load_dump(out)[9]
+    rgb = frame.rgb.astype(int)
+    blocks = rgb.reshape(H // 2, 2, W // 2, 2, 3)
+    flat = np.repeat(np.repeat((blocks == blocks[:, :1, :, :1]).all(axis=(1, 3, 4)), 2, axis=0), 2, axis=1)
+    layouts = json.loads((out / "meta.json").read_text())["files"]
+    for name, pixel_format, bound, where in (("yuv444", "yuv444p", YUV444_BOUND, np.ones_like(flat)),
+                                             ("yuv420", "yuv420p", YUV420_FLAT_BOUND, flat)):
+        assert f"{W}x{H}" in layouts[name]["layout"]
+        decoded = subprocess.run(["ffmpeg", "-v", "error", "-f", "rawvideo", "-pix_fmt", pixel_format, "-s", f"{W}x{H}",
+                                  "-i", str(frame.path(name)), "-f", "rawvideo", "-pix_fmt", "rgb24", "-"],
+                                 capture_output=True, check=True).stdout
+        assert len(decoded) == W * H * 3, name
+        assert np.abs(np.frombuffer(decoded, np.uint8).reshape(H, W, 3) - rgb)[where].max() <= bound, name
+
+
 def test_white_and_black_in_limited_range():
     for value, (y, c) in ((255, (235, 128)), (0, (16, 128))):
         image = np.full((2, 2, 3), value, np.uint8)
