@@ -15,8 +15,8 @@ from pathlib import Path
 import numpy as np
 
 from .mtn import MODES as MTN_MODES
-from .options import (ArgumentParser, add_world_options, camera_options, finite_float, make_out_folder, place,
-                      world_options)
+from .options import (ArgumentParser, add_world_options, camera_options, finite_float, make_out_folder, path_text,
+                      place, world_options)
 from .robot import BACKENDS
 
 EXIT_BAD_INPUT, EXIT_CONTROLLER, EXIT_DIVERGED, EXIT_INTERRUPTED, EXIT_BROKEN_PIPE = 2, 1, 3, 130, 141
@@ -166,14 +166,14 @@ def build_parser() -> argparse.ArgumentParser:
     commands = parser.add_subparsers(dest="command", required=True)
 
     run = commands.add_parser("run", help="run a controller headless")
-    run.add_argument("controller", help="controller (Webots-era Aibo API): a Python file, or a C or C++ file or "
+    run.add_argument("controller", type=path_text, help="controller (Webots-era Aibo API): a Python file, or a C or C++ file or "
                                         "folder (compiled with the system compiler)")
     run.add_argument("--backend", choices=BACKENDS, default="sim")
     run.add_argument("--duration", type=finite_float, default=10.0, help="simulated seconds (default 10)")
-    run.add_argument("--out", help="folder for camera frames, the controller's files and run.json")
+    run.add_argument("--out", type=path_text, help="folder for camera frames, the controller's files and run.json")
     run.add_argument("--mtn-mode", choices=MTN_MODES, default="openr",
                      help="MTN playback: OPEN-R interpolation (default) or Webots keyframe stepping")
-    run.add_argument("--memory-stick", metavar="DIR", help="OPEN-R memory stick folder for the openr backend")
+    run.add_argument("--memory-stick", type=path_text, metavar="DIR", help="OPEN-R memory stick folder for the openr backend")
     run.add_argument("--view", action="store_true",
                      help="watch it in MuJoCo's viewer, in real time (needs a display; space pauses, right arrow steps)")
     add_world_options(run)
@@ -182,7 +182,7 @@ def build_parser() -> argparse.ArgumentParser:
     render = commands.add_parser("render", help="render the head camera and a third-person view")
     render.add_argument("--keyframe", default="stand", help="the scene's keyframe to start from (default stand)")
     render.add_argument("--settle", type=finite_float, default=0.5, help="seconds to simulate first (default 0.5)")
-    render.add_argument("--out", default="renders",
+    render.add_argument("--out", type=path_text, default="renders",
                         help="folder for head_camera.png, head_camera.json (its lens, settings, pose) and tracking.png")
     render.add_argument("--side-by-side", nargs="?", const="", metavar="EASYTRAIN_PNG",
                         help="also write side_by_side.png: the ers7 and ideal pictures of the view, after a real "
@@ -192,14 +192,14 @@ def build_parser() -> argparse.ArgumentParser:
 
     mtn = commands.add_parser("mtn", help="OPEN-R motion files").add_subparsers(dest="mtn_command", required=True)
     info = mtn.add_parser("info", help="print a file's name, creator, design, frames, length, locators")
-    info.add_argument("file", help="an MTN file, or the name of a bundled motion (WALKFWD.MTN, TURNL.MTN, ...)")
+    info.add_argument("file", type=path_text, help="an MTN file, or the name of a bundled motion (WALKFWD.MTN, TURNL.MTN, ...)")
     info.add_argument("--json", action="store_true")
     info.set_defaults(handler=_mtn_info)
     play = mtn.add_parser("play", help="play a file on the standing robot and report how it moved",
                           description="Play a motion on the standing robot and report how it moved. It takes "
                           "the options of every aibo-sim command; it renders no camera frame and reads no "
                           "noisy sensor, so --seed and the camera options leave its report unchanged.")
-    play.add_argument("file", help="an MTN file, or the name of a bundled motion")
+    play.add_argument("file", type=path_text, help="an MTN file, or the name of a bundled motion")
     play.add_argument("--repeat", type=int, default=1)
     play.add_argument("--mode", choices=MTN_MODES, default="openr")
     play.add_argument("--json", action="store_true")

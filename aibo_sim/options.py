@@ -49,6 +49,14 @@ def finite_float(text: str) -> float:
     return value
 
 
+def path_text(text: str) -> str:
+    """argparse type: a file or folder name, which an empty string is not (a path made of it
+    would name the current folder)."""
+    if not text:
+        raise argparse.ArgumentTypeError("an empty string names no file or folder")
+    return text
+
+
 def seed_number(text: str) -> int:
     """argparse type: a seed, a whole number from 0 to 2**64 - 1."""
     try:
@@ -63,7 +71,7 @@ def seed_number(text: str) -> int:
 def add_world_options(parser: argparse.ArgumentParser, camera: bool = True) -> None:
     """--scene, --pose, --ball, --seed and (with ``camera``) the camera options; see
     ``world_options`` and ``camera_options`` for what they become."""
-    parser.add_argument("--scene", metavar="FILE", help="MJCF scene file (default: the RoboCup 2005 field)")
+    parser.add_argument("--scene", type=path_text, metavar="FILE", help="MJCF scene file (default: the RoboCup 2005 field)")
     parser.add_argument("--pose", type=finite_float, nargs=3, metavar=("X", "Y", "YAW_DEG"),
                         help="robot position on the field (m) and heading (deg); default: the scene's start")
     parser.add_argument("--ball", type=finite_float, nargs=2, metavar=("X", "Y"),

@@ -24,6 +24,7 @@ import ctypes
 import ctypes.util
 import math
 import os
+import warnings
 
 import cv2
 import mujoco
@@ -154,7 +155,14 @@ class Renderer:
         self._current_context = _current_context(backend)
         other = self._current_context.save() if self._current_context is not None else None  # before ours exists
         try:
-            self._gl = _context_class(backend)(width, height)  # mujoco.egl makes it current at once
+            with warnings.catch_warnings(record=True) as warned:  # GLFW's errors come as warnings
+                warnings.simplefilter("always")
+                gl = _context_class(backend)(width, height)  # mujoco.egl makes it current at once
+            if not gl._context:  # GLFW without a display: a NULL window (and nothing for close to free)
+                why = "; ".join(str(w.message) for w in warned) or "no context"
+                raise RenderingUnavailable(f"MUJOCO_GL={backend}: cannot create an OpenGL context ({why}); "
+                                           "unset MUJOCO_GL to render headless with EGL or OSMesa")
+            self._gl = gl
             self._context_address = (ctypes.cast(self._gl._context, ctypes.c_void_p).value
                                      if self._current_context is not None else None)
             self._gl.make_current()

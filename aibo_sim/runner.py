@@ -24,8 +24,9 @@ from .cbind import (C_SUFFIXES, CControllerError, compile_controller, controller
                     run_c_controller)
 from .files import png, write_file_atomic
 from .options import make_out_folder, place, start_values
+from .render import RenderingUnavailable
 from .robot import Robot, SimulationEnd
-from .sim import Simulation, SimulationDiverged, models_dir
+from .sim import FRAME_MS, Simulation, SimulationDiverged, models_dir
 
 
 class ControllerFailed(RuntimeError):
@@ -263,6 +264,8 @@ def run_controller(path: str | Path, *, backend: str = "sim", duration: float = 
         raise ValueError(f"--duration must be a number of seconds, not {duration!r}")
     if not (math.isfinite(duration) and duration > 0):
         raise ValueError(f"--duration must be positive and finite, not {duration}")
+    if round(duration * 1000) < FRAME_MS:
+        raise ValueError(f"--duration {duration} s is shorter than one {FRAME_MS} ms joint frame: nothing would run")
     pose, ball = start_values("--pose", pose, 3), start_values("--ball", ball, 2)
     sim = Simulation(scene, seed=seed, camera_full=camera_full, camera_profile=camera_profile,
                      camera_settings=camera_settings)
@@ -323,9 +326,9 @@ def run_controller(path: str | Path, *, backend: str = "sim", duration: float = 
                 f"\n{'then ' if error is not None or k else ''}its robot_die function "
                 f"{getattr(fn, '__qualname__', repr(fn))} raised:\n" + controller_traceback(exc).rstrip()
                 for k, (fn, exc) in enumerate(die_failures))
-            if isinstance(error, SimulationDiverged):
+            if isinstance(error, (SimulationDiverged, RenderingUnavailable)):  # the simulator's, not the controller's
                 if die_report:
-                    raise SimulationDiverged(f"{error}{die_report}") from error
+                    raise type(error)(f"{error}{die_report}") from error
                 raise error
             if isinstance(error, SystemExit):
                 status = error.code if isinstance(error.code, int) else repr(error.code)
@@ -339,7 +342,7 @@ def run_controller(path: str | Path, *, backend: str = "sim", duration: float = 
                                        + controller_traceback(error) + die_report) from error
             if die_report:
                 raise ControllerFailed(f"controller {path.name} ended {where};{die_report}")
-    except (ControllerFailed, SimulationDiverged, KeyboardInterrupt) as failure:
+    except (ControllerFailed, SimulationDiverged, RenderingUnavailable, KeyboardInterrupt) as failure:
         if writer is not None:  # the frames so far stay, and run.json says how the run ended
             record_end("interrupted" if isinstance(failure, KeyboardInterrupt) else "failed", failure)
         raise

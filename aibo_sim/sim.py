@@ -59,8 +59,9 @@ def models_dir() -> Path:
 
 def load_model(scene: str | Path | None = None, ball: bool = True) -> mujoco.MjModel:
     """Compile a scene file (default: the RoboCup field), with an error that names the file
-    (also for its light's custom numerics out of range: ``SceneLight``); ``ball=False`` leaves
-    out its body named ``ball``."""
+    (also for its light's custom numerics out of range, ``SceneLight``, and a timestep that is
+    not a positive divisor of the 8 ms joint frame); ``ball=False`` leaves out its body named
+    ``ball``."""
     path = Path(scene) if scene is not None else models_dir() / "scene.xml"
     try:
         if not path.is_file():
@@ -76,6 +77,10 @@ def load_model(scene: str | Path | None = None, ball: bool = True) -> mujoco.MjM
                 spec.delete(spec.body("ball"))
             model = spec.compile()
         scene_light(model)  # its custom numerics in range
+        timestep = model.opt.timestep
+        steps = FRAME_MS / 1000 / timestep if timestep > 0 else 0.0
+        if steps < 1 or abs(steps - round(steps)) > 1e-9:
+            raise ValueError(f"the timestep ({timestep} s) must be positive and divide the 8 ms joint frame")
         return model
     except ValueError as exc:  # MuJoCo's message spans lines (the element and line on the second): one line
         lines = (line.strip().rstrip(":") for line in str(exc).splitlines())
@@ -224,10 +229,7 @@ class Simulation:
         check_robot(self.model, scene if scene is not None else models_dir() / "scene.xml", keyframe)
         self.data = mujoco.MjData(self.model)
         self.keyframe = keyframe
-        steps = FRAME_MS / 1000 / self.model.opt.timestep
-        if abs(steps - round(steps)) > 1e-9:
-            raise ModelError(f"timestep {self.model.opt.timestep} does not divide the 8 ms joint frame")
-        self.steps_per_frame = round(steps)
+        self.steps_per_frame = round(FRAME_MS / 1000 / self.model.opt.timestep)
         self.servos = Servos(self.model)
         self._sensor_slices = {
             s.name: slice(self.model.sensor(s.name).adr[0], self.model.sensor(s.name).adr[0] + self.model.sensor(s.name).dim[0])

@@ -59,6 +59,44 @@ def test_run_controller_refuses_a_bad_duration(value):
         run_controller(SCRIPTED, duration=value)
 
 
+def test_a_run_shorter_than_one_joint_frame_is_refused(tmp_path, capsys):
+    assert main(["run", str(SCRIPTED), "--duration", "0.004", "--out", str(tmp_path / "out")]) == 2
+    assert one_error_line(capsys) == ("aibo-sim: error: --duration 0.004 s is shorter than one 8 ms joint frame: "
+                                      "nothing would run")
+    assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("command, argument", [
+    (["run", ""], "controller"), (["run", str(SCRIPTED), "--out", ""], "--out"),
+    (["run", str(SCRIPTED), "--backend", "openr", "--memory-stick", ""], "--memory-stick"),
+    (["render", "--scene", ""], "--scene"), (["render", "--out", ""], "--out"),
+    (["mtn", "info", ""], "file"), (["mtn", "play", ""], "file"),
+])
+def test_an_empty_path_is_refused_not_read_as_the_current_folder(tmp_path, monkeypatch, capsys, command, argument):
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(SystemExit) as caught:
+        main(command)
+    assert caught.value.code == 2
+    one_error_line(capsys, f"argument {argument}: an empty string names no file or folder")
+    assert not list(tmp_path.iterdir())
+
+
+@pytest.mark.parametrize("command", [["run", str(ROOT / "controllers" / "ball_tracker.py"), "--duration", "0.1"],
+                                     ["render", "--settle", "0"]])
+def test_glfw_without_a_display_is_rendering_unavailable_not_the_controllers_fault(tmp_path, monkeypatch, capsys,
+                                                                                    command):
+    """GLFW makes no window without a display and only warns: one line naming MUJOCO_GL, exit 2
+    (a run was reported as its controller raising MuJoCo's FatalError); run.json says failed."""
+    monkeypatch.setenv("MUJOCO_GL", "glfw")
+    for variable in ("DISPLAY", "WAYLAND_DISPLAY"):
+        monkeypatch.delenv(variable, raising=False)
+    assert main(command + ["--out", str(tmp_path / "out")]) == 2
+    one_error_line(capsys, "MUJOCO_GL=glfw: cannot create an OpenGL context", "DISPLAY")
+    if command[0] == "run":
+        run = json.loads((tmp_path / "out" / "run.json").read_text())
+        assert run["status"] == "failed" and "MUJOCO_GL=glfw" in run["error"]
+
+
 # ----------------------------------------------------------------------------- scenes
 
 
@@ -106,6 +144,22 @@ def test_ball_placed_in_a_scene_whose_ball_has_no_free_joint_exits_2(tmp_path, c
     out = ["--out", str(tmp_path / "out")] if command[0] in ("render", "dump") else []
     assert main(command + out + ["--scene", str(scene), "--ball", "0.3", "0"]) == 2
     one_error_line(capsys, "body 'ball' cannot be placed: it needs one free joint")
+    assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("timestep", ["0", "-0.002", "0.003", "0.016"])
+@pytest.mark.parametrize("command", [["run", str(SCRIPTED), "--duration", "0.1"], ["render", "--settle", "0"],
+                                     ["dump", str(SCRIPTED), "--steps", "3"], ["mtn", "play", "STAND.MTN"]])
+def test_a_timestep_that_is_not_a_positive_divisor_of_8_ms_exits_2(tmp_path, command, timestep, capsys):
+    """Zero (a division by zero), negative (physics that never ran: time stood still) or not
+    dividing the 8 ms joint frame: one line naming the scene, and no output folder."""
+    models = tmp_path / "models"
+    shutil.copytree(ROOT / "models", models)
+    robot = models / "ers7.xml"
+    robot.write_text(robot.read_text().replace('timestep="0.002"', f'timestep="{timestep}"'))
+    out = ["--out", str(tmp_path / "out")] if command[0] in ("render", "dump") else []
+    assert main(command + out + ["--scene", str(models / "scene.xml")]) == 2
+    one_error_line(capsys, str(models / "scene.xml"), f"the timestep ({float(timestep)} s) must be positive and divide")
     assert not (tmp_path / "out").exists()
 
 
