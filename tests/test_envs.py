@@ -1,6 +1,7 @@
 """The gymnasium environments (issue 5)."""
 
 import copy
+import math
 import os
 import pickle
 import subprocess
@@ -275,6 +276,12 @@ def test_no_camera_and_invalid_options():
         gym.make(HEAD_TRACK, camera="bgr")
     with pytest.raises(ValueError, match=r"randomize\['lighting'\] = True"):
         gym.make(HEAD_TRACK, randomize={"lighting": True})
+    for not_a_dict in ([1, 2], "lighting", 0.5):
+        with pytest.raises(ValueError, match="randomize must be a dict of"):
+            gym.make(HEAD_TRACK, randomize=not_a_dict)
+    for name, value in (("ball_start", 1e9), ("camera_robot", math.inf), ("lighting", 1.5), ("ball_start", math.nan)):
+        with pytest.raises(ValueError, match=rf"randomize\['{name}'\] = .*must be a finite number >= 0"):
+            gym.make("aibo_sim/ReachBall-v0", randomize={name: value})  # at construction, not at the first reset
     env = gym.make(HEAD_TRACK, camera=None, randomize={"lighting": np.float32(0.25), "ball_start": np.int64(0)})
     with pytest.raises(TypeError, match="cannot be pickled or copied"):
         copy.deepcopy(env)

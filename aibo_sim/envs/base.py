@@ -41,7 +41,9 @@ over real robots.
 
 from __future__ import annotations
 
+import math
 import numbers
+from collections.abc import Mapping
 
 import gymnasium as gym
 import mujoco
@@ -52,7 +54,7 @@ from ..ers7 import DISTANCE_SENSORS, JOINT_INDEX, JOINTS, LEGS, TOUCH_SENSORS
 from ..camera import CameraSettings, RobotColour
 from ..camera.backends import OpenRCamera
 from ..render import Renderer
-from ..sim import ACCEL_RANGE, Simulation
+from ..sim import ACCEL_RANGE, MAX_PLACEMENT, Simulation
 
 CAMERA_MODES = ("rgb", "ycrcb", "openr", None)
 LAYERS = {name: layer for layer, name in enumerate(openr_bridge.LAYER_NAMES[:3])}  # the YCrCb layers H, M, L
@@ -80,15 +82,18 @@ class AiboEnv(gym.Env):
             raise ValueError(f"camera_layer must be one of {tuple(LAYERS)}, not {camera_layer!r}")
         if render_mode not in (None, *self.metadata["render_modes"]):
             raise ValueError(f"render_mode must be None or 'rgb_array', not {render_mode!r}")
+        if randomize is not None and not isinstance(randomize, Mapping):
+            raise ValueError(f"randomize must be a dict of {RANDOMIZATIONS} to numbers, not {randomize!r}")
         self.randomize = dict(randomize or {})
         unknown = set(self.randomize) - set(RANDOMIZATIONS)
         if unknown:
             raise ValueError(f"unknown randomisations {sorted(unknown)}; known: {RANDOMIZATIONS}")
         for name, value in self.randomize.items():
-            if isinstance(value, bool) or not isinstance(value, numbers.Real) or not 0 <= value < float("inf") \
-                    or name == "lighting" and value > 1:
+            largest = {"lighting": 1.0, "ball_start": MAX_PLACEMENT}.get(name, math.inf)
+            if isinstance(value, bool) or not isinstance(value, numbers.Real) \
+                    or not (0 <= value <= largest and math.isfinite(value)):
                 raise ValueError(f"randomize[{name!r}] = {value!r}: must be a finite number >= 0"
-                                 + (" and at most 1" if name == "lighting" else ""))
+                                 + (f" and at most {largest:g}" if math.isfinite(largest) else ""))
         if camera == "openr" and camera_layer != "H":
             raise ValueError("camera='openr' serves layer H, as the wrapper's camera_get_image does; "
                              "use camera='ycrcb' or 'rgb' for layers M and L")
