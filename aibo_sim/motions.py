@@ -19,7 +19,7 @@ import numpy as np
 
 from .ers7 import JOINT_BY_LOCATOR, JOINT_INDEX, JOINTS, LEGS, joint_indices
 from .mjcf import HIP_OFFSET, KNEE_OFFSET, PAW_OFFSET, POSES
-from .mtn import Motion, MotionPlayer, read_mtn, write_mtn
+from .mtn import Motion, MotionPlayer, MtnError, printable, read_mtn, write_mtn
 from .options import place, start_values
 from .sim import FRAME_MS, Simulation, models_dir
 
@@ -318,7 +318,7 @@ def play_motion(motion_or_path, repeat: int = 1, sim: Simulation | None = None, 
         raise ValueError(f"step_ms must be a positive multiple of {FRAME_MS} ms")
     unknown = [loc for loc in motion.locators if loc not in JOINT_BY_LOCATOR]
     if unknown:
-        raise ValueError(f"{motion.source}: no joint for locator(s) {', '.join(unknown)}")
+        raise MtnError(motion.source, None, f"no joint for locator(s) {', '.join(map(printable, unknown))}")
     pose, ball = start_values("--pose", pose, 3), start_values("--ball", ball, 2)
     if sim is not None:
         if scene is not None:

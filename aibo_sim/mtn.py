@@ -27,7 +27,8 @@ Decisions where the spec leaves room (also listed in the report that came with t
   stops at its limit).
 * Strings are latin-1 (a pstring is a u8 length, so at most 255 bytes).
 * A missing file is an ``OSError`` from :func:`read_mtn` (it is not a malformed file);
-  :func:`mtn_new` turns it into Webots' "File not found: <path>" :class:`MtnError`.
+  :func:`mtn_new` turns it into Webots' "File not found: <path>" :class:`MtnError`. A FIFO,
+  device or folder in its place is an :class:`MtnError` naming it ("not a regular file").
 * OPEN-R playback (``MTN.cc``) hard-codes 16 ms frames: ``2n+2`` sub-frames of 8 ms per
   segment. Here a segment has ``(n+1)*frame_time_ms/8`` sub-frames, which is the same for
   16 ms and scales otherwise; a frame time that is not a multiple of 8 ms cannot be played in
@@ -49,6 +50,9 @@ from pathlib import Path
 from typing import Iterable, Iterator, Sequence
 
 import numpy as np
+
+from openr_bridge.config import read_regular_file
+from openr_bridge.errors import NotRegularFile
 
 from . import ers7
 
@@ -342,8 +346,15 @@ def parse_mtn(data: bytes, source: str = "<bytes>") -> Motion:
 
 
 def read_mtn(path: str | os.PathLike) -> Motion:
-    """Read an MTN file. Malformed content raises :class:`MtnError`; I/O errors are ``OSError``."""
-    return parse_mtn(Path(path).read_bytes(), os.fspath(path))
+    """Read an MTN file. Malformed content raises :class:`MtnError`, as does a FIFO, device or
+    folder in its place (refused at once: opened without blocking, never waited on or read
+    without end); I/O errors are ``OSError``."""
+    source = os.fspath(path)
+    try:
+        data = read_regular_file(source)
+    except NotRegularFile as error:
+        raise MtnError(source, None, str(error)) from None
+    return parse_mtn(data, source)
 
 
 # ----------------------------------------------------------------------------- writing

@@ -29,7 +29,7 @@ import stat
 from dataclasses import dataclass
 from pathlib import Path
 
-from .errors import ConfigError
+from .errors import ConfigError, NotRegularFile
 
 _NAME = r"[A-Za-z_][A-Za-z0-9_]*"
 _SERVICE_NAME = re.compile(rf"({_NAME})\.({_NAME})\.({_NAME})\.({_NAME})")
@@ -223,23 +223,27 @@ def _lines(source: bytes | str, path: str):
         yield number, line.removesuffix("\r")
 
 
-def _read(path) -> bytes:
+def read_regular_file(path) -> bytes:
     """The bytes of a regular file. Opened without blocking, so that a FIFO in its place (which
-    a plain open would wait on for a writer) is refused at once, as is any other non-regular file."""
-    try:
-        fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_BINARY", 0))
-    except OSError as error:
-        raise ConfigError(f"cannot read: {error.strerror}", path) from None
+    a plain open would wait on for a writer) is refused at once, as is any other non-regular file
+    (``NotRegularFile`` saying what it is); other failures are the ``OSError`` of the call."""
+    fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_BINARY", 0))
     try:
         mode = os.fstat(fd).st_mode
         if not stat.S_ISREG(mode):
             kind = ("a FIFO" if stat.S_ISFIFO(mode) else "a folder" if stat.S_ISDIR(mode)
                     else "a device" if stat.S_ISCHR(mode) or stat.S_ISBLK(mode)
-                    else "a socket" if stat.S_ISSOCK(mode) else "not a regular file")
-            raise ConfigError(f"cannot read: {kind}, not a regular file", path)
+                    else "a socket" if stat.S_ISSOCK(mode) else "a special file")
+            raise NotRegularFile(f"{kind}, not a regular file")
         with os.fdopen(fd, "rb", closefd=False) as file:
             return file.read()
-    except OSError as error:
-        raise ConfigError(f"cannot read: {error.strerror or error}", path) from None
     finally:
         os.close(fd)
+
+
+def _read(path) -> bytes:
+    """``read_regular_file``, its failures a ``ConfigError`` naming the file."""
+    try:
+        return read_regular_file(path)
+    except (OSError, NotRegularFile) as error:
+        raise ConfigError(f"cannot read: {getattr(error, 'strerror', None) or error}", path) from None

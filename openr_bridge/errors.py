@@ -31,6 +31,10 @@ class ConfigError(OpenRError):
         super().__init__(f"{where}: {message}")
 
 
+class NotRegularFile(OpenRError):
+    """A FIFO, folder, device or socket where a regular file was to be read."""
+
+
 class NotConnectedError(OpenRError):
     """An observer that no CONNECT.CFG line connects to a subject, or a wrapper used outside an
     OpenRSystem (no OPENR to open primitives with)."""

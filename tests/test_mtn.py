@@ -5,13 +5,17 @@ from __future__ import annotations
 import json
 import os
 import random
+import signal
 import struct
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 from aibo_sim import ers7
+from aibo_sim.motions import play_motion
 from aibo_sim.mtn import (
     MAX_JOINT_URAD,
     MAX_LENGTH_MS,
@@ -448,3 +452,59 @@ def test_mtn_new_refuses_a_device_that_is_not_a_joint(tmp_path):
     with pytest.raises(MtnError) as info:
         mtn_new(path)
     assert str(info.value) == f"Not a joint: {led} (a motion moves joints only)" == mtn_get_error()
+
+
+# ----------------------------------------------------------------------------- what is not a regular file
+
+
+@pytest.fixture
+def no_hang():
+    """Fail a test that blocks (on a FIFO's open) instead of hanging the run."""
+    def hung(signum, frame):
+        raise TimeoutError("blocked for 10 s")
+    previous = signal.signal(signal.SIGALRM, hung)
+    signal.alarm(10)
+    yield
+    signal.alarm(0)
+    signal.signal(signal.SIGALRM, previous)
+
+
+def test_a_fifo_or_a_folder_is_refused_at_once_by_every_reader(tmp_path, no_hang):
+    fifo = tmp_path / "fifo.MTN"
+    os.mkfifo(fifo)
+    for read in (read_mtn, mtn_new, play_motion):
+        with pytest.raises(MtnError) as info:
+            read(fifo)
+        assert str(info.value) == f"{fifo}: a FIFO, not a regular file"
+    assert mtn_get_error() == f"{fifo}: a FIFO, not a regular file"
+    with pytest.raises(MtnError) as info:
+        read_mtn(tmp_path)
+    assert str(info.value) == f"{tmp_path}: a folder, not a regular file"
+
+
+def test_an_empty_name_is_a_missing_file_not_the_current_folder():
+    with pytest.raises(FileNotFoundError):
+        read_mtn("")
+    with pytest.raises(MtnError, match="^File not found: $"):
+        mtn_new("")
+
+
+@pytest.mark.parametrize("command", ["info", "play"])
+@pytest.mark.parametrize("special", ["fifo", "/dev/zero"])
+def test_the_cli_refuses_a_fifo_or_a_device_in_one_line(tmp_path, command, special):
+    """Not waited on (a FIFO) nor read without end (a device): exit 2 at once."""
+    if special == "fifo":
+        special = str(tmp_path / "fifo.MTN")
+        os.mkfifo(special)
+    done = subprocess.run([sys.executable, "-m", "aibo_sim.cli", "mtn", command, special],
+                          capture_output=True, text=True, timeout=60)
+    kind = "a FIFO" if special.endswith("fifo.MTN") else "a device"
+    assert (done.returncode, done.stdout, done.stderr) == (2, "", f"aibo-sim: error: {special}: {kind}, not a regular file\n")
+
+
+def test_play_escapes_a_locator_that_is_not_a_joint(tmp_path):
+    path = tmp_path / "b\x1bd.mtn"
+    write_mtn(Motion.from_poses("bogus", [ers7.JOINTS[6].locator, "BOGUS\x1b[31mRED"], [[0.0, 0.0]], []), path)
+    with pytest.raises(MtnError) as info:
+        play_motion(path)
+    assert str(info.value) == f"{tmp_path}/b\\x1bd.mtn: no joint for locator(s) BOGUS\\x1b[31mRED"
