@@ -71,6 +71,8 @@ def test_a_run_shorter_than_one_joint_frame_is_refused(tmp_path, capsys):
     (["run", str(SCRIPTED), "--backend", "openr", "--memory-stick", ""], "--memory-stick"),
     (["render", "--scene", ""], "--scene"), (["render", "--out", ""], "--out"),
     (["mtn", "info", ""], "file"), (["mtn", "play", ""], "file"),
+    (["dump", "", "--out", "d"], "controller"), (["dump", str(SCRIPTED), "--out", ""], "--out"),
+    (["dump", str(SCRIPTED), "--out", "d", "--backend", "openr", "--memory-stick", ""], "--memory-stick"),
 ])
 def test_an_empty_path_is_refused_not_read_as_the_current_folder(tmp_path, monkeypatch, capsys, command, argument):
     monkeypatch.chdir(tmp_path)

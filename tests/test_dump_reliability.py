@@ -461,3 +461,146 @@ def test_a_set_whose_target_is_a_folder_is_not_half_replaced(tmp_path):
     with pytest.raises(OSError, match=rf"^cannot write {tmp_path / 'b.png'}: Is a directory$"):
         write_files_atomic({tmp_path / "a.png": b"new", tmp_path / "b.png": b"new"})
     assert (tmp_path / "a.png").read_bytes() == b"old" and sorted(p.name for p in tmp_path.iterdir()) == ["a.png", "b.png"]
+
+
+# ---------------------------------------------------------------- bad input refused before anything is written
+
+
+def _scene(tmp_path: Path, ball: str) -> Path:
+    """A scene of the robot on a floor: no ball (``""``), or a ball body without a free joint."""
+    from aibo_sim.sim import models_dir
+
+    scene = tmp_path / "scene.xml"
+    scene.write_text(f"""<mujoco>
+  <include file="{models_dir() / 'ers7.xml'}"/>
+  <worldbody><geom name="floor" type="plane" size="2 2 0.1"/>{ball}</worldbody>
+</mujoco>""")
+    return scene
+
+
+FIXED_BALL = '<body name="ball" pos="0.5 0 0.042"><geom name="ball" type="sphere" size="0.042"/></body>'
+
+
+@pytest.mark.parametrize("env, ball, workers", [("ReachBall", "", "1"), ("HeadTrackBall", FIXED_BALL, "2")],
+                         ids=["reach-no-ball", "track-fixed-ball-sharded"])
+def test_an_env_dump_in_a_scene_whose_ball_cannot_be_placed_writes_nothing(tmp_path, capsys, env, ball, workers):
+    scene, out = _scene(tmp_path, ball), tmp_path / "dump"
+    argv = ["dump", "--env", f"aibo_sim/{env}-v0", "--scene", str(scene), "--out", str(out), "--steps", "4",
+            "--workers", workers]
+    assert main(argv) == 2
+    error = capsys.readouterr().err
+    assert error.startswith(f"aibo-sim: error: --scene {scene}: environment aibo_sim/{env}-v0 places the ball, but ")
+    assert error.count("\n") == 1 and not out.exists()
+
+
+def test_a_sharded_controller_dump_in_a_scene_without_a_ball_runs_as_one_worker_does(tmp_path):
+    scene = _scene(tmp_path, "")
+    dump(tmp_path / "one", controller=TRACKER, frames=4, scene=scene, formats=("rgb",))
+    dump(tmp_path / "two", controller=TRACKER, frames=4, scene=scene, formats=("rgb",), workers=2)
+    shard = json.loads((tmp_path / "two" / "shard_0" / "meta.json").read_text())["parameters"]
+    assert (shard["ball"], shard["seed"], len(load_dump(tmp_path / "two"))) == (None, 0, 4)
+    for index in range(2):  # shard 0 is the one-worker dump's start
+        name = f"rgb/{index:06d}.png"
+        assert (tmp_path / "two" / "shard_0" / name).read_bytes() == (tmp_path / "one" / name).read_bytes()
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--seed", str(2**64 - 1), "--workers", "2"], "--seed must be a whole number from 0 to 2**64 - 2 with "
+                                                   "--workers 2 (shard k uses seed + k), not 18446744073709551615"),
+    (["--formats", "all,rgb"], "--formats all,rgb: all (every format) cannot be combined with other names"),
+], ids=["seed", "formats"])
+def test_options_that_cannot_work_together_are_refused_before_the_folder(tmp_path, capsys, argv, message):
+    out = tmp_path / "dump"
+    assert main(["dump", str(TRACKER), "--out", str(out), "--steps", "4", *argv]) == 2
+    assert capsys.readouterr().err == f"aibo-sim: error: {message}\n"
+    assert not out.exists()
+
+
+@pytest.fixture(scope="module")
+def coco_dump(tmp_path_factory):
+    out = tmp_path_factory.mktemp("coco") / "dump"
+    dump(out, controller=TRACKER, frames=4, formats=("rgb", "coco"))
+    return out
+
+
+BALL = {"category": "ball", "object": "ball", "bbox": [1, 2, 3, 4], "area": 9, "visibility": 1.0}
+
+
+@pytest.mark.parametrize("change, message", [
+    ({"objects": None}, '"objects" is not a list of detections'),
+    ({"objects": {"a": 1}}, '"objects" is not a list of detections'),
+    ({"objects": [1]}, '"objects" is not a list of detections'),
+    ({"objects": [{}]}, '"objects" is not a list of detections'),
+    ({"objects": [{k: v for k, v in BALL.items() if k != "object"}]}, '"objects" is not a list of detections'),
+    ({"objects": [{**BALL, "category": "nope"}]}, '"objects" is not a list of detections'),
+    ({"index": 99999999}, "frame index 99999999 is past the dump's frames (its indices are below 4)"),
+], ids=["null", "object", "number", "empty", "no-object", "category", "index"])
+def test_a_bad_frame_record_is_a_corrupt_line_and_nothing_changes(coco_dump, tmp_path, capsys, change, message):
+    out = tmp_path / "dump"
+    shutil.copytree(coco_dump, out)
+    lines = (out / "frames.jsonl").read_text().splitlines(keepends=True)
+    lines[2] = json.dumps({**json.loads(lines[2]), **change}) + "\n"
+    (out / "frames.jsonl").write_text("".join(lines))
+    with pytest.raises(DumpError, match=f"frames\\.jsonl: line 3: {re.escape(message)}.*; the file is corrupt$"):
+        load_dump(out)
+    before = _snapshot(out, lock=False)
+    assert main(["dump", str(TRACKER), "--out", str(out), "--steps", "4", "--formats", "rgb,coco", "--resume"]) == 2
+    error = capsys.readouterr().err
+    assert error.startswith(f"aibo-sim: error: {out / 'frames.jsonl'}: line 3: {message}") and error.count("\n") == 1
+    assert _snapshot(out, lock=False) == before
+
+
+def _set(meta: dict, path: str, value) -> None:
+    *parents, key = path.split(".")
+    for parent in parents:
+        meta = meta[parent]
+    if value is KeyError:
+        del meta[key]
+    else:
+        meta[key] = value
+
+
+@pytest.mark.parametrize("path, value, field", [
+    ("files.rgb.path", KeyError, '"files"."rgb"."path"'), ("files.rgb.path", 3, '"files"."rgb"."path"'),
+    ("files.rgb.path", "rgb/{frame}.png", '"files"."rgb"."path"'), ("files.rgb", "x", '"files"."rgb"'),
+    ("files.yuv420.bytes", "x", '"files"."yuv420"."bytes"'), ("camera.width", KeyError, '"camera"."width"'),
+    ("camera.width", "x", '"camera"."width"'), ("camera.height", 0, '"camera"."height"'),
+    ("segmentation_classes", 5, '"segmentation_classes"'), ("parameters.frames", None, '"parameters"."frames"'),
+    ("camera", [], '"camera"'),
+])
+def test_load_dump_names_a_damaged_field_of_meta_json(small_dump, tmp_path, path, value, field):
+    out = tmp_path / "dump"
+    shutil.copytree(small_dump, out)
+    meta = json.loads((out / "meta.json").read_text())
+    _set(meta, path, value)
+    (out / "meta.json").write_text(json.dumps(meta))
+    with pytest.raises(DumpError, match=f"^{re.escape(str(out / 'meta.json'))}: {re.escape(field)} must be .*; "
+                                        "the file is corrupt$"):
+        load_dump(out)
+
+
+def test_a_shard_without_meta_json_is_named_as_damaged_with_the_way_out(tmp_path, capsys):
+    out = tmp_path / "sharded"
+    argv = ["dump", str(TRACKER), "--out", str(out), "--steps", "2", "--workers", "2", "--formats", "rgb"]
+    assert main(argv) == 0
+    (out / "shard_1" / "meta.json").unlink()
+    before = {name: data for name, (data, _) in _snapshot(out, lock=False).items()}
+    capsys.readouterr()
+    assert main([*argv, "--resume"]) == 2
+    shard = out / "shard_1"
+    assert capsys.readouterr().err == f"aibo-sim: error: {shard}: this shard of the dump in {out} has no meta.json: " \
+                                      f"the shard is damaged; remove {shard} and --resume to write the shard again\n"
+    assert {name: data for name, (data, _) in _snapshot(out, lock=False).items()} == before
+    shutil.rmtree(shard)
+    assert main([*argv, "--resume"]) == 0 and len(load_dump(out)) == 2
+
+
+def test_a_file_in_place_of_the_controllers_folder_is_named(small_dump, tmp_path, capsys):
+    out = tmp_path / "dump"
+    shutil.copytree(small_dump, out)
+    shutil.rmtree(out / "controller_files")
+    (out / "controller_files").write_text("mine")
+    assert main(["dump", str(TRACKER), "--out", str(out), "--steps", "4", "--formats", "rgb,yuv420", "--resume"]) == 2
+    assert capsys.readouterr().err == f"aibo-sim: error: {out / 'controller_files'}: not a folder (the controller " \
+                                      "runs in it): move it away, then --resume\n"
+    assert (out / "controller_files").read_text() == "mine"

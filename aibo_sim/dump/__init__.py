@@ -69,8 +69,8 @@ ever removed. A corrupt meta.json or frames.jsonl is an error that names the fil
 
 ``--workers N`` splits the frames into N shards run in parallel processes, written to
 ``DIR/shard_k/`` (each a dump of the layout above, with its own video.mp4); shard k uses
-seed ``seed + k`` and, in a controller dump without ``--ball``, a ball position drawn from
-that seed. ``load_dump`` reads a sharded dump as
+seed ``seed + k`` and, in a controller dump without ``--ball`` whose scene has a ball it can
+place, a ball position drawn from that seed. ``load_dump`` reads a sharded dump as
 the shards' frames one after the other. The workers end with the dump: killed with it
 (SIGKILL too: ``PR_SET_PDEATHSIG`` on Linux, and everywhere a watch on the parent), stopped when
 it fails. A SIGTERM stops a dump cleanly (workers stopped, temporary files removed, exit

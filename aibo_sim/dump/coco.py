@@ -34,7 +34,7 @@ from ..camera import HEAD_CAMERA_GROUPS
 from ..field import SEGMENTATION_CLASSES
 from ..sim import Simulation
 from .formats import PATHS, geom_classes
-from .reading import LINES, META, read_meta, read_records
+from .reading import LINES, META, frame_limit, read_meta, read_records
 
 LABELLED = ("ball", "goal", "beacon", "robot")
 MERGED = ("goal", "beacon")  # static objects drawn as one mesh per colour for all of them
@@ -103,9 +103,10 @@ def coco_dataset(out: Path, folders: list[Path]) -> dict:
     names the rgb files relative to ``out``, category ids the segmentation class ids."""
     images, annotations = [], []
     for folder in folders:
-        camera = read_meta(folder / META)["camera"]
+        meta = read_meta(folder / META)
+        camera = meta["camera"]
         prefix = folder.relative_to(out).as_posix() + "/" if folder != out else ""
-        records = {r["index"]: r for r in read_records(folder / LINES)}
+        records = {r["index"]: r for r in read_records(folder / LINES, frame_limit(meta))}
         for index in sorted(records):
             image_id = len(images) + 1
             images.append({"id": image_id, "file_name": prefix + PATHS["rgb"].format(index=index),

@@ -8,14 +8,17 @@ import sys
 from openr_bridge import FRAME_RATE_HZ
 
 from ..mtn import MODES as MTN_MODES
-from ..options import add_world_options, camera_options, finite_float
+from ..options import add_world_options, camera_options, finite_float, path_text
 from ..robot import BACKENDS
 from .formats import DEFAULT_FORMATS, FORMATS
 from .running import ENGINES, POLICIES, dump
 
 
 def _dump_command(args) -> int:
-    formats = FORMATS if args.formats == "all" else tuple(f.strip() for f in args.formats.split(",") if f.strip())
+    formats = tuple(f.strip() for f in args.formats.split(",") if f.strip())
+    if "all" in formats and len(formats) > 1:
+        raise ValueError(f"--formats {args.formats}: all (every format) cannot be combined with other names")
+    formats = FORMATS if formats == ("all",) else formats
     if args.steps is not None and args.steps <= 0:
         raise ValueError(f"--steps must be a whole number >= 1, not {args.steps}")
     if args.duration is not None and args.duration <= 0:
@@ -43,10 +46,10 @@ def add_dump_parser(subcommands) -> argparse.ArgumentParser:
     parser = subcommands.add_parser("dump", help="write every camera frame of a headless run (images, YUV, OPEN-R)",
                                     description=sys.modules[__package__].__doc__,
                                     formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("controller", nargs="?", help="controller file (or use --env)")
+    parser.add_argument("controller", nargs="?", type=path_text, help="controller file (or use --env)")
     parser.add_argument("--env", help="gymnasium environment id, e.g. aibo_sim/HeadTrackBall-v0")
     parser.add_argument("--policy", choices=POLICIES, help="environment dumps: the policy (default random)")
-    parser.add_argument("--out", required=True, help="dump folder: new, empty, or a dump to --resume")
+    parser.add_argument("--out", type=path_text, required=True, help="dump folder: new, empty, or a dump to --resume")
     length = parser.add_mutually_exclusive_group()
     length.add_argument("--duration", type=finite_float, help="simulated seconds, 30 frames each (default 10)")
     length.add_argument("--steps", type=int, help="camera frames (controller) or environment steps")
@@ -54,7 +57,7 @@ def add_dump_parser(subcommands) -> argparse.ArgumentParser:
     parser.add_argument("--mtn-mode", choices=MTN_MODES,
                         help="controller dumps: MTN playback, OPEN-R interpolation (default openr) or Webots "
                              "keyframe stepping")
-    parser.add_argument("--memory-stick", metavar="DIR",
+    parser.add_argument("--memory-stick", type=path_text, metavar="DIR",
                         help="controller dumps: OPEN-R memory stick folder for the openr backend")
     add_world_options(parser)  # --scene, --pose, --ball, --seed (shard k of --workers: seed + k), camera
     parser.add_argument("--formats", default=",".join(DEFAULT_FORMATS),

@@ -49,8 +49,20 @@ def split_lines(data: bytes) -> tuple[bytes, bytes]:
     return data[:end], data[end:]
 
 
-def parse_records(path: Path, data: bytes) -> list[dict]:
-    """frames.jsonl's records, from complete lines only; DumpError naming the line of a bad one."""
+# A detection in a record's "objects" (``coco.Objects.detect``): its keys and their types.
+DETECTION = {"category": str, "object": str, "bbox": list, "area": int, "visibility": (int, float)}
+
+
+def _detections(objects) -> bool:
+    """Whether ``objects`` is a list of detections that coco.json can be made from."""
+    return isinstance(objects, list) and all(
+        isinstance(o, dict) and all(isinstance(o.get(k), t) for k, t in DETECTION.items())
+        and o["category"] in SEGMENTATION_CLASSES and isinstance(o.get("segmentation", {}), dict) for o in objects)
+
+
+def parse_records(path: Path, data: bytes, limit: int) -> list[dict]:
+    """frames.jsonl's records, from complete lines only; DumpError naming the line of a bad one
+    (an index of ``limit`` or more included: ``frame_limit``)."""
     records = []
     for number, line in enumerate(data.splitlines(), 1):
         try:
@@ -62,11 +74,17 @@ def parse_records(path: Path, data: bytes) -> list[dict]:
         index = record.get("index") if isinstance(record, dict) else None
         if isinstance(index, bool) or not isinstance(index, int) or index < 0:
             raise DumpError(f"{path}: line {number}: not a frame record (no \"index\" >= 0); the file is corrupt")
+        if index >= limit:
+            raise DumpError(f"{path}: line {number}: frame index {index} is past the dump's frames (its indices "
+                            f"are below {limit}); the file is corrupt")
+        if "objects" in record and not _detections(record["objects"]):
+            raise DumpError(f"{path}: line {number}: \"objects\" is not a list of detections (each with "
+                            f"{', '.join(DETECTION)}, a known category); the file is corrupt")
         records.append(record)
     return records
 
 
-def read_records(path: Path) -> list[dict]:
+def read_records(path: Path, limit: int) -> list[dict]:
     """The complete frames' records of a frames.jsonl (none when it does not exist)."""
     try:
         data = path.read_bytes()
@@ -74,7 +92,48 @@ def read_records(path: Path) -> list[dict]:
         return []
     except OSError as exc:
         raise DumpError(f"cannot read {path}: {exc.strerror or exc}") from exc
-    return parse_records(path, split_lines(data)[0])
+    return parse_records(path, split_lines(data)[0], limit)
+
+
+def frame_limit(meta: dict) -> int:
+    """One more than the highest frame index a (checked) meta.json's dump can hold: a controller
+    dump's frame count; an environment dump's steps, each with a reset frame at most, twice that."""
+    parameters = meta["parameters"]
+    return parameters["frames"] * (2 if parameters.get("env") else 1)
+
+
+def _whole(value) -> bool:
+    return isinstance(value, int) and not isinstance(value, bool) and value >= 1
+
+
+def check_meta(path: Path, meta: dict) -> None:
+    """DumpError naming ``path`` and the field when a field that ``load_dump`` reads (in a shard's
+    or an unsharded dump's meta.json) is missing or of the wrong type."""
+    def bad(field: str, what: str) -> DumpError:
+        return DumpError(f"{path}: {field} must be {what}; the file is corrupt")
+
+    for key in ("parameters", "camera", "files"):
+        if not isinstance(meta.get(key), dict):
+            raise bad(f"\"{key}\"", "an object")
+    if not _whole(meta["parameters"].get("frames")):
+        raise bad('"parameters"."frames"', "a whole number >= 1")
+    for key in ("width", "height"):
+        if not _whole(meta["camera"].get(key)):
+            raise bad(f'"camera"."{key}"', "a whole number >= 1")
+    for name, layout in meta["files"].items():
+        field = f'"files"."{name}"'
+        if not isinstance(layout, dict):
+            raise bad(field, "an object")
+        try:
+            layout["path"].format(index=0, layer="H")
+        except (KeyError, AttributeError, TypeError, ValueError, IndexError):
+            raise bad(field + '."path"', "a file name pattern") from None
+        sizes = layout.get("bytes")
+        if not (sizes is None or _whole(sizes) or isinstance(sizes, dict) and all(map(_whole, sizes.values()))):
+            raise bad(field + '."bytes"', "a whole number >= 1, an object of them or null")
+    classes = meta.get("segmentation_classes", SEGMENTATION_CLASSES)
+    if not isinstance(classes, (list, tuple)) or not all(isinstance(c, str) for c in classes):
+        raise bad('"segmentation_classes"', "a list of names")
 
 
 class DumpFrame:
@@ -172,15 +231,15 @@ class Dump:
         shards = self.meta.get("shards", [])
         if not isinstance(shards, list) or not all(isinstance(s, str) and s and Path(s).name == s for s in shards):
             raise DumpError(f"{meta_path}: \"shards\" must list the shard folders' names; the file is corrupt")
-        for key in () if shards else ("camera", "files"):
-            if not isinstance(self.meta.get(key), dict):
-                raise DumpError(f"{meta_path}: no {key!r} object; the file is corrupt")
+        if not shards:
+            check_meta(meta_path, self.meta)
         self.parts = [Dump(self.folder / shard) for shard in shards if (self.folder / shard / META).exists()]
         if shards:
             self.frames = [f for part in self.parts for f in part.frames]
             self.videos = [v for part in self.parts for v in part.videos]
         else:
-            records = {r["index"]: r for r in read_records(self.folder / LINES)}  # one frame per index
+            records = read_records(self.folder / LINES, frame_limit(self.meta))
+            records = {r["index"]: r for r in records}  # one frame per index
             self.frames = [DumpFrame(self.folder, records[i], self.meta) for i in sorted(records)]
             video = self.folder / "video.mp4"
             self.videos = [video] if video.is_file() else []

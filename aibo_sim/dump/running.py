@@ -4,6 +4,7 @@ checks the arguments and hands shards to ``shards.py``."""
 from __future__ import annotations
 
 import hashlib
+import numbers
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -22,8 +23,8 @@ from ..mtn import MODES as MTN_MODES
 from ..options import check_place, start_values
 from ..robot import BACKENDS, SimulationEnd, check_memory_stick
 from ..runner import Progress, check_python_controller, run_controller
-from ..sim import load_model
-from .formats import DEFAULT_FORMATS, FORMATS
+from ..sim import SEED_LIMIT, ModelError, ball_joint, load_model
+from .formats import DEFAULT_FORMATS, FORMATS, DumpError
 from .writing import CONTROLLER_FILES, DumpWriter
 
 POLICIES = ("random", "scripted", "zero")
@@ -89,7 +90,11 @@ def _dump_controller(parameters: dict, out: Path, resume: bool, **lock) -> DumpW
         listener = _CameraFrames(writer, frames, progress)
         workdir = out / CONTROLLER_FILES  # the controller's own files: one folder per shard
         try:
-            workdir.mkdir(exist_ok=True)
+            try:
+                workdir.mkdir(exist_ok=True)
+            except FileExistsError:
+                raise DumpError(f"{workdir}: not a folder (the controller runs in it): move it away, then --resume") \
+                    from None
             run_controller(parameters["controller"], backend=parameters["backend"], duration=frames / FRAME_RATE_HZ,
                            scene=parameters["scene"], seed=parameters["seed"], pose=parameters["pose"],
                            ball=parameters["ball"], mtn_mode=parameters["mtn_mode"],
@@ -179,10 +184,9 @@ def file_sha256(path: Path) -> str:
     return digest.hexdigest()
 
 
-def model_sha256(scene) -> str:
+def model_sha256(model: mujoco.MjModel) -> str:
     """The hash of the compiled scene (the robot, the field, their physics and looks): a resume
     refuses a scene or an aibo-sim whose model changed since the dump began."""
-    model = load_model(scene)
     saved = np.zeros(mujoco.mj_sizeModel(model), np.uint8)
     mujoco.mj_saveModel(model, None, saved)
     return hashlib.sha256(saved.tobytes()).hexdigest()
@@ -219,7 +223,7 @@ def dump(out, *, controller: str | Path | None = None, env: str | None = None, p
         raise ValueError("dump a controller file or an environment (--env), not both or neither")
     unknown = sorted(set(formats) - set(FORMATS))
     if unknown or not formats:
-        raise ValueError(f"unknown formats {unknown or '(none given)'}; known: {', '.join(FORMATS)}")
+        raise ValueError(f"--formats: unknown formats {unknown or '(none given)'}; known: {', '.join(FORMATS)}")
     if backend not in BACKENDS:
         raise ValueError(f"backend must be one of {BACKENDS}, not {backend!r}")
     if policy is not None and controller is not None:
@@ -233,6 +237,9 @@ def dump(out, *, controller: str | Path | None = None, env: str | None = None, p
         raise ValueError("--formats: coco annotates the rgb files; add rgb")
     if not 1 <= workers <= frames:
         raise ValueError(f"--workers must be between 1 and the number of frames ({frames}), not {workers}")
+    if isinstance(seed, bool) or not isinstance(seed, numbers.Integral) or not 0 <= seed <= SEED_LIMIT - workers:
+        shards = f" with --workers {workers} (shard k uses seed + k)" if workers > 1 else ""
+        raise ValueError(f"--seed must be a whole number from 0 to 2**64 - {workers}{shards}, not {seed!r}")
     if engine not in ENGINES:
         raise ValueError(f"--engine must be one of {', '.join(ENGINES)}, not {engine!r}")
     if ray_address is not None and engine != "ray":
@@ -259,6 +266,14 @@ def dump(out, *, controller: str | Path | None = None, env: str | None = None, p
     profile = resolve_profile(camera_profile)
     if env is not None:
         _check_env(env)
+    model = load_model(scene)
+    try:
+        ball_joint(model)
+        placeable_ball = True
+    except ModelError as exc:
+        if env is not None:  # the environments place the ball at each reset
+            raise ModelError(f"--scene {scene}: environment {env} places the ball, but {exc}") from None
+        placeable_ball = False
     pose, ball = start_values("--pose", pose, 3), start_values("--ball", ball, 2)
     if ball is not None or pose is not None:
         check_place(scene, pose, ball)  # the scene's ModelError, or a placement's ValueError, before the folder is made
@@ -278,12 +293,12 @@ def dump(out, *, controller: str | Path | None = None, env: str | None = None, p
         parameters["camera_profile_options"] = options
     if source_sha256 is not None:
         parameters["controller_sha256"] = source_sha256  # a resume refuses another controller
-    parameters["model_sha256"] = model_sha256(scene)
+    parameters["model_sha256"] = model_sha256(model)
     if workers == 1:
         return dump_one(parameters, out, resume)
     from .shards import dump_sharded, ray_session
 
     if engine == "local":
-        return dump_sharded(parameters, out, resume, workers, engine)
+        return dump_sharded(parameters, out, resume, workers, engine, placeable_ball)
     with ray_session(ray_address):  # before the folder is touched: a Ray that cannot start changes nothing
-        return dump_sharded(parameters, out, resume, workers, engine)
+        return dump_sharded(parameters, out, resume, workers, engine, placeable_ball)

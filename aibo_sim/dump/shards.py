@@ -23,7 +23,7 @@ from .coco import coco_bytes
 from .formats import DUMP_FORMAT, PATHS, DumpError
 from .reading import LINES
 from .running import DumpSummary, dump_one
-from .writing import COCO, command_line, prepare_folder, remove_temporary_files, write_atomic
+from .writing import COCO, check_destination, command_line, prepare_folder, remove_temporary_files, write_atomic
 
 RAY_MAX_RETRIES = 3  # a shard whose Ray worker is lost runs again (resuming its folder)
 RAY_CONNECT_S = 5.0  # an --ray-address that does not answer in this is refused (ray.init would wait minutes)
@@ -220,7 +220,10 @@ def _run_ray_shards(shards: list[tuple[dict, Path]], progress: _ShardProgress) -
             _remove_temporary_files(shards)
 
 
-def dump_sharded(parameters: dict, out: Path, resume: bool, workers: int, engine: str) -> DumpSummary:
+def dump_sharded(parameters: dict, out: Path, resume: bool, workers: int, engine: str,
+                 placeable_ball: bool) -> DumpSummary:
+    """The dump as ``workers`` shards; in a controller dump without a ball position, each
+    shard's ball is drawn from its seed where the scene's ball can be placed."""
     start = time.perf_counter()
     meta = {"format": DUMP_FORMAT, "parameters": {**parameters, "workers": workers},
             "shards": [f"shard_{k}" for k in range(workers)]}
@@ -230,12 +233,13 @@ def dump_sharded(parameters: dict, out: Path, resume: bool, workers: int, engine
         for k in range(workers):
             seed = parameters["seed"] + k
             ball = parameters["ball"]
-            if parameters["controller"] and ball is None:
+            if parameters["controller"] and ball is None and placeable_ball:
                 rng = np.random.default_rng(seed)
                 ball = [float(rng.uniform(*SHARD_BALL_X)), float(rng.uniform(*SHARD_BALL_Y))]
             frames = parameters["frames"] // workers + (k < parameters["frames"] % workers)
             shard = {**parameters, "seed": seed, "ball": ball, "frames": frames, "progress": False}
             shards.append((shard, out / f"shard_{k}"))
+            check_destination(out / f"shard_{k}", shard_of=out)
         progress = _ShardProgress([folder for _, folder in shards], parameters["frames"])
         try:
             results = _run_ray_shards(shards, progress) if engine == "ray" else _run_shards(shards, resume, progress)

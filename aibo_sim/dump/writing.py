@@ -25,7 +25,7 @@ from ..sim import Simulation
 from .coco import Objects, coco_bytes
 from .formats import (DUMP_FORMAT, LAYERS, PATHS, DumpError, annex_yuv, file_layouts, frame_files, frame_metadata,
                       geom_classes, mp4_faststart, npy, yuv420_bytes, yuv444_bytes)
-from .reading import LINES, META, parse_records, read_meta, split_lines
+from .reading import LINES, META, frame_limit, parse_records, read_meta, split_lines
 
 try:
     import fcntl
@@ -147,8 +147,9 @@ class FolderLock:
 # ---------------------------------------------------------------- the folder
 
 
-def _check_destination(out: Path) -> None:
-    """Before anything is written: ``out`` is missing, empty (but for the dump's own files) or a dump."""
+def check_destination(out: Path, shard_of: Path | None = None) -> None:
+    """Before anything is written: ``out`` is missing, empty (but for the dump's own files) or a
+    dump; ``shard_of``: the dump whose shard it is (named in the error)."""
     try:
         entries = set(os.listdir(out))
     except FileNotFoundError:
@@ -160,6 +161,9 @@ def _check_destination(out: Path) -> None:
     if META in entries:
         read_meta(out / META)  # a clear error when it is not a dump's
         return
+    if shard_of is not None:
+        raise DumpError(f"{out}: this shard of the dump in {shard_of} has no {META}: the shard is damaged; "
+                        f"remove {out} and --resume to write the shard again")
     raise DumpError(f"{out} is not empty and is not a dump (no {META}): refusing to write into it; "
                     "choose a new or empty folder for --out")
 
@@ -168,9 +172,9 @@ def _changed_parameters(previous: dict, parameters: dict) -> list[str]:
     return sorted(k for k in set(previous) | set(parameters) if previous.get(k) != parameters.get(k))
 
 
-def _frames_on_disk(out: Path, layouts: dict, truncate: bool) -> tuple[set[int], set[int]]:
+def _frames_on_disk(out: Path, layouts: dict, limit: int, truncate: bool) -> tuple[set[int], set[int]]:
     """(frames listed in frames.jsonl, those of them with a file missing or of the wrong size);
-    a partial last line is cut off when ``truncate``."""
+    an index of ``limit`` or more is corrupt; a partial last line is cut off when ``truncate``."""
     lines_path = out / LINES
     try:
         data = lines_path.read_bytes()
@@ -179,7 +183,7 @@ def _frames_on_disk(out: Path, layouts: dict, truncate: bool) -> tuple[set[int],
     except OSError as exc:
         raise DumpError(f"cannot read {lines_path}: {exc.strerror or exc}") from exc
     complete_lines, partial = split_lines(data)
-    complete = {record["index"] for record in parse_records(lines_path, complete_lines)}
+    complete = {record["index"] for record in parse_records(lines_path, complete_lines, limit)}
     if partial and truncate:
         try:
             with open(lines_path, "r+b") as file:
@@ -221,7 +225,7 @@ def prepare_folder(out: Path, meta: dict, resume: bool, *, lock_wait_s: float = 
     of the wrong size (a fixed-size format's) are rewritten (``Prepared.missing``); the
     simulation is deterministic.
     """
-    _check_destination(out)
+    check_destination(out)
     try:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
@@ -245,7 +249,7 @@ def prepare_folder(out: Path, meta: dict, resume: bool, *, lock_wait_s: float = 
             if changed:
                 raise DumpError(f"{meta_path}: cannot resume, the dump was made with other parameters "
                                 f"({', '.join(changed)})")
-            complete, missing = _frames_on_disk(out, layouts, truncate=True)
+            complete, missing = _frames_on_disk(out, layouts, frame_limit(meta), truncate=True)
         remove_temporary_files(out, layouts)
         write_atomic(meta_path, (json.dumps(meta, indent=2) + "\n").encode())
     except BaseException:
