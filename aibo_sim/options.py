@@ -18,7 +18,7 @@ from pathlib import Path
 from openr_bridge import CAMERA_DEFAULTS, CAMERA_SETTINGS
 
 from .camera import PROFILES, CameraSettings
-from .sim import SEED_LIMIT, Simulation
+from .sim import SEED_LIMIT, ModelError, Simulation
 
 PLACEMENT_OVERLAP_M = 0.005  # a placed robot or ball sunk deeper than this into something is an error
 MAX_MAGNITUDE = 1e6  # |value| beyond this is a typo, not a position (metres) or an angle (degrees)
@@ -142,7 +142,10 @@ def place(sim, pose: tuple[float, float, float] | None = None, ball: tuple[float
         x, y, yaw_deg = pose
         sim.place_robot(x, y, math.radians(yaw_deg))
     if ball is not None:
-        sim.place_ball(*ball)
+        try:
+            sim.place_ball(*ball)
+        except ModelError as exc:
+            raise ModelError(f"--ball {' '.join(f'{v:g}' for v in ball)}: {exc}") from None
     placed = {"the robot": ("--pose", pose), "the ball": ("--ball", ball)}
     for first, second, depth in sim.overlaps(PLACEMENT_OVERLAP_M):
         for subject, other in ((first, second), (second, first)):

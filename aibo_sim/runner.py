@@ -64,9 +64,10 @@ def motion_dirs(controller_path: Path) -> tuple[Path, ...]:
 
 
 RUN_FILE = "run.json"
+FRAME_FILE = re.compile(r"\d{6,}\.png")  # a run's frame, frames/NNNNNN.png
 # What a run's frames/ may hold: its frames, their temporary names (".NNNNNN.png.tmp": no
 # "*.png" pattern matches them) and the temporary names of earlier versions ("NNNNNN.partial.png").
-RUN_FRAME_NAMES = re.compile(r"\d{6,}\.png|\.\d{6,}\.png\.tmp|\d{6,}\.partial\.png")
+RUN_FRAME_NAMES = re.compile(rf"{FRAME_FILE.pattern}|\.\d{{6,}}\.png\.tmp|\d{{6,}}\.partial\.png")
 
 
 def check_python_controller(path: Path) -> None:
@@ -105,7 +106,6 @@ class FrameWriter:
 
     def __init__(self, directory: Path, controller: Path | None = None, backend: str | None = None):
         self.out, self.directory = directory, directory / "frames"
-        self.count = 0
         self.error: OSError | None = None
         self._prepare({"controller": controller and str(controller), "backend": backend, "status": "incomplete"})
 
@@ -159,7 +159,12 @@ class FrameWriter:
         except OSError as exc:
             self.error = exc
             raise SimulationEnd() from exc  # raised in the controller's call: ends the run
-        self.count += 1
+
+    @property
+    def count(self) -> int:
+        """The frames written, counted in the folder: a signal (SIGTERM, Ctrl-C) that ends the run
+        between a frame's rename and a counter's increment cannot make run.json disagree with it."""
+        return sum(1 for name in os.listdir(self.directory) if FRAME_FILE.fullmatch(name))
 
     def check(self) -> None:
         """Raise the write error that ended the run, if one did."""

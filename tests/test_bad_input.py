@@ -145,7 +145,7 @@ def test_ball_placed_in_a_scene_whose_ball_has_no_free_joint_exits_2(tmp_path, c
     scene.write_text(scene.read_text().replace('<freejoint name="ball"/>', ""))
     out = ["--out", str(tmp_path / "out")] if command[0] in ("render", "dump") else []
     assert main(command + out + ["--scene", str(scene), "--ball", "0.3", "0"]) == 2
-    one_error_line(capsys, "body 'ball' cannot be placed: it needs one free joint")
+    one_error_line(capsys, "--ball 0.3 0: this scene's body 'ball' cannot be placed: it needs one free joint")
     assert not (tmp_path / "out").exists()
 
 
@@ -505,3 +505,24 @@ def test_a_memory_stick_for_the_sim_backend_is_refused_not_ignored(tmp_path, cap
     assert main(command + ["--memory-stick", str(stick), "--out", str(out)]) == 2
     one_error_line(capsys, "--memory-stick applies to the openr backend (--backend openr): the sim backend")
     assert not out.exists()
+
+
+def test_a_signal_right_after_a_frame_is_renamed_in_still_counts_that_frame(tmp_path, monkeypatch):
+    """Ctrl-C or SIGTERM lands between bytecodes: after a frame's rename, run.json's
+    camera_frames must still equal the frames in the folder (a counter was one short)."""
+    import aibo_sim.runner as runner
+
+    writer = runner.FrameWriter(tmp_path / "out")
+    image = np.zeros((4, 4, 3), np.uint8)
+    writer(0, image)
+    write = runner.write_file_atomic
+
+    def write_then_interrupt(path, data):
+        write(path, data)
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(runner, "write_file_atomic", write_then_interrupt)
+    with pytest.raises(KeyboardInterrupt):
+        writer(1, image)
+    assert sorted(p.name for p in (tmp_path / "out" / "frames").iterdir()) == ["000000.png", "000001.png"]
+    assert writer.count == 2
