@@ -296,3 +296,26 @@ def test_the_wheel_ships_the_headers_and_the_binding():
             if p.is_file() and p.suffix not in (".py", ".pyc")]
     assert "include/device/robot.h" in data and "libaibo.c" in data
     assert all(any(fnmatch.fnmatch(name, pattern) for pattern in patterns) for name in data), data
+
+
+def test_the_simulators_own_failures_in_a_c_controllers_call_are_not_blamed_on_it(tmp_path, monkeypatch, capsys):
+    """A divergence (exit 3) or no OpenGL context (exit 2) inside robot_step ends a C controller's
+    run as it ends a Python one's (both were 'controller ... raised', exit 1)."""
+    from aibo_sim.sim import Simulation, SimulationDiverged
+
+    source = c_file(tmp_path, "look.c", "#include <device/camera.h>\nint main(void) {\n  robot_live(0);\n"
+                    "  camera_enable(robot_get_device(\"PRM:/r1/c1/c2/c3/i1-FbkImageSensor:F1\"), 32);\n"
+                    "  for (;;) robot_step(32);\n}\n")
+    with monkeypatch.context() as patch:
+        def diverge(*args, **kwargs):
+            raise SimulationDiverged("gone")
+
+        patch.setattr(Simulation, "step_frames", diverge)
+        with pytest.raises(SimulationDiverged, match="gone"):
+            run_controller(source, duration=1)
+    monkeypatch.setenv("MUJOCO_GL", "glfw")
+    for variable in ("DISPLAY", "WAYLAND_DISPLAY"):
+        monkeypatch.delenv(variable, raising=False)
+    assert main(["run", str(source), "--duration", "0.5"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("aibo-sim: error: MUJOCO_GL=glfw: cannot create an OpenGL context") and "controller" not in err

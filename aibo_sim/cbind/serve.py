@@ -42,7 +42,9 @@ from pathlib import Path
 import numpy as np
 
 from .. import controller as api
+from ..render import RenderingUnavailable
 from ..robot import SimulationEnd
+from ..sim import SimulationDiverged
 from .protocol import MAX_IMAGE_BYTES, OPS, PREFETCHED, STATUS
 
 WAIT_NOTICE_S = 10.0
@@ -276,6 +278,8 @@ class _Server:
                 ended = True
                 self._channel.sendall(_Call.END)
                 continue
+            except (SimulationDiverged, RenderingUnavailable):  # the simulator's failures, not the controller's
+                raise
             except Exception as exc:
                 shown = ", ".join(repr(a) for a in args)
                 raise CControllerError(f"{call.name}({shown}) raised {type(exc).__name__}: {exc}") from exc
