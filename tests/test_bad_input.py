@@ -84,11 +84,12 @@ def test_an_empty_path_is_refused_not_read_as_the_current_folder(tmp_path, monke
 
 
 @pytest.mark.parametrize("command", [["run", str(ROOT / "controllers" / "ball_tracker.py"), "--duration", "0.1"],
-                                     ["render", "--settle", "0"]])
+                                     ["render", "--settle", "0"], ["dump", str(SCRIPTED), "--steps", "2"]])
 def test_glfw_without_a_display_is_rendering_unavailable_not_the_controllers_fault(tmp_path, monkeypatch, capsys,
                                                                                     command):
     """GLFW makes no window without a display and only warns: one line naming MUJOCO_GL, exit 2
-    (a run was reported as its controller raising MuJoCo's FatalError); run.json says failed."""
+    (a run was reported as its controller raising MuJoCo's FatalError); run.json says failed; a
+    dump checks before it makes its folder."""
     monkeypatch.setenv("MUJOCO_GL", "glfw")
     for variable in ("DISPLAY", "WAYLAND_DISPLAY"):
         monkeypatch.delenv(variable, raising=False)
@@ -97,6 +98,8 @@ def test_glfw_without_a_display_is_rendering_unavailable_not_the_controllers_fau
     if command[0] == "run":
         run = json.loads((tmp_path / "out" / "run.json").read_text())
         assert run["status"] == "failed" and "MUJOCO_GL=glfw" in run["error"]
+    if command[0] == "dump":
+        assert not (tmp_path / "out").exists()
 
 
 # ----------------------------------------------------------------------------- scenes

@@ -21,6 +21,7 @@ from ..camera import camera_profile as resolve_profile  # dump's argument of tha
 from ..cbind import compile_controller, controller_sources, is_c_controller
 from ..mtn import MODES as MTN_MODES
 from ..options import check_place, start_values
+from ..render import Renderer
 from ..robot import BACKENDS, SimulationEnd, check_memory_stick
 from ..runner import Progress, check_python_controller, run_controller
 from ..sim import SEED_LIMIT, ModelError, ball_joint, load_model
@@ -267,6 +268,7 @@ def dump(out, *, controller: str | Path | None = None, env: str | None = None, p
     if env is not None:
         _check_env(env)
     model = load_model(scene)
+    Renderer(model, 1, 1).close()  # no OpenGL context (MUJOCO_GL=glfw without a display): refused here
     try:
         ball_joint(model)
         placeable_ball = True
