@@ -138,6 +138,9 @@ def place(sim, pose: tuple[float, float, float] | None = None, ball: tuple[float
     each when given; the scene's start otherwise. ValueError naming the option when what it
     placed would sink more than ``PLACEMENT_OVERLAP_M`` into something (a wall, a goal, the
     robot or the ball), which the first step would fling apart."""
+    def given(option: str, values) -> str:
+        return f"{option} {' '.join(f'{v:g}' for v in values)}"
+
     if pose is not None:
         x, y, yaw_deg = pose
         sim.place_robot(x, y, math.radians(yaw_deg))
@@ -145,11 +148,10 @@ def place(sim, pose: tuple[float, float, float] | None = None, ball: tuple[float
         try:
             sim.place_ball(*ball)
         except ModelError as exc:
-            raise ModelError(f"--ball {' '.join(f'{v:g}' for v in ball)}: {exc}") from None
+            raise ModelError(f"{given('--ball', ball)}: {exc}") from None
     placed = {"the robot": ("--pose", pose), "the ball": ("--ball", ball)}
     for first, second, depth in sim.overlaps(PLACEMENT_OVERLAP_M):
         for subject, other in ((first, second), (second, first)):
             option, values = placed.get(subject, (None, None))
             if values is not None:
-                raise ValueError(f"{option} {' '.join(f'{v:g}' for v in values)}: {subject} would overlap {other} "
-                                 f"by {depth * 100:.1f} cm")
+                raise ValueError(f"{given(option, values)}: {subject} would overlap {other} by {depth * 100:.1f} cm")
