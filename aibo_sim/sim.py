@@ -48,6 +48,11 @@ class SimulationDiverged(RuntimeError):
     """The physics produced NaN or unbounded accelerations."""
 
 
+def is_seed(value, count: int = 1) -> bool:
+    """Whether ``value`` and the ``count - 1`` whole numbers after it are all seeds."""
+    return not isinstance(value, bool) and isinstance(value, numbers.Integral) and 0 <= value <= SEED_LIMIT - count
+
+
 def models_dir() -> Path:
     """The bundled ``models/`` folder (source checkout or installed wheel)."""
     here = Path(__file__).resolve().parent
@@ -254,7 +259,7 @@ class Simulation:
 
     def reset(self, seed: int | None = None, keyframe: str | None = None) -> None:
         if seed is not None:
-            if isinstance(seed, bool) or not isinstance(seed, numbers.Integral) or not 0 <= seed < SEED_LIMIT:
+            if not is_seed(seed):
                 raise ValueError(f"seed must be a whole number from 0 to 2**64 - 1, not {seed!r}")
             seed = int(seed)
             self.rng = np.random.default_rng(seed)  # IR noise; the camera's noise has its own stream

@@ -4,7 +4,6 @@ checks the arguments and hands shards to ``shards.py``."""
 from __future__ import annotations
 
 import hashlib
-import numbers
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -24,7 +23,7 @@ from ..options import check_place, start_values
 from ..render import Renderer
 from ..robot import BACKENDS, SimulationEnd, check_memory_stick
 from ..runner import Progress, check_python_controller, run_controller
-from ..sim import SEED_LIMIT, ModelError, ball_joint, load_model
+from ..sim import ModelError, ball_joint, is_seed, load_model
 from .formats import DEFAULT_FORMATS, FORMATS, DumpError
 from .writing import CONTROLLER_FILES, DumpWriter
 
@@ -238,7 +237,7 @@ def dump(out, *, controller: str | Path | None = None, env: str | None = None, p
         raise ValueError("--formats: coco annotates the rgb files; add rgb")
     if not 1 <= workers <= frames:
         raise ValueError(f"--workers must be between 1 and the number of frames ({frames}), not {workers}")
-    if isinstance(seed, bool) or not isinstance(seed, numbers.Integral) or not 0 <= seed <= SEED_LIMIT - workers:
+    if not is_seed(seed, workers):
         shards = f" with --workers {workers} (shard k uses seed + k)" if workers > 1 else ""
         raise ValueError(f"--seed must be a whole number from 0 to 2**64 - {workers}{shards}, not {seed!r}")
     if engine not in ENGINES:
