@@ -157,6 +157,13 @@ LED_BY_LOCATOR = {led.locator: led for led in LEDS}
 LED_BY_NAME = {led.name: led for led in LEDS}
 
 
+# OPEN-R primitives the Webots-era API has no device for: the wireless LAN switch, the speaker
+# and the stereo microphones (Model Information for ERS-7, A.1).
+WLAN_SWITCH_LOCATOR = "PRM:/b1-Sensor:b1"
+SPEAKER_LOCATOR = "PRM:/s1-Speaker:S1"
+MIC_LOCATOR = "PRM:/r1/c1/c2/c3/m1-Mic:M1"
+
+
 def all_locators() -> list[str]:
     """Every device locator the simulated robot has (joints, sensors, LEDs)."""
     return [j.locator for j in JOINTS] + [s.locator for s in SENSORS] + list(ACCELEROMETER_ALIASES) + [

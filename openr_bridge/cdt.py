@@ -16,10 +16,12 @@ Y segment contains its (Cr, Cb), bounds inclusive. Choices where no source settl
   never set; so do a channel mask that is not one bit and two tables for one channel.
 """
 
+import struct
+
 import numpy as np
 
 from .errors import CdtError
-from .image import odataCDT
+from .image import VECTOR_INFO_SIZE, odataCDT
 
 ocdtNUM_CHANNELS = 8
 ocdtCHANNEL_UNDEF = 0x00
@@ -34,6 +36,7 @@ ocdtCHANNEL7 = 0x80
 ocdtMAX_Y_SEGMENT = 32
 ocdtINIT = 0x80808080
 ERS7_CDT_CHANNELS = 7
+_CDT_INFO = struct.Struct(f"<3I{ocdtMAX_Y_SEGMENT}I4x")  # OCdtInfo, 144 bytes
 
 
 class OCdtInfo:
@@ -83,6 +86,21 @@ class OCdtVectorData:
 
     def GetInfo(self, index: int) -> OCdtInfo:
         return self.info[index]
+
+    @classmethod
+    def from_bytes(cls, data: bytes) -> "OCdtVectorData":
+        """The vector from the robot's bytes: the 192-byte header (``numData`` at 32), then eight
+        144-byte ``OCdtInfo`` (type, primitiveID, channel, table[32], padding), little-endian."""
+        if len(data) != VECTOR_INFO_SIZE + ocdtNUM_CHANNELS * _CDT_INFO.size:
+            raise CdtError(f"an OCdtVectorData has {VECTOR_INFO_SIZE + ocdtNUM_CHANNELS * _CDT_INFO.size} bytes, "
+                           f"not {len(data)}")
+        vector = cls()
+        vector.SetNumData(struct.unpack_from("<I", data, 32)[0])
+        for index, info in enumerate(vector.info):
+            info.type, info.primitiveID, info.channel, *table = _CDT_INFO.unpack_from(
+                data, VECTOR_INFO_SIZE + index * _CDT_INFO.size)
+            info.table = table
+        return vector
 
     @classmethod
     def of(cls, *infos: OCdtInfo) -> "OCdtVectorData":

@@ -9,11 +9,17 @@ stub.cfg (report section 2.1.5), one item a line::
 
 A service name is Object.Subname.Data.Kind with Kind ``S`` (subject) or ``O`` (observer); the
 two members are ``null`` or ``Name()``. There must be at least one subject and one observer
-(a dummy where none is needed) and exactly as many as ``NumOfOSubject`` / ``NumOfOObserver``.
+(a dummy where none is needed) and exactly as many as ``NumOfOSubject`` / ``NumOfOObserver``
+(Sony's stubgen2 also reads ``NumOfSubject`` / ``NumOfObserver``). ``Extra : Name()`` lines
+add entries of the object's own (called with a message pointer, as ``OPENR::ObservePowerStatus``
+calls one).
 
 CONNECT.CFG (section 2.1.6) has one connection a line, a subject service, white space, an
 observer service, both with the same data name. It lives in ``OPEN-R/MW/CONF/`` of the
-memory stick, found in any letter case (``find_connect_cfg``).
+memory stick, found in any letter case (``find_connect_cfg``). A line ``[ERS-7]`` starts the
+lines for one robot design (Sony's CONNECT.CFG, OBJECT.CFG and DESIGNDB.CFG have sections
+``[ERS-210]``, ``[ERS-7]``...): lines before any section are every design's, a section's only
+its design's (``design_lines``).
 
 Files are ASCII; blank lines, CRLF and ``//`` comment lines (stub.cfg, as in Sony's samples)
 or ``#`` comments (CONNECT.CFG) are accepted. Names are case-sensitive, as in OPEN-R. Every
@@ -37,6 +43,7 @@ _MEMBER = rf"null|{_NAME}\(\)"
 _STUB_LINE = re.compile(r"[ \t]*([A-Za-z]+)[ \t]*:(.*)")  # the value is stripped after (a lazy group would backtrack quadratically)
 _SERVICE_LINE = re.compile(rf'"([^"]*)"[ \t]*,[ \t]*({_MEMBER})[ \t]*,[ \t]*({_MEMBER})')
 _COUNT_KEYS = {"NumOfOSubject": "S", "NumOfOObserver": "O"}
+_COUNT_ALIASES = {"NumOfSubject": "NumOfOSubject", "NumOfObserver": "NumOfOObserver"}
 KINDS = {"S": "subject", "O": "observer"}
 QUOTE_LIMIT = 80  # characters of an offending line or field quoted in a ConfigError
 
@@ -80,6 +87,7 @@ class StubConfig:
     path: str
     object_name: str
     services: tuple[Service, ...]
+    extras: tuple[str, ...] = ()  # the Extra entries' member names, in order
 
     def of_kind(self, kind: str) -> list[Service]:
         return [service for service in self.services if service.name.kind == kind]
@@ -98,6 +106,7 @@ class Connection:
 def parse_stub_cfg(source: bytes | str, path: str = "stub.cfg") -> StubConfig:
     values: dict[str, tuple[str, int]] = {}
     services: list[Service] = []
+    extras: list[str] = []
     first_line: dict[ServiceName, int] = {}  # each service's line, for the repeat check
     for number, line in _lines(source, path):
         if not line.strip() or line.lstrip().startswith("//"):
@@ -105,16 +114,22 @@ def parse_stub_cfg(source: bytes | str, path: str = "stub.cfg") -> StubConfig:
         match = _STUB_LINE.fullmatch(line)
         if not match:
             raise ConfigError(f"expected 'Key : value', got {_quote(line)}", path, number)
-        key, value = match[1], match[2].strip(" \t")
+        key, value = _COUNT_ALIASES.get(match[1], match[1]), match[2].strip(" \t")
         if key == "Service":
             services.append(_parse_service(value, path, number, first_line))
+        elif key == "Extra":
+            if not re.fullmatch(rf"{_NAME}\(\)", value):
+                raise ConfigError(f"Extra {_quote(value)} is not a member 'Name()'", path, number)
+            if value[:-2] in extras:
+                raise ConfigError(f"Extra {value} given twice", path, number)
+            extras.append(value[:-2])
         elif key in ("ObjectName", *_COUNT_KEYS):
             if key in values:
                 raise ConfigError(f"{key} given twice (first on line {values[key][1]})", path, number)
             values[key] = (value, number)
         else:
             raise ConfigError(
-                f"unknown item {_quote(key)} (ObjectName, NumOfOSubject, NumOfOObserver, Service)", path, number
+                f"unknown item {_quote(key)} (ObjectName, NumOfOSubject, NumOfOObserver, Service, Extra)", path, number
             )
 
     missing = [key for key in ("ObjectName", *_COUNT_KEYS) if key not in values]
@@ -134,17 +149,31 @@ def parse_stub_cfg(source: bytes | str, path: str = "stub.cfg") -> StubConfig:
             raise ConfigError(
                 f"{key} is {int(count)} but {len(listed)} {KINDS[kind]} services are listed {_cut(listed)}", path, number
             )
-    return StubConfig(path, object_name, tuple(services))
+    return StubConfig(path, object_name, tuple(services), tuple(extras))
+
+
+ROBOT_DESIGN = "ERS-7"
+_SECTION = re.compile(r"[ \t]*\[([^\]]*)\][ \t]*")
+
+
+def design_lines(source: bytes | str, path: str, design: str = ROBOT_DESIGN):
+    """(line number, text without its ``#`` comment) of each non-blank line for ``design``."""
+    section = None
+    for number, line in _lines(source, path):
+        text = line.split("#", 1)[0]
+        match = _SECTION.fullmatch(text)
+        if match:
+            section = match[1].strip()
+        elif text.strip() and section in (None, design):
+            yield number, text
 
 
 def parse_connect_cfg(source: bytes | str, path: str = "CONNECT.CFG") -> list[Connection]:
     connections: list[Connection] = []
     first_line: dict[tuple[ServiceName, ServiceName], int] = {}  # each connection's line, for the repeat check
     names: dict[str, ServiceName] = {}  # each service name's text parsed once
-    for number, line in _lines(source, path):
-        fields = line.split("#", 1)[0].split()
-        if not fields:
-            continue
+    for number, line in design_lines(source, path):
+        fields = line.split()
         if len(fields) != 2:
             raise ConfigError(f"expected 'subject-service observer-service', got {_quote(line.strip())}", path, number)
         subject, observer = (names.get(field) or names.setdefault(field, _service_name(field, path, number))
@@ -165,24 +194,30 @@ def parse_connect_cfg(source: bytes | str, path: str = "CONNECT.CFG") -> list[Co
 
 
 def load_stub_cfg(path) -> StubConfig:
-    return parse_stub_cfg(_read(path), str(path))
+    return parse_stub_cfg(read_config(path), str(path))
 
 
 def load_connect_cfg(path) -> list[Connection]:
-    return parse_connect_cfg(_read(path), str(path))
+    return parse_connect_cfg(read_config(path), str(path))
 
 
 def find_connect_cfg(memory_stick) -> Path:
     """``OPEN-R/MW/CONF/CONNECT.CFG`` under a memory stick folder, in any letter case."""
+    return find_in_stick(memory_stick, "CONNECT.CFG")
+
+
+def find_in_stick(memory_stick, name: str) -> Path:
+    """``OPEN-R/MW/CONF/<name>`` under a memory stick folder, in any letter case; ConfigError
+    naming the folder where a part is missing (or ambiguous)."""
     found = Path(memory_stick)
-    for part in ("OPEN-R", "MW", "CONF", "CONNECT.CFG"):
+    for part in ("OPEN-R", "MW", "CONF", name):
         try:
             matches = [entry for entry in found.iterdir() if entry.name.upper() == part] if found.is_dir() else []
         except OSError as error:
             raise ConfigError(f"cannot list: {error.strerror}", found) from None
         if len(matches) != 1:
             problem = "no" if not matches else "more than one"
-            raise ConfigError(f"{problem} {part} (any case) here; expected OPEN-R/MW/CONF/CONNECT.CFG", found)
+            raise ConfigError(f"{problem} {part} (any case) here; expected OPEN-R/MW/CONF/{name}", found)
         found = matches[0]
     return found
 
@@ -241,7 +276,7 @@ def read_regular_file(path) -> bytes:
         os.close(fd)
 
 
-def _read(path) -> bytes:
+def read_config(path) -> bytes:
     """``read_regular_file``, its failures a ``ConfigError`` naming the file."""
     try:
         return read_regular_file(path)

@@ -7,7 +7,8 @@ Choices made where the spec leaves the hardware unconfirmed:
   49920, 12480) and w h for C (8320); ``numData`` = ``maxNumData`` = 4; ``totalSize`` is the
   message length; region, address, sync and option fields are 0.
 - ``frameNumber`` (8 ms ticks, see ``ers7_camera.frame_number_for_image``) is the same in all
-  four infos; it wraps at 2^32 and the field counter at 2^16.
+  four infos; it wraps as OPEN-R's does, to 1 after ``oframeMAX_NUMBER`` (``openr_frame_number``),
+  and the field counter at 2^16.
 - Y subbands, from the layer's double-resolution luma p (pXY = p(2x + X, 2y + Y)):
   Y_LL = (p00 + p10 + p01 + p11 + 2) >> 2, Y_LH = 128 + ((p01 + p11 - p00 - p10 + 2) >> 2),
   Y_HL = 128 + ((p10 + p11 - p00 - p01 + 2) >> 2), Y_HH = 128 + ((p00 + p11 - p10 - p01 + 2) >> 2):
@@ -56,7 +57,7 @@ import numpy as np
 from .cdt import OCdtVectorData, cdt_layer, ocdtNUM_CHANNELS
 from .colour import rgb_to_ycrcb, rgb_to_ycrcb_packed
 from .errors import FrameError
-from .ers7_camera import FULL_HEIGHT, FULL_WIDTH, LAYER_SIZE, LAYER_TYPE
+from .ers7_camera import FULL_HEIGHT, FULL_WIDTH, LAYER_SIZE, LAYER_TYPE, openr_frame_number
 from .image import (
     BAND_RUNS,
     IMAGE_INFO_SIZE,
@@ -119,7 +120,7 @@ def _encode(frame, fill_h, frame_number, field_counter, cdt, primitive_id) -> OF
     message[: _OFFSETS[0]] = _PREAMBLE
     for index in range(len(_SIZES)):
         info_start = VECTOR_INFO_SIZE + IMAGE_INFO_SIZE * index
-        struct.pack_into("<2I", message, info_start + 4, primitive_id, frame_number % 2**32)
+        struct.pack_into("<2I", message, info_start + 4, primitive_id, openr_frame_number(frame_number))
     data = np.frombuffer(message, np.uint8)
     h_layer, m_layer, l_layer, c_layer = (  # each (height, runs, width): run k of row y is [y, k]
         data[offset : offset + size].reshape(height, -1, width)

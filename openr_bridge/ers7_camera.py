@@ -21,6 +21,15 @@ VERTICAL_FOV_DEG = 45.2
 FIELD_OF_VIEW = 0.993092
 
 
+# OPEN-R frame numbers count 8 ms frames from 0; after oframeMAX_NUMBER they start again at 1.
+oframeMAX_NUMBER = 0x0FFFFFF0
+
+
+def openr_frame_number(tick: int) -> int:
+    """The OPEN-R frame number of the 8 ms frame ``tick`` (0, 1, ...): wraps to 1 after oframeMAX_NUMBER."""
+    return tick if tick <= oframeMAX_NUMBER else (tick - 1) % oframeMAX_NUMBER + 1
+
+
 def frame_number_for_image(index: int) -> int:
     """frameNumber of the index-th image at 30 fps: steps of 4 or 5, 25 per 6 images."""
     return index * 1000 // (FRAME_RATE_HZ * FRAME_TICK_MS)

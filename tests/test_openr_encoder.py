@@ -308,8 +308,12 @@ def test_haar_analysis_of_any_luma():
 def test_frame_numbers_count_8ms_ticks():
     assert [frame_number_for_image(n) for n in range(8)] == [0, 4, 8, 12, 16, 20, 25, 29]
     message = encode_frame(np.zeros((160, 208, 3), np.uint8), frame_number=2**32 + 5, field_counter=2**16 + 3)
-    assert {message.GetInfo(layer).frameNumber for layer in range(4)} == {5}
     assert message.band(H, ofbkimageBAND_Y)[-1, :2].tolist() == [3, 0]
+    # OPEN-R's frame numbers wrap to 1 after oframeMAX_NUMBER (0x0ffffff0), never to 0.
+    for tick, number in ((0, 0), (0x0FFFFFF0, 0x0FFFFFF0), (0x0FFFFFF1, 1), (2 * 0x0FFFFFF0 + 1, 1),
+                         (2**32 + 5, (2**32 + 4) % 0x0FFFFFF0 + 1)):
+        message = encode_frame(np.zeros((160, 208, 3), np.uint8), frame_number=tick)
+        assert {message.GetInfo(layer).frameNumber for layer in range(4)} == {number}
 
 
 @pytest.mark.parametrize(

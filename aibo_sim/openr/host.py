@@ -1,0 +1,421 @@
+"""A memory stick's OPEN-R objects on the simulated ERS-7.
+
+``MemoryStickRun`` starts the runtime (``openr-host`` of the host SDK, a child process: see
+``openr_bridge.host_protocol`` for the messages), gives it the ERS-7's primitives and the
+stick's objects, checks CONNECT.CFG against the services the objects registered (a line
+naming a service no object has is a ``ConfigError`` naming the line), then, every 8 ms frame:
+
+1. sends the state at this tick: for each sensor vector entry its value, signal, PWM duty and
+   commanded value (joints in micro-radians, distances in micrometres, accelerations in
+   micrometres/s^2 as a1 forward, a2 left, a3 up, switches 0/1, the electrostatic head and back
+   sensors an AD value 0..80), and, when the camera made a frame, its OFbkImageVectorData
+   (with the CDT layer of the table the objects set);
+2. applies what the objects did (joint set-points, LEDs, motor power, joint gains, camera
+   settings, colour tables, sound, Shutdown);
+3. steps the physics one frame.
+
+The robot's servos act only when powered (``OPENR::SetMotorPower``) and, for the Joint2
+joints, once their gain is enabled and set (``EnableJointGain``, ``SetJointGain``): a joint's
+stiffness is Sony's P register as ``mjcf.servo_stiffness`` maps the standard one (scaled by
+2^(PSHIFT - 14)); I and D are not modelled (the servo's damping is the motor's). A joint
+whose gain comes on holds where it is until commanded. The ears (Joint4) follow their state:
+0 down, 1 up (their joint's range), when powered.
+
+Choices marked UNCONFIRMED (no source gives them): the order of the sensor vector, the
+touch sensors' AD value (100 per newton, at most 80: the simulated touch threshold, 0.1 N,
+reads 10, beside Sony's thresholds 9-14), the head distance sensors' alternation (near on even
+frames, far on odd), the battery (``BATTERY``, draining 1 % a minute from 100 %).
+"""
+
+from __future__ import annotations
+
+import mmap
+import os
+import signal
+import socket
+import struct
+import sys
+import tempfile
+import wave
+from pathlib import Path
+
+import numpy as np
+
+import openr_bridge
+from openr_bridge import host_protocol as protocol
+from openr_bridge.config import Connection, ConfigError, _cut
+from openr_bridge.ers7_camera import CAMERA_SETTINGS, openr_frame_number
+from openr_bridge.memory_stick import MemoryStick, read_object
+
+from .. import ers7
+from ..cbind.child import Child
+from ..mjcf import KP_PER_SONY_P
+from ..sim import Simulation
+from .sdk import sdk_root
+
+SYSTEM_SERVICES = {
+    "OVirtualRobotComm": ("OVirtualRobotComm.Effector.OCommandVectorData.O",
+                          "OVirtualRobotComm.Sensor.OSensorFrameVectorData.S",
+                          "OVirtualRobotComm.FbkImageSensor.OFbkImageVectorData.S"),
+    "OVirtualRobotAudioComm": ("OVirtualRobotAudioComm.Speaker.OSoundVectorData.O",
+                               "OVirtualRobotAudioComm.Mic.OSoundVectorData.S"),
+}
+STANDARD_PSHIFT = 0x0E  # Sony's fixed PSHIFT (Model Information 2.2): the P register's scale
+TOUCH_AD_PER_NEWTON, TOUCH_AD_MAX = 100, 80  # UNCONFIRMED, see the module docstring
+# The battery at the start (UNCONFIRMED): status bits, capacity %, temperature (0.01 C),
+# full capacity mAh, voltage mV, current mA, time difference h, volume; 1 % less a minute.
+BATTERY = {"robotStatus": 0x00008040, "batteryStatus": 0x00C0, "remainingCapacity": 100, "temperature": 3000,
+           "fullyChargedCapacity": 2200, "voltage": 8000, "current": -1200, "timeDif": 9, "volume": 2}
+CAPACITY_LOW = 15  # % at which orsbBATTERY_CAPACITY_LOW is set
+orsbMOTOR_POWER, orsbBATTERY_CAPACITY_LOW = 0x00000002, 0x00000200
+SETTING_BY_REQUEST = {request: (setting, {number: name for name, number in values.items()})
+                      for setting, (request, values) in CAMERA_SETTINGS.items()}
+
+
+class OpenRObjectCrashed(RuntimeError):
+    """An object of the memory stick killed the runtime (a signal: segmentation fault, abort)."""
+
+
+def primitives() -> list[str]:
+    """The ERS-7's primitive locators; an OPrimitiveID is the index here."""
+    return [*(j.locator for j in ers7.JOINTS), *(s.locator for s in ers7.SENSORS), *ers7.ACCELEROMETER_ALIASES,
+            *(led.locator for led in ers7.LEDS), ers7.WLAN_SWITCH_LOCATOR, ers7.SPEAKER_LOCATOR, ers7.MIC_LOCATOR]
+
+
+class SensorFrame:
+    """The sensor vector's entries and their values at a tick (``VALUES_PER_SENSOR`` int32 each)."""
+
+    def __init__(self, sim: Simulation):
+        self.sim = sim
+        index = {locator: i for i, locator in enumerate(primitives())}
+        kinds = protocol.SENSOR_KINDS
+        self.joints = [i for i, j in enumerate(ers7.JOINTS) if "-Joint2:" in j.locator]
+        touches = list(ers7.TOUCH_SENSORS)
+        self.switch = np.array([s.name.startswith(("touch_paw", "touch_chin")) for s in touches])
+        self.entries = ([(index[ers7.JOINTS[i].locator], kinds["JOINT"]) for i in self.joints]
+                        + [(index[s.locator], kinds["DISTANCE"]) for s in ers7.DISTANCE_SENSORS]
+                        + [(index[locator], kinds["ACCELERATION"]) for locator in
+                           (ers7.SENSOR_BY_NAME["accelerometer"].locator, *ers7.ACCELEROMETER_ALIASES)]
+                        + [(index[s.locator], kinds["SWITCH"] if switch else kinds["TOUCH"])
+                           for s, switch in zip(touches, self.switch)]
+                        + [(index[ers7.WLAN_SWITCH_LOCATOR], kinds["SWITCH"])])
+        self.values = np.zeros((len(self.entries), protocol.VALUES_PER_SENSOR), np.int32)
+        self._touch_adr = [sim.model.sensor(s.name).adr[0] for s in touches]
+        self._threshold = np.array([s.threshold for s in touches])
+        self._max_force = sim.model.actuator_forcerange[self.joints, 1]
+        self._head_distance = [i for i, s in enumerate(ers7.DISTANCE_SENSORS) if s.name in ("ir_near", "ir_far")]
+
+    def at(self, tick: int) -> bytes:
+        sim, values = self.sim, self.values
+        n = len(self.joints)
+        values[:n, 0] = np.round(sim.joint_positions()[self.joints] * 1e6)
+        values[:n, 2] = np.round(np.clip(sim.data.actuator_force[self.joints] / self._max_force, -1, 1) * 255)
+        values[:n, 3] = np.round(sim.servos.command[self.joints] * 1e6)
+        distances = sim.distances_mm()
+        for k, mm in enumerate(distances):
+            row = n + k
+            if k in self._head_distance and self._head_distance.index(k) != tick % 2:
+                values[row, 1] = 0  # not this sensor's turn: the last value stays, no signal
+                continue
+            values[row, 0] = round(mm * 1000)
+            values[row, 1] = min(0xFFFF, round(mm))
+        row = n + len(distances)
+        values[row:row + 3, 0] = np.round(sim.acceleration() * 1e6)
+        row += 3
+        force = sim.data.sensordata[self._touch_adr]
+        touch = np.where(self.switch, force > self._threshold, np.minimum(TOUCH_AD_MAX, np.round(force * TOUCH_AD_PER_NEWTON)))
+        values[row:row + len(force), 0] = touch
+        values[row:row + len(force), 1] = np.where(self.switch, 0, touch)
+        return values.tobytes()
+
+
+class MemoryStickRun:
+    """Runs a memory stick's objects on ``sim`` until ``end_ms`` or their Shutdown.
+
+    ``frame_listeners`` are called with this run after every 8 ms frame (``sim``, ``time_ms``),
+    ``camera_listeners`` with (camera frame index, RGB picture) of every frame the camera sends.
+    Console text goes to standard output and, when given, ``log_path``; the speaker's sound to
+    ``sound_path`` (a 16 kHz WAV file) when the objects played any.
+    """
+
+    def __init__(self, sim: Simulation, stick: MemoryStick, workdir: Path, *, log_path: Path | None = None,
+                 sound_path: Path | None = None):
+        self.sim, self.stick, self.workdir = sim, stick, Path(workdir)
+        self.log_path, self.sound_path = log_path, sound_path
+        self.frame_listeners, self.camera_listeners = [], []
+        self.end_ms: int | None = None
+        self.shutdown = False
+        self.object_names: list[str] = []
+        self._sensors = SensorFrame(sim)
+        self._locators = primitives()
+        self._joint_of = {self._locators.index(j.locator): i for i, j in enumerate(ers7.JOINTS)}
+        self._led_of = {self._locators.index(led.locator): led.name for led in ers7.LEDS}
+        self._ears = [i for i, j in enumerate(ers7.JOINTS) if "-Joint4:" in j.locator]
+        self._kp = np.zeros(len(ers7.JOINTS))  # each joint's stiffness when powered (0: gain off)
+        self._standard_kp = sim.model.actuator_gainprm[:, 0].copy()
+        self._kp[self._ears] = self._standard_kp[self._ears]
+        self._powered = False
+        self._power = dict(BATTERY)
+        self._cdt = None
+        self._sound: dict[int, np.ndarray] = {}
+        self._camera_index = -1
+        self._apply_gains()
+
+    @property
+    def time_ms(self) -> int:
+        return self.sim.time_ms
+
+    def run(self) -> None:
+        """Load, connect and start the objects, then run frames until the end; ConfigError for a
+        stick that cannot run, OpenRObjectCrashed when an object crashed."""
+        with tempfile.TemporaryDirectory(prefix="aibo-sim-openr-") as scratch:
+            scratch = Path(scratch)
+            libraries = []
+            for number, stick_object in enumerate(self.stick.objects):
+                library = scratch / f"{number}_{stick_object.name}.so"
+                library.write_bytes(read_object(stick_object, self.stick.object_cfg))
+                libraries.append((library, stick_object))
+            shared = scratch / "shared"
+            shared.write_bytes(bytes(protocol.SHM_HEADER + protocol.MAX_IMAGE_BYTES))
+            with open(shared, "r+b") as block, mmap.mmap(block.fileno(), 0) as memory:
+                self._memory = memory
+                self._serve(libraries, shared)
+        self._write_sound()
+
+    def _serve(self, libraries, shared: Path) -> None:
+        ours, theirs = socket.socketpair()
+        log = None if self.log_path is None else os.open(self.log_path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC
+                                                         | os.O_NOFOLLOW, 0o644)
+        environment = {**os.environ, "AIBO_OPENR_FD": str(theirs.fileno()), "AIBO_OPENR_SHM": str(shared),
+                       **({"AIBO_OPENR_LOG_FD": str(log)} if log is not None else {})}
+        host = sdk_root() / "OPEN_R" / "bin" / "openr-host"
+        child = Child([str(host)], name=f"memory stick {self.stick.root.name}", env=environment,
+                      pass_fds=(theirs.fileno(), *(() if log is None else (log,))),
+                      grace_note="its objects' Stop entries did not run")
+        try:
+            with child, ours:
+                theirs.close()
+                self._channel, self._child, self._buffer = ours, child, bytearray()
+                self._start(libraries)
+                while not self.shutdown and (self.end_ms is None or self.time_ms < self.end_ms):
+                    if child.pending is not None:
+                        break
+                    self._frame()
+                if child.pending is None:
+                    self._send(protocol.MESSAGES["STOP"], struct.pack("<I", openr_frame_number(self.sim.frame)))
+                    self._apply(self._reply(protocol.REPLIES["FRAME_DONE"]))
+        finally:
+            theirs.close()
+            if log is not None:
+                os.close(log)
+
+    def _start(self, libraries) -> None:
+        locators = self._locators
+        setup = b"".join([
+            protocol.pack_string(openr_bridge.config.ROBOT_DESIGN), protocol.pack_string(str(self.stick.root.resolve())),
+            protocol.pack_string(str(self.workdir.resolve())),
+            struct.pack("<I", len(locators)), *map(protocol.pack_string, locators),
+            struct.pack("<I", len(self._sensors.entries)),
+            *(struct.pack("<2i", index, kind) for index, kind in self._sensors.entries),
+            struct.pack("<3i", locators.index(openr_bridge.CAMERA_LOCATOR), locators.index(ers7.SPEAKER_LOCATOR),
+                        locators.index(ers7.MIC_LOCATOR)),
+            struct.pack("<I", len(self.stick.design_data)),
+            *(protocol.pack_string(k) + protocol.pack_string(v) for k, v in self.stick.design_data.items()),
+            self._power_fields(),
+            struct.pack("<I", len(libraries)),
+            *(protocol.pack_string(str(path)) + protocol.pack_string(o.ms_path) for path, o in libraries)])
+        self._send(protocol.MESSAGES["SETUP"], setup)
+        services = self._services(self._reply(protocol.REPLIES["SERVICES"]))
+        self._check(self.stick.connections, services)
+        self._send(protocol.MESSAGES["CONNECT"], struct.pack("<I", len(self.stick.connections)) + b"".join(
+            protocol.pack_string(str(c.subject)) + protocol.pack_string(str(c.observer))
+            for c in self.stick.connections))
+        self._apply(self._reply(protocol.REPLIES["FRAME_DONE"]))
+
+    def _services(self, payload: bytes) -> dict[str, str]:
+        """Each registered service's object, from the SERVICES reply (plus the system's)."""
+        services = {name: system for system, names in SYSTEM_SERVICES.items() for name in names}
+        count, offset = struct.unpack_from("<I", payload)[0], 4
+        for _ in range(count):
+            name, offset = protocol.unpack_string(payload, offset)
+            self.object_names.append(name)
+            n, offset = struct.unpack_from("<I", payload, offset)[0], offset + 4
+            for _ in range(n):
+                service, offset = protocol.unpack_string(payload, offset)
+                services[service] = name
+        return services
+
+    def _check(self, connections: tuple[Connection, ...], services: dict[str, str]) -> None:
+        """ConfigError naming the CONNECT.CFG line of a service no object registered."""
+        for connection in connections:
+            for name in (connection.subject, connection.observer):
+                if str(name) in services:
+                    continue
+                known = sorted(set(services.values()))
+                problem = (f"{name.object} has no service {_cut(name)} (it registers "
+                           f"{', '.join(s for s in sorted(services) if services[s] == name.object)})"
+                           if name.object in known else
+                           f"no object named {_cut(repr(name.object))} registers {_cut(name)} (the objects: "
+                           f"{', '.join(known)}; names are case-sensitive)")
+                raise ConfigError(problem, connection.path, connection.line)
+
+    def _frame(self) -> None:
+        tick = self.sim.frame
+        flags, extra = 0, b""
+        index = self.sim.camera_frame_index()
+        if index != self._camera_index:
+            self._camera_index = index
+            frame = self.sim.camera.frame()
+            message = bytes(frame.message) if self._cdt is None else bytes(self._encode_with_cdt(frame))
+            self._memory[protocol.SHM_HEADER:protocol.SHM_HEADER + len(message)] = message
+            flags |= protocol.FRAME_FLAGS["IMAGE"]
+            extra += struct.pack("<I", len(message))
+            for listener in self.camera_listeners:
+                listener(frame.index, frame.rgb)
+        if self._update_power():
+            flags |= protocol.FRAME_FLAGS["POWER"]
+            extra += self._power_fields()
+        self._send(protocol.MESSAGES["FRAME"], struct.pack("<4I", tick & 0xFFFFFFFF, tick >> 32, openr_frame_number(tick),
+                                                           flags) + self._sensors.at(tick) + extra)
+        self._apply(self._reply(protocol.REPLIES["FRAME_DONE"]))
+        self.sim.step_frame()
+        for listener in self.frame_listeners:
+            listener(self)
+
+    def _encode_with_cdt(self, frame):
+        if self.sim.camera.sensor is not None:  # the ers7 sensor delivers Y, Cr, Cb
+            return openr_bridge.encode_ycrcb(frame.ycrcb, frame_number=frame.frame_number, field_counter=frame.index,
+                                             cdt=self._cdt)
+        return openr_bridge.encode_frame(frame.rgb, frame_number=frame.frame_number, field_counter=frame.index,
+                                         cdt=self._cdt)
+
+    def _update_power(self) -> bool:
+        """The battery at this time; whether anything changed."""
+        before = dict(self._power)
+        capacity = max(0, BATTERY["remainingCapacity"] - self.time_ms // 60000)
+        status = self._power["robotStatus"] & ~(orsbMOTOR_POWER | orsbBATTERY_CAPACITY_LOW)
+        status |= (orsbMOTOR_POWER if self._powered else 0) | (orsbBATTERY_CAPACITY_LOW if capacity <= CAPACITY_LOW else 0)
+        self._power.update(remainingCapacity=capacity, robotStatus=status)
+        return self._power != before
+
+    def _power_fields(self) -> bytes:
+        return struct.pack(f"<{len(protocol.POWER_FIELDS)}i", *(self._power[f] for f in protocol.POWER_FIELDS))
+
+    # ---------------------------------------------------------------- what the objects did
+
+    def _apply(self, payload: bytes) -> None:
+        servos, gains_changed = self.sim.servos, False
+        for kind, data in protocol.iter_records(payload):
+            if kind == protocol.RECORDS["JOINT"]:
+                primitive, value = struct.unpack("<2i", data)
+                joint = self._joint_of[primitive]
+                if joint in self._ears:
+                    low, high = servos.low[joint], servos.high[joint]
+                    target = high if value else low
+                else:
+                    target = value / 1e6
+                servos.set_target(joint, target)
+                servos.command[joint] = servos.target[joint]
+            elif kind == protocol.RECORDS["LED"]:
+                primitive, intensity, _ = struct.unpack("<3i", data)
+                self.sim.set_led(self._led_of[primitive], min(max(intensity, 0), 255) / 255)
+            elif kind == protocol.RECORDS["MOTOR_POWER"]:
+                self._powered, gains_changed = bool(struct.unpack("<i", data)[0]), True
+            elif kind == protocol.RECORDS["GAIN"]:
+                primitive, enabled, p, _, _, p_shift, _, _ = struct.unpack("<8i", data)
+                joint = self._joint_of[primitive]
+                self._kp[joint] = KP_PER_SONY_P * p * 2.0 ** (STANDARD_PSHIFT - p_shift) if enabled else 0.0
+                gains_changed = True
+            elif kind == protocol.RECORDS["CAMERA"]:
+                request, value = struct.unpack("<2I", data)
+                setting, names = SETTING_BY_REQUEST[request]
+                self.sim.camera.set_settings(**{setting: names[value]})
+            elif kind == protocol.RECORDS["CDT"]:
+                self._cdt = openr_bridge.OCdtVectorData.from_bytes(data)
+            elif kind == protocol.RECORDS["SOUND"]:
+                start = struct.unpack_from("<I", data)[0]
+                self._sound[start] = np.frombuffer(data, "<i2", offset=4).copy()
+            elif kind == protocol.RECORDS["SHUTDOWN"]:
+                self.shutdown = True
+            if gains_changed:
+                self._apply_gains()
+                gains_changed = False
+
+    def _apply_gains(self) -> None:
+        """Each actuator's stiffness: its gain when powered, none otherwise; a joint whose
+        stiffness comes on holds its position."""
+        model, servos = self.sim.model, self.sim.servos
+        kp = self._kp if self._powered else np.zeros_like(self._kp)
+        waking = (kp > 0) & (model.actuator_gainprm[:, 0] == 0)
+        if waking.any():
+            positions = self.sim.joint_positions()
+            servos.set_target(np.flatnonzero(waking), positions[waking])
+            servos.command[waking] = servos.target[waking]
+        model.actuator_gainprm[:, 0] = kp
+        model.actuator_biasprm[:, 1] = -kp
+
+    def _write_sound(self) -> None:
+        if not self._sound or self.sound_path is None:
+            return
+        end = max(start + len(samples) for start, samples in self._sound.items())
+        track = np.zeros(end, "<i2")
+        for start, samples in self._sound.items():
+            track[start:start + len(samples)] = samples
+        with wave.open(str(self.sound_path), "wb") as out:
+            out.setnchannels(1)
+            out.setsampwidth(2)
+            out.setframerate(protocol.SPEAKER_RATE)
+            out.writeframes(track.tobytes())
+
+    # ---------------------------------------------------------------- messages
+
+    def _send(self, kind: int, payload: bytes) -> None:
+        self._channel.sendall(struct.pack("<2I", len(payload) + 4, kind) + payload)
+
+    def _reply(self, expected: int) -> bytes:
+        """The next reply's payload if it is ``expected``; raises for FAILED and CRASHED."""
+        buffer = self._buffer
+        while len(buffer) < 4 or len(buffer) < 4 + struct.unpack_from("<I", buffer)[0]:
+            if not self._child.wait(self._channel, protocol.WAIT_NOTICE_S, self._waiting):
+                chunk = b""
+            else:
+                chunk = self._channel.recv(1 << 20)
+            if not chunk:
+                self._gone()
+            buffer += chunk
+        size = struct.unpack_from("<I", buffer)[0]
+        kind = struct.unpack_from("<I", buffer, 4)[0]
+        payload = bytes(buffer[8:4 + size])
+        del buffer[:4 + size]
+        if kind == protocol.REPLIES["FAILED"]:
+            text, _ = protocol.unpack_string(payload, 0)
+            object_cfg = self.stick.object_cfg
+            line = next((o.line for o in self.stick.objects if text.startswith(o.ms_path + ":")), None)
+            raise ConfigError(text, object_cfg, line)
+        if kind == protocol.REPLIES["CRASHED"]:
+            self._crashed, _ = protocol.unpack_string(payload, 0)
+            self._gone()
+        if kind != expected:
+            raise RuntimeError(f"openr-host answered {kind} where {expected} was expected")
+        return payload
+
+    def _gone(self) -> None:
+        """The runtime has exited (or must be stopped): raise what ended it."""
+        status = self._child.stop()
+        where = f"at simulated t = {self.time_ms / 1000:.3f} s"
+        crashed = getattr(self, "_crashed", None)
+        if status is not None and status < 0:
+            name = signal.Signals(-status).name
+            raise OpenRObjectCrashed(f"{crashed or 'the OPEN-R runtime'} crashed ({name}: {signal.strsignal(-status)}) "
+                                     f"{where}")
+        raise OpenRObjectCrashed(f"the OPEN-R runtime exited with status {status} {where}")
+
+    def _waiting(self, seconds: float) -> None:
+        status = struct.unpack_from("<2I", self._memory, 0)
+        what = "the OPEN-R runtime"
+        if status[0]:
+            names = ["OVirtualRobotComm", "OVirtualRobotAudioComm", *self.object_names]
+            what = f"OPEN-R object {names[status[0] - 1] if status[0] <= len(names) else status[0]} (entry {status[1]})"
+        print(f"aibo-sim: waiting for {what}: no answer for {seconds:.1f} s of wall time "
+              f"(simulated time stays at t = {self.time_ms / 1000:.3f} s)", file=sys.stderr, flush=True)
+

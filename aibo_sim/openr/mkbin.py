@@ -1,0 +1,73 @@
+"""mkbin for the host OPEN-R SDK: an object's ``.o`` and ``.a`` files into a loadable object.
+
+Sony's mkbin links a relocatable MIPS image for Aperios; here the object is a shared library
+that the runtime (``openr-host``) loads. Options as Sony's: ``-o OUT`` (default ``a.bin``),
+``-p OPENRSDK_ROOT`` (default: the SDK this script belongs to), one ``.ocf`` file (or ``-m
+FILE``; Aperios loader hints, checked for its ``object`` line and otherwise ignored), ``-v``,
+``--nodefaultlib``, ``--nocrt``, ``--vm``, ``--novm`` (accepted, no effect); every other argument
+(objects, archives, ``-L``, ``-l``) goes to the linker, after which come ``-lObjectComm -lOPENR``
+from the SDK. Symbols bind inside the object first (``-Bsymbolic``: two objects may define the
+same names, as separate Aperios objects may), and an undefined one is an error at link time,
+not when the robot loads the object.
+"""
+
+import subprocess
+import sys
+from pathlib import Path
+
+USAGE = "usage: mkbin [-p OPENRSDK_ROOT] -o OUTPUT.bin OBJECT.o ... [OBJECT.ocf] [-L DIR] [-l LIB]"
+
+
+def parse(argv: list[str]) -> tuple[str, Path | None, Path | None, list[str]]:
+    """(output, SDK root or None, .ocf or None, linker arguments); ValueError on bad usage."""
+    output, root, ocf, rest = "a.bin", None, None, []
+    arguments = list(argv)
+    while arguments:
+        argument = arguments.pop(0)
+        for flag in ("-o", "-p", "-m"):
+            if argument.startswith(flag) and argument != "--":
+                value = argument[len(flag):] or (arguments.pop(0) if arguments else None)
+                if value is None:
+                    raise ValueError(f"{flag} needs a value")
+                if flag == "-o":
+                    output = value
+                elif flag == "-p":
+                    root = Path(value)
+                elif ocf is not None:
+                    raise ValueError(".ocf given more than once")
+                else:
+                    ocf = Path(value)
+                break
+        else:
+            if argument.endswith(".ocf"):
+                if ocf is not None:
+                    raise ValueError(".ocf given more than once")
+                ocf = Path(argument)
+            elif argument not in ("-v", "--nodefaultlib", "--nocrt", "--vm", "--novm"):
+                rest.append(argument)
+    return output, root, ocf, rest
+
+
+def check_ocf(ocf: Path) -> None:
+    """ValueError naming the file unless its first non-comment line is ``object NAME ...``."""
+    try:
+        lines = [line.split() for line in ocf.read_text(errors="replace").splitlines()]
+    except OSError as error:
+        raise ValueError(f"{ocf}: {error.strerror or error}") from None
+    words = next((line for line in lines if line and not line[0].startswith("#")), [])
+    if len(words) < 2 or words[0] != "object":
+        raise ValueError(f"{ocf}: expected 'object NAME stack heap sched cache tlb mode', got {' '.join(words)!r}")
+
+
+def main(argv: list[str], cxx: str) -> int:
+    try:
+        output, root, ocf, rest = parse(argv)
+        if ocf is not None:
+            check_ocf(ocf)
+    except ValueError as error:
+        print(f"mkbin: {error}\n{USAGE}", file=sys.stderr)
+        return 2
+    library = root / "OPEN_R" / "lib" if root is not None else Path(sys.argv[0]).resolve().parents[1] / "lib"
+    command = [cxx, "-shared", "-o", output, *rest, "-L", str(library), "-lObjectComm", "-lOPENR",
+               "-Wl,-Bsymbolic", "-Wl,--no-undefined"]
+    return subprocess.run(command).returncode

@@ -1,0 +1,289 @@
+/*
+ * kernel.cc: objects, their mailbox, services and connections, shared memory regions, the
+ * console and simulated time of the aibo-sim OPEN-R runtime.
+ */
+#include <deque>
+#include <stdarg.h>
+#include <unistd.h>
+#include <MCOOP.h>
+#include <OPENR/OSyslog.h>
+#include <OPENR/ObjcommMessages.h>
+#include "host.h"
+
+namespace host {
+
+namespace {
+
+struct Message {
+    Object*           target;
+    Selector          selector;
+    std::vector<char> bytes;
+};
+
+std::vector<Object*> objects;
+Object* current = NULL;
+Object* constructing = NULL;
+std::deque<Message> mailbox;
+std::map<std::string, OServiceEntry> services;
+void*  replySlot = NULL;
+size_t replySize = 0;
+bool   replied = false;
+
+struct Region {
+    std::vector<char> bytes;
+};
+std::map<MemoryRegionID, Region*> regions;
+MemoryRegionID nextRegion = 1;
+
+int consoleFd = 1, logFd = -1;
+std::map<Object*, std::string> partialLines;
+longword frameNumber = 0;
+std::string records;
+volatile longword* statusArea = NULL;
+
+void SetStatus(Object* object, Selector selector) {
+    if (statusArea == NULL) return;
+    longword index = 0;
+    for (size_t i = 0; object != NULL && i < objects.size(); i++) {
+        if (objects[i] == object) index = (longword)i + 1;
+    }
+    statusArea[0] = index;
+    statusArea[1] = selector;
+}
+
+void WriteAll(int fd, const std::string& text) {
+    size_t done = 0;
+    while (fd >= 0 && done < text.size()) {
+        ssize_t n = write(fd, text.data() + done, text.size() - done);
+        if (n <= 0) return;
+        done += (size_t)n;
+    }
+}
+
+}  // namespace
+
+Object* ObjectOf(const OID& oid) {
+    for (size_t i = 0; i < objects.size(); i++) {
+        if (oid.GetAddress() == objects[i]) return objects[i];
+    }
+    return NULL;
+}
+
+Object* Current() { return current; }
+Object* Constructing() { return constructing; }
+void SetConstructing(Object* object) { constructing = object; }
+const std::vector<Object*>& Objects() { return objects; }
+
+Object* AddObject(const std::string& name, const ObjectEntry* table, bool system) {
+    Object* object = new Object();
+    object->name = name;
+    object->system = system;
+    for (; table != NULL && table->selector != UNDEF; table++) object->entries[table->selector] = table->entry;
+    objects.push_back(object);
+    return object;
+}
+
+void Invoke(Object* object, Selector selector, void* message) {
+    std::map<Selector, Entry>::iterator entry = object->entries.find(selector);
+    if (entry == object->entries.end()) {
+        char text[160];
+        snprintf(text, sizeof text, "%s has no entry %u: a message for it is lost\n", object->name.c_str(),
+                 (unsigned)selector);
+        Object* caller = current;
+        current = object;
+        Print(text);
+        current = caller;
+        return;
+    }
+    Object* caller = current;
+    longword callerSelector = statusArea != NULL ? statusArea[1] : 0;
+    bool inside = InObjectCode();
+    current = object;
+    SetStatus(object, selector);
+    EnterObjectCode(true);
+    ((void (*)(void*))entry->second)(message);
+    EnterObjectCode(inside);
+    current = caller;
+    SetStatus(caller, callerSelector);
+}
+
+void SetStatusArea(volatile longword* area) { statusArea = area; }
+
+void Send(const OServiceEntry& to, const void* message, size_t size) {
+    Object* target = ObjectOf(to.oid);
+    if (target == NULL) return;
+    Message queued;
+    queued.target = target;
+    queued.selector = to.selector;
+    queued.bytes.assign((const char*)message, (const char*)message + size);
+    mailbox.push_back(queued);
+}
+
+bool Deliver(size_t limit) {
+    for (size_t delivered = 0; !mailbox.empty(); delivered++) {
+        if (delivered == limit) return false;
+        Message message = mailbox.front();
+        mailbox.pop_front();
+        Invoke(message.target, message.selector, &message.bytes[0]);
+    }
+    return true;
+}
+
+OStatus Call(const OServiceEntry& to, void* message, void* reply, size_t size) {
+    Object* target = ObjectOf(to.oid);
+    if (target == NULL) return oINVALID_OID;
+    void* outerSlot = replySlot;
+    size_t outerSize = replySize;
+    bool outerReplied = replied;
+    replySlot = reply;
+    replySize = size;
+    replied = false;
+    Invoke(target, to.selector, message);
+    bool answered = replied;
+    replySlot = outerSlot;
+    replySize = outerSize;
+    replied = outerReplied;
+    return answered ? oSUCCESS : oFAIL;
+}
+
+void Reply(const void* reply, size_t size) {
+    if (replySlot != NULL) {
+        memcpy(replySlot, reply, size < replySize ? size : replySize);
+        replied = true;
+    }
+}
+
+OStatus Register(const OServiceEntry& entry, const char* name) {
+    Object* object = ObjectOf(entry.oid);
+    if (object == NULL || name == NULL) return oFAIL;
+    if (services.count(name)) return oALREADY_EXIST;
+    services[name] = entry;
+    object->services.push_back(std::make_pair(std::string(name), entry));
+    return oSUCCESS;
+}
+
+const OServiceEntry* FindService(const std::string& name) {
+    std::map<std::string, OServiceEntry>::const_iterator found = services.find(name);
+    return found == services.end() ? NULL : &found->second;
+}
+
+OStatus Connect(const std::string& subject, const std::string& observer) {
+    const OServiceEntry* control = FindService(subject);
+    const OServiceEntry* connect = FindService(observer);
+    if (control == NULL || connect == NULL) return oNOT_FOUND;
+    OConnectMessage message;
+    message.command = oconnectcmdCONNECT;
+    message.subjectID = *control;
+    strncpy(message.subName, subject.c_str(), oserviceNAME_MAX);
+    message.subName[oserviceNAME_MAX] = 0;
+    Invoke(ObjectOf(connect->oid), connect->selector, &message);
+    return oSUCCESS;
+}
+
+MemoryRegionID NewRegion(size_t size, void** base) {
+    Region* region = new Region();
+    region->bytes.assign(size ? size : 1, 0);
+    MemoryRegionID id = nextRegion++;
+    regions[id] = region;
+    *base = &region->bytes[0];
+    return id;
+}
+
+void* RegionBase(MemoryRegionID id, size_t* size) {
+    std::map<MemoryRegionID, Region*>::iterator found = regions.find(id);
+    if (found == regions.end()) return NULL;
+    if (size != NULL) *size = found->second->bytes.size();
+    return &found->second->bytes[0];
+}
+
+void DeleteRegion(MemoryRegionID id) {
+    std::map<MemoryRegionID, Region*>::iterator found = regions.find(id);
+    if (found == regions.end()) return;
+    delete found->second;
+    regions.erase(found);
+}
+
+void SetConsole(int stdoutFd, int logFileFd) {
+    consoleFd = stdoutFd;
+    logFd = logFileFd;
+}
+
+void Print(const char* text) {
+    Object* object = current;
+    std::string& partial = partialLines[object];
+    partial += text;
+    size_t end;
+    while ((end = partial.find('\n')) != std::string::npos) {
+        char stamp[32];
+        snprintf(stamp, sizeof stamp, "[%9.3f s] ", Seconds());
+        std::string line = stamp + (object ? object->name : std::string("system")) + ": " + partial.substr(0, end + 1);
+        WriteAll(consoleFd, line);
+        WriteAll(logFd, line);
+        partial.erase(0, end + 1);
+    }
+}
+
+void FlushConsole() {
+    Object* caller = current;
+    for (std::map<Object*, std::string>::iterator it = partialLines.begin(); it != partialLines.end(); ++it) {
+        if (it->second.empty()) continue;
+        current = it->first;
+        Print("\n");
+    }
+    current = caller;
+}
+
+longword FrameNumber() { return frameNumber; }
+void SetFrameNumber(longword frame) { frameNumber = frame; }
+double Seconds() { return frameNumber * 0.008; }
+
+void Record(longword kind, const void* payload, size_t size) {
+    longword header[2] = {kind, (longword)size};
+    records.append((const char*)header, sizeof header);
+    records.append((const char*)payload, size);
+}
+
+std::string TakeRecords() {
+    std::string taken;
+    taken.swap(records);
+    return taken;
+}
+
+}  // namespace host
+
+/* Aperios: an entry returns when it is done. */
+extern "C" void Exit() {}
+extern "C" void Return(void*, size_t) {}
+extern "C" void Prologue(void*) {}
+extern "C" sError WhoAmI(OID* object) {
+    *object = OID(host::Current());
+    return 0;
+}
+
+/* The console. */
+static OStatus PrintFormatted(const char* prefix, const char* format, va_list arguments, bool newline) {
+    char text[4096];
+    int used = snprintf(text, sizeof text, "%s", prefix);
+    vsnprintf(text + used, sizeof text - used, format, arguments);
+    if (newline) strncat(text, "\n", sizeof text - strlen(text) - 1);
+    host::Print(text);
+    return oSUCCESS;
+}
+
+OStatus osysprint(const char* format, ...) {
+    va_list arguments;
+    va_start(arguments, format);
+    OStatus status = PrintFormatted("", format, arguments, false);
+    va_end(arguments);
+    return status;
+}
+
+OStatus osyslog(OSyslogPriority priority, const char* format, ...) {
+    const char* prefix = priority == osyslogERROR ? "[ERROR] " : priority == osyslogWARNING ? "[WARNING] "
+                       : priority == osyslogINFO ? "[INFO] " : "";
+    va_list arguments;
+    va_start(arguments, format);
+    OStatus status = PrintFormatted(prefix, format, arguments, priority != osyslogDEBUG_NO_NEWLINE);
+    va_end(arguments);
+    return status;
+}
