@@ -406,8 +406,8 @@ class MemoryStickRun:
         crashed = getattr(self, "_crashed", None)
         if status is not None and status < 0:
             name = signal.Signals(-status).name
-            raise OpenRObjectCrashed(f"{crashed or 'the OPEN-R runtime'} crashed ({name}: {signal.strsignal(-status)}) "
-                                     f"{where}")
+            what = f"OPEN-R object {crashed}" if crashed else "the OPEN-R runtime"
+            raise OpenRObjectCrashed(f"{what} crashed ({name}: {signal.strsignal(-status)}) {where}")
         raise OpenRObjectCrashed(f"the OPEN-R runtime exited with status {status} {where}")
 
     def _waiting(self, seconds: float) -> None:

@@ -104,7 +104,7 @@ void Crashed(int signal) {
     size_t used = 0;
     const Object* object = Current();
     const char* name = object != NULL ? object->name.c_str() : "the runtime";
-    const char* parts[] = {name, object != NULL ? ", entry " : "", ""};
+    const char* parts[] = {name, object != NULL ? " (entry " : "", ""};
     for (int k = 0; k < 2; k++) {
         for (const char* c = parts[k]; *c && used < 200; c++) text[used++] = *c;
     }
@@ -112,6 +112,7 @@ void Crashed(int signal) {
         longword selector = ((volatile longword*)shared)[1], digits = 1;
         while (digits * 10 <= selector) digits *= 10;
         for (; digits > 0; digits /= 10) text[used++] = (char)('0' + selector / digits % 10);
+        text[used++] = ')';
     }
     longword header[3] = {(longword)(used + 8), AIBO_OPENR_REPLY_CRASHED, (longword)used};
     if (write(channel, header, sizeof header) > 0 && write(channel, text, used) > 0) {

@@ -1,0 +1,23 @@
+// Crash: writes through a null pointer on its third sensor vector (aibo-sim's runtime tests).
+#ifndef Crash_h_DEFINED
+#define Crash_h_DEFINED
+
+#include <OPENR/OObject.h>
+#include <OPENR/OSubject.h>
+#include <OPENR/OObserver.h>
+#include "def.h"
+
+class Crash : public OObject {
+public:
+    Crash() : vectors(0) {}
+    OSubject*  subject[numOfSubject];
+    OObserver* observer[numOfObserver];
+    virtual OStatus DoInit(const OSystemEvent& event);
+    virtual OStatus DoStart(const OSystemEvent& event);
+    void NotifySensor(const ONotifyEvent& event);
+
+private:
+    int vectors;
+};
+
+#endif

@@ -1,0 +1,88 @@
+#include <OPENR/OPENRAPI.h>
+#include <OPENR/OSyslog.h>
+#include <OPENR/OUnits.h>
+#include <OPENR/core_macro.h>
+#include "JointProbe.h"
+
+static const char* const PAN = "PRM:/r1/c1/c2-Joint2:12";
+
+JointProbe::JointProbe() : pan(oprimitiveID_UNDEF), sent(0), sensorIndex(-1) {}
+
+OStatus JointProbe::DoInit(const OSystemEvent&) {
+    NEW_ALL_SUBJECT_AND_OBSERVER;
+    REGISTER_ALL_ENTRY;
+    SET_ALL_READY_AND_NOTIFY_ENTRY;
+    OPENR::OpenPrimitive(PAN, &pan);
+    for (int i = 0; i < 2; i++) {
+        MemoryRegionID id;
+        OCommandVectorData* vector;
+        OPENR::NewCommandVectorData(1, &id, &vector);
+        vector->SetNumData(1);
+        vector->GetInfo(0)->Set(odataJOINT_COMMAND2, pan, FRAMES);
+        region[i] = new RCRegion(vector->vectorInfo.memRegionID, vector->vectorInfo.offset, (void*)vector,
+                                 vector->vectorInfo.totalSize);
+    }
+    return oSUCCESS;
+}
+
+OStatus JointProbe::DoStart(const OSystemEvent&) {
+    char mode[16] = "";
+    ODesignDataID id;
+    byte* data;
+    size_t size;
+    if (OPENR::FindDesignData("JOINTPROBE_MODE", &id, &data, &size) == oSUCCESS) {
+        memcpy(mode, data, size < sizeof mode - 1 ? size : sizeof mode - 1);
+        OPENR::DeleteDesignData(id);
+    }
+    OSYSPRINT(("mode [%s]\n", mode));
+    if (strncmp(mode, "nopower", 7) != 0) OPENR::SetMotorPower(opowerON);
+    if (strncmp(mode, "nogain", 6) != 0) {
+        OPENR::EnableJointGain(pan);
+        OPENR::SetJointGain(pan, 0x08, 0x02, 0x04, 0x0E, 0x02, 0x0F);
+    }
+    Send(0);
+    Send(1);
+    subject[sbjMove]->NotifyObservers();
+    ASSERT_READY_TO_ALL_OBSERVER;
+    return oSUCCESS;
+}
+
+// Vector v: frame k holds the pan at 10 + 4v + k degrees.
+void JointProbe::Send(int vector) {
+    RCRegion* free = region[0]->NumberOfReference() == 1 ? region[0] : region[1];
+    if (free->NumberOfReference() != 1) {
+        OSYSPRINT(("no free region\n"));
+        return;
+    }
+    OCommandVectorData* data = (OCommandVectorData*)free->Base();
+    OJointCommandValue2* value = (OJointCommandValue2*)data->GetData(0)->value;
+    for (int k = 0; k < FRAMES; k++) value[k].value = oradians(10 + 4 * vector + k);
+    subject[sbjMove]->SetData(free);
+    sent++;
+}
+
+void JointProbe::Ready(const OReadyEvent& event) {
+    OSYSPRINT(("ready %s refs %d %d\n", event.IsAssert() ? "assert" : "deassert", region[0]->NumberOfReference(),
+               region[1]->NumberOfReference()));
+    if (sent < VECTORS) {
+        Send(sent);
+        subject[sbjMove]->NotifyObservers();
+    }
+}
+
+void JointProbe::NotifySensor(const ONotifyEvent& event) {
+    OSensorFrameVectorData* sensors = (OSensorFrameVectorData*)event.Data(0);
+    if (sensorIndex < 0) {
+        for (longword i = 0; i < sensors->vectorInfo.numData; i++) {
+            if (sensors->GetInfo(i)->primitiveID == pan) sensorIndex = (int)i;
+        }
+    }
+    OSensorFrameInfo* info = sensors->GetInfo(sensorIndex);
+    OJointValue* joint = (OJointValue*)sensors->GetData(sensorIndex)->frame;
+    OJointValue now;
+    OPENR::GetJointValue(pan, &now);
+    OSYSPRINT(("sensor %u %u %d %d %d %d ref %d now %d\n", (unsigned)info->frameNumber, (unsigned)info->numFrames,
+               (int)joint[0].value, (int)joint[1].value, (int)joint[2].value, (int)joint[3].value,
+               (int)joint[3].refValue, (int)now.value));
+    observer[event.ObsIndex()]->AssertReady();
+}

@@ -1,0 +1,278 @@
+"""The host OPEN-R runtime's semantics, with OPEN-R objects of our own (tests/openr_programs),
+built by the host SDK with Sony-style Makefiles and run on the simulated ERS-7."""
+
+import signal
+import struct
+import subprocess
+import threading
+
+import numpy as np
+import pytest
+
+import openr_bridge
+from aibo_sim import ers7
+from aibo_sim.openr import host
+from aibo_sim.openr.host import OpenRObjectCrashed
+from aibo_sim.openr.sdk import sdk_root
+from openr_bridge import ConfigError, host_protocol
+from openr_bridge.cdt import OCdtVectorData, orange_ball_cdt, pink_ball_cdt
+from openr_bridge.config import parse_stub_cfg
+from openr_bridge.stubgen import generate
+
+from openr_support import build_programs, make, make_stick, run_stick
+
+PAN = ers7.JOINT_INDEX["head_pan"]
+EFFECTOR = "OVirtualRobotComm.Effector.OCommandVectorData.O"
+SENSOR = "OVirtualRobotComm.Sensor.OSensorFrameVectorData.S"
+IMAGE = "OVirtualRobotComm.FbkImageSensor.OFbkImageVectorData.S"
+JOINT_PROBE = f"JointProbe.Move.OCommandVectorData.S {EFFECTOR}\n{SENSOR} JointProbe.Sensor.OSensorFrameVectorData.O\n"
+
+
+@pytest.fixture(scope="module")
+def objects(tmp_path_factory):
+    return build_programs(tmp_path_factory.mktemp("openr"))
+
+
+def test_stubgen2_numbers_entries_as_sony_does():
+    stub = parse_stub_cfg('ObjectName : Probe\nNumOfOSubject : 2\nNumOfOObserver : 3\n'
+                          'Service : "Probe.A.X.S", null, Ready()\nService : "Probe.B.X.S", Control(), null\n'
+                          'Service : "Probe.C.X.O", null, Notify()\nService : "Probe.D.X.O", Connect(), null\n'
+                          'Service : "Probe.E.X.O", null, null\nExtra : Power()\n')
+    files = generate(stub)
+    assert set(files) == {"def.h", "entry.h", "ProbeStub.h", "ProbeStub.cc"}
+    entry = files["entry.h"]
+    for table, selectors in (("Hook   [numOfHook]    ", "0, 1, 2, 3"), ("Control[numOfSubject] ", "4, 5"),
+                             ("Ready  [numOfSubject] ", "6, 7"), ("Connect[numOfObserver]", "8, 9, 10"),
+                             ("Notify [numOfObserver]", "11, 12, 13")):
+        assert f"const Selector Entry_{table} = {{ {selectors} }};" in entry
+    assert "const Selector Extra_Entry[] = { 14 };" in entry and "const int entryPower = 0;" in entry
+    assert "const longword numOfBasicEntries = 14;" in entry
+    definitions = files["def.h"]
+    assert "const int sbjA = 0;" in definitions and "const int sbjB = 1;" in definitions
+    assert "const int obsE = 2;" in definitions and '"Probe.D.X.O",' in definitions
+    stub_cc = files["ProbeStub.cc"]
+    for line in ("StubFuncDefine_Ready(0, Ready)", "StubFuncDefine_Control_nofunc(0)", "StubFuncDefine_Control(1, Control)",
+                 "StubFuncDefine_Ready_nofunc(1)", "StubFuncDefine_Notify(0, Notify)", "StubFuncDefine_Connect(1, Connect)",
+                 "StubFuncDefine_Notify_nofunc(2)", "{Extra_Entry[0], (Entry)::_Power},", "Probe Self;"):
+        assert line in stub_cc
+
+
+def test_sdk_structures_read_the_encoders_bytes(tmp_path):
+    """A C++ program of the SDK reads an OFbkImageVectorData our encoder wrote, field for field."""
+    rgb = np.random.default_rng(3).integers(0, 256, (160, 208, 3), np.uint8)
+    message = openr_bridge.encode_frame(rgb, frame_number=1234, field_counter=77,
+                                        cdt=OCdtVectorData.of(orange_ball_cdt()))
+    (tmp_path / "image.bin").write_bytes(bytes(message))
+    (tmp_path / "read.cc").write_text(r"""
+#include <OPENR/ODataFormats.h>
+#include <OPENR/OFbkImage.h>
+int main() {
+    static byte buffer[300000];
+    FILE* file = fopen("image.bin", "rb");
+    size_t size = fread(buffer, 1, sizeof buffer, file);
+    OFbkImageVectorData* image = (OFbkImageVectorData*)buffer;
+    printf("%u %u %u %u\n", (unsigned)size, (unsigned)image->vectorInfo.totalSize, (unsigned)image->vectorInfo.numData,
+           (unsigned)image->vectorInfo.infoOffset);
+    for (int layer = 0; layer < 4; layer++) {
+        OFbkImageInfo* info = image->GetInfo(layer);
+        printf("%u %u %u %u %u %u\n", (unsigned)info->type, (unsigned)info->frameNumber, (unsigned)info->dataOffset,
+               (unsigned)info->dataSize, (unsigned)info->width, (unsigned)info->height);
+    }
+    OFbkImage y(image->GetInfo(0), image->GetData(0), ofbkimageBAND_Y);
+    OFbkImage hh(image->GetInfo(1), image->GetData(1), ofbkimageBAND_Y_HH);
+    OFbkImage c(image->GetInfo(3), image->GetData(3), ofbkimageBAND_CDT);
+    printf("%u %u %u %u %u %u\n", y.Pixel(17, 33), hh.Pixel(5, 7), c.Pixel(9, 2), (unsigned)y.FieldCounter(),
+           (unsigned)c.ColorFrequency(ocdtCHANNEL1), (unsigned)y.Skip());
+    printf("%u %u %u\n", (unsigned)sizeof(ODataVectorInfo), (unsigned)sizeof(OCdtVectorData),
+           (unsigned)sizeof(OSensorFrameData));
+    return 0;
+}
+""")
+    library = sdk_root() / "OPEN_R" / "lib"
+    subprocess.run([str(sdk_root() / "bin" / "mipsel-linux-g++"), "-Wall", "-o", "read", "read.cc", f"-L{library}",
+                    "-lOPENR", f"-Wl,-rpath,{library}"], cwd=tmp_path, check=True)
+    out = subprocess.run(["./read"], cwd=tmp_path, capture_output=True, text=True, check=True).stdout.split("\n")
+    assert out[0].split() == [str(len(bytes(message)))] * 2 + ["4", "192"]
+    for layer in range(4):
+        info = message.GetInfo(layer)
+        assert out[1 + layer].split() == [str(v) for v in (info.type, 1234, info.dataOffset, info.dataSize,
+                                                            info.width, info.height)]
+    h_y, m_hh = message.band(0, openr_bridge.ofbkimageBAND_Y), message.band(1, openr_bridge.ofbkimageBAND_Y_HH)
+    c = message.band(3, openr_bridge.ofbkimageBAND_CDT)
+    c_band = openr_bridge.OFbkImage(message.GetInfo(3), message.GetData(3), openr_bridge.ofbkimageBAND_CDT)
+    assert out[5].split() == [str(v) for v in (h_y[33, 17], m_hh[7, 5], c[2, 9], 77,
+                                                c_band.ColorFrequency(openr_bridge.ocdtCHANNEL1), 5 * 208)]
+    assert out[6].split() == ["192", str(192 + 8 * 144), "256"]
+
+
+def test_effector_plays_each_vector_and_asks_for_the_next_after_its_last_frame(objects, tmp_path):
+    stick = make_stick(tmp_path / "ms", objects, ["JPROBE"], JOINT_PROBE)
+    result = run_stick(stick, 0.3, tmp_path / "out", lambda r: (r.time_ms, r.sim.servos.command[PAN]))
+    lines = result.lines("JointProbe")
+    readies = [line for line in lines if line.startswith("ready")]
+    # The effector's first ready (at boot) sends the first of the two primed vectors; each later
+    # one comes after a vector's last frame: that vector's region is given back (one reference
+    # left: the program's) and the subject sends the other (two: the program's and the one the
+    # subject holds until it is played; the effector takes its own when the notification arrives).
+    assert readies == ["ready assert refs 2 2", "ready assert refs 1 2", "ready assert refs 2 1",
+                       "ready assert refs 1 2", "ready assert refs 2 1", "ready assert refs 1 2", "ready assert refs 1 1"]
+    assert lines[2] == "no free region"  # the boot ready found both regions queued
+    # Set-points: vector v's frame k is 10 + 4v + k degrees, one frame each, without a gap; then held.
+    set_points = np.round(np.degrees([command for _, command in result.frames]), 6)
+    expected = [10 + 4 * (k // 4) + k % 4 for k in range(24)] + [33] * (len(set_points) - 24)
+    assert np.allclose(set_points, expected, atol=1e-5)
+    sensors = [line.split() for line in lines if line.startswith("sensor")]
+    assert [int(s[1]) for s in sensors] == list(range(0, 36, 4))  # 4 frames a vector, every 32 ms
+    assert {s[2] for s in sensors} == {"4"}
+    assert abs(np.degrees(int(sensors[-1][6]) / 1e6) - 33) < 1.5  # the pan got there
+
+
+@pytest.mark.parametrize("mode", ["nopower", "nogain"])
+def test_joints_stay_limp_without_motor_power_or_gain(objects, tmp_path, mode):
+    stick = make_stick(tmp_path / "ms", objects, ["JPROBE"], JOINT_PROBE, {"JOINTPROBE_MODE": "MODE.TXT"},
+                       {"MODE.TXT": mode})
+    result = run_stick(stick, 0.3, tmp_path / "out", lambda r: r.sim.joint_positions()[PAN])
+    assert result.lines("JointProbe")[0] == f"mode [{mode}]"
+    assert abs(np.degrees(result.frames[-1])) < 2  # commanded to 33 degrees, it did not move
+
+
+def test_files_are_the_memory_stick_and_the_runs_folder(objects, tmp_path):
+    stick = make_stick(tmp_path / "ms", objects, ["FPROBE"], design_data={"PROBE_TEXT": "TEXT.TXT"},
+                       data={"TEXT.TXT": "hello design\n"})
+    out = tmp_path / "out"
+    result = run_stick(stick, 1.0, out)
+    assert result.run.time_ms == 0  # OPENR::Shutdown in DoStart ended the run before its first frame
+    lines = result.lines("FileProbe")
+    assert lines[:5] == ["design ERS-7", "design data 13 bytes: hello design", "missing design data: 6",
+                         "write /ms/open-r/mw/data/p/probe.txt: ok", "read /MS/OPEN-R/MW/DATA/P/PROBE.TXT: on the stick"]
+    assert "write here.txt: ok" in lines and "read /MS/OPEN-R/MW/DATA/P/STREAM.TXT: through a C++ stream" in lines
+    for refused in ("write /MS/OPEN-R/MW/DATA/P/longer_name.txt: refused (errno 13)",
+                    "read /etc/hostname: refused (errno 13)", "write ../escape.txt: refused (errno 13)",
+                    "write /MS/../escape.txt: refused (errno 13)"):
+        assert refused in lines
+    assert "[ERROR] refused to open /etc/hostname: not on the memory stick (/MS)" in lines
+    data = stick / "OPEN-R" / "MW" / "DATA" / "P"
+    assert sorted(p.name for p in data.iterdir()) == ["PROBE.TXT", "STREAM.TXT", "TEXT.TXT"]
+    assert (out / "here.txt").read_text() == "in the run's folder\n"
+    assert not list(tmp_path.rglob("escape.txt")) and not list(tmp_path.rglob("longer_name.txt"))
+
+
+def test_colour_tables_fill_the_cdt_layer_of_the_next_frames(objects, tmp_path):
+    stick = make_stick(tmp_path / "ms", objects, ["CDTPROBE"], f"{IMAGE} CdtProbe.Image.OFbkImageVectorData.O\n")
+    result = run_stick(stick, 0.1, tmp_path / "out")
+    lines = result.lines("CdtProbe")
+    assert lines[0] == "SetCdtVectorData 0"
+    # The same frames, encoded here with the same tables: the C layer the object read is ours.
+    tables = OCdtVectorData.of(pink_ball_cdt(), orange_ball_cdt())
+    expected = []
+    for index, frame in enumerate(result.images[:3]):
+        message = openr_bridge.encode_ycrcb(frame.ycrcb, frame_number=frame.frame_number, field_counter=frame.index,
+                                            cdt=tables)
+        layer_c = message.band(3, openr_bridge.ofbkimageBAND_CDT)[:-1]
+        rows, columns = np.nonzero(layer_c & openr_bridge.ocdtCHANNEL1)
+        c = openr_bridge.OFbkImage(message.GetInfo(3), message.GetData(3), openr_bridge.ofbkimageBAND_CDT)
+        expected.append(f"image {index} frame {frame.frame_number} field {index} camera 1 C 104x80 orange "
+                        f"{len(rows)} {columns.sum()} {rows.sum()} freq {c.ColorFrequency(openr_bridge.ocdtCHANNEL0)} "
+                        f"{c.ColorFrequency(openr_bridge.ocdtCHANNEL1)} "
+                        f"Y(10,20) {message.band(0, openr_bridge.ofbkimageBAND_Y)[20, 10]}")
+    assert lines[1:4] == expected
+    assert int(expected[0].split()[11]) > 50  # the orange ball is in view: the table finds it
+
+
+def test_a_crashing_object_is_named_with_the_signal_and_the_time(objects, tmp_path):
+    stick = make_stick(tmp_path / "ms", objects, ["CRASH"], f"{SENSOR} Crash.Sensor.OSensorFrameVectorData.O\n")
+    with pytest.raises(OpenRObjectCrashed, match=r"^OPEN-R object Crash \(entry 7\) crashed \(SIGSEGV: Segmentation fault\) at "
+                                                 r"simulated t = 0\.088 s$"):
+        run_stick(stick, 1.0, tmp_path / "out")
+
+
+def test_an_object_that_never_returns_is_announced_and_one_signal_ends_it(objects, tmp_path, monkeypatch, capfd):
+    monkeypatch.setattr(host_protocol, "WAIT_NOTICE_S", 0.2)
+    stick = make_stick(tmp_path / "ms", objects, ["SPIN"], f"{SENSOR} Spin.Sensor.OSensorFrameVectorData.O\n")
+    timer = threading.Timer(1.0, signal.raise_signal, [signal.SIGINT])
+    timer.start()
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            run_stick(stick, 5.0, tmp_path / "out")
+    finally:
+        timer.cancel()
+    err = capfd.readouterr().err
+    assert "aibo-sim: waiting for OPEN-R object Spin (entry 7): no answer for 0.2 s of wall time (simulated time stays " \
+           "at t = 0.056 s)" in err
+
+
+def test_runs_are_deterministic(objects, tmp_path):
+    stick = make_stick(tmp_path / "ms", objects, ["JPROBE", "CDTPROBE"],
+                       JOINT_PROBE + f"{IMAGE} CdtProbe.Image.OFbkImageVectorData.O\n")
+    runs = [run_stick(stick, 0.2, tmp_path / f"out{k}", lambda r: r.sim.data.qpos.copy(), seed=5) for k in range(2)]
+    assert runs[0].console == runs[1].console and "CdtProbe: image 4" in runs[0].console
+    assert np.array_equal(np.array(runs[0].frames), np.array(runs[1].frames))
+
+
+def test_frame_numbers_wrap_to_one_after_oframe_max_number(objects, tmp_path):
+    stick = make_stick(tmp_path / "ms", objects, ["JPROBE"], JOINT_PROBE)
+    original = host.MemoryStickRun._start
+
+    def start_late(self, libraries):
+        self.sim.frame = openr_bridge.ers7_camera.oframeMAX_NUMBER - 5
+        self.end_ms = self.time_ms + 100
+        original(self, libraries)
+
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(host.MemoryStickRun, "_start", start_late)
+        result = run_stick(stick, 0.1, tmp_path / "out")
+    numbers = [int(line.split()[1]) for line in result.lines("JointProbe") if line.startswith("sensor")]
+    maximum = openr_bridge.ers7_camera.oframeMAX_NUMBER
+    assert numbers == [maximum - 5, maximum - 1, 3]  # frames maximum - 1, maximum, 1, 2; then 3, 4, 5, 6
+
+
+def test_connect_cfg_naming_an_unregistered_service_names_its_line(objects, tmp_path):
+    stick = make_stick(tmp_path / "ms", objects, ["JPROBE"],
+                       JOINT_PROBE + "# the next line's observer has no such service\n"
+                                     f"{SENSOR} JointProbe.Sensors.OSensorFrameVectorData.O\n")
+    with pytest.raises(ConfigError, match=r"CONNECT\.CFG:4: JointProbe has no service "
+                                          r"JointProbe\.Sensors\.OSensorFrameVectorData\.O \(it registers "):
+        run_stick(stick, 0.1, tmp_path / "out")
+
+
+def test_an_object_that_is_not_built_for_this_machine_is_refused(objects, tmp_path):
+    stick = make_stick(tmp_path / "ms", objects, ["JPROBE"], JOINT_PROBE)
+    (stick / "OPEN-R" / "MW" / "OBJS" / "JPROBE.BIN").write_bytes(b"\x1f\x8b" + bytes(20))
+    with pytest.raises(ConfigError, match=r"OBJECT\.CFG:1: /MS/OPEN-R/MW/OBJS/JPROBE\.BIN is a damaged gzip file"):
+        run_stick(stick, 0.1, tmp_path / "out")
+    (stick / "OPEN-R" / "MW" / "OBJS" / "JPROBE.BIN").unlink()
+    with pytest.raises(ConfigError, match=r"OBJECT\.CFG:1: cannot read /MS/OPEN-R/MW/OBJS/JPROBE\.BIN: No such file .*"
+                                          r"\(not built\? run make install"):
+        run_stick(stick, 0.1, tmp_path / "out")
+
+
+def test_a_compile_error_names_the_file_and_line(tmp_path):
+    program = tmp_path / "Broken"
+    program.mkdir()
+    (program / "Broken.cc").write_text("#include <OPENR/OObject.h>\nint f() { return undefined_name; }\n")
+    (program / "Makefile").write_text("OPENRSDK_ROOT?=/usr/local/OPEN_R_SDK\nall:\n"
+                                      "\t$(OPENRSDK_ROOT)/bin/mipsel-linux-g++ -c Broken.cc\n")
+    with pytest.raises(AssertionError, match=r"Broken\.cc:2:\d+: error: .undefined_name. was not declared"):
+        make(program)
+
+
+def test_sensor_vector_values_are_the_simulators_state(objects, tmp_path):
+    """JointProbe prints the pan's four values of each sensor vector: the joint's angle at each
+    frame, in micro-radians, as the simulator had it at that frame's start."""
+    stick = make_stick(tmp_path / "ms", objects, ["JPROBE"], JOINT_PROBE)
+    angles = []
+    original = host.SensorFrame.at
+
+    def at(self, tick):
+        values = original(self, tick)
+        angles.append(struct.unpack_from("<i", values, self.joints.index(PAN) * 16)[0])
+        return values
+
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(host.SensorFrame, "at", at)
+        result = run_stick(stick, 0.2, tmp_path / "out", lambda r: r.sim.joint_positions()[PAN])
+    sensors = [line.split() for line in result.lines("JointProbe") if line.startswith("sensor")]
+    for line in sensors:
+        first = int(line[1])
+        assert [int(v) for v in line[3:7]] == angles[first:first + 4]
+    assert angles[4] == round(result.frames[3] * 1e6)  # the state after frame 3 is frame 4's
