@@ -7,7 +7,9 @@
  * brings the answers of the calls that only read the state (protocol.PREFETCHED) the controller
  * made before: they serve it until its next call without results. When the
  * simulator answers "end" (the run is over), the controller exits with status 0; at exit, the
- * robot_die functions run. */
+ * robot_die functions run. A controller that closed its end of the socket (AIBO_SIM_FD) and
+ * then calls cannot go on: it exits, leaving the reason for the simulator in AIBO_SIM_SHM,
+ * past the images (serve.py reports it). */
 #include <errno.h>
 #include <fcntl.h>
 #include <sched.h>
@@ -87,13 +89,30 @@ static void connect_to_simulator(void) {
     atexit(at_exit);
 }
 
+/* The socket failed: the controller closed its descriptor (EBADF; ENOTSOCK where the number
+ * now names another file), which the simulator, still there, is told; else the simulator is
+ * gone, and reports why itself. */
+static void channel_failed(void) {
+    if (errno == EBADF || errno == ENOTSOCK) {
+        char why[200];
+        int size = snprintf(why, sizeof why, "closed its connection to the simulator (descriptor %d, AIBO_SIM_FD), "
+                            "then made a call", channel);
+        int file = open(getenv("AIBO_SIM_SHM"), O_WRONLY | O_CLOEXEC);
+        if (file >= 0) {
+            if (pwrite(file, why, (size_t)size, AIBO_MAX_IMAGE_BYTES) < 0) { /* the exit status is all it has */ }
+            close(file);
+        }
+    }
+    _exit(70);
+}
+
 /* ---- sending */
 
 static void write_all(const unsigned char *bytes, size_t size) {
     while (size) {
-        ssize_t sent = write(channel, bytes, size);
+        ssize_t sent = send(channel, bytes, size, MSG_NOSIGNAL); /* never write()s into a file in its place */
         if (sent < 0 && errno == EINTR) continue;
-        if (sent <= 0) _exit(70); /* the simulator is gone: it reports why */
+        if (sent <= 0) channel_failed();
         bytes += sent;
         size -= (size_t)sent;
     }
@@ -175,8 +194,10 @@ static size_t read_answer(size_t have, size_t need) {
             have += (size_t)got;
         } else if (got < 0 && (errno == EAGAIN || errno == EWOULDBLOCK)) {
             sched_yield();
-        } else if (!(got < 0 && errno == EINTR)) {
+        } else if (got == 0) {
             _exit(70); /* the simulator is gone: it reports why */
+        } else if (errno != EINTR) {
+            channel_failed();
         }
     }
     return have;

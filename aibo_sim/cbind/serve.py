@@ -2,25 +2,32 @@
 
 Each call is made on the Python API (``aibo_sim.controller``) with the installed robot, so a
 C controller gets the values, the semantics and the errors a Python controller gets; the
-answers of reading calls (``PREFETCHED``) also go ahead with each step's. How it ends, as the
-runner reports it:
+answers of reading calls (``PREFETCHED``) also go ahead with each step's. The process runs
+under ``child.Child``'s discipline: a process group of its own, killed with aibo-sim (even by
+SIGKILL) and, with whatever it started, at the end of the run. How it ends, as the runner
+reports it:
 
 - the run's duration is over: ``robot_step`` answers "end", the controller runs its
   ``robot_die`` functions and exits 0 (``SimulationEnd`` here); it returns from ``main`` or
-  calls ``exit(0)``: the run ends there; Ctrl-C (or SIGTERM): its ``robot_die`` functions run
-  (its own Ctrl-C is ignored), then the signal acts here as it would have (``KeyboardInterrupt``,
-  exit status 130). A first Ctrl-C is noted and acted on between two calls, never in the middle
-  of reading or answering one (which would lose a call, and leave both sides waiting for the
-  other); a second one acts at once (a ``robot_die`` function that never returns);
+  calls ``exit(0)``: the run ends there;
+- Ctrl-C or SIGTERM: acted on between two calls, never in the middle of reading or answering
+  one (which would lose a call, and leave both sides waiting for the other): its next
+  ``robot_step`` is answered "end", its ``robot_die`` functions run, then the signal acts here
+  as it would have (``KeyboardInterrupt``, ``cli.Terminated``: exit status 130, 143). A
+  controller that makes no call for ``child.GRACE_S`` after the signal (it computes) is
+  stopped without them; a second signal acts at once (a ``robot_die`` function that never
+  returns);
 - ``exit(N)``, N not 0: ``SystemExit(N)``, as a Python controller's ``sys.exit(N)``;
 - a call raised (an unknown device, a bad value): the controller is stopped and
   ``CControllerError`` names the call and the error;
-- it crashed (a signal: segmentation fault, abort): ``CControllerError`` names the signal.
+- it crashed (a signal: segmentation fault, abort): ``CControllerError`` names the signal;
+- it closed its socket, then made a call: ``CControllerError`` says so (``libaibo.c`` leaves
+  the reason in the shared file, past the images; not its ``exit(70)``).
 
 A controller that computes for long between two calls leaves the simulated time where it
 is; after ``WAIT_NOTICE_S`` of wall time without a call, one line on stderr says that the
 simulator is waiting for the controller (simulated time and how long), so such a controller
-is not taken for a simulator that hangs.
+is not taken for a simulator that hangs (``runner`` says the same of a Python controller).
 """
 
 from __future__ import annotations
@@ -28,14 +35,11 @@ from __future__ import annotations
 import io
 import mmap
 import os
-import select
 import signal
 import socket
 import struct
-import subprocess
 import sys
 import tempfile
-import threading
 import time
 from pathlib import Path
 
@@ -45,6 +49,7 @@ from .. import controller as api
 from ..render import RenderingUnavailable
 from ..robot import SimulationEnd
 from ..sim import SimulationDiverged
+from .child import Child
 from .protocol import MAX_IMAGE_BYTES, OPS, PREFETCHED, STATUS
 
 WAIT_NOTICE_S = 10.0
@@ -134,12 +139,12 @@ class _Calls:
     """The calls arriving from the controller, read in bulk (calls without results come
     queued, several to a read)."""
 
-    def __init__(self, channel: socket.socket, name: str, robot):
-        self._channel, self._name, self._robot = channel, name, robot
+    def __init__(self, channel: socket.socket, name: str, robot, child: Child):
+        self._channel, self._name, self._robot, self._child = channel, name, robot, child
         self._buffer = bytearray()
 
     def next(self) -> bytes | None:
-        """The next call's payload, or None when the controller has closed its end."""
+        """The next call's payload, or None when the controller has closed its end or exited."""
         buffer = self._buffer
         while len(buffer) < 4 or len(buffer) < 4 + _LENGTH.unpack_from(buffer)[0]:
             chunk = self._read()
@@ -163,15 +168,21 @@ class _Calls:
                 os.sched_yield()
             except ConnectionResetError:  # it exited with an answer unread: gone all the same
                 return b""
-        waited = 0.0
-        while not select.select([self._channel], [], [], WAIT_NOTICE_S)[0]:
-            waited += WAIT_NOTICE_S
-            print(f"aibo-sim: waiting for controller {self._name}: no API call for {waited:.1f} s of wall time "
-                  f"(simulated time stays at t = {self._robot.time_ms / 1000:.3f} s)", file=sys.stderr, flush=True)
+        if not self._child.wait(self._channel, WAIT_NOTICE_S, self.announce_wait):
+            return b""  # it has exited
         try:
             return self._channel.recv(1 << 16)
         except ConnectionResetError:
             return b""
+
+    def announce_wait(self, waited_s: float) -> None:
+        announce_wait(self._name, waited_s, self._robot.time_ms)
+
+
+def announce_wait(name: str, waited_s: float, time_ms: int) -> None:
+    """The line that says the simulator waits for controller ``name`` (C here, Python in ``runner``)."""
+    print(f"aibo-sim: waiting for controller {name}: no API call for {waited_s:.1f} s of wall time "
+          f"(simulated time stays at t = {time_ms / 1000:.3f} s)", file=sys.stderr, flush=True)
 
 
 def run_c_controller(executable: Path, name: str) -> None:
@@ -183,27 +194,23 @@ def run_c_controller(executable: Path, name: str) -> None:
         image = mmap.mmap(shared.fileno(), MAX_IMAGE_BYTES)
         ours, theirs = socket.socketpair()
         environment = {**os.environ, "AIBO_SIM_FD": str(theirs.fileno()), "AIBO_SIM_SHM": shared.name}
-        # The controller ignores Ctrl-C: this process ends it, after its robot_die functions.
-        child = subprocess.Popen([str(executable)], pass_fds=(theirs.fileno(),), env=environment,
-                                 preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_IGN))
-        theirs.close()
-        signals = _SignalsBetweenCalls()
+        child = Child([str(executable)], name=f"controller {name}", pass_fds=(theirs.fileno(),), env=environment,
+                      grace_note="its robot_die functions could not run")
         try:
-            with memoryview(image) as view, signals:
-                server = _Server(ours, view, name, robot, signals)
+            with child, memoryview(image) as view:
+                theirs.close()
                 try:
-                    server.serve(child)
+                    _Server(ours, view, name, robot, child).serve()
                 except SimulationEnd:
-                    if signals.pending is None:
+                    if child.pending is None:
                         raise
         finally:
+            theirs.close()
             ours.close()
-            if child.poll() is None:
-                child.kill()
-            child.wait()
             image.close()
-            if signals.pending is not None:
-                signal.raise_signal(signals.pending)  # under the handler it had before: as if it came now
+        reason = os.pread(shared.fileno(), 512, MAX_IMAGE_BYTES)  # the binding's, past the images
+    if reason:
+        raise CControllerError(reason.decode("utf-8", "replace"))
     status = child.returncode
     if status < 0:
         signal_name = signal.Signals(-status).name
@@ -212,51 +219,18 @@ def run_c_controller(executable: Path, name: str) -> None:
         raise SystemExit(status)
 
 
-class _SignalsBetweenCalls:
-    """SIGINT and SIGTERM in the main thread while a controller is served: the first is noted
-    (``pending``, its number) for the server to act on between two calls; a second one goes to
-    the handler the signal had before. Elsewhere than the main thread, where no signal handler
-    runs, nothing changes."""
-
-    SIGNALS = (signal.SIGINT, signal.SIGTERM)
-
-    def __init__(self):
-        self.pending: int | None = None
-        self._previous: dict[int, object] = {}
-
-    def __enter__(self) -> "_SignalsBetweenCalls":
-        if threading.current_thread() is threading.main_thread():
-            self._previous = {number: signal.signal(number, self._note) for number in self.SIGNALS}
-        return self
-
-    def __exit__(self, *exc_info) -> None:
-        for number, handler in self._previous.items():
-            signal.signal(number, signal.SIG_DFL if handler is None else handler)  # None: not set from Python
-
-    def _note(self, number, frame) -> None:
-        if self.pending is None:
-            self.pending = number
-            return
-        previous = self._previous[number]
-        if callable(previous):
-            previous(number, frame)
-        elif previous != signal.SIG_IGN:
-            signal.signal(number, signal.SIG_DFL)
-            signal.raise_signal(number)
-
-
 class _Server:
     """Answers one controller's calls: its motions, the calls it sent and those read ahead, and
     whether it waits for an answer now."""
 
-    def __init__(self, channel: socket.socket, image: memoryview, name: str, robot, signals: _SignalsBetweenCalls):
+    def __init__(self, channel: socket.socket, image: memoryview, name: str, robot, child: Child):
         handlers = _handlers(image)
         self._table = [_Call(op_name, arguments, results, handlers[op_name]) for op_name, arguments, results in OPS]
-        self._channel, self._calls = channel, _Calls(channel, name, robot)
+        self._channel, self._calls = channel, _Calls(channel, name, robot, child)
         self._wanted = {}  # the PREFETCHED calls made so far, by (number, arguments): answered with each step
-        self._signals = signals
+        self._child = child
 
-    def serve(self, child: subprocess.Popen) -> None:
+    def serve(self) -> None:
         """Answer the controller's calls until it exits; SimulationEnd after a run that ended.
         Once a signal is pending, every ``robot_step`` is answered "end" (the controller's
         robot_die functions run, then it exits)."""
@@ -267,7 +241,7 @@ class _Server:
                 raise CControllerError(f"unknown call number {number} (a controller built against other headers?)")
             call = self._table[number]
             args = call.arguments(payload)
-            if self._signals.pending is not None and call.name == "robot_step":
+            if self._child.pending is not None and call.name == "robot_step":
                 self._channel.sendall(_Call.END)
                 continue
             if call.ahead:
@@ -286,8 +260,8 @@ class _Server:
             if call.results:
                 self._channel.sendall(_with_answers_ahead(call.answer(result), self._wanted)
                                       if call.name == "robot_step" else call.answer(result))
-        child.wait()
-        if ended and child.returncode == 0:
+        self._child.wait(None, WAIT_NOTICE_S, self._calls.announce_wait)  # it may run on after closing its socket
+        if ended and self._child.stop() == 0:
             raise SimulationEnd()
 
 

@@ -4,11 +4,9 @@ tasks (``engine="ray"``), each shard a dump of its own folder, merged at the end
 from __future__ import annotations
 
 import contextlib
-import ctypes
 import os
 import signal
 import socket
-import sys
 import threading
 import time
 from multiprocessing import connection, get_context
@@ -18,6 +16,7 @@ import numpy as np
 
 from openr_bridge import FRAME_RATE_HZ
 
+from ..cbind.child import die_with_parent_thread
 from ..runner import Progress
 from .coco import coco_bytes
 from .formats import DUMP_FORMAT, PATHS, DumpError
@@ -32,19 +31,16 @@ SHARD_BALL_X, SHARD_BALL_Y = (0.3, 1.2), (-0.5, 0.5)  # metres: ahead of the rob
 PARENT_POLL_S = 0.5  # a worker's check that its parent still lives (where PR_SET_PDEATHSIG is missing)
 SHARD_LOCK_WAIT_S = 5.0  # a shard's lock may still be held by a worker of a killed dump, dying
 WORKER_STOP_S = 5.0  # SIGTERM, then SIGKILL after this
-PR_SET_PDEATHSIG = 1  # <linux/prctl.h>
 
 
 def die_with_parent(parent_pid: int) -> None:
     """Make this worker process end when ``parent_pid`` does, however it ends (SIGKILL too).
 
-    Linux: ``prctl(PR_SET_PDEATHSIG, SIGKILL)``; everywhere: a thread that ends the process
-    once its parent is gone (it has been re-parented), checked every ``PARENT_POLL_S``.
+    Linux: ``child.die_with_parent_thread`` (``PR_SET_PDEATHSIG``: the parent's thread that
+    started the worker is the one that waits for it); everywhere: a thread that ends the
+    process once its parent is gone (it has been re-parented), checked every ``PARENT_POLL_S``.
     """
-    if sys.platform.startswith("linux"):
-        with contextlib.suppress(OSError, AttributeError):
-            libc = ctypes.CDLL(None, use_errno=True)
-            libc.prctl(PR_SET_PDEATHSIG, int(signal.SIGKILL), 0, 0, 0)
+    die_with_parent_thread()
     if os.getppid() != parent_pid:  # the parent died before the line above
         os._exit(1)
 

@@ -1,0 +1,151 @@
+"""What a trusted tool must never do (issue 39): write or read through a link planted where it
+writes, leave a controller running after one SIGTERM or a SIGKILL, let two runs share a folder,
+start more dump workers than memory holds, break on a controller thread that reads the camera;
+and the smaller promises (a scene that starts the robot in a wall, wait notices for Python
+controllers, a closed socket, memory after closing envs, long arguments, run.json's status)."""
+
+import json
+import os
+import re
+import shutil
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from aibo_sim.runner import ControllerFailed, run_controller
+
+ROOT = Path(__file__).resolve().parents[1]
+SCRIPTED = ROOT / "tests" / "controllers" / "scripted_head.py"
+TRACKER = ROOT / "controllers" / "ball_tracker.py"
+VICTIM = b"a file of the user's, not aibo-sim's\n"
+STARTUP_S = 60  # a subprocess's imports, a compile and its first frames, on a loaded machine
+GONE_S = 10  # a stopped controller is gone within this (child.GRACE_S, 2 s, and the stop)
+needs_cc = pytest.mark.skipif(not shutil.which("cc"), reason="needs cc")
+
+
+@pytest.fixture(autouse=True)
+def own_cache(tmp_path_factory, monkeypatch):
+    """C controllers compile into this session's cache (the user's is left alone)."""
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path_factory.getbasetemp() / "cache"))
+
+
+def one_error_line(capsys, *words) -> str:
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "Traceback" not in err, err[:2000]
+    assert all(word in err for word in words), err
+    return err
+
+
+def _alive(pid: int) -> bool:
+    """The process exists and is not a zombie."""
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] not in "ZX"
+    except (OSError, IndexError):
+        return False
+
+
+def _wait_for(predicate, timeout_s: float, what: str):
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        if predicate():
+            return
+        time.sleep(0.02)
+    raise AssertionError(f"timed out after {timeout_s} s waiting for {what}")
+
+
+def _cli(*args: str) -> list[str]:
+    return [sys.executable, "-m", "aibo_sim.cli", *args]
+
+
+# ---------------------------------------------------------------- 2. one signal ends any controller
+
+SPINNER = r"""#include <stdio.h>
+#include <stdlib.h>
+#include <unistd.h>
+#include <device/robot.h>
+static void bye(void) { fclose(fopen("die.txt", "w")); }
+int main(void) {
+  robot_live(0); robot_die(bye); robot_step(8);
+  pid_t grandchild = fork();
+  if (grandchild == 0) { for (;;) pause(); }
+  FILE *f = fopen("pids.txt", "w");
+  fprintf(f, "%d %d\n", (int)getpid(), (int)grandchild);
+  fclose(f);
+  for (volatile unsigned long i = 0;; i++) {}
+}
+"""
+
+
+def _start_spinner(tmp_path) -> tuple[subprocess.Popen, Path, list[int]]:
+    """aibo-sim running a C controller that forked a child and computes forever between calls."""
+    source, out = tmp_path / "spin.c", tmp_path / "out"
+    source.write_text(SPINNER)
+    run = subprocess.Popen(_cli("run", str(source), "--duration", "100000", "--out", str(out)), cwd=ROOT,
+                           stderr=subprocess.PIPE, text=True)
+    _wait_for(lambda: (out / "pids.txt").exists() and (out / "pids.txt").read_text().endswith("\n"), STARTUP_S,
+              "the controller's pids")
+    pids = [int(p) for p in (out / "pids.txt").read_text().split()]
+    assert all(map(_alive, pids))
+    return run, out, pids
+
+
+@needs_cc
+@pytest.mark.parametrize("signal_name, status", [("SIGTERM", 143), ("SIGINT", 130)])
+def test_one_signal_ends_a_c_controller_that_computes_forever_and_its_group(tmp_path, signal_name, status):
+    """As ``timeout`` or systemd sends it: once. The controller makes no further call, so its
+    robot_die cannot run: it is stopped with its process group (its forked child too), the run
+    says so and exits as the signal says, run.json says "interrupted"."""
+    run, out, pids = _start_spinner(tmp_path)
+    try:
+        run.send_signal(getattr(signal, signal_name))
+        err = run.communicate(timeout=STARTUP_S)[1]
+    finally:
+        run.kill()
+    assert run.returncode == status, err
+    assert (f"aibo-sim: controller spin.c made no call for 2 s after {signal_name}: stopped, with its process group; "
+            "its robot_die functions could not run") in err
+    assert json.loads((out / "run.json").read_text())["status"] == "interrupted" and not (out / "die.txt").exists()
+    _wait_for(lambda: not any(map(_alive, pids)), GONE_S, "the controller and its child to end")
+
+
+@needs_cc
+def test_a_c_controller_dies_with_aibo_sim_killed_by_sigkill(tmp_path):
+    run, out, pids = _start_spinner(tmp_path)
+    run.kill()
+    run.wait()
+    _wait_for(lambda: not _alive(pids[0]), GONE_S, "the controller to die with its parent")
+    os.kill(pids[1], signal.SIGKILL)  # the grandchild's parent was the controller: no one else stops it
+
+
+@needs_cc
+def test_a_child_that_keeps_the_socket_open_does_not_hold_the_run(tmp_path):
+    """The controller forks a child that inherits the socket and sleeps, then returns: the run ends
+    there (exit 0), and the child is stopped with it."""
+    source, out = tmp_path / "forks.c", tmp_path / "out"
+    source.write_text("#include <stdio.h>\n#include <unistd.h>\n#include <device/robot.h>\n"
+                      "int main(void) {\n  robot_live(0); robot_step(8);\n  pid_t child = fork();\n"
+                      "  if (child == 0) { for (;;) pause(); }\n  FILE *f = fopen(\"child.txt\", \"w\");\n"
+                      "  fprintf(f, \"%d\\n\", (int)child); fclose(f);\n  robot_step(8); return 0;\n}\n")
+    run = subprocess.run(_cli("run", str(source), "--duration", "10", "--out", str(out)), cwd=ROOT,
+                         capture_output=True, text=True, timeout=STARTUP_S)
+    assert run.returncode == 0, run.stderr
+    assert json.loads((out / "run.json").read_text())["simulated_s"] == 0.016
+    _wait_for(lambda: not _alive(int((out / "child.txt").read_text())), GONE_S, "the controller's child to end")
+
+
+@needs_cc
+def test_a_c_controller_that_closes_its_socket_is_not_reported_as_exit_70(tmp_path):
+    source = tmp_path / "closes.c"
+    source.write_text("#include <stdlib.h>\n#include <unistd.h>\n#include <device/robot.h>\n"
+                      "int main(void) {\n  robot_live(0); robot_step(8);\n  close(atoi(getenv(\"AIBO_SIM_FD\")));\n"
+                      "  robot_step(8); return 0;\n}\n")
+    with pytest.raises(ControllerFailed) as failed:
+        run_controller(source, duration=1)
+    message = str(failed.value)
+    assert re.fullmatch(r"controller closes\.c: closed its connection to the simulator \(descriptor \d+, AIBO_SIM_FD\), "
+                        r"then made a call at simulated t = 0\.008 s", message), message
+    assert failed.value.exit_status is None
