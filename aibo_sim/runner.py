@@ -22,7 +22,7 @@ from . import controller
 from .camera import CameraSettings
 from .cbind import (C_SUFFIXES, CControllerError, compile_controller, controller_sources, is_c_controller,
                     run_c_controller)
-from .files import png, write_file_atomic
+from .files import FolderLock, SymlinkRefused, make_folder, png, read_file, write_file_atomic
 from .options import make_out_folder, place, start_values
 from .render import RenderingUnavailable
 from .robot import Robot, SimulationEnd
@@ -64,6 +64,7 @@ def motion_dirs(controller_path: Path) -> tuple[Path, ...]:
 
 
 RUN_FILE = "run.json"
+LOCK_FILE = ".run.lock"  # flock()ed while a run writes its folder (``files.FolderLock``): one run per folder
 FRAME_FILE = re.compile(r"\d{6,}\.png")  # a run's frame, frames/NNNNNN.png
 # What a run's frames/ may hold: its frames, their temporary names (".NNNNNN.png.tmp": no
 # "*.png" pattern matches them) and the temporary names of earlier versions ("NNNNNN.partial.png").
@@ -93,11 +94,13 @@ class FrameWriter:
     controller's files go there too), or hold an earlier aibo-sim run, whose ``frames/``
     files and ``run.json`` are then removed first (the controller's own files are left: it
     rewrites them). Anything else is refused with an OSError (exit status 2), nothing
-    changed: a ``run.json`` that is not aibo-sim's, a non-empty ``frames/`` beside no
-    ``run.json``, a ``frames/`` holding files that are not a run's frames. ``run.json`` is
-    written at the start with ``"status": "incomplete"`` and replaced by the summary at the
-    end (by ``"status": "failed"``, the error and the simulated time when the controller
-    failed or the physics diverged), so that a killed run's folder is still recognised.
+    changed: a folder another run is writing (``.run.lock``, held as a dump holds its lock,
+    until ``lock.release()``), a ``run.json`` that is not aibo-sim's, a non-empty ``frames/``
+    beside no ``run.json``, a ``frames/`` holding files that are not a run's frames, a link in
+    place of ``frames/`` or ``run.json`` (``files.SymlinkRefused``). ``run.json`` is written at
+    the start with ``"status": "incomplete"`` and replaced by the summary at the end (by
+    ``"status": "failed"``, the error and the simulated time when the controller failed or
+    the physics diverged), so that a killed run's folder is still recognised.
 
     A write that fails (a full disk) ends the run: the error is kept and ``check`` raises it
     after the run, as the OSError naming the file rather than as the controller's exception;
@@ -105,16 +108,27 @@ class FrameWriter:
     """
 
     def __init__(self, directory: Path, controller: Path | None = None, backend: str | None = None):
-        self.out, self.directory = directory, directory / "frames"
+        self.out, self.directory = make_out_folder(directory), directory / "frames"
         self.error: OSError | None = None
-        self._prepare({"controller": controller and str(controller), "backend": backend, "status": "incomplete"})
+        self._check()  # before the lock file is made: a folder refused is left as it was
+        self.lock = FolderLock(directory, LOCK_FILE, "run", "wait for it to end or stop it, or choose another --out")
+        try:
+            self._prepare({"controller": controller and str(controller), "backend": backend, "status": "incomplete"})
+        except BaseException:
+            self.lock.release()
+            raise
 
-    def _prepare(self, marker: dict) -> None:
+    def _check(self) -> list[str]:
+        """The names in an earlier run's ``frames/``; OSError when the folder is not one to reuse."""
         run_json, frames = self.out / RUN_FILE, self.directory
+        if frames.is_symlink():
+            raise SymlinkRefused.at(frames)
         earlier_run = run_json.exists() or run_json.is_symlink()
         if earlier_run:
             try:
-                previous = json.loads(run_json.read_bytes())
+                previous = json.loads(read_file(run_json))
+            except SymlinkRefused:
+                raise
             except (OSError, ValueError):
                 previous = None
             if not (isinstance(previous, dict) and {"controller", "backend"} <= previous.keys()):
@@ -134,7 +148,11 @@ class FrameWriter:
             raise OSError(f"{frames} holds files that are not a run's frames ({foreign[0]!r}"
                           f"{f' and {len(foreign) - 1} more' if len(foreign) > 1 else ''}): refusing to remove them; "
                           "choose another --out")
-        for name in names:  # the earlier run's frames
+        return names
+
+    def _prepare(self, marker: dict) -> None:
+        frames = self.directory
+        for name in self._check():  # the earlier run's frames, checked again under the lock
             try:
                 (frames / name).unlink()
             except FileNotFoundError:
@@ -142,7 +160,9 @@ class FrameWriter:
             except OSError as exc:
                 raise OSError(f"cannot remove the earlier run's {frames / name}: {exc.strerror or exc}") from exc
         try:
-            frames.mkdir(parents=True, exist_ok=True)
+            make_folder(frames)
+        except SymlinkRefused:
+            raise
         except OSError as exc:
             raise OSError(f"cannot create {frames}: {exc.strerror or exc}") from exc
         self.write_run_json(marker)
@@ -286,7 +306,7 @@ def run_controller(path: str | Path, *, backend: str = "sim", duration: float = 
     writer = None
     if out is not None:
         try:
-            out = make_out_folder(Path(out).resolve())
+            out = Path(out).resolve()
             writer = FrameWriter(out, controller=path, backend=backend)
         except BaseException:
             sim.close()
@@ -347,6 +367,22 @@ def run_controller(path: str | Path, *, backend: str = "sim", duration: float = 
                                        + controller_traceback(error) + die_report) from error
             if die_report:
                 raise ControllerFailed(f"controller {path.name} ended {where};{die_report}")
+        wall = time.perf_counter() - start
+        if writer is not None and writer.error is not None:  # a frame that could not be written ended the run
+            try:
+                record_end("failed", writer.error)
+            except OSError:
+                pass  # the full disk refused this too: run.json still says "incomplete"
+            writer.check()
+        position, yaw, _ = sim.body_pose()
+        ball_end = sim.ball_position()
+        summary = RunSummary(str(path), backend, robot.time_ms / 1000, wall, robot.time_ms / 1000 / max(wall, 1e-9),
+                             writer.count if writer else 0, (float(position[0]), float(position[1]), math.degrees(yaw)),
+                             None if ball_end is None else (float(ball_end[0]), float(ball_end[1])),
+                             scene=None if scene is None else str(Path(scene).resolve()), seed=seed, pose=pose,
+                             ball=ball, camera=camera)
+        if writer is not None:
+            writer.write_run_json(asdict(summary))
     except (ControllerFailed, SimulationDiverged, RenderingUnavailable, KeyboardInterrupt) as failure:
         if writer is not None:  # the frames so far stay, and run.json says how the run ended
             record_end("interrupted" if isinstance(failure, KeyboardInterrupt) else "failed", failure)
@@ -355,20 +391,6 @@ def run_controller(path: str | Path, *, backend: str = "sim", duration: float = 
         progress_bar.close()
         controller.install(None)
         sim.close()
-    wall = time.perf_counter() - start
-    if writer is not None and writer.error is not None:  # a frame that could not be written ended the run
-        try:
-            record_end("failed", writer.error)
-        except OSError:
-            pass  # the full disk refused this too: run.json still says "incomplete"
-        writer.check()
-    position, yaw, _ = sim.body_pose()
-    ball_end = sim.ball_position()
-    summary = RunSummary(str(path), backend, robot.time_ms / 1000, wall, robot.time_ms / 1000 / max(wall, 1e-9),
-                         writer.count if writer else 0, (float(position[0]), float(position[1]), math.degrees(yaw)),
-                         None if ball_end is None else (float(ball_end[0]), float(ball_end[1])),
-                         scene=None if scene is None else str(Path(scene).resolve()), seed=seed, pose=pose, ball=ball,
-                         camera=camera)
-    if out is not None:
-        writer.write_run_json(asdict(summary))
+        if writer is not None:
+            writer.lock.release()
     return summary

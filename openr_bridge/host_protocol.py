@@ -11,7 +11,8 @@ Simulator to runtime:
 - ``SETUP``: robot design; memory stick folder; working folder; the primitives (locator
   strings; the primitive's index is its ``OPrimitiveID``); the sensor vector's entries
   (primitive index, ``SENSOR_KINDS`` value each); camera, speaker and microphone indices
-  (-1: none); design data (keyword, ``/MS`` path each); the objects to load (library path,
+  (-1: none); the sensor values at boot (as in ``FRAME``: what ``OPENR::GetJointValue``
+  reads before the first frame); design data (keyword, ``/MS`` path each); the objects to load (library path,
   the name OBJECT.CFG gives). The runtime loads and initialises the objects and answers
   ``SERVICES`` (per object: its name and registered service names) or ``FAILED`` (text).
 - ``CONNECT``: (subject, observer) service name pairs; the runtime connects them, starts the

@@ -274,7 +274,8 @@ def test_full_disk_leaves_only_complete_frames_and_resumes(tmp_path, monkeypatch
         real_replace(source, target)
 
     monkeypatch.setattr(os, "replace", replace)
-    with pytest.raises(DumpError, match=f"cannot write {out / 'yuv420' / '000003.yuv'}: No space left on device"):
+    with pytest.raises(DumpError, match=f"cannot write {out / 'yuv420' / '000003.yuv'}: No space left on device; "
+                                        "free some space, then continue the dump with --resume$"):
         dump(out, controller=TRACKER, frames=6)
     assert not list(out.rglob(".tmp.*")) and not (out / "video.mp4").exists()
     assert len(load_dump(out)) == 3 and (out / "rgb" / "000003.png").exists()  # written, but not complete

@@ -439,14 +439,14 @@ def test_render_on_a_full_disk_leaves_the_earlier_set_whole(tmp_path, monkeypatc
     out = tmp_path / "render"
     assert main(["render", "--settle", "0", "--out", str(out)]) == 0
     before = _snapshot(out)
-    real_open = open
+    real_open = aibo_sim.files.open_file
 
     def open_until_full(path, *args, **kwargs):
         if "tracking" in Path(path).name:
             raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
         return real_open(path, *args, **kwargs)
 
-    monkeypatch.setattr(aibo_sim.files, "open", open_until_full, raising=False)
+    monkeypatch.setattr(aibo_sim.files, "open_file", open_until_full)
     capsys.readouterr()
     assert main(["render", "--settle", "0", "--seed", "5", "--pose", "0.2", "0", "30", "--out", str(out)]) == 2
     assert capsys.readouterr().err == f"aibo-sim: error: cannot write {out / 'tracking.png'}: No space left on device\n"

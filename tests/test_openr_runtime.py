@@ -260,12 +260,12 @@ def test_sensor_vector_values_are_the_simulators_state(objects, tmp_path):
     """JointProbe prints the pan's four values of each sensor vector: the joint's angle at each
     frame, in micro-radians, as the simulator had it at that frame's start."""
     stick = make_stick(tmp_path / "ms", objects, ["JPROBE"], JOINT_PROBE)
-    angles = []
+    angles = {}  # tick -> the pan's value sent for that frame (at boot, then at frame 0, for tick 0)
     original = host.SensorFrame.at
 
     def at(self, tick):
         values = original(self, tick)
-        angles.append(struct.unpack_from("<i", values, self.joints.index(PAN) * 16)[0])
+        angles[tick] = struct.unpack_from("<i", values, self.joints.index(PAN) * 16)[0]
         return values
 
     with pytest.MonkeyPatch.context() as patch:
@@ -274,5 +274,5 @@ def test_sensor_vector_values_are_the_simulators_state(objects, tmp_path):
     sensors = [line.split() for line in result.lines("JointProbe") if line.startswith("sensor")]
     for line in sensors:
         first = int(line[1])
-        assert [int(v) for v in line[3:7]] == angles[first:first + 4]
+        assert [int(v) for v in line[3:7]] == [angles[first + k] for k in range(4)]
     assert angles[4] == round(result.frames[3] * 1e6)  # the state after frame 3 is frame 4's

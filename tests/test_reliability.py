@@ -16,7 +16,9 @@ from pathlib import Path
 
 import pytest
 
-from aibo_sim.runner import ControllerFailed, run_controller
+from aibo_sim.cli import main
+from aibo_sim.dump import DumpError, dump, load_dump
+from aibo_sim.runner import ControllerFailed, FrameWriter, run_controller
 
 ROOT = Path(__file__).resolve().parents[1]
 SCRIPTED = ROOT / "tests" / "controllers" / "scripted_head.py"
@@ -59,6 +61,95 @@ def _wait_for(predicate, timeout_s: float, what: str):
 
 def _cli(*args: str) -> list[str]:
     return [sys.executable, "-m", "aibo_sim.cli", *args]
+
+
+# ---------------------------------------------------------------- 1. links planted where we write
+
+
+def _plant(link: Path, victim: Path) -> None:
+    victim.write_bytes(VICTIM)
+    link.parent.mkdir(parents=True, exist_ok=True)
+    link.symlink_to(victim)
+
+
+def _small_dump(out: Path, frames: int = 3) -> None:
+    assert main(["dump", str(SCRIPTED), "--out", str(out), "--steps", str(frames), "--formats", "rgb",
+                 "--camera-profile", "ideal"]) == 0
+
+
+def _cut_to_first_frame(out: Path) -> None:
+    """frames.jsonl as a killed dump leaves it: one frame listed."""
+    lines = (out / "frames.jsonl").read_bytes().splitlines(keepends=True)
+    (out / "frames.jsonl").write_bytes(lines[0])
+
+
+PLACES = {  # what is planted (relative to --out), how the folder is made first, the command
+    "dump lock": (".dump.lock", None, ["dump", str(SCRIPTED), "--steps", "2", "--formats", "rgb"]),
+    "dump frames.jsonl on --resume": ("frames.jsonl", _small_dump, ["dump", str(SCRIPTED), "--steps", "3", "--formats",
+                                                                    "rgb", "--camera-profile", "ideal", "--resume"]),
+    "dump leftover temporary frame on --resume": ("rgb/.tmp.000001.png", lambda out: (_small_dump(out),
+                                                                                       _cut_to_first_frame(out)),
+                                                  ["dump", str(SCRIPTED), "--steps", "3", "--formats", "rgb",
+                                                   "--camera-profile", "ideal", "--resume"]),
+    "run lock": (".run.lock", None, ["run", str(SCRIPTED), "--duration", "0.1"]),
+    "run's temporary run.json": (".run.json.tmp", None, ["run", str(SCRIPTED), "--duration", "0.1"]),
+    "run's frames folder": ("frames", None, ["run", str(SCRIPTED), "--duration", "0.1"]),
+    "render's temporary picture": (".head_camera.png.tmp", None, ["render", "--settle", "0"]),
+}
+
+
+@pytest.mark.parametrize("place", PLACES)
+def test_a_link_planted_where_aibo_sim_writes_is_refused_naming_it(tmp_path, capsys, place):
+    """Exit 2 with one line naming the link; what it points to is left as it was."""
+    name, prepare, command = PLACES[place]
+    out, victim = tmp_path / "out", tmp_path / "victim"
+    if prepare is not None:
+        prepare(out)
+        (out / name).unlink(missing_ok=True)
+    if name == "frames":  # a link to a folder of the user's, holding a file named like a frame
+        (tmp_path / "theirs").mkdir()
+        victim = tmp_path / "theirs" / "000000.png"
+        victim.write_bytes(VICTIM)
+        out.mkdir()
+        (out / name).symlink_to(tmp_path / "theirs")
+    else:
+        _plant(out / name, victim)
+    capsys.readouterr()
+    assert main(command + ["--out", str(out)]) == 2
+    one_error_line(capsys, f"{out / name} is a symbolic link: refusing to follow it")
+    assert victim.read_bytes() == VICTIM and (out / name).is_symlink()
+
+
+def test_a_frame_that_is_a_link_is_not_complete_on_resume_nor_read(tmp_path):
+    """A frame's file replaced by a link to a copy elsewhere: load_dump does not read it, and
+    --resume rewrites it as a file of the dump's own, leaving the copy alone."""
+    out = tmp_path / "out"
+    _small_dump(out)
+    frame, copy = out / "rgb" / "000001.png", tmp_path / "copy.png"
+    original = frame.read_bytes()
+    shutil.move(frame, copy)
+    frame.symlink_to(copy)
+    with pytest.raises(DumpError, match=f"^{re.escape(str(frame))} is a symbolic link: refusing to follow it"):
+        load_dump(out)[1].rgb
+    summary = dump(out, controller=SCRIPTED, frames=3, formats=("rgb",), camera_profile="ideal", resume=True)
+    assert (summary.new_frames, summary.repaired_frames) == (0, 1)
+    assert not frame.is_symlink() and frame.read_bytes() == original == copy.read_bytes()
+
+
+def test_load_dump_reads_no_file_outside_the_dump(tmp_path):
+    out = tmp_path / "out"
+    _small_dump(out)
+    meta = json.loads((out / "meta.json").read_text())
+    meta["files"]["rgb"]["path"] = "../elsewhere/{index:06d}.png"
+    (out / "meta.json").write_text(json.dumps(meta))
+    with pytest.raises(DumpError, match=r'"files"\."rgb"\."path" must be a file name pattern inside the dump'):
+        load_dump(out)
+    shutil.rmtree(out)
+    _small_dump(out)
+    shutil.move(out / "rgb", tmp_path / "rgb")
+    (out / "rgb").symlink_to(tmp_path / "rgb")
+    with pytest.raises(DumpError, match=f"^{re.escape(str(out / 'rgb'))} is a symbolic link"):
+        load_dump(out)
 
 
 # ---------------------------------------------------------------- 2. one signal ends any controller
@@ -149,3 +240,21 @@ def test_a_c_controller_that_closes_its_socket_is_not_reported_as_exit_70(tmp_pa
     assert re.fullmatch(r"controller closes\.c: closed its connection to the simulator \(descriptor \d+, AIBO_SIM_FD\), "
                         r"then made a call at simulated t = 0\.008 s", message), message
     assert failed.value.exit_status is None
+
+
+# ---------------------------------------------------------------- 3. one run per folder
+
+
+def test_a_second_run_into_a_folder_being_written_is_refused(tmp_path, capsys):
+    out = tmp_path / "out"
+    first = FrameWriter(out, controller=SCRIPTED, backend="sim")  # a run writing there now
+    try:
+        before = {p.name: p.read_bytes() for p in out.iterdir() if p.is_file()}
+        capsys.readouterr()
+        assert main(["run", str(SCRIPTED), "--duration", "0.1", "--out", str(out)]) == 2
+        one_error_line(capsys, f"{out} is being written by another run (pid {os.getpid()}, started ",
+                       "wait for it to end or stop it, or choose another --out; nothing was changed")
+        assert {p.name: p.read_bytes() for p in out.iterdir() if p.is_file()} == before
+    finally:
+        first.lock.release()
+    assert main(["run", str(SCRIPTED), "--duration", "0.1", "--out", str(out)]) == 0

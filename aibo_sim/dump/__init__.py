@@ -64,8 +64,9 @@ pid, command and start time) while it writes; a second dump or ``--resume`` into
 stops with exit status 2 and that holder's description, changing nothing. ``--out`` must be
 a new or empty folder, or a dump (with ``--resume``): any other folder is refused the same
 way. Only the dump's own temporary files (``.tmp.`` + its file names, in its folders) are
-ever removed. A corrupt meta.json or frames.jsonl is an error that names the file and line
-(``load_dump`` too).
+ever removed; no file is written or read through a symbolic link (``files.SymlinkRefused``).
+A corrupt meta.json or frames.jsonl is an error that names the file and line (``load_dump``
+too).
 
 ``--workers N`` splits the frames into N shards run in parallel processes, written to
 ``DIR/shard_k/`` (each a dump of the layout above, with its own video.mp4); shard k uses

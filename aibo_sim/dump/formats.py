@@ -14,6 +14,7 @@ from openr_bridge.image import BAND_RUNS, IMAGE_INFO_SIZE, VECTOR_INFO_SIZE
 from ..camera import HEAD_CAMERA_GROUPS
 from ..ers7 import JOINTS
 from ..field import SEGMENTATION_CLASSES
+from ..files import open_file
 from ..sim import Simulation
 
 FORMATS = ("rgb", "yuv444", "yuv420", "annex", "openr", "bands", "luma", "depth", "seg", "mp4", "coco")
@@ -237,7 +238,7 @@ def mp4_faststart(path) -> bool:
     start before the whole file is read. The frames move in blocks, so memory stays small.
     False, the file untouched, where the index already leads or cannot be moved (a chunk
     offset that would outgrow 32 bits, boxes it cannot read)."""
-    with open(path, "r+b") as file:
+    with open(open_file(path, os.O_RDWR), "r+b") as file:
         size = file.seek(0, os.SEEK_END)
         boxes, start = {}, 0  # the first box of each type at the top level: (start, end)
         while start + 8 <= size:

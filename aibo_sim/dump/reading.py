@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import io
 import json
+import os
 from pathlib import Path
 
 import cv2
@@ -14,9 +15,14 @@ import openr_bridge
 from openr_bridge.image import BAND_RUNS
 
 from ..field import SEGMENTATION_CLASSES
+from ..files import SymlinkRefused, read_file
 from .formats import DUMP_FORMAT, LAYERS, DumpError
 
 META, LINES = "meta.json", "frames.jsonl"
+
+
+def _read_error(path: Path, exc: OSError) -> DumpError:
+    return DumpError(str(exc) if isinstance(exc, SymlinkRefused) else f"cannot read {path}: {exc.strerror or exc}")
 
 
 def _json_error(path: Path, exc: json.JSONDecodeError, line: int | None = None) -> DumpError:
@@ -27,11 +33,11 @@ def _json_error(path: Path, exc: json.JSONDecodeError, line: int | None = None) 
 def read_meta(path: Path) -> dict:
     """A dump's meta.json; DumpError naming the file (and line) when it is not a dump's."""
     try:
-        data = path.read_bytes()
+        data = read_file(path)
     except FileNotFoundError:
         raise DumpError(f"{path}: not a dump (no {META})") from None
     except OSError as exc:
-        raise DumpError(f"cannot read {path}: {exc.strerror or exc}") from exc
+        raise _read_error(path, exc) from exc
     try:
         meta = json.loads(data)
     except UnicodeDecodeError as exc:
@@ -87,11 +93,11 @@ def parse_records(path: Path, data: bytes, limit: int) -> list[dict]:
 def read_records(path: Path, limit: int) -> list[dict]:
     """The complete frames' records of a frames.jsonl (none when it does not exist)."""
     try:
-        data = path.read_bytes()
+        data = read_file(path)
     except FileNotFoundError:
         return []
     except OSError as exc:
-        raise DumpError(f"cannot read {path}: {exc.strerror or exc}") from exc
+        raise _read_error(path, exc) from exc
     return parse_records(path, split_lines(data)[0], limit)
 
 
@@ -104,6 +110,12 @@ def frame_limit(meta: dict) -> int:
 
 def _whole(value) -> bool:
     return isinstance(value, int) and not isinstance(value, bool) and value >= 1
+
+
+def _inside(path: str) -> bool:
+    """Whether a relative ``path`` stays in the folder it is relative to (no .., not absolute)."""
+    parts = Path(path).parts
+    return bool(parts) and not Path(path).is_absolute() and ".." not in parts
 
 
 def check_meta(path: Path, meta: dict) -> None:
@@ -125,9 +137,11 @@ def check_meta(path: Path, meta: dict) -> None:
         if not isinstance(layout, dict):
             raise bad(field, "an object")
         try:
-            layout["path"].format(index=0, layer="H")
+            inside = _inside(layout["path"].format(index=0, layer="H"))
         except (KeyError, AttributeError, TypeError, ValueError, IndexError):
-            raise bad(field + '."path"', "a file name pattern") from None
+            inside = False
+        if not inside:
+            raise bad(field + '."path"', "a file name pattern inside the dump")
         sizes = layout.get("bytes")
         if not (sizes is None or _whole(sizes) or isinstance(sizes, dict) and all(map(_whole, sizes.values()))):
             raise bad(field + '."bytes"', "a whole number >= 1, an object of them or null")
@@ -152,7 +166,12 @@ class DumpFrame:
     def _raw(self, name: str, layer: str = "") -> np.ndarray:
         """A file's bytes (uint8); DumpError naming it when a fixed-size format's has another size."""
         path = self.path(name, layer)
-        data = np.fromfile(path, np.uint8)
+        try:
+            data = np.frombuffer(bytearray(read_file(path)), np.uint8)
+        except FileNotFoundError:
+            raise
+        except OSError as exc:
+            raise _read_error(path, exc) from exc
         expected = self._dump_meta["files"][name].get("bytes")
         expected = expected.get(layer) if isinstance(expected, dict) else expected
         if expected is not None and data.size != expected:
@@ -233,6 +252,9 @@ class Dump:
             raise DumpError(f"{meta_path}: \"shards\" must list the shard folders' names; the file is corrupt")
         if not shards:
             check_meta(meta_path, self.meta)
+        for name in shards or {os.path.dirname(layout["path"]) for layout in self.meta["files"].values()} - {""}:
+            if (self.folder / name).is_symlink():  # read only files inside the dump
+                raise DumpError(str(SymlinkRefused.at(self.folder / name)))
         self.parts = [Dump(self.folder / shard) for shard in shards if (self.folder / shard / META).exists()]
         if shards:
             self.frames = [f for part in self.parts for f in part.frames]

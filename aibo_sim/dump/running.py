@@ -18,6 +18,7 @@ from openr_bridge import FRAME_RATE_HZ
 from ..camera import CameraProfile, CameraSettings, camera_size, describe_camera, scene_light
 from ..camera import camera_profile as resolve_profile  # dump's argument of that name shadows it
 from ..cbind import compile_controller, controller_sources, is_c_controller
+from ..files import make_folder
 from ..mtn import MODES as MTN_MODES
 from ..options import check_place, start_values
 from ..render import Renderer
@@ -91,8 +92,8 @@ def _dump_controller(parameters: dict, out: Path, resume: bool, **lock) -> DumpW
         workdir = out / CONTROLLER_FILES  # the controller's own files: one folder per shard
         try:
             try:
-                workdir.mkdir(exist_ok=True)
-            except FileExistsError:
+                make_folder(workdir)
+            except NotADirectoryError:
                 raise DumpError(f"{workdir}: not a folder (the controller runs in it): move it away, then --resume") \
                     from None
             run_controller(parameters["controller"], backend=parameters["backend"], duration=frames / FRAME_RATE_HZ,

@@ -17,12 +17,13 @@ import numpy as np
 from openr_bridge import FRAME_RATE_HZ
 
 from ..cbind.child import die_with_parent_thread
+from ..files import command_line, open_file
 from ..runner import Progress
 from .coco import coco_bytes
 from .formats import DUMP_FORMAT, PATHS, DumpError
 from .reading import LINES
 from .running import DumpSummary, dump_one
-from .writing import COCO, check_destination, command_line, prepare_folder, remove_temporary_files, write_atomic
+from .writing import COCO, check_destination, prepare_folder, remove_temporary_files, write_atomic
 
 RAY_MAX_RETRIES = 3  # a shard whose Ray worker is lost runs again (resuming its folder)
 RAY_CONNECT_S = 5.0  # an --ray-address that does not answer in this is refused (ray.init would wait minutes)
@@ -90,7 +91,7 @@ class _ShardProgress(Progress):
         if not self.enabled:
             return
         for folder, offset in self.offsets.items():
-            with contextlib.suppress(OSError), open(folder / LINES, "rb") as file:
+            with contextlib.suppress(OSError), open(open_file(folder / LINES, os.O_RDONLY), "rb") as file:
                 file.seek(offset)
                 data = file.read()
                 self.frames += data.count(b"\n")

@@ -3,13 +3,10 @@
 from __future__ import annotations
 
 import contextlib
-import datetime
+import errno
 import json
 import os
 import re
-import shlex
-import sys
-import time
 from pathlib import Path
 
 import cv2
@@ -20,17 +17,13 @@ import openr_bridge
 from openr_bridge import FRAME_RATE_HZ
 
 from ..field import SEGMENTATION_CLASSES
-from ..files import png, write_file_atomic
+from .. import files
+from ..files import SymlinkRefused, make_folder, open_file, png, read_file, write_file_atomic
 from ..sim import Simulation
 from .coco import Objects, coco_bytes
 from .formats import (DUMP_FORMAT, LAYERS, PATHS, DumpError, annex_yuv, file_layouts, frame_files, frame_metadata,
                       geom_classes, mp4_faststart, npy, yuv420_bytes, yuv444_bytes)
 from .reading import LINES, META, frame_limit, parse_records, read_meta, split_lines
-
-try:
-    import fcntl
-except ImportError:  # not POSIX: dumps are not locked there
-    fcntl = None
 
 TEMP_PREFIX = ".tmp."  # a file being written: ".tmp." + its final name, in the same folder
 LOCK_NAME = ".dump.lock"  # flock()ed by the writer; holds its pid, command and start time
@@ -38,18 +31,26 @@ CONTROLLER_FILES = "controller_files"  # a controller dump's (or shard's) folder
 VIDEO, COCO = PATHS["mp4"], PATHS["coco"]
 # What an empty destination may hold: the lock, or the temporary meta.json of a writer killed at once.
 OWN_TOP_FILES = frozenset({LOCK_NAME, TEMP_PREFIX + META, TEMP_PREFIX + VIDEO, TEMP_PREFIX + COCO})
-HOLDER_COMMAND_CHARS = 300  # a holder's command line is cut to this in messages
 
 
 # ---------------------------------------------------------------- files
 
 
+def dump_error(exc: OSError, message: str | None = None) -> DumpError:
+    """``exc`` as a DumpError: ``message`` (default, and for a refused link, its own words); a
+    full disk's says how to go on."""
+    message = str(exc) if message is None or isinstance(exc, SymlinkRefused) else message
+    if exc.errno == errno.ENOSPC:
+        message += "; free some space, then continue the dump with --resume"
+    return DumpError(message)
+
+
 def write_atomic(path: Path, data: bytes) -> None:
-    """Write ``path`` whole or not at all (temporary name in the same folder, then rename)."""
+    """Write ``path`` whole or not at all (``files.write_file_atomic``, under a ``.tmp.`` name)."""
     try:
         write_file_atomic(path, data, path.with_name(TEMP_PREFIX + path.name))
     except OSError as exc:
-        raise DumpError(str(exc)) from exc
+        raise dump_error(exc) from exc
 
 
 def _temporary_name(pattern: str) -> re.Pattern:
@@ -81,67 +82,12 @@ def remove_temporary_files(out: Path, layouts: dict) -> None:
 # ---------------------------------------------------------------- the lock
 
 
-def command_line() -> str:
-    """This process's command line, as a shell would take it."""
-    try:
-        arguments = Path("/proc/self/cmdline").read_bytes().rstrip(b"\0").split(b"\0")
-        return shlex.join(a.decode(errors="replace") for a in arguments)
-    except OSError:
-        return shlex.join([sys.executable, *sys.argv])
-
-
-class FolderLock:
-    """An exclusive ``flock`` on ``folder/.dump.lock`` for the life of a writer (the kernel
-    drops it when the process dies, however it dies); the file names the holder."""
+class FolderLock(files.FolderLock):
+    """The dump's lock, ``.dump.lock`` (``files.FolderLock``): DumpError while another dump holds it."""
 
     def __init__(self, folder: Path, *, wait_s: float = 0.0, command: str | None = None):
-        self.path, self._fd = folder / LOCK_NAME, None
-        if fcntl is None:
-            return
-        try:
-            fd = os.open(self.path, os.O_RDWR | os.O_CREAT | getattr(os, "O_CLOEXEC", 0), 0o644)
-        except OSError as exc:
-            raise DumpError(f"cannot lock {self.path}: {exc.strerror or exc}") from exc
-        deadline = time.monotonic() + wait_s
-        while True:
-            try:
-                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-                break
-            except BlockingIOError:
-                if time.monotonic() < deadline:
-                    time.sleep(0.05)
-                    continue
-                holder = self._holder(fd)
-                os.close(fd)
-                raise DumpError(f"{folder} is being written by another dump ({holder}): wait for it to end or "
-                                "stop it, then --resume; nothing was changed") from None
-            except OSError as exc:
-                os.close(fd)
-                raise DumpError(f"cannot lock {self.path}: {exc.strerror or exc}") from exc
-        started = datetime.datetime.now().astimezone().isoformat(timespec="seconds")
-        info = {"pid": os.getpid(), "command": command or command_line(), "started": started}
-        with contextlib.suppress(OSError):  # the lock holds without its description
-            os.ftruncate(fd, 0)
-            os.pwrite(fd, (json.dumps(info) + "\n").encode(), 0)
-        self._fd = fd
-
-    @staticmethod
-    def _holder(fd: int) -> str:
-        try:
-            info = json.loads(os.pread(fd, 65536, 0))
-            command = str(info["command"])
-            if len(command) > HOLDER_COMMAND_CHARS:
-                command = command[:HOLDER_COMMAND_CHARS] + "..."
-            return f"pid {info['pid']}, started {info['started']}, command: {command}"
-        except (OSError, ValueError, KeyError, TypeError):
-            return "a process that has just started"
-
-    def release(self) -> None:
-        if self._fd is not None:
-            with contextlib.suppress(OSError):
-                os.ftruncate(self._fd, 0)
-            os.close(self._fd)  # drops the flock
-            self._fd = None
+        super().__init__(folder, LOCK_NAME, "dump", "wait for it to end or stop it, then --resume", wait_s=wait_s,
+                         command=command, error=DumpError)
 
 
 # ---------------------------------------------------------------- the folder
@@ -177,26 +123,30 @@ def _frames_on_disk(out: Path, layouts: dict, limit: int, truncate: bool) -> tup
     an index of ``limit`` or more is corrupt; a partial last line is cut off when ``truncate``."""
     lines_path = out / LINES
     try:
-        data = lines_path.read_bytes()
+        data = read_file(lines_path)
     except FileNotFoundError:
         return set(), set()
     except OSError as exc:
-        raise DumpError(f"cannot read {lines_path}: {exc.strerror or exc}") from exc
+        raise dump_error(exc, f"cannot read {lines_path}: {exc.strerror or exc}") from exc
     complete_lines, partial = split_lines(data)
     complete = {record["index"] for record in parse_records(lines_path, complete_lines, limit)}
     if partial and truncate:
         try:
-            with open(lines_path, "r+b") as file:
-                file.truncate(len(complete_lines))
+            fd = open_file(lines_path, os.O_WRONLY)
+            try:
+                os.ftruncate(fd, len(complete_lines))
+            finally:
+                os.close(fd)
         except OSError as exc:
-            raise DumpError(f"cannot write {lines_path}: {exc.strerror or exc}") from exc
-    sizes: dict[str, dict[str, int]] = {}
+            raise dump_error(exc, f"cannot write {lines_path}: {exc.strerror or exc}") from exc
+    sizes: dict[str, dict[str, int]] = {}  # a frame's files: regular files (a link is no frame's file)
     for layout in layouts.values():
         folder = os.path.dirname(layout["path"])
         if folder and folder not in sizes:
             sizes[folder] = {}
             with contextlib.suppress(FileNotFoundError), os.scandir(out / folder) as entries:
-                sizes[folder] = {e.name: e.stat().st_size for e in entries if e.is_file()}
+                sizes[folder] = {e.name: e.stat(follow_symlinks=False).st_size for e in entries
+                                 if e.is_file(follow_symlinks=False)}
     missing = set()
     for index in complete:
         for _, path, expected in frame_files(layouts, index):
@@ -227,9 +177,9 @@ def prepare_folder(out: Path, meta: dict, resume: bool, *, lock_wait_s: float = 
     """
     check_destination(out)
     try:
-        out.mkdir(parents=True, exist_ok=True)
+        make_folder(out)
     except OSError as exc:
-        raise DumpError(f"cannot create the dump folder {out}: {exc.strerror or exc}") from exc
+        raise dump_error(exc, f"cannot create the dump folder {out}: {exc.strerror or exc}") from exc
     lock = FolderLock(out, wait_s=lock_wait_s, command=command)
     try:
         meta_path, layouts = out / META, meta.get("files", {})
@@ -282,15 +232,13 @@ class DumpWriter:
             for name in self.formats:
                 path = out / self.layouts[name]["path"]
                 try:
-                    path.parent.mkdir(exist_ok=True)
+                    make_folder(path.parent)
                 except OSError as exc:
-                    raise DumpError(f"cannot create {path.parent}: {exc.strerror or exc}") from exc
-            try:
-                self._lines = open(out / LINES, "ab")
-            except OSError as exc:
-                raise DumpError(f"cannot write {out / LINES}: {exc.strerror or exc}") from exc
+                    raise dump_error(exc, f"cannot create {path.parent}: {exc.strerror or exc}") from exc
+            self._lines = open(self._open(out / LINES, os.O_APPEND), "ab")
             if "mp4" in self.formats:
                 self._video_path = out / (TEMP_PREFIX + VIDEO)
+                os.close(self._open(self._video_path, os.O_EXCL))  # ours, not a link, when OpenCV opens it
                 self._video = cv2.VideoWriter(str(self._video_path), cv2.VideoWriter_fourcc(*"mp4v"),
                                               FRAME_RATE_HZ, (width, height))
                 if not self._video.isOpened():
@@ -298,6 +246,14 @@ class DumpWriter:
         except BaseException:
             self.abort()
             raise
+
+    @staticmethod
+    def _open(path: Path, flags: int) -> int:
+        """``path`` created (or opened) for writing with ``flags``, never through a link; DumpError."""
+        try:
+            return open_file(path, os.O_WRONLY | os.O_CREAT | flags)
+        except OSError as exc:
+            raise dump_error(exc, f"cannot write {path}: {exc.strerror or exc}") from exc
 
     def needs_frame(self, index: int) -> bool:
         """Whether frame ``index`` must be rendered: not complete yet, a file of it missing (or
@@ -324,7 +280,7 @@ class DumpWriter:
             self._lines.write(line.encode())
             self._lines.flush()
         except OSError as exc:
-            raise DumpError(f"cannot write {self.out / LINES}: {exc.strerror or exc}") from exc
+            raise dump_error(exc, f"cannot write {self.out / LINES}: {exc.strerror or exc}") from exc
         self.complete.add(index)
         self.new_frames += 1
 
@@ -377,7 +333,7 @@ class DumpWriter:
                     os.replace(self._video_path, final)
                 except OSError as exc:
                     remove_temporary_files(self.out, self.layouts)
-                    raise DumpError(f"cannot write {final}: {exc.strerror or exc}") from exc
+                    raise dump_error(exc, f"cannot write {final}: {exc.strerror or exc}") from exc
                 self.bytes_written += final.stat().st_size
             if self._objects is not None:
                 coco = coco_bytes(self.out, [self.out])

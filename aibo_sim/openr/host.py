@@ -219,6 +219,7 @@ class MemoryStickRun:
             *(struct.pack("<2i", index, kind) for index, kind in self._sensors.entries),
             struct.pack("<3i", locators.index(openr_bridge.CAMERA_LOCATOR), locators.index(ers7.SPEAKER_LOCATOR),
                         locators.index(ers7.MIC_LOCATOR)),
+            self._sensors.at(self.sim.frame),
             struct.pack("<I", len(self.stick.design_data)),
             *(protocol.pack_string(k) + protocol.pack_string(v) for k, v in self.stick.design_data.items()),
             self._power_fields(),

@@ -69,6 +69,7 @@ struct Primitive {
 void SetRobot(const std::string& design, const std::vector<Primitive>& primitives,
               const std::vector<int>& sensorOrder, int camera, int speaker, int mic);
 void StartSystemObjects();             /* creates OVirtualRobotComm and OVirtualRobotAudioComm */
+void SetLatestValues(const std::vector<slongword>& values);  /* the state at boot: what GetJointValue reads */
 void SetFrameValues(const slongword* values);             /* 4 per sensor-order entry */
 void PublishImage(const void* bytes, size_t size);
 void SetPowerStatus(const OPowerStatus& status);  /* observers of what changed are told */

@@ -175,6 +175,9 @@ void Setup(const std::string& payload) {
     std::vector<int> sensors(2 * setup.U32());
     for (size_t i = 0; i < sensors.size(); i++) sensors[i] = setup.I32();
     int camera = setup.I32(), speaker = setup.I32(), mic = setup.I32();
+    std::vector<slongword> now(sensors.size() / 2 * AIBO_OPENR_VALUES_PER_SENSOR);
+    if (!now.empty()) memcpy(&now[0], setup.Here(), now.size() * sizeof(slongword));
+    setup.Skip(now.size() * sizeof(slongword));
     std::map<std::string, std::string> designData;
     for (longword n = setup.U32(); n > 0; n--) {
         std::string keyword = setup.String();
@@ -188,6 +191,7 @@ void Setup(const std::string& payload) {
     power = OPowerStatus(values[0], values[1], values[2], values[3], values[4], values[5], values[6], values[7],
                          values[8]);
     SetRobot(design, primitives, sensors, camera, speaker, mic);
+    SetLatestValues(now);
     SetDesignData(designData);
     SetMemoryStick(stick, workdir);
     SetPowerStatus(power);

@@ -490,6 +490,8 @@ void StartSystemObjects() {
     SetConstructing(NULL);
 }
 
+void SetLatestValues(const std::vector<slongword>& values) { latest = values; }
+
 void SetFrameValues(const slongword* values) {
     latest.assign(values, values + sensorOrder.size() * AIBO_OPENR_VALUES_PER_SENSOR);
     if (pending.empty()) pendingFrame = FrameNumber();
