@@ -16,8 +16,9 @@ naming a service no object has is a ``ConfigError`` naming the line), then, ever
 
 The robot's servos act only when powered (``OPENR::SetMotorPower``) and, for the Joint2
 joints, once their gain is enabled and set (``EnableJointGain``, ``SetJointGain``): a joint's
-stiffness is Sony's P register as ``mjcf.servo_stiffness`` maps the standard one (scaled by
-2^(PSHIFT - 14)); I and D are not modelled (the servo's damping is the motor's). A joint
+stiffness is the model's (``mjcf.servo_stiffness`` of Sony's standard P) times the P register's
+ratio to the standard P, scaled by 2^(14 - PSHIFT), so that the standard gains give the model's
+stiffness bit for bit; I and D are not modelled (the servo's damping is the motor's). A joint
 whose gain comes on holds where it is until commanded. The ears (Joint4) follow their state:
 0 down, 1 up (their joint's range), when powered.
 
@@ -49,7 +50,6 @@ from openr_bridge.memory_stick import MemoryStick, read_object
 
 from .. import ers7
 from ..cbind.child import Child
-from ..mjcf import KP_PER_SONY_P
 from ..sim import Simulation
 from .sdk import sdk_root
 
@@ -325,7 +325,8 @@ class MemoryStickRun:
             elif kind == protocol.RECORDS["GAIN"]:
                 primitive, enabled, p, _, _, p_shift, _, _ = struct.unpack("<8i", data)
                 joint = self._joint_of[primitive]
-                self._kp[joint] = KP_PER_SONY_P * p * 2.0 ** (STANDARD_PSHIFT - p_shift) if enabled else 0.0
+                ratio = p / ers7.JOINTS[joint].gains[0] * 2.0 ** (STANDARD_PSHIFT - p_shift)
+                self._kp[joint] = self._standard_kp[joint] * ratio if enabled else 0.0
                 gains_changed = True
             elif kind == protocol.RECORDS["CAMERA"]:
                 request, value = struct.unpack("<2I", data)
