@@ -104,8 +104,8 @@ def write_files_atomic(files: dict[Path, bytes], temps: dict[Path, Path] | None 
     path, created = None, []
     try:
         for path, data in files.items():
+            created.append(temps[path])  # before it exists: a signal right after it is made still finds it
             fd = _create(temps[path])
-            created.append(temps[path])
             with open(fd, "wb") as file:
                 file.write(data)
         for path in files:
@@ -116,7 +116,8 @@ def write_files_atomic(files: dict[Path, bytes], temps: dict[Path, Path] | None 
     except BaseException as exc:
         for temp in created:
             with contextlib.suppress(OSError):
-                temp.unlink()
+                if not temp.is_symlink():  # ours never is: a link refused stays
+                    temp.unlink()
         if not isinstance(exc, OSError) or isinstance(exc, SymlinkRefused):
             raise
         error = OSError(f"cannot write {path}: {exc.strerror or exc}")

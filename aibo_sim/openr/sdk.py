@@ -4,7 +4,8 @@
 of everything that goes in) and returns its path; ``aibo-sim openr sdk`` prints it::
 
     bin/mipsel-linux-g++, -gcc     the host compiler (CXX, CC) at C++98 (gnu++98), position-
-                                   independent, with the headers' include paths
+                                   independent, without fused multiply-add, with the headers'
+                                   include paths
     bin/mipsel-linux-strip, -ar, -ranlib
     OPEN_R/bin/stubgen2            openr_bridge.stubgen: stub.cfg -> def.h, entry.h, <Name>Stub.*
     OPEN_R/bin/gzcp                gzip -c FROM > TO
@@ -35,9 +36,11 @@ from ..cbind.build import CompileError, _compiler, _run, _version
 
 SOURCES = Path(openr_bridge.__file__).resolve().parent / "sdk"
 # What every object and the library are compiled with: Sony's SDK compiled C++98 (GCC 3.3), whose
-# old code today's compilers refuse unless permissive; objects are shared libraries.
-CXXFLAGS = ("-std=gnu++98", "-fPIC", "-fpermissive", "-Wno-deprecated-declarations")
-CFLAGS = ("-fPIC",)
+# old code today's compilers refuse unless permissive; objects are shared libraries; no fused
+# multiply-add, so that an object's double arithmetic rounds as the source (and Python, and a C
+# controller compiled by aibo_sim.cbind) says, on every machine.
+CXXFLAGS = ("-std=gnu++98", "-fPIC", "-fpermissive", "-Wno-deprecated-declarations", "-ffp-contract=off")
+CFLAGS = ("-fPIC", "-ffp-contract=off")
 LIBRARY_SOURCES = ("kernel.cc", "objcomm.cc", "robot.cc", "msfs.cc", "interpose.c")
 
 
