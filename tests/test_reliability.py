@@ -120,6 +120,22 @@ def test_a_link_planted_where_aibo_sim_writes_is_refused_naming_it(tmp_path, cap
     assert victim.read_bytes() == VICTIM and (out / name).is_symlink()
 
 
+def test_a_signal_right_after_a_temporary_file_is_made_leaves_none(tmp_path, monkeypatch):
+    """Ctrl-C or SIGTERM lands between bytecodes, here just after the temporary file was made."""
+    from aibo_sim import files
+
+    create = files._create
+
+    def create_then_interrupt(temp):
+        os.close(create(temp))
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(files, "_create", create_then_interrupt)
+    with pytest.raises(KeyboardInterrupt):
+        files.write_file_atomic(tmp_path / "frame.png", b"picture")
+    assert list(tmp_path.iterdir()) == []
+
+
 def test_a_frame_that_is_a_link_is_not_complete_on_resume_nor_read(tmp_path):
     """A frame's file replaced by a link to a copy elsewhere: load_dump does not read it, and
     --resume rewrites it as a file of the dump's own, leaving the copy alone."""
