@@ -274,3 +274,17 @@ def test_a_second_run_into_a_folder_being_written_is_refused(tmp_path, capsys):
     finally:
         first.lock.release()
     assert main(["run", str(SCRIPTED), "--duration", "0.1", "--out", str(out)]) == 0
+
+
+# ---------------------------------------------------------------- 4. workers within memory
+
+
+def test_more_dump_workers_than_memory_holds_are_refused_saying_how_many_fit(tmp_path, monkeypatch, capsys):
+    from aibo_sim.dump import running
+
+    assert running.available_memory_mb() > 0
+    monkeypatch.setattr(running, "available_memory_mb", lambda: 1000.0)
+    out = tmp_path / "out"
+    assert main(["dump", str(SCRIPTED), "--out", str(out), "--steps", "100", "--workers", "6"]) == 2
+    one_error_line(capsys, "--workers 6: this machine has memory for 5 workers (1.0 GB available, about 200 MB a worker)")
+    assert not out.exists()

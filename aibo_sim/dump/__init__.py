@@ -68,7 +68,8 @@ ever removed; no file is written or read through a symbolic link (``files.Symlin
 A corrupt meta.json or frames.jsonl is an error that names the file and line (``load_dump``
 too).
 
-``--workers N`` splits the frames into N shards run in parallel processes, written to
+``--workers N`` (at most what memory holds, about 200 MB a worker: more is refused, saying
+how many fit) splits the frames into N shards run in parallel processes, written to
 ``DIR/shard_k/`` (each a dump of the layout above, with its own video.mp4); shard k uses
 seed ``seed + k`` and, in a controller dump without ``--ball`` whose scene has a ball it can
 place, a ball position drawn from that seed. ``load_dump`` reads a sharded dump as

@@ -3,6 +3,7 @@ checks the arguments and hands shards to ``shards.py``."""
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import time
 from dataclasses import dataclass
@@ -29,6 +30,9 @@ from .formats import DEFAULT_FORMATS, FORMATS, DumpError
 from .writing import CONTROLLER_FILES, DumpWriter
 
 POLICIES = ("random", "scripted", "zero")
+# A local worker's memory, with a margin: ~135 MB of its own measured (a controller dump, 208x160,
+# default formats; its libraries' pages are shared).
+WORKER_MEMORY_MB = 200
 ENGINES = ("local", "ray")
 RAY_INSTALL = "pip install 'aibo-sim[ray]'"
 SCRIPTED_SWEEP_HZ = 0.25
@@ -163,6 +167,21 @@ def dump_one(parameters: dict, out: Path, resume: bool, **lock) -> DumpSummary:
                        time.perf_counter() - start, writer.repaired_frames)
 
 
+def available_memory_mb() -> float | None:
+    """The memory new processes can take, in MiB: Linux's MemAvailable, within this process's
+    cgroup limit (a container's); None where neither can be read."""
+    values = []
+    with contextlib.suppress(OSError, ValueError, IndexError):
+        meminfo = Path("/proc/meminfo").read_text()
+        values.append(int(meminfo.split("MemAvailable:")[1].split()[0]) / 1024)
+    with contextlib.suppress(OSError, ValueError, IndexError):
+        group = Path("/sys/fs/cgroup") / Path("/proc/self/cgroup").read_text().split("0::/")[1].split("\n")[0]
+        limit = (group / "memory.max").read_text().strip()
+        if limit != "max":
+            values.append((int(limit) - int((group / "memory.current").read_text())) / 2**20)
+    return min(values) if values else None
+
+
 def _check_env(env_id: str) -> None:
     """ValueError unless ``env_id`` is an aibo_sim environment (a dump renders its head camera)."""
     from ..envs import ENV_SPECS
@@ -238,6 +257,10 @@ def dump(out, *, controller: str | Path | None = None, env: str | None = None, p
         raise ValueError("--formats: coco annotates the rgb files; add rgb")
     if not 1 <= workers <= frames:
         raise ValueError(f"--workers must be between 1 and the number of frames ({frames}), not {workers}")
+    available = available_memory_mb() if engine == "local" and workers > 1 else None
+    if available is not None and workers * WORKER_MEMORY_MB > available:
+        raise ValueError(f"--workers {workers}: this machine has memory for {int(available // WORKER_MEMORY_MB)} "
+                         f"workers ({available / 1024:.1f} GB available, about {WORKER_MEMORY_MB} MB a worker)")
     if not is_seed(seed, workers):
         shards = f" with --workers {workers} (shard k uses seed + k)" if workers > 1 else ""
         raise ValueError(f"--seed must be a whole number from 0 to 2**64 - {workers}{shards}, not {seed!r}")
