@@ -24,6 +24,7 @@ the simulated camera directly. They need no ``camera_enable``. Another value rai
 from __future__ import annotations
 
 import sys
+import threading
 
 import numpy as np
 from openr_bridge.ers7_camera import (
@@ -44,15 +45,16 @@ from .robot import (Accelerometer, Camera, Device, DeviceError, DistanceSensor, 
                     SimulationEnd, TouchSensor)
 
 _robot: Robot | None = None
+_thread: threading.Thread | None = None  # the thread that runs the controller: the camera renders there
 _tags: list[Device] = []
 _reset_fn = None
 _die_fns: list = []
 
 
 def install(robot: Robot | None) -> None:
-    """Make ``robot`` the one the API functions drive (the runner calls this)."""
-    global _robot, _reset_fn
-    _robot, _reset_fn = robot, None
+    """Make ``robot`` the one the API functions drive, from this thread (the runner calls this)."""
+    global _robot, _reset_fn, _thread
+    _robot, _reset_fn, _thread = robot, None, threading.current_thread()
     _tags.clear()
     _die_fns.clear()
 
@@ -61,6 +63,16 @@ def current_robot() -> Robot:
     if _robot is None:
         raise RuntimeError("no robot: run the controller with `aibo-sim run CONTROLLER`")
     return _robot
+
+
+def _rendering(function: str) -> Robot:
+    """The robot, for a call that may render the camera: DeviceError from any thread but the
+    controller's (an OpenGL context is current in one thread; another's call would break it)."""
+    robot, thread = current_robot(), threading.current_thread()
+    if thread is not _thread:
+        raise DeviceError(f"{function} called from thread {thread.name!r}: the camera renders in the thread that "
+                          f"runs the controller ({_thread.name!r}) only; call {function} there")
+    return robot
 
 
 def _device(tag, kind: type) -> Device:
@@ -121,11 +133,11 @@ def robot_run(run_fn) -> None:
         ms = run_fn(ms)
         if not isinstance(ms, (int, np.integer)) or ms <= 0:
             raise ValueError(f"run function returned {ms!r}: it must return the next step in ms (e.g. TIME_STEP)")
-        current_robot().step(ms)
+        _rendering("robot_run").step(ms)
 
 
 def robot_step(ms: int) -> int:
-    current_robot().step(ms)
+    _rendering("robot_step").step(ms)
     return 0
 
 
@@ -195,6 +207,7 @@ def camera_disable(tag) -> None:
 
 
 def camera_get_image(tag) -> np.ndarray:
+    _rendering("camera_get_image")
     return _device(tag, Camera).get_image()
 
 

@@ -9,6 +9,7 @@ import os
 import re
 import runpy
 import sys
+import threading
 import time
 import traceback
 from dataclasses import asdict, dataclass, field
@@ -194,7 +195,7 @@ class FrameWriter:
 
 # Where the frames that call a controller, and that its API calls raise from, live.
 _SIMULATOR_CODE = (*(str(Path(package.__file__).resolve().parent) + os.sep for package in (controller, openr_bridge)),
-                   runpy.__file__, "<frozen runpy>")
+                   runpy.__file__, "<frozen runpy>", threading.__file__)
 
 
 def controller_traceback(error: BaseException) -> str:
@@ -227,6 +228,31 @@ def _controller_context(controller_dir: Path, workdir: Path | None):
     finally:
         os.chdir(previous)
         sys.path.remove(str(controller_dir))
+
+
+class _ControllerThreads:
+    """While a controller runs: the first exception that a thread raises (one the controller
+    started) is kept with the thread's name and the simulated time (``error``), for the run to
+    end as failed, not printed as threading's hook would; later ones go to that hook. A thread
+    that steps past the run's end (SimulationEnd) ends quietly."""
+
+    def __init__(self, robot: Robot):
+        self._robot, self.error = robot, None
+
+    def __enter__(self) -> "_ControllerThreads":
+        self._previous, threading.excepthook = threading.excepthook, self._hook
+        return self
+
+    def __exit__(self, *exc_info) -> None:
+        threading.excepthook = self._previous
+
+    def _hook(self, args) -> None:
+        if issubclass(args.exc_type, SimulationEnd):
+            return
+        if self.error is None and args.exc_value is not None:
+            self.error = (args.thread.name if args.thread is not None else "?", args.exc_value, self._robot.time_ms)
+            return
+        self._previous(args)
 
 
 class Progress:
@@ -325,12 +351,14 @@ def run_controller(path: str | Path, *, backend: str = "sim", duration: float = 
                                "simulated_s": robot.time_ms / 1000, "camera_frames": writer.count, "camera": camera})
 
     # How a controller ends: its run is over (SimulationEnd) or it calls sys.exit(0) or
-    # sys.exit(): a normal end. It raises, or calls sys.exit with another status: exit status
-    # 1, ControllerFailed quoting its traceback or its status (never read as a divergence).
-    # The physics diverges: SimulationDiverged (exit status 3). Its robot_die functions run in
-    # every case (Ctrl-C too); one that raises is reported after the controller's own error.
+    # sys.exit(): a normal end. It raises (in its own thread or in one it started), or calls
+    # sys.exit with another status: exit status 1, ControllerFailed quoting its traceback or its
+    # status (never read as a divergence). The physics diverges: SimulationDiverged (exit
+    # status 3). Its robot_die functions run in every case (Ctrl-C too); one that raises is
+    # reported after the controller's own error.
     try:
-        with _controller_context(path.parent, out if workdir is None else Path(workdir).resolve()):
+        with _controller_context(path.parent, out if workdir is None else Path(workdir).resolve()), \
+                _ControllerThreads(robot) as threads:
             error: BaseException | None = None
             try:
                 if executable is None:
@@ -347,6 +375,9 @@ def run_controller(path: str | Path, *, backend: str = "sim", duration: float = 
                 ended_ms = robot.time_ms
                 die_failures = controller.call_die_functions()
             where = f"at simulated t = {ended_ms / 1000:.3f} s"
+            if error is None and threads.error is not None:
+                thread, error, raised_ms = threads.error
+                where = f"in thread {thread!r} at simulated t = {raised_ms / 1000:.3f} s"
             die_report = "".join(
                 f"\n{'then ' if error is not None or k else ''}its robot_die function "
                 f"{getattr(fn, '__qualname__', repr(fn))} raised:\n" + controller_traceback(exc).rstrip()

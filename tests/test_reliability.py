@@ -18,6 +18,7 @@ import pytest
 
 from aibo_sim.cli import main
 from aibo_sim.dump import DumpError, dump, load_dump
+from aibo_sim.dump.writing import FolderLock
 from aibo_sim.runner import ControllerFailed, FrameWriter, run_controller
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -288,3 +289,42 @@ def test_more_dump_workers_than_memory_holds_are_refused_saying_how_many_fit(tmp
     assert main(["dump", str(SCRIPTED), "--out", str(out), "--steps", "100", "--workers", "6"]) == 2
     one_error_line(capsys, "--workers 6: this machine has memory for 5 workers (1.0 GB available, about 200 MB a worker)")
     assert not out.exists()
+
+
+# ---------------------------------------------------------------- 5. the camera and threads
+
+THREADED = """import threading
+from aibo_sim.controller import *
+robot_live(None)
+camera = robot_get_device("PRM:/r1/c1/c2/c3/i1-FbkImageSensor:F1")
+camera_enable(camera, 32)
+robot_step(64)
+reader = threading.Thread(target=lambda: camera_get_image(camera), name="reader")
+reader.start()
+reader.join()
+while True:
+    robot_step(32)
+"""
+
+
+def test_a_thread_reading_the_camera_ends_the_run_naming_the_rule(tmp_path, capsys):
+    controller, out = tmp_path / "threaded.py", tmp_path / "out"
+    controller.write_text(THREADED)
+    assert main(["run", str(controller), "--duration", "0.2", "--out", str(out)]) == 1
+    err = capsys.readouterr().err
+    assert err.startswith("aibo-sim: controller threaded.py raised in thread 'reader' at simulated t = 0.064 s:\n")
+    assert err.rstrip().endswith("DeviceError: camera_get_image called from thread 'reader': the camera renders in "
+                                 "the thread that runs the controller ('MainThread') only; call camera_get_image there")
+    run = json.loads((out / "run.json").read_text())
+    assert run["status"] == "failed" and run["camera_frames"] == len(list((out / "frames").iterdir())) > 0
+
+
+def test_a_dump_whose_controller_thread_reads_the_camera_stays_consistent(tmp_path, capsys):
+    controller, out = tmp_path / "threaded.py", tmp_path / "out"
+    controller.write_text(THREADED)
+    command = ["dump", str(controller), "--out", str(out), "--steps", "6", "--formats", "rgb"]
+    assert main(command) == 1
+    assert "call camera_get_image there" in capsys.readouterr().err
+    assert len(load_dump(out)) == 6 and not list(out.rglob(".tmp.*"))
+    FolderLock(out).release()  # free: the dump can be resumed
+    assert main(command + ["--resume"]) == 1
