@@ -15,8 +15,8 @@ from pathlib import Path
 import numpy as np
 
 from .mtn import MODES as MTN_MODES
-from .options import (ArgumentParser, add_world_options, camera_options, finite_float, make_out_folder, path_text,
-                      place, world_options)
+from .options import (ArgumentParser, add_world_options, camera_options, cut_long_words, finite_float, make_out_folder,
+                      path_text, place, world_options)
 from .robot import BACKENDS
 
 EXIT_BAD_INPUT, EXIT_CONTROLLER, EXIT_DIVERGED, EXIT_INTERRUPTED, EXIT_BROKEN_PIPE = 2, 1, 3, 130, 141
@@ -255,7 +255,7 @@ def main(argv: list[str] | None = None) -> int:
         from .cbind import CompileError
         from .mtn import MtnError
         from .render import RenderingUnavailable
-        from .robot import DeviceError, short_repr
+        from .robot import DeviceError
         from .runner import ControllerFailed
         from .sim import ModelError, SimulationDiverged
         from .viewer import ViewerUnavailable
@@ -275,7 +275,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"aibo-sim: {exc}", file=sys.stderr)
         return EXIT_CONTROLLER
     except SimulationDiverged as exc:
-        print(f"aibo-sim: error: {exc}", file=sys.stderr)
+        print(f"aibo-sim: error: {cut_long_words(exc)}", file=sys.stderr)
         return EXIT_DIVERGED
     except BrokenPipeError as exc:
         if _reader_gone(sys.stdout):  # stop quietly, as a process that SIGPIPE ends
@@ -285,9 +285,9 @@ def main(argv: list[str] | None = None) -> int:
         return EXIT_BAD_INPUT
     except (ModelError, MtnError, OpenRError, DeviceError, RenderingUnavailable, ViewerUnavailable, CompileError,
             OSError, ValueError) as exc:
-        if isinstance(exc, OSError) and exc.filename is not None:  # the name, cut if it is a long one
-            exc = f"{short_repr(str(exc.filename), 120)}: {exc.strerror or exc}"
-        print(f"aibo-sim: error: {exc}", file=sys.stderr)
+        if isinstance(exc, OSError) and exc.filename is not None:
+            exc = f"{exc.filename}: {exc.strerror or exc}"
+        print(f"aibo-sim: error: {cut_long_words(exc)}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except KeyboardInterrupt as exc:  # Ctrl-C: 130, as a shell reports a process ended by SIGINT (128 + 2)
         hint = " (the dump can continue with --resume)" if args.command == "dump" else ""

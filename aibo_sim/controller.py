@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import sys
 import threading
+import time
 
 import numpy as np
 from openr_bridge.ers7_camera import (
@@ -49,19 +50,22 @@ _thread: threading.Thread | None = None  # the thread that runs the controller: 
 _tags: list[Device] = []
 _reset_fn = None
 _die_fns: list = []
+last_call_s = 0.0  # time.monotonic() at the last API call (the runner's wait notices)
 
 
 def install(robot: Robot | None) -> None:
     """Make ``robot`` the one the API functions drive, from this thread (the runner calls this)."""
-    global _robot, _reset_fn, _thread
-    _robot, _reset_fn, _thread = robot, None, threading.current_thread()
+    global _robot, _reset_fn, _thread, last_call_s
+    _robot, _reset_fn, _thread, last_call_s = robot, None, threading.current_thread(), time.monotonic()
     _tags.clear()
     _die_fns.clear()
 
 
 def current_robot() -> Robot:
+    global last_call_s
     if _robot is None:
         raise RuntimeError("no robot: run the controller with `aibo-sim run CONTROLLER`")
+    last_call_s = time.monotonic()
     return _robot
 
 
@@ -76,6 +80,8 @@ def _rendering(function: str) -> Robot:
 
 
 def _device(tag, kind: type) -> Device:
+    global last_call_s
+    last_call_s = time.monotonic()
     if not isinstance(tag, (int, np.integer)) or not 0 < tag <= len(_tags):
         raise DeviceError(f"invalid device tag {tag!r}: use the value robot_get_device returned")
     device = _tags[tag - 1]

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import re
 from pathlib import Path
 
 from openr_bridge import CAMERA_DEFAULTS, CAMERA_SETTINGS
@@ -25,6 +26,15 @@ MAX_MAGNITUDE = 1e6  # |value| beyond this is a typo, not a position (metres) or
 CAMERA_SETTING_OPTIONS = (("white_balance", "--camera-wb"), ("gain", "--camera-gain"), ("shutter", "--camera-shutter"))
 WORLD_DESTS = ("scene", "pose", "ball", "seed")
 CAMERA_DESTS = ("camera_profile", "camera_wb", "camera_gain", "camera_shutter", "camera_full")
+LONG_WORD = 120  # an error line's paths and arguments are cut after this many characters
+
+
+def cut_long_words(message) -> str:
+    """An error line with each run of more than ``LONG_WORD`` characters without a space or a
+    quote (a path, an argument: a file's text given in place of its name) cut, saying how long
+    it was."""
+    return re.sub(rf"[^\s:,'\"`()\[\]]{{{LONG_WORD + 1},}}", lambda m: f"{m[0][:LONG_WORD]}... ({len(m[0])} characters)",
+                  str(message))
 
 
 class ArgumentParser(argparse.ArgumentParser):
@@ -32,7 +42,7 @@ class ArgumentParser(argparse.ArgumentParser):
     ``aibo-sim run: error: argument --ball: 'nan' is not a finite number (see aibo-sim run --help)``."""
 
     def error(self, message: str):
-        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+        self.exit(2, f"{self.prog}: error: {cut_long_words(message)} (see {self.prog} --help)\n")
 
 
 def finite_float(text: str) -> float:
@@ -137,7 +147,8 @@ def place(sim, pose: tuple[float, float, float] | None = None, ball: tuple[float
     """Put the robot at ``pose`` (x, y in metres, yaw in degrees) and the ball at ``ball`` (x, y),
     each when given; the scene's start otherwise. ValueError naming the option when what it
     placed would sink more than ``PLACEMENT_OVERLAP_M`` into something (a wall, a goal, the
-    robot or the ball), which the first step would fling apart."""
+    robot or the ball), which the first step would fling apart; naming ``--scene`` when the
+    scene's own start does."""
     def given(option: str, values) -> str:
         return f"{option} {' '.join(f'{v:g}' for v in values)}"
 
@@ -151,7 +162,12 @@ def place(sim, pose: tuple[float, float, float] | None = None, ball: tuple[float
             raise ModelError(f"{given('--ball', ball)}: {exc}") from None
     placed = {"the robot": ("--pose", pose), "the ball": ("--ball", ball)}
     for first, second, depth in sim.overlaps(PLACEMENT_OVERLAP_M):
-        for subject, other in ((first, second), (second, first)):
+        pairs = ((first, second), (second, first))
+        for subject, other in pairs:
             option, values = placed.get(subject, (None, None))
             if values is not None:
                 raise ValueError(f"{given(option, values)}: {subject} would overlap {other} by {depth * 100:.1f} cm")
+        for subject, other in pairs:
+            if subject in placed and subject != other:
+                raise ValueError(f"--scene {sim.scene}: {subject} starts inside {other} ({depth * 100:.1f} cm deep); "
+                                 f"move it in the scene, or place it with {placed[subject][0]}")

@@ -22,7 +22,7 @@ import openr_bridge
 from . import controller
 from .camera import CameraSettings
 from .cbind import (C_SUFFIXES, CControllerError, compile_controller, controller_sources, is_c_controller,
-                    run_c_controller)
+                    run_c_controller, serve)
 from .files import FolderLock, SymlinkRefused, make_folder, png, read_file, write_file_atomic
 from .options import make_out_folder, place, start_values
 from .render import RenderingUnavailable
@@ -99,9 +99,9 @@ class FrameWriter:
     until ``lock.release()``), a ``run.json`` that is not aibo-sim's, a non-empty ``frames/``
     beside no ``run.json``, a ``frames/`` holding files that are not a run's frames, a link in
     place of ``frames/`` or ``run.json`` (``files.SymlinkRefused``). ``run.json`` is written at
-    the start with ``"status": "incomplete"`` and replaced by the summary at the end (by
-    ``"status": "failed"``, the error and the simulated time when the controller failed or
-    the physics diverged), so that a killed run's folder is still recognised.
+    the start with ``"status": "incomplete"`` and replaced by the summary at the end
+    (``"status": "done"``; ``"failed"`` with the error and the simulated time when the
+    controller failed or the physics diverged), so that a killed run's folder is still recognised.
 
     A write that fails (a full disk) ends the run: the error is kept and ``check`` raises it
     after the run, as the OSError naming the file rather than as the controller's exception;
@@ -255,6 +255,36 @@ class _ControllerThreads:
         self._previous(args)
 
 
+class _WaitNotices:
+    """While a Python controller runs, a thread that prints the line ``serve.announce_wait``
+    prints for a C controller after every ``serve.WAIT_NOTICE_S`` of wall time without an API
+    call: a controller that computes for long, or never returns, is not taken for a simulator
+    that hangs."""
+
+    def __init__(self, name: str, robot: Robot):
+        self._name, self._robot, self._stop = name, robot, threading.Event()
+        self._thread = threading.Thread(target=self._watch, name="aibo-sim wait notices", daemon=True)
+
+    def __enter__(self) -> "_WaitNotices":
+        self._thread.start()
+        return self
+
+    def __exit__(self, *exc_info) -> None:
+        self._stop.set()
+        self._thread.join()
+
+    def _watch(self) -> None:
+        seen, notices = None, 0
+        while True:
+            if controller.last_call_s != seen:
+                seen, notices = controller.last_call_s, 0
+            if self._stop.wait(max(0.0, seen + (notices + 1) * serve.WAIT_NOTICE_S - time.monotonic())):
+                return
+            if controller.last_call_s == seen:
+                notices += 1
+                serve.announce_wait(self._name, notices * serve.WAIT_NOTICE_S, self._robot.time_ms)
+
+
 class Progress:
     """A one-line progress bar on a terminal: simulated time, frames (when counted), the
     real-time factor and the time left, both from the progress since the first update;
@@ -362,7 +392,8 @@ def run_controller(path: str | Path, *, backend: str = "sim", duration: float = 
             error: BaseException | None = None
             try:
                 if executable is None:
-                    runpy.run_path(str(path), run_name="__main__")
+                    with _WaitNotices(path.name, robot):
+                        runpy.run_path(str(path), run_name="__main__")
                 else:
                     run_c_controller(executable, path.name)
             except SimulationEnd:
@@ -413,7 +444,9 @@ def run_controller(path: str | Path, *, backend: str = "sim", duration: float = 
                              scene=None if scene is None else str(Path(scene).resolve()), seed=seed, pose=pose,
                              ball=ball, camera=camera)
         if writer is not None:
-            writer.write_run_json(asdict(summary))
+            done = asdict(summary)
+            writer.write_run_json({"controller": done.pop("controller"), "backend": done.pop("backend"),
+                                   "status": "done", **done})
     except (ControllerFailed, SimulationDiverged, RenderingUnavailable, KeyboardInterrupt) as failure:
         if writer is not None:  # the frames so far stay, and run.json says how the run ended
             record_end("interrupted" if isinstance(failure, KeyboardInterrupt) else "failed", failure)

@@ -7,6 +7,7 @@ simulated time reaches the next multiple of 1/30 s.
 
 from __future__ import annotations
 
+import ctypes
 import math
 import numbers
 from collections.abc import Callable
@@ -30,6 +31,20 @@ IR_NOISE = 0.1  # Webots lookup tables: 10 % noise at mid-range, none at the end
 
 class ModelError(ValueError):
     """A model or scene file is missing or invalid; the message names the file."""
+
+
+try:
+    _malloc_trim = ctypes.CDLL(None).malloc_trim  # glibc's
+except (OSError, AttributeError):
+    _malloc_trim = None
+
+
+def release_freed_memory() -> None:
+    """Give the memory freed so far back to the system (glibc's ``malloc_trim``; nothing
+    elsewhere): glibc keeps freed blocks for reuse, so without it the resident memory of a
+    process that closed simulations (their models, buffers, renderers) would not fall."""
+    if _malloc_trim is not None:
+        _malloc_trim(0)
 
 
 def ball_joint(model: mujoco.MjModel) -> int:
@@ -230,6 +245,7 @@ class Simulation:
         if not isinstance(command_latency_frames, int) or command_latency_frames < 0:
             raise ValueError(f"command_latency_frames must be a whole number >= 0, not {command_latency_frames!r}")
         self.command_latency_frames = command_latency_frames
+        self.scene = scene  # as given: None for the RoboCup field
         self.model = load_model(scene, ball)
         check_robot(self.model, scene if scene is not None else models_dir() / "scene.xml", keyframe)
         self.data = mujoco.MjData(self.model)

@@ -300,8 +300,8 @@ def dump(out, *, controller: str | Path | None = None, env: str | None = None, p
             raise ModelError(f"--scene {scene}: environment {env} places the ball, but {exc}") from None
         placeable_ball = False
     pose, ball = start_values("--pose", pose, 3), start_values("--ball", ball, 2)
-    if ball is not None or pose is not None:
-        check_place(scene, pose, ball)  # the scene's ModelError, or a placement's ValueError, before the folder is made
+    if controller is not None:
+        check_place(scene, pose, ball)  # the scene's ModelError, or a start's ValueError, before the folder is made
     source_sha256 = None
     if controller is not None:
         controller = Path(controller).resolve()

@@ -54,7 +54,7 @@ from ..ers7 import DISTANCE_SENSORS, JOINT_INDEX, JOINTS, LEGS, TOUCH_SENSORS
 from ..camera import CameraSettings, RobotColour
 from ..camera.backends import OpenRCamera
 from ..render import Renderer
-from ..sim import ACCEL_RANGE, MAX_PLACEMENT, Simulation
+from ..sim import ACCEL_RANGE, MAX_PLACEMENT, Simulation, release_freed_memory
 
 CAMERA_MODES = ("rgb", "ycrcb", "openr", None)
 LAYERS = {name: layer for layer, name in enumerate(openr_bridge.LAYER_NAMES[:3])}  # the YCrCb layers H, M, L
@@ -187,6 +187,7 @@ class AiboEnv(gym.Env):
         self.sim.close()
         self._closed = True
         self.sim = _ClosedSimulation(type(self).__name__)
+        release_freed_memory()
 
     # ---------------------------------------------------------------- actions
 
