@@ -99,34 +99,36 @@ class SensorFrame:
                         + [(index[s.locator], kinds["SWITCH"] if switch else kinds["TOUCH"])
                            for s, switch in zip(touches, self.switch)]
                         + [(index[ers7.WLAN_SWITCH_LOCATOR], kinds["SWITCH"])])
-        self.values = np.zeros((len(self.entries), protocol.VALUES_PER_SENSOR), np.int32)
+        self._n = len(self.joints)
+        self._qpos = [sim.model.joint(ers7.JOINTS[i].name).qposadr[0] for i in self.joints]
         self._touch_adr = [sim.model.sensor(s.name).adr[0] for s in touches]
         self._threshold = np.array([s.threshold for s in touches])
         self._max_force = sim.model.actuator_forcerange[self.joints, 1]
         self._head_distance = [i for i, s in enumerate(ers7.DISTANCE_SENSORS) if s.name in ("ir_near", "ir_far")]
+        self._raw = np.zeros((len(self.entries), protocol.VALUES_PER_SENSOR))  # the values before rounding
+        # Each entry's value in OPEN-R's unit: micro-radians, micrometres (from mm), micrometres/s^2.
+        n, distances = self._n, len(ers7.DISTANCE_SENSORS)
+        self._units = np.ones_like(self._raw)
+        self._units[:n + distances + 3, 0] = [1e6] * n + [1e3] * distances + [1e6] * 3
 
     def at(self, tick: int) -> bytes:
-        sim, values = self.sim, self.values
-        n = len(self.joints)
-        values[:n, 0] = np.round(sim.joint_positions()[self.joints] * 1e6)
-        values[:n, 2] = np.round(np.clip(sim.data.actuator_force[self.joints] / self._max_force, -1, 1) * 255)
-        values[:n, 3] = np.round(sim.servos.command[self.joints] * 1e6)
-        distances = sim.distances_mm()
-        for k, mm in enumerate(distances):
-            row = n + k
-            if k in self._head_distance and self._head_distance.index(k) != tick % 2:
-                values[row, 1] = 0  # not this sensor's turn: the last value stays, no signal
-                continue
-            values[row, 0] = round(mm * 1000)
-            values[row, 1] = min(0xFFFF, round(mm))
-        row = n + len(distances)
-        values[row:row + 3, 0] = np.round(sim.acceleration() * 1e6)
-        row += 3
-        force = sim.data.sensordata[self._touch_adr]
-        touch = np.where(self.switch, force > self._threshold, np.minimum(TOUCH_AD_MAX, np.round(force * TOUCH_AD_PER_NEWTON)))
-        values[row:row + len(force), 0] = touch
-        values[row:row + len(force), 1] = np.where(self.switch, 0, touch)
-        return values.tobytes()
+        sim, raw, n = self.sim, self._raw, self._n
+        data = sim.data
+        raw[:n, 0] = data.qpos[self._qpos]
+        raw[:n, 2] = np.clip(data.actuator_force[self.joints] / self._max_force, -1, 1) * 255
+        raw[:n, 3] = sim.servos.command[self.joints] * 1e6
+        for k, mm in enumerate(sim.distances_mm(), start=n):
+            if k - n in self._head_distance and self._head_distance.index(k - n) != tick % 2:
+                raw[k, 1] = 0  # not this head sensor's turn: its last value stays, no signal
+            else:
+                raw[k, :2] = mm, min(0xFFFF, mm)
+        row = n + len(self._head_distance) + 1
+        raw[row:row + 3, 0] = sim.acceleration()
+        force = data.sensordata[self._touch_adr]
+        touch = np.where(self.switch, force > self._threshold, np.minimum(TOUCH_AD_MAX, force * TOUCH_AD_PER_NEWTON))
+        raw[row + 3:row + 3 + len(force), 0] = touch
+        raw[row + 3:row + 3 + len(force), 1] = np.where(self.switch, 0, touch)
+        return np.rint(raw * self._units).astype(np.int32).tobytes()
 
 
 class MemoryStickRun:
