@@ -24,7 +24,7 @@ EXIT_TERMINATED = 128 + signal.SIGTERM  # 143, as a shell reports a process that
 
 
 def _run(args) -> int:
-    from .runner import run_controller
+    from .runner import MEMORY_STICK, run_controller
     from .viewer import LiveViewer
 
     viewer = LiveViewer() if args.view else None
@@ -37,7 +37,10 @@ def _run(args) -> int:
     finally:
         if viewer is not None:
             viewer.close()
-    print(f"ran {Path(summary.controller).name} on the {summary.backend} backend: {summary.simulated_s:.2f} s simulated "
+    name = Path(summary.controller).name
+    what = (f"memory stick {name} on the host OPEN-R runtime" if summary.backend == MEMORY_STICK
+            else f"{name} on the {summary.backend} backend")
+    print(f"ran {what}: {summary.simulated_s:.2f} s simulated "
           f"in {summary.wall_s:.2f} s (real-time factor {summary.real_time_factor:.1f}), "
           f"{summary.camera_frames} camera frames written" + (f" to {args.out}" if args.out else ""))
     return 0
@@ -82,7 +85,7 @@ def _settled_simulation(args, profile: str):
 
     world = world_options(args)
     try:
-        sim = Simulation(world["scene"], seed=world["seed"], keyframe=args.keyframe,
+        sim = Simulation(world["scene"], seed=world["seed"], keyframe=args.keyframe, ball_type=world["ball_type"],
                          **{**camera_options(args), "camera_profile": profile})
     except KeyError as exc:  # MuJoCo's: no keyframe of that name; the message lists the valid ones
         raise ValueError(f"--keyframe {args.keyframe!r}: {exc.args[0] if exc.args else exc}") from None
@@ -119,6 +122,13 @@ def _side_by_side(args) -> np.ndarray:
         finally:
             sim.close()
     return np.hstack([cv2.resize(p, (416, 320), interpolation=cv2.INTER_NEAREST) for p in pictures])
+
+
+def _openr_sdk(args) -> int:
+    from .openr.sdk import sdk_root
+
+    print(sdk_root())
+    return 0
 
 
 def _motion_file(name: str) -> Path:
@@ -166,13 +176,15 @@ def build_parser() -> argparse.ArgumentParser:
     commands = parser.add_subparsers(dest="command", required=True)
 
     run = commands.add_parser("run", help="run a controller headless")
-    run.add_argument("controller", type=path_text, help="controller (Webots-era Aibo API): a Python file, or a C or C++ file or "
-                                        "folder (compiled with the system compiler)")
-    run.add_argument("--backend", choices=BACKENDS, default="sim")
+    run.add_argument("controller", type=path_text,
+                     help="controller (Webots-era Aibo API): a Python file, or a C or C++ file or folder (compiled with "
+                          "the system compiler); or a memory stick folder (OPEN-R/MW/CONF/OBJECT.CFG: its OPEN-R objects "
+                          "run on the host runtime)")
+    run.add_argument("--backend", choices=BACKENDS, help="the controller's robot side: sim (default) or openr")
     run.add_argument("--duration", type=finite_float, default=10.0, help="simulated seconds (default 10)")
     run.add_argument("--out", type=path_text, help="folder for camera frames, the controller's files and run.json")
-    run.add_argument("--mtn-mode", choices=MTN_MODES, default="openr",
-                     help="MTN playback: OPEN-R interpolation (default) or Webots keyframe stepping")
+    run.add_argument("--mtn-mode", choices=MTN_MODES,
+                     help="MTN playback: OPEN-R interpolation (default openr) or Webots keyframe stepping")
     run.add_argument("--memory-stick", type=path_text, metavar="DIR", help="OPEN-R memory stick folder for the openr backend")
     run.add_argument("--view", action="store_true",
                      help="watch it in MuJoCo's viewer, in real time (needs a display; space pauses, right arrow steps)")
@@ -207,6 +219,12 @@ def build_parser() -> argparse.ArgumentParser:
                       help="no ball in the scene: the default, unless --ball places one")
     add_world_options(play)  # the camera options too, so that one option set works with every command
     play.set_defaults(handler=_mtn_play)
+
+    openr = commands.add_parser("openr", help="real OPEN-R programs: the host OPEN-R SDK").add_subparsers(
+        dest="openr_command", required=True)
+    sdk = openr.add_parser("sdk", help="print the host OPEN-R SDK's folder (made on first use), for Sony's Makefiles: "
+                                       "make OPENRSDK_ROOT=$(aibo-sim openr sdk) install")
+    sdk.set_defaults(handler=_openr_sdk)
 
     from .dump import add_dump_parser
 

@@ -26,6 +26,14 @@ GOAL_HEIGHT = 0.30
 
 BALL_RADIUS = 0.042
 BALL_MASS = 0.055  # not in the spec: a light plastic ball (choice)
+# Sony's pink ball, the AIBO's toy (Sony's samples find it with their CDT table): the size and mass
+# Webots' ERS-7 world (aibo_ers7.wbt) gives it; UNCONFIRMED, no Sony source gives them. Its albedo
+# (COLOURS["pink_ball"], plastic like the orange ball) is chosen, also UNCONFIRMED, so that the
+# ers7 camera on the default field reads it where Sony's table for it looks (Cr ~200, Cb ~140
+# inside Cr 150-230, Cb 120-190), as the real ball under the samples' indoor light.
+PINK_BALL_RADIUS = 0.035
+PINK_BALL_MASS = 0.1
+BALL_TYPES = ("robocup", "pink")  # --ball-type: the orange RoboCup ball (the default) or the pink one
 
 BEACON_RADIUS = 0.05
 BEACON_X = 1.35
@@ -43,8 +51,9 @@ COLOURS = {
     "pink": (0.8, 0.27, 0.59, 1.0),
     "white": (0.65, 0.65, 0.65, 1.0),
     "orange": (1.0, 0.45, 0.05, 1.0),
+    "pink_ball": (1.0, 0.2, 0.85, 1.0),
 }
-SPECULAR = {"orange": 0.1}  # the plastic ball; carpet and paint are matte (0)
+SPECULAR = {"orange": 0.1, "pink_ball": 0.1}  # the plastic balls; carpet and paint are matte (0)
 
 
 def _line_segments() -> tuple[tuple[float, float, float, float], ...]:

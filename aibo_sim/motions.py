@@ -295,8 +295,8 @@ class GaitMeter:
 
 def play_motion(motion_or_path, repeat: int = 1, sim: Simulation | None = None, mode: str = "openr",
                 step_ms: int = 16, *, scene=None, seed: int = 0, pose: tuple[float, float, float] | None = None,
-                ball: tuple[float, float] | None = None, camera_profile: str = "ers7", camera_full: bool = False,
-                camera_settings=None) -> dict:
+                ball: tuple[float, float] | None = None, ball_type: str = "robocup", camera_profile: str = "ers7",
+                camera_full: bool = False, camera_settings=None) -> dict:
     """Play a motion (or MTN file) ``repeat`` times on ``sim`` (default: a new robot standing in
     ``scene``, the RoboCup field by default, made with ``seed`` and the camera options, which
     ``mtn play`` takes like every ``aibo-sim`` command) and say where it went. ``pose`` (x, y
@@ -326,7 +326,7 @@ def play_motion(motion_or_path, repeat: int = 1, sim: Simulation | None = None, 
         place(sim, pose, ball)
         return _play(sim, motion, player, repeat, mode, step_ms)
     sim = Simulation(scene, seed=seed, camera_full=camera_full, camera_profile=camera_profile,
-                     camera_settings=camera_settings, ball=ball is not None)
+                     camera_settings=camera_settings, ball=ball is not None, ball_type=ball_type)
     try:
         place(sim, pose, ball)
         return _play(sim, motion, player, repeat, mode, step_ms)

@@ -1,5 +1,5 @@
 """The command-line options that ``run``, ``render``, ``dump`` and ``mtn play`` share, with the
-same names, defaults and meanings: the world (``--scene``, ``--pose``, ``--ball``, ``--seed``)
+same names, defaults and meanings: the world (``--scene``, ``--pose``, ``--ball``, ``--ball-type``, ``--seed``)
 and the head camera (``--camera-profile``, ``--camera-wb``, ``--camera-gain``,
 ``--camera-shutter``, ``--camera-full``).
 
@@ -19,12 +19,13 @@ from pathlib import Path
 from openr_bridge import CAMERA_DEFAULTS, CAMERA_SETTINGS
 
 from .camera import PROFILES, CameraSettings
+from .field import BALL_TYPES
 from .sim import SEED_LIMIT, ModelError, Simulation
 
 PLACEMENT_OVERLAP_M = 0.005  # a placed robot or ball sunk deeper than this into something is an error
 MAX_MAGNITUDE = 1e6  # |value| beyond this is a typo, not a position (metres) or an angle (degrees)
 CAMERA_SETTING_OPTIONS = (("white_balance", "--camera-wb"), ("gain", "--camera-gain"), ("shutter", "--camera-shutter"))
-WORLD_DESTS = ("scene", "pose", "ball", "seed")
+WORLD_DESTS = ("scene", "pose", "ball", "ball_type", "seed")
 CAMERA_DESTS = ("camera_profile", "camera_wb", "camera_gain", "camera_shutter", "camera_full")
 LONG_WORD = 120  # an error line's paths and arguments are cut after this many characters
 
@@ -86,6 +87,9 @@ def add_world_options(parser: argparse.ArgumentParser, camera: bool = True) -> N
                         help="robot position on the field (m) and heading (deg); default: the scene's start")
     parser.add_argument("--ball", type=finite_float, nargs=2, metavar=("X", "Y"),
                         help="ball position on the field (m); default: the scene's")
+    parser.add_argument("--ball-type", choices=BALL_TYPES, default="robocup",
+                        help="the scene's ball: robocup (the orange RoboCup ball, 84 mm; default) or pink "
+                             "(Sony's pink AIBO ball, 70 mm, which Sony's samples look for)")
     parser.add_argument("--seed", type=seed_number, default=0, metavar="N",
                         help="random seed (IR and camera noise, randomised choices; default 0)")
     if not camera:
@@ -99,10 +103,10 @@ def add_world_options(parser: argparse.ArgumentParser, camera: bool = True) -> N
 
 
 def world_options(args: argparse.Namespace) -> dict:
-    """Keyword arguments ``scene``, ``seed``, ``pose`` (x, y, yaw in degrees, or None) and
-    ``ball`` (x, y, or None) from the world options."""
+    """Keyword arguments ``scene``, ``seed``, ``pose`` (x, y, yaw in degrees, or None), ``ball``
+    (x, y, or None) and ``ball_type`` from the world options."""
     return {"scene": args.scene, "seed": args.seed, "pose": None if args.pose is None else tuple(args.pose),
-            "ball": None if args.ball is None else tuple(args.ball)}
+            "ball": None if args.ball is None else tuple(args.ball), "ball_type": args.ball_type}
 
 
 def camera_options(args: argparse.Namespace) -> dict:
@@ -134,9 +138,10 @@ def make_out_folder(path) -> Path:
     return path
 
 
-def check_place(scene, pose: tuple[float, float, float] | None, ball: tuple[float, float] | None) -> None:
+def check_place(scene, pose: tuple[float, float, float] | None, ball: tuple[float, float] | None,
+                ball_type: str = "robocup") -> None:
     """``place``'s errors for these placements in ``scene``, before a command writes anything."""
-    sim = Simulation(scene, camera_profile="ideal")
+    sim = Simulation(scene, camera_profile="ideal", ball_type=ball_type)
     try:
         place(sim, pose, ball)
     finally:

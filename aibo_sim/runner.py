@@ -18,12 +18,14 @@ from pathlib import Path
 import numpy as np
 
 import openr_bridge
+from openr_bridge.memory_stick import MemoryStick, is_memory_stick, load_memory_stick
 
 from . import controller
 from .camera import CameraSettings
 from .cbind import (C_SUFFIXES, CControllerError, compile_controller, controller_sources, is_c_controller,
                     run_c_controller, serve)
 from .files import FolderLock, SymlinkRefused, make_folder, png, read_file, write_file_atomic
+from .openr.host import MemoryStickRun, OpenRObjectCrashed
 from .options import make_out_folder, place, start_values
 from .render import RenderingUnavailable
 from .robot import Robot, SimulationEnd
@@ -56,6 +58,7 @@ class RunSummary:
     seed: int = 0
     pose: tuple[float, float, float] | None = None
     ball: tuple[float, float] | None = None
+    ball_type: str = "robocup"
     camera: dict = field(default_factory=dict)  # ``HeadCamera.describe()`` at the start: profile, lens, settings
 
 
@@ -65,6 +68,8 @@ def motion_dirs(controller_path: Path) -> tuple[Path, ...]:
 
 
 RUN_FILE = "run.json"
+CONSOLE_FILE, SOUND_FILE = "console.log", "speaker.wav"  # a memory stick's console and speaker, in --out
+MEMORY_STICK = "memory stick"  # run.json's "backend" of a memory stick's run: its objects are the robot side
 LOCK_FILE = ".run.lock"  # flock()ed while a run writes its folder (``files.FolderLock``): one run per folder
 FRAME_FILE = re.compile(r"\d{6,}\.png")  # a run's frame, frames/NNNNNN.png
 # What a run's frames/ may hold: its frames, their temporary names (".NNNNNN.png.tmp": no
@@ -318,29 +323,39 @@ class Progress:
             self.stream.write("\n")
 
 
-def run_controller(path: str | Path, *, backend: str = "sim", duration: float = 10.0, scene=None, seed: int = 0,
-                   out: str | Path | None = None, mtn_mode: str = "openr", memory_stick=None,
+def run_controller(path: str | Path, *, backend: str | None = None, duration: float = 10.0, scene=None,
+                   seed: int = 0, out: str | Path | None = None, mtn_mode: str | None = None, memory_stick=None,
                    camera_full: bool = False, camera_profile: str = "ers7",
                    camera_settings: CameraSettings | None = None, pose: tuple[float, float, float] | None = None,
-                   ball: tuple[float, float] | None = None, frame_listeners=(), progress: bool = True,
-                   workdir: str | Path | None = None) -> RunSummary:
+                   ball: tuple[float, float] | None = None, ball_type: str = "robocup", frame_listeners=(),
+                   progress: bool = True, workdir: str | Path | None = None) -> RunSummary:
     """Run a controller for ``duration`` simulated seconds; frames, its files and ``run.json``
-    (the summary) go to ``out``. The controller is a Python file, or a C or C++ file or folder
-    (``aibo_sim.cbind``: compiled first, a CompileError when it does not compile).
+    (the summary) go to ``out``. The controller is a Python file, a C or C++ file or folder
+    (``aibo_sim.cbind``: compiled first, a CompileError when it does not compile), or a memory
+    stick: a folder with ``OPEN-R/MW/CONF/OBJECT.CFG``, whose OPEN-R objects run on the host
+    OPEN-R runtime (``aibo_sim.openr``: ``backend``, ``mtn_mode`` and ``memory_stick``, the
+    Webots API's, do not apply; its console goes to ``out/console.log``, its sound to
+    ``out/speaker.wav``).
 
     The robot starts at ``pose`` (x, y in metres, yaw in degrees; default the scene's start),
-    the ball at ``ball``; the head camera is ``camera_profile`` (``ers7`` or ``ideal``) with
-    ``camera_settings`` at the start. ``frame_listeners`` are called with the robot after every
-    8 ms frame; ``progress=False`` silences the progress bar (worker processes). The controller
-    runs in ``workdir`` (default ``out``; with neither, the current folder): its files land there.
+    the ball (``ball_type``) at ``ball``; the head camera is ``camera_profile`` (``ers7`` or
+    ``ideal``) with ``camera_settings`` at the start. ``frame_listeners`` are called with the
+    robot (or the memory stick's run) after every 8 ms frame; ``progress=False`` silences the
+    progress bar (worker processes). The controller runs in ``workdir`` (default ``out``; with
+    neither, the current folder): its files land there.
     """
     path = Path(path).resolve()
+    stick = _memory_stick(path, backend, mtn_mode, memory_stick)
     executable = None
-    if is_c_controller(path):
-        executable = compile_controller(path)
-        path = controller_sources(path)[0]  # the main file: its folder holds the controller's motions
+    if stick is None:
+        backend, mtn_mode = backend or "sim", mtn_mode or "openr"
+        if is_c_controller(path):
+            executable = compile_controller(path)
+            path = controller_sources(path)[0]  # the main file: its folder holds the controller's motions
+        else:
+            check_python_controller(path)
     else:
-        check_python_controller(path)
+        backend = MEMORY_STICK
     if isinstance(duration, (str, bytes, bool)) or not isinstance(duration, (int, float, np.integer, np.floating)):
         raise ValueError(f"--duration must be a number of seconds, not {duration!r}")
     if not (math.isfinite(duration) and duration > 0):
@@ -349,46 +364,110 @@ def run_controller(path: str | Path, *, backend: str = "sim", duration: float = 
         raise ValueError(f"--duration {duration} s is shorter than one {FRAME_MS} ms joint frame: nothing would run")
     pose, ball = start_values("--pose", pose, 3), start_values("--ball", ball, 2)
     sim = Simulation(scene, seed=seed, camera_full=camera_full, camera_profile=camera_profile,
-                     camera_settings=camera_settings)
+                     camera_settings=camera_settings, ball_type=ball_type)
+    writer = None
     try:
         place(sim, pose, ball)
-        robot = Robot(sim, backend=backend, mtn_mode=mtn_mode, memory_stick=memory_stick,
-                      search_dirs=motion_dirs(path))
-        camera = sim.camera.describe((robot.camera_source.width, robot.camera_source.height))  # what it serves
+        out = out and Path(out).resolve()
+        folder = Path(workdir).resolve() if workdir is not None else out
+        if stick is None:
+            program = Robot(sim, backend=backend, mtn_mode=mtn_mode, memory_stick=memory_stick,
+                            search_dirs=motion_dirs(path))
+            camera_listeners = program.camera_source.listeners
+            camera = sim.camera.describe((program.camera_source.width, program.camera_source.height))  # what it serves
+        else:
+            program = MemoryStickRun(sim, stick, folder or Path.cwd(), log_path=out and out / CONSOLE_FILE,
+                                     sound_path=out and out / SOUND_FILE)
+            camera_listeners, camera = program.camera_listeners, sim.camera.describe()
+        if out is not None:
+            writer = FrameWriter(out, controller=path, backend=backend)
     except BaseException:
         sim.close()
+        if writer is not None:
+            writer.lock.release()
         raise
-    robot.end_ms = int(round(duration * 1000))
-    writer = None
-    if out is not None:
-        try:
-            out = Path(out).resolve()
-            writer = FrameWriter(out, controller=path, backend=backend)
-        except BaseException:
-            sim.close()
-            raise
-        robot.camera_source.listeners.append(writer)
-    robot.frame_listeners.extend(frame_listeners)
+    program.end_ms = int(round(duration * 1000))
+    if writer is not None:
+        camera_listeners.append(writer)
+    program.frame_listeners.extend(frame_listeners)
     progress_bar = Progress(duration, enabled=progress)
-    robot.frame_listeners.append(progress_bar)
-    controller.install(robot)
+    program.frame_listeners.append(progress_bar)
     start = time.perf_counter()
 
     def record_end(status: str, error: BaseException) -> None:
         """run.json of a run that did not reach its end: how it ended, the time and frames so far."""
         writer.write_run_json({"controller": str(path), "backend": backend, "status": status,
                                **({"error": str(error)} if status == "failed" else {}),
-                               "simulated_s": robot.time_ms / 1000, "camera_frames": writer.count, "camera": camera})
+                               "simulated_s": program.time_ms / 1000, "camera_frames": writer.count, "camera": camera})
 
-    # How a controller ends: its run is over (SimulationEnd) or it calls sys.exit(0) or
-    # sys.exit(): a normal end. It raises (in its own thread or in one it started), or calls
-    # sys.exit with another status: exit status 1, ControllerFailed quoting its traceback or its
-    # status (never read as a divergence). The physics diverges: SimulationDiverged (exit
-    # status 3). Its robot_die functions run in every case (Ctrl-C too); one that raises is
-    # reported after the controller's own error.
     try:
-        with _controller_context(path.parent, out if workdir is None else Path(workdir).resolve()), \
-                _ControllerThreads(robot) as threads:
+        if stick is None:
+            _run_controller_program(path, executable, program, folder)
+        else:
+            _run_memory_stick(path, program)
+        wall = time.perf_counter() - start
+        if writer is not None and writer.error is not None:  # a frame that could not be written ended the run
+            try:
+                record_end("failed", writer.error)
+            except OSError:
+                pass  # the full disk refused this too: run.json still says "incomplete"
+            writer.check()
+        position, yaw, _ = sim.body_pose()
+        ball_end = sim.ball_position()
+        summary = RunSummary(str(path), backend, program.time_ms / 1000, wall, program.time_ms / 1000 / max(wall, 1e-9),
+                             writer.count if writer else 0, (float(position[0]), float(position[1]), math.degrees(yaw)),
+                             None if ball_end is None else (float(ball_end[0]), float(ball_end[1])),
+                             scene=None if scene is None else str(Path(scene).resolve()), seed=seed, pose=pose,
+                             ball=ball, ball_type=ball_type, camera=camera)
+        if writer is not None:
+            done = asdict(summary)
+            writer.write_run_json({"controller": done.pop("controller"), "backend": done.pop("backend"),
+                                   "status": "done", **done})
+    except (ControllerFailed, SimulationDiverged, RenderingUnavailable, KeyboardInterrupt) as failure:
+        if writer is not None:  # the frames so far stay, and run.json says how the run ended
+            record_end("interrupted" if isinstance(failure, KeyboardInterrupt) else "failed", failure)
+        raise
+    finally:
+        progress_bar.close()
+        sim.close()
+        if writer is not None:
+            writer.lock.release()
+    return summary
+
+
+def _memory_stick(path: Path, backend: str | None, mtn_mode: str | None, memory_stick) -> MemoryStick | None:
+    """The memory stick in the folder ``path``, loaded (a ConfigError naming the file and line of a
+    problem), or None for a controller; ValueError for a controller's option given with a stick."""
+    if not path.is_dir() or not is_memory_stick(path):
+        return None
+    for option, value in (("--backend", backend), ("--mtn-mode", mtn_mode), ("--memory-stick", memory_stick)):
+        if value not in (None, MEMORY_STICK if option == "--backend" else None):
+            raise ValueError(f"{option} applies to controllers: {path} is a memory stick, whose OPEN-R objects run "
+                             "as on the robot")
+    return load_memory_stick(path)
+
+
+def _run_memory_stick(path: Path, run: MemoryStickRun) -> None:
+    """Run a memory stick's objects; an object that crashed is ControllerFailed."""
+    try:
+        run.run()
+    except OpenRObjectCrashed as error:
+        raise ControllerFailed(f"memory stick {path.name}: {error}") from error
+
+
+def _run_controller_program(path: Path, executable: Path | None, robot: Robot, workdir: Path | None) -> None:
+    """Run a Python or C controller on ``robot`` until its end; ControllerFailed (or the
+    simulator's SimulationDiverged, RenderingUnavailable) for a run that did not end well.
+
+    How a controller ends: its run is over (SimulationEnd) or it calls sys.exit(0) or
+    sys.exit(): a normal end. It raises (in its own thread or in one it started), or calls
+    sys.exit with another status: ControllerFailed quoting its traceback or its status (never
+    read as a divergence). The physics diverges: SimulationDiverged. Its robot_die functions
+    run in every case (Ctrl-C too); one that raises is reported after the controller's own error.
+    """
+    controller.install(robot)
+    try:
+        with _controller_context(path.parent, workdir), _ControllerThreads(robot) as threads:
             error: BaseException | None = None
             try:
                 if executable is None:
@@ -429,32 +508,5 @@ def run_controller(path: str | Path, *, backend: str = "sim", duration: float = 
                                        + controller_traceback(error) + die_report) from error
             if die_report:
                 raise ControllerFailed(f"controller {path.name} ended {where};{die_report}")
-        wall = time.perf_counter() - start
-        if writer is not None and writer.error is not None:  # a frame that could not be written ended the run
-            try:
-                record_end("failed", writer.error)
-            except OSError:
-                pass  # the full disk refused this too: run.json still says "incomplete"
-            writer.check()
-        position, yaw, _ = sim.body_pose()
-        ball_end = sim.ball_position()
-        summary = RunSummary(str(path), backend, robot.time_ms / 1000, wall, robot.time_ms / 1000 / max(wall, 1e-9),
-                             writer.count if writer else 0, (float(position[0]), float(position[1]), math.degrees(yaw)),
-                             None if ball_end is None else (float(ball_end[0]), float(ball_end[1])),
-                             scene=None if scene is None else str(Path(scene).resolve()), seed=seed, pose=pose,
-                             ball=ball, camera=camera)
-        if writer is not None:
-            done = asdict(summary)
-            writer.write_run_json({"controller": done.pop("controller"), "backend": done.pop("backend"),
-                                   "status": "done", **done})
-    except (ControllerFailed, SimulationDiverged, RenderingUnavailable, KeyboardInterrupt) as failure:
-        if writer is not None:  # the frames so far stay, and run.json says how the run ended
-            record_end("interrupted" if isinstance(failure, KeyboardInterrupt) else "failed", failure)
-        raise
     finally:
-        progress_bar.close()
         controller.install(None)
-        sim.close()
-        if writer is not None:
-            writer.lock.release()
-    return summary

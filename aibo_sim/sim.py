@@ -19,7 +19,7 @@ import numpy as np
 from openr_bridge import FRAME_RATE_HZ, FRAME_TICK_MS
 
 from .camera import CameraProfile, CameraSettings, HeadCamera, camera_size, scene_light
-from .field import BALL_RADIUS
+from .field import BALL_TYPES, COLOURS, PINK_BALL_MASS, PINK_BALL_RADIUS, SPECULAR
 from .ers7 import DISTANCE_SENSORS, HEAD_CAMERA, JOINTS, LED_BY_NAME, LED_OFF_RGBA, SENSORS, TOUCH_SENSORS
 
 FRAME_MS = FRAME_TICK_MS  # OPEN-R joint frame, 8 ms
@@ -77,11 +77,13 @@ def models_dir() -> Path:
     raise ModelError(f"bundled models not found next to {here}")
 
 
-def load_model(scene: str | Path | None = None, ball: bool = True) -> mujoco.MjModel:
+def load_model(scene: str | Path | None = None, ball: bool = True, ball_type: str = "robocup") -> mujoco.MjModel:
     """Compile a scene file (default: the RoboCup field), with an error that names the file
     (also for its light's custom numerics out of range, ``SceneLight``, and a timestep that is
     not a positive divisor of the 8 ms joint frame); ``ball=False`` leaves out its body named
-    ``ball``."""
+    ``ball``, ``ball_type="pink"`` makes it Sony's pink ball (``field.PINK_BALL_RADIUS``)."""
+    if ball_type not in BALL_TYPES:
+        raise ValueError(f"--ball-type must be one of {', '.join(BALL_TYPES)}, not {ball_type!r}")
     path = Path(scene) if scene is not None else models_dir() / "scene.xml"
     try:
         if not path.is_file():
@@ -89,12 +91,19 @@ def load_model(scene: str | Path | None = None, ball: bool = True) -> mujoco.MjM
     except OSError as exc:  # a name too long, a folder without permission
         raise ModelError(f"{path}: cannot read: {exc.strerror or exc}") from None
     try:
-        if ball:
+        if ball and ball_type == "robocup":
             model = mujoco.MjModel.from_xml_path(str(path))
         else:
             spec = mujoco.MjSpec.from_file(str(path))
-            if spec.body("ball") is not None:
-                spec.delete(spec.body("ball"))
+            body = spec.body("ball")
+            if body is not None and not ball:
+                spec.delete(body)
+            elif body is not None and spec.geom("ball") is not None:
+                geom = spec.geom("ball")
+                geom.size, geom.mass = [PINK_BALL_RADIUS, 0, 0], PINK_BALL_MASS
+                body.pos = [body.pos[0], body.pos[1], PINK_BALL_RADIUS]
+                spec.add_material(name="pink_ball", rgba=COLOURS["pink_ball"], specular=SPECULAR["pink_ball"])
+                geom.material = "pink_ball"
             model = spec.compile()
         scene_light(model)  # its custom numerics in range
         timestep = model.opt.timestep
@@ -232,7 +241,7 @@ class Servos:
 class Simulation:
     """One ERS-7 in a scene, advanced in 8 ms frames, with its head camera (``camera``, see
     ``aibo_sim.camera``: profile ``ers7`` or ``ideal``, settings by name); ``ball=False``
-    leaves the scene's ball out.
+    leaves the scene's ball out, ``ball_type`` chooses it (``field.BALL_TYPES``).
 
     ``command_latency_frames``: 8 ms frames between a set-point and the servo acting on it. On
     the robot, OPEN-R plays joint commands from a queue of 4-frame command vectors, so a
@@ -241,12 +250,12 @@ class Simulation:
 
     def __init__(self, scene=None, *, seed: int = 0, keyframe: str = "stand", camera_full: bool = False,
                  camera_profile: str | CameraProfile = "ers7", camera_settings: CameraSettings | None = None,
-                 ball: bool = True, command_latency_frames: int = 0):
+                 ball: bool = True, ball_type: str = "robocup", command_latency_frames: int = 0):
         if not isinstance(command_latency_frames, int) or command_latency_frames < 0:
             raise ValueError(f"command_latency_frames must be a whole number >= 0, not {command_latency_frames!r}")
         self.command_latency_frames = command_latency_frames
         self.scene = scene  # as given: None for the RoboCup field
-        self.model = load_model(scene, ball)
+        self.model = load_model(scene, ball, ball_type)
         check_robot(self.model, scene if scene is not None else models_dir() / "scene.xml", keyframe)
         self.data = mujoco.MjData(self.model)
         self.keyframe = keyframe
@@ -310,7 +319,7 @@ class Simulation:
         ``MAX_PLACEMENT`` metres, as for ``place_robot``."""
         x, y = _placement("place_ball", x=x, y=y)
         position, velocity = self.ball_state()
-        position[:] = (x, y, BALL_RADIUS, 1, 0, 0, 0)
+        position[:] = (x, y, self.model.geom("ball").size[0], 1, 0, 0, 0)
         velocity[:] = 0
         mujoco.mj_forward(self.model, self.data)
         self.camera.moved()

@@ -18,7 +18,7 @@ from aibo_sim.runner import run_controller
 ROOT = Path(__file__).resolve().parents[1]
 SCRIPTED = Path(__file__).parent / "controllers" / "scripted_head.py"
 ROBOT_ONLY = ROOT / "models" / "ers7.xml"  # a scene without a ball
-SHARED = ("--scene", "--pose", "--ball", "--seed", "--camera-profile", "--camera-wb", "--camera-gain",
+SHARED = ("--scene", "--pose", "--ball", "--ball-type", "--seed", "--camera-profile", "--camera-wb", "--camera-gain",
           "--camera-shutter", "--camera-full")
 # Each command with the arguments it needs besides the shared options (argparse stops first).
 COMMANDS = {
@@ -58,7 +58,8 @@ def test_every_command_takes_the_same_world_and_camera_options():
         assert actions == options["run"], f"{name} differs from run"
     defaults = {name: vars(parser.parse_args(COMMANDS[name][2 if name == "mtn play" else 1:]))
                 for name, parser in parsers.items()}
-    expected = {"scene": None, "pose": None, "ball": None, "seed": 0, "camera_profile": "ers7", "camera_wb": "fl",
+    expected = {"scene": None, "pose": None, "ball": None, "ball_type": "robocup", "seed": 0, "camera_profile": "ers7",
+                "camera_wb": "fl",
                 "camera_gain": "mid", "camera_shutter": "mid", "camera_full": False}
     assert set(expected) == set(WORLD_DESTS + CAMERA_DESTS)
     for name, values in defaults.items():
@@ -66,7 +67,7 @@ def test_every_command_takes_the_same_world_and_camera_options():
 
 
 def test_shared_options_parse_to_the_same_values_everywhere():
-    given = ["--scene", "x.xml", "--pose", "-1", "0.5", "90", "--ball", "0.2", "-0.3", "--seed", "7",
+    given = ["--scene", "x.xml", "--pose", "-1", "0.5", "90", "--ball", "0.2", "-0.3", "--ball-type", "pink", "--seed", "7",
              "--camera-profile", "ideal", "--camera-wb", "outdoor", "--camera-gain", "high",
              "--camera-shutter", "fast", "--camera-full"]
     parsed = {}

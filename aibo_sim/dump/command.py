@@ -30,7 +30,7 @@ def _dump_command(args) -> int:
     # Ctrl-C and SIGTERM (``cli.sigterm_stops_cleanly``) stop it cleanly: writers abort, workers stop.
     summary = dump(args.out, controller=args.controller, env=args.env, policy=args.policy, frames=frames,
                    backend=args.backend, scene=args.scene, seed=args.seed, pose=args.pose and tuple(args.pose),
-                   ball=args.ball and tuple(args.ball), formats=formats, resume=args.resume,
+                   ball=args.ball and tuple(args.ball), ball_type=args.ball_type, formats=formats, resume=args.resume,
                    workers=args.workers, engine=args.engine, ray_address=args.ray_address,
                    mtn_mode=args.mtn_mode, memory_stick=args.memory_stick, **camera_options(args))
     repaired = f", {summary.repaired_frames} with missing or damaged files rewritten" if summary.repaired_frames else ""
@@ -53,7 +53,8 @@ def add_dump_parser(subcommands) -> argparse.ArgumentParser:
     length = parser.add_mutually_exclusive_group()
     length.add_argument("--duration", type=finite_float, help="simulated seconds, 30 frames each (default 10)")
     length.add_argument("--steps", type=int, help="camera frames (controller) or environment steps")
-    parser.add_argument("--backend", choices=BACKENDS, default="sim", help="what the controller sees")
+    parser.add_argument("--backend", choices=BACKENDS,
+                        help="controller dumps: what the controller sees (default sim); not for a memory stick")
     parser.add_argument("--mtn-mode", choices=MTN_MODES,
                         help="controller dumps: MTN playback, OPEN-R interpolation (default openr) or Webots "
                              "keyframe stepping")

@@ -15,6 +15,8 @@ import numpy as np
 
 import openr_bridge
 from openr_bridge import FRAME_RATE_HZ
+from openr_bridge.config import find_in_stick
+from openr_bridge.memory_stick import is_memory_stick, load_memory_stick, read_object
 
 from ..camera import CameraProfile, CameraSettings, camera_size, describe_camera, scene_light
 from ..camera import camera_profile as resolve_profile  # dump's argument of that name shadows it
@@ -24,7 +26,7 @@ from ..mtn import MODES as MTN_MODES
 from ..options import check_place, start_values
 from ..render import Renderer
 from ..robot import BACKENDS, SimulationEnd, check_memory_stick
-from ..runner import Progress, check_python_controller, run_controller
+from ..runner import MEMORY_STICK, Progress, check_python_controller, run_controller
 from ..sim import ModelError, ball_joint, is_seed, load_model
 from .formats import DEFAULT_FORMATS, FORMATS, DumpError
 from .writing import CONTROLLER_FILES, DumpWriter
@@ -86,7 +88,7 @@ def _profile(parameters: dict) -> CameraProfile:
 def _dump_controller(parameters: dict, out: Path, resume: bool, **lock) -> DumpWriter:
     frames, camera_full = parameters["frames"], parameters["camera_full"]
     settings = CameraSettings(**parameters["camera_settings"])
-    model, profile = load_model(parameters["scene"]), _profile(parameters)
+    model, profile = load_model(parameters["scene"], ball_type=parameters.get("ball_type", "robocup")), _profile(parameters)
     camera = describe_camera(profile, settings, camera_size(camera_full),
                              scene_light(model))
     progress = Progress(frames / FRAME_RATE_HZ, enabled=parameters.get("progress", True))
@@ -102,7 +104,8 @@ def _dump_controller(parameters: dict, out: Path, resume: bool, **lock) -> DumpW
                     from None
             run_controller(parameters["controller"], backend=parameters["backend"], duration=frames / FRAME_RATE_HZ,
                            scene=parameters["scene"], seed=parameters["seed"], pose=parameters["pose"],
-                           ball=parameters["ball"], mtn_mode=parameters["mtn_mode"],
+                           ball=parameters["ball"], ball_type=parameters.get("ball_type", "robocup"),
+                           mtn_mode=parameters["mtn_mode"],
                            memory_stick=parameters["memory_stick"], camera_full=camera_full,
                            camera_profile=profile, camera_settings=settings,
                            frame_listeners=[listener], progress=False, workdir=workdir)
@@ -214,7 +217,17 @@ def model_sha256(model: mujoco.MjModel) -> str:
 
 def controller_sha256(path: Path) -> str:
     """The hash of a controller: its file's, or for a C or C++ controller folder, that of its
-    sources' names and hashes (compiled first: a syntax or compile error stops the dump at once)."""
+    sources' names and hashes (compiled first: a syntax or compile error stops the dump at once);
+    for a memory stick, that of its configuration files and objects (each read and checked first)."""
+    if is_memory_stick(path):
+        stick = load_memory_stick(path)
+        files = [stick.object_cfg, *(o.file for o in stick.objects)]
+        for stick_object in stick.objects:
+            read_object(stick_object, stick.object_cfg)
+        for name in ("CONNECT.CFG", "DESIGNDB.CFG"):
+            with contextlib.suppress(openr_bridge.ConfigError):
+                files.append(find_in_stick(path, name))
+        return hashlib.sha256("".join(f"{f.relative_to(path)}\0{file_sha256(f)}\0" for f in files).encode()).hexdigest()
     if not is_c_controller(path):
         check_python_controller(path)
         return file_sha256(path)
@@ -226,16 +239,17 @@ def controller_sha256(path: Path) -> str:
 
 
 def dump(out, *, controller: str | Path | None = None, env: str | None = None, policy: str | None = None,
-         frames: int = 300, backend: str = "sim", scene: str | Path | None = None, seed: int = 0,
+         frames: int = 300, backend: str | None = None, scene: str | Path | None = None, seed: int = 0,
          pose: tuple[float, float, float] | None = None, ball: tuple[float, float] | None = None,
-         formats=DEFAULT_FORMATS, camera_full: bool = False, camera_profile: str | CameraProfile = "ers7",
+         ball_type: str = "robocup", formats=DEFAULT_FORMATS, camera_full: bool = False, camera_profile: str | CameraProfile = "ers7",
          camera_settings: CameraSettings | None = None, resume: bool = False, workers: int = 1,
          engine: str = "local", ray_address: str | None = None, mtn_mode: str | None = None,
          memory_stick: str | Path | None = None) -> DumpSummary:
     """Dump a controller run (``frames`` camera frames) or an env run (``frames`` steps of
     ``policy``, default random) to ``out``;
     ``pose`` (x, y, yaw in degrees), ``ball``, ``mtn_mode`` (default openr) and ``memory_stick``
-    apply to controller dumps, as to ``run_controller``; the controller runs in
+    apply to controller dumps, as to ``run_controller`` (a memory stick takes none of ``backend``,
+    ``mtn_mode`` and ``memory_stick``); the controller runs in
     ``out/controller_files`` (a shard's own). ``engine="ray"``
     runs the ``workers`` shards as Ray tasks: on the Ray cluster at ``ray_address``, or on a
     local Ray started for the dump; the files are the same, byte for byte."""
@@ -244,7 +258,14 @@ def dump(out, *, controller: str | Path | None = None, env: str | None = None, p
     unknown = sorted(set(formats) - set(FORMATS))
     if unknown or not formats:
         raise ValueError(f"--formats: unknown formats {unknown or '(none given)'}; known: {', '.join(FORMATS)}")
-    if backend not in BACKENDS:
+    if controller is not None and is_memory_stick(controller):
+        for option, value in (("--backend", backend), ("--mtn-mode", mtn_mode), ("--memory-stick", memory_stick)):
+            if value is not None:
+                raise ValueError(f"{option} applies to controllers: {controller} is a memory stick, whose OPEN-R "
+                                 "objects run as on the robot")
+        backend = MEMORY_STICK
+    backend = backend or "sim"
+    if backend not in (*BACKENDS, MEMORY_STICK):
         raise ValueError(f"backend must be one of {BACKENDS}, not {backend!r}")
     if policy is not None and controller is not None:
         raise ValueError("--policy applies to --env dumps: a controller chooses its own actions")
@@ -290,7 +311,7 @@ def dump(out, *, controller: str | Path | None = None, env: str | None = None, p
     profile = resolve_profile(camera_profile)
     if env is not None:
         _check_env(env)
-    model = load_model(scene)
+    model = load_model(scene, ball_type=ball_type)
     Renderer(model, 1, 1).close()  # no OpenGL context (MUJOCO_GL=glfw without a display): refused here
     try:
         ball_joint(model)
@@ -301,7 +322,7 @@ def dump(out, *, controller: str | Path | None = None, env: str | None = None, p
         placeable_ball = False
     pose, ball = start_values("--pose", pose, 3), start_values("--ball", ball, 2)
     if controller is not None:
-        check_place(scene, pose, ball)  # the scene's ModelError, or a start's ValueError, before the folder is made
+        check_place(scene, pose, ball, ball_type)  # the scene's ModelError, or a start's ValueError, before the folder is made
     source_sha256 = None
     if controller is not None:
         controller = Path(controller).resolve()
@@ -310,9 +331,12 @@ def dump(out, *, controller: str | Path | None = None, env: str | None = None, p
     parameters = {"controller": controller and str(controller), "env": env, "policy": env and policy,
                   "frames": frames, "backend": backend, "scene": scene and str(Path(scene).resolve()), "seed": seed,
                   "pose": pose and list(pose), "ball": ball and list(ball),
-                  "mtn_mode": controller and (mtn_mode or "openr"), "memory_stick": memory_stick and str(memory_stick),
+                  "mtn_mode": controller and backend != MEMORY_STICK and (mtn_mode or "openr") or None,
+                  "memory_stick": memory_stick and str(memory_stick),
                   "formats": [f for f in FORMATS if f in formats], "camera_full": camera_full,
                   "camera_profile": profile.name, "camera_settings": (camera_settings or CameraSettings()).as_dict()}
+    if ball_type != "robocup":  # only then: a dump resumes one made before the pink ball existed
+        parameters["ball_type"] = ball_type
     options = profile.options()
     if options:  # only then: a dump of a preset resumes one made before options were recorded
         parameters["camera_profile_options"] = options

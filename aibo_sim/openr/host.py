@@ -162,6 +162,7 @@ class MemoryStickRun:
         self._sound: dict[int, np.ndarray] = {}
         self._camera_index = -1
         self._apply_gains()
+        self._host = sdk_root() / "OPEN_R" / "bin" / "openr-host"  # built now, if it must be, not during the run
 
     @property
     def time_ms(self) -> int:
@@ -190,8 +191,7 @@ class MemoryStickRun:
                                                          | os.O_NOFOLLOW, 0o644)
         environment = {**os.environ, "AIBO_OPENR_FD": str(theirs.fileno()), "AIBO_OPENR_SHM": str(shared),
                        **({"AIBO_OPENR_LOG_FD": str(log)} if log is not None else {})}
-        host = sdk_root() / "OPEN_R" / "bin" / "openr-host"
-        child = Child([str(host)], name=f"memory stick {self.stick.root.name}", env=environment,
+        child = Child([str(self._host)], name=f"memory stick {self.stick.root.name}", env=environment,
                       pass_fds=(theirs.fileno(), *(() if log is None else (log,))),
                       grace_note="its objects' Stop entries did not run")
         try:
