@@ -37,7 +37,8 @@ def _run(args) -> int:
     finally:
         if viewer is not None:
             viewer.close()
-    name = Path(summary.controller).name
+    path = Path(summary.controller)
+    name = path.name if path.name.upper() != "MS" else f"{path.parent.name}/{path.name}"  # a program's MS folder
     what = (f"memory stick {name} on the host OPEN-R runtime" if summary.backend == MEMORY_STICK
             else f"{name} on the {summary.backend} backend")
     print(f"ran {what}: {summary.simulated_s:.2f} s simulated "
@@ -122,6 +123,17 @@ def _side_by_side(args) -> np.ndarray:
         finally:
             sim.close()
     return np.hstack([cv2.resize(p, (416, 320), interpolation=cv2.INTER_NEAREST) for p in pictures])
+
+
+def _build_ms(args) -> int:
+    from .openr.build_ms import build_ms
+
+    out = build_ms(args.controller, args.out)
+    print(f"wrote the memory-stick project {out}: build it for the simulator with\n"
+          f"  make -C {out} OPENRSDK_ROOT=$(aibo-sim openr sdk) install\n"
+          f"then run it with: aibo-sim run {out / 'MS'}\n"
+          f"(for the robot: make -C {out} install with Sony's OPEN-R SDK in /usr/local/OPEN_R_SDK)")
+    return 0
 
 
 def _openr_sdk(args) -> int:
@@ -225,6 +237,11 @@ def build_parser() -> argparse.ArgumentParser:
     sdk = openr.add_parser("sdk", help="print the host OPEN-R SDK's folder (made on first use), for Sony's Makefiles: "
                                        "make OPENRSDK_ROOT=$(aibo-sim openr sdk) install")
     sdk.set_defaults(handler=_openr_sdk)
+    build_ms = commands.add_parser("build-ms", help="write a memory-stick project for a C or C++ controller: the "
+                                                     "controller with the Webots OPEN-R wrapper object")
+    build_ms.add_argument("controller", type=path_text, help="a .c, .cc or .cpp controller, or a folder of them")
+    build_ms.add_argument("--out", type=path_text, required=True, help="the project's folder (new or empty)")
+    build_ms.set_defaults(handler=_build_ms)
 
     from .dump import add_dump_parser
 

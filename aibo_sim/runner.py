@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 import openr_bridge
-from openr_bridge.memory_stick import MemoryStick, is_memory_stick, load_memory_stick
+from openr_bridge.memory_stick import MemoryStick, load_memory_stick, memory_stick_folder
 
 from . import controller
 from .camera import CameraSettings
@@ -347,15 +347,15 @@ def run_controller(path: str | Path, *, backend: str | None = None, duration: fl
     path = Path(path).resolve()
     stick = _memory_stick(path, backend, mtn_mode, memory_stick)
     executable = None
-    if stick is None:
+    if stick is not None:
+        path, backend = stick.root, MEMORY_STICK
+    else:
         backend, mtn_mode = backend or "sim", mtn_mode or "openr"
         if is_c_controller(path):
             executable = compile_controller(path)
             path = controller_sources(path)[0]  # the main file: its folder holds the controller's motions
         else:
             check_python_controller(path)
-    else:
-        backend = MEMORY_STICK
     if isinstance(duration, (str, bytes, bool)) or not isinstance(duration, (int, float, np.integer, np.floating)):
         raise ValueError(f"--duration must be a number of seconds, not {duration!r}")
     if not (math.isfinite(duration) and duration > 0):
@@ -436,15 +436,17 @@ def run_controller(path: str | Path, *, backend: str | None = None, duration: fl
 
 
 def _memory_stick(path: Path, backend: str | None, mtn_mode: str | None, memory_stick) -> MemoryStick | None:
-    """The memory stick in the folder ``path``, loaded (a ConfigError naming the file and line of a
-    problem), or None for a controller; ValueError for a controller's option given with a stick."""
-    if not path.is_dir() or not is_memory_stick(path):
+    """The memory stick ``path`` names (``memory_stick_folder``), loaded (a ConfigError naming the
+    file and line of a problem), or None for a controller; ValueError for a controller's option
+    given with a stick."""
+    folder = memory_stick_folder(path)
+    if folder is None:
         return None
     for option, value in (("--backend", backend), ("--mtn-mode", mtn_mode), ("--memory-stick", memory_stick)):
         if value not in (None, MEMORY_STICK if option == "--backend" else None):
-            raise ValueError(f"{option} applies to controllers: {path} is a memory stick, whose OPEN-R objects run "
+            raise ValueError(f"{option} applies to controllers: {folder} is a memory stick, whose OPEN-R objects run "
                              "as on the robot")
-    return load_memory_stick(path)
+    return load_memory_stick(folder)
 
 
 def _run_memory_stick(path: Path, run: MemoryStickRun) -> None:

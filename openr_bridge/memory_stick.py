@@ -57,6 +57,18 @@ def is_memory_stick(folder) -> bool:
     return True
 
 
+def memory_stick_folder(path) -> Path | None:
+    """The memory stick ``path`` names: the folder itself, or its ``MS`` (a program's folder, as
+    Sony's samples and ``aibo-sim build-ms`` lay them out); None when neither is one."""
+    path = Path(path)
+    if not path.is_dir():
+        return None
+    for folder in (path, path / "MS"):
+        if is_memory_stick(folder):
+            return folder
+    return None
+
+
 def stick_path(root: Path, ms_path: str, config: Path, line: int) -> Path:
     """The file of the folder ``root`` that ``/MS/...`` names (names matched ignoring case; a
     missing one kept as written), or ConfigError naming ``config`` and ``line``."""

@@ -152,7 +152,8 @@ def test_files_are_the_memory_stick_and_the_runs_folder(objects, tmp_path):
         assert refused in lines
     assert "[ERROR] refused to open /etc/hostname: not on the memory stick (/MS)" in lines
     data = stick / "OPEN-R" / "MW" / "DATA" / "P"
-    assert sorted(p.name for p in data.iterdir()) == ["PROBE.TXT", "STREAM.TXT", "TEXT.TXT"]
+    assert sorted(p.name for p in data.iterdir()) == ["PROBE.TXT", "STREAM.TXT", "TEXT.TXT", "UNCLOSED.TXT"]
+    assert (data / "UNCLOSED.TXT").read_text() == "written when the object's process ends\n"  # never closed
     assert (out / "here.txt").read_text() == "in the run's folder\n"
     assert not list(tmp_path.rglob("escape.txt")) and not list(tmp_path.rglob("longer_name.txt"))
 

@@ -5,7 +5,7 @@ repository): these tests skip without them."""
 import math
 import re
 import shutil
-import struct
+import wave
 
 import cv2
 import numpy as np
@@ -19,7 +19,7 @@ from openr_support import SAMPLES, make, run_stick
 
 pytestmark = pytest.mark.skipif(not SAMPLES.is_dir(), reason="Sony's OPEN-R samples not present (../shared/data)")
 PROGRAMS = ("common/HelloWorld", "common/ObjectComm", "common/ImageObserver", "ers7/BlinkingLED7", "ers7/MovingHead7",
-            "ers7/SensorObserver7")
+            "ers7/SensorObserver7", "ers7/BallTrackingHead7")
 
 
 @pytest.fixture(scope="module")
@@ -143,3 +143,30 @@ def test_image_observer_saves_layer_h_as_the_frame_has_it(samples, tmp_path):
         assert np.array_equal(cv2.imread(str(saved / name), cv2.IMREAD_COLOR)[:, :, ::-1], expected), name
     tags = [line for line in result.lines("ImageObserver") if line.startswith("FrameNumber")]
     assert tags[0] == f"FrameNumber {result.images[5].frame_number:x} FieldCounter 5 ColorFreq 0 0 0 0 0 0 0 0 "
+
+
+def test_ball_tracking_head7_stands_up_and_keeps_the_pink_ball_centred_as_it_rolls(samples, tmp_path):
+    """With MoNet, MotionAgents, SoundAgent and PowerMonitor: the limp robot is stood up, the head
+    finds Sony's pink ball with Sony's own CDT table on the ers7 camera's frames and keeps it near
+    the image centre while it rolls away sideways; the sound it plays on finding it is recorded."""
+    push_ms = 15000
+
+    def record(run):
+        sim = run.sim
+        if run.time_ms == push_ms:
+            sim.ball_state()[1][:3] = (0.0, -0.5, 0.0)  # the ball rolls to the robot's right
+        offset, visible = sim.camera.image_offset(sim.ball_position())
+        return run.time_ms, offset, visible, sim.body_pose()[0][2], sim.ball_position()[1]
+
+    result = run_stick(samples / "ers7/BallTrackingHead7/MS", 17.0, tmp_path, record, ball_type="pink")
+    found = next(line for line in result.console.splitlines() if "### BALL FOUND ###" in line)
+    found_ms = round(float(found.split("s]")[0].strip("[ ")) * 1000)
+    frames = [f for f in result.frames if f[0] >= found_ms + 500]
+    assert found_ms < push_ms - 500 and min(f[3] for f in frames) > 0.13  # standing by then
+    rolled = frames[0][4] - frames[-1][4]
+    assert rolled > 0.1, rolled
+    assert all(visible and max(abs(x), abs(y)) < 0.25 for _, (x, y), visible, _, _ in frames)
+    with wave.open(str(tmp_path / "speaker.wav")) as sound:
+        samples_16k = np.frombuffer(sound.readframes(sound.getnframes()), "<i2")
+        assert sound.getframerate() == 16000
+    assert np.abs(samples_16k[round(found_ms * 16):]).max() > 1000  # a sound after the ball was found

@@ -16,7 +16,7 @@ import numpy as np
 import openr_bridge
 from openr_bridge import FRAME_RATE_HZ
 from openr_bridge.config import find_in_stick
-from openr_bridge.memory_stick import is_memory_stick, load_memory_stick, read_object
+from openr_bridge.memory_stick import load_memory_stick, memory_stick_folder, read_object
 
 from ..camera import CameraProfile, CameraSettings, camera_size, describe_camera, scene_light
 from ..camera import camera_profile as resolve_profile  # dump's argument of that name shadows it
@@ -219,15 +219,16 @@ def controller_sha256(path: Path) -> str:
     """The hash of a controller: its file's, or for a C or C++ controller folder, that of its
     sources' names and hashes (compiled first: a syntax or compile error stops the dump at once);
     for a memory stick, that of its configuration files and objects (each read and checked first)."""
-    if is_memory_stick(path):
-        stick = load_memory_stick(path)
+    if memory_stick_folder(path) is not None:
+        stick = load_memory_stick(memory_stick_folder(path))
         files = [stick.object_cfg, *(o.file for o in stick.objects)]
         for stick_object in stick.objects:
             read_object(stick_object, stick.object_cfg)
         for name in ("CONNECT.CFG", "DESIGNDB.CFG"):
             with contextlib.suppress(openr_bridge.ConfigError):
-                files.append(find_in_stick(path, name))
-        return hashlib.sha256("".join(f"{f.relative_to(path)}\0{file_sha256(f)}\0" for f in files).encode()).hexdigest()
+                files.append(find_in_stick(stick.root, name))
+        return hashlib.sha256("".join(f"{f.relative_to(stick.root)}\0{file_sha256(f)}\0"
+                                      for f in files).encode()).hexdigest()
     if not is_c_controller(path):
         check_python_controller(path)
         return file_sha256(path)
@@ -258,7 +259,7 @@ def dump(out, *, controller: str | Path | None = None, env: str | None = None, p
     unknown = sorted(set(formats) - set(FORMATS))
     if unknown or not formats:
         raise ValueError(f"--formats: unknown formats {unknown or '(none given)'}; known: {', '.join(FORMATS)}")
-    if controller is not None and is_memory_stick(controller):
+    if controller is not None and memory_stick_folder(controller) is not None:
         for option, value in (("--backend", backend), ("--mtn-mode", mtn_mode), ("--memory-stick", memory_stick)):
             if value is not None:
                 raise ValueError(f"{option} applies to controllers: {controller} is a memory stick, whose OPEN-R "

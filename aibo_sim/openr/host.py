@@ -206,6 +206,8 @@ class MemoryStickRun:
                 if child.pending is None:
                     self._send(protocol.MESSAGES["STOP"], struct.pack("<I", openr_frame_number(self.sim.frame)))
                     self._apply(self._reply(protocol.REPLIES["FRAME_DONE"]))
+                    # The runtime's own exit then flushes the files its objects left open.
+                    child.wait(None, protocol.WAIT_NOTICE_S, self._waiting)
         finally:
             theirs.close()
             if log is not None:

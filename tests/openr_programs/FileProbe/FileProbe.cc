@@ -48,6 +48,8 @@ OStatus FileProbe::DoStart(const OSystemEvent&) {
     stream.close();
     Read("/MS/OPEN-R/MW/DATA/P/STREAM.TXT");
     Read("/etc/hostname");
+    FILE* unclosed = fopen("/MS/OPEN-R/MW/DATA/P/UNCLOSED.TXT", "w");
+    fputs("written when the object's process ends\n", unclosed);
     Write("../escape.txt", "no\n");
     Write("/MS/../escape.txt", "no\n");
     OPENR::Shutdown(OBootCondition(obcbPAUSE_SW));
