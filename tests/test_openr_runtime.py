@@ -5,6 +5,7 @@ import signal
 import struct
 import subprocess
 import threading
+import wave
 
 import numpy as np
 import pytest
@@ -277,3 +278,29 @@ def test_sensor_vector_values_are_the_simulators_state(objects, tmp_path):
         first = int(line[1])
         assert [int(v) for v in line[3:7]] == [angles[first + k] for k in range(4)]
     assert angles[4] == round(result.frames[3] * 1e6)  # the state after frame 3 is frame 4's
+
+
+def test_power_status_and_its_observers(objects, tmp_path):
+    stick = make_stick(tmp_path / "ms", objects, ["PPROBE"])
+    lines = run_stick(stick, 0.1, tmp_path / "out").lines("PowerProbe")
+    battery = host.BATTERY
+    status = (f"robot 0x{battery['robotStatus']:08x} battery 0x{battery['batteryStatus']:04x} capacity "
+              f"{battery['remainingCapacity']} temperature {battery['temperature']} full "
+              f"{battery['fullyChargedCapacity']} voltage {battery['voltage']} current {battery['current']}")
+    powered = status.replace(f"robot 0x{battery['robotStatus']:08x}", f"robot 0x{battery['robotStatus'] | 2:08x}")
+    assert lines == [f"status {status}", "observe 0", "observe again 4101",  # oALREADY_REGISTERED
+                     f"notified {powered}", "unobserve 0"]
+
+
+def test_the_speaker_plays_sound_vectors_one_after_the_other_into_a_wav_file(objects, tmp_path):
+    stick = make_stick(tmp_path / "ms", objects, ["SPROBE"],
+                       "SoundProbe.Speaker.OSoundVectorData.S OVirtualRobotAudioComm.Speaker.OSoundVectorData.O\n")
+    result = run_stick(stick, 0.5, tmp_path / "out")
+    readies = result.lines("SoundProbe")
+    assert readies[:3] == ["ready 1 refs 1 1", "ready 2 refs 1 2", "ready 3 refs 2 1"]  # a vector played at each
+    assert len(readies) == 11  # the boot's, then one after each of the ten vectors
+    with wave.open(str(tmp_path / "out" / "speaker.wav")) as sound:
+        assert (sound.getframerate(), sound.getnchannels(), sound.getsampwidth()) == (16000, 1, 2)
+        samples = np.frombuffer(sound.readframes(sound.getnframes()), "<i2").astype(int)
+    tone = np.trunc(10000 * np.sin(2 * np.pi * 1000 * np.arange(5120) / 16000)).astype(int)
+    assert len(samples) == 5120 and np.abs(samples - tone).max() <= 1  # from t = 0, without a gap

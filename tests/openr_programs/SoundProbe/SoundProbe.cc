@@ -1,0 +1,51 @@
+#include <math.h>
+#include <OPENR/OPENRAPI.h>
+#include <OPENR/OSyslog.h>
+#include <OPENR/core_macro.h>
+#include "SoundProbe.h"
+
+OStatus SoundProbe::DoInit(const OSystemEvent&) {
+    NEW_ALL_SUBJECT_AND_OBSERVER;
+    REGISTER_ALL_ENTRY;
+    SET_ALL_READY_AND_NOTIFY_ENTRY;
+    OPENR::OpenPrimitive("PRM:/s1-Speaker:S1", &speaker);
+    OPrimitiveControl_SpeakerSoundType type(ospksndMONO16K16B);
+    OPENR::ControlPrimitive(speaker, oprmreqSPEAKER_SET_SOUND_TYPE, &type, sizeof type, 0, 0);
+    OPrimitiveControl_SpeakerVolume volume(ospkvol10dB);
+    OPENR::ControlPrimitive(speaker, oprmreqSPEAKER_SET_VOLUME, &volume, sizeof volume, 0, 0);
+    for (int i = 0; i < 2; i++) {
+        MemoryRegionID id;
+        OSoundVectorData* vector;
+        OPENR::NewSoundVectorData(1, SAMPLES * 2, &id, &vector);
+        vector->SetNumData(1);
+        OSoundInfo* info = vector->GetInfo(0);
+        info->Set(odataSOUND_VECTOR, speaker, SAMPLES * 2);
+        info->samplingRate = 16000;
+        info->bitsPerSample = 16;
+        region[i] = new RCRegion(vector->vectorInfo.memRegionID, vector->vectorInfo.offset, (void*)vector,
+                                 vector->vectorInfo.totalSize);
+    }
+    return oSUCCESS;
+}
+
+OStatus SoundProbe::DoStart(const OSystemEvent&) {
+    return oSUCCESS;
+}
+
+void SoundProbe::Send() {
+    RCRegion* free = region[0]->NumberOfReference() == 1 ? region[0] : region[1];
+    if (free->NumberOfReference() != 1 || sent == VECTORS) return;
+    sword* samples = (sword*)((OSoundVectorData*)free->Base())->GetData(0);
+    for (int k = 0; k < SAMPLES; k++) samples[k] = (sword)(10000 * sin(2 * M_PI * 1000 * (sent * SAMPLES + k) / 16000.0));
+    subject[sbjSpeaker]->SetData(free);
+    sent++;
+}
+
+// The speaker's first ready comes at boot (the tone starts at t = 0), then one after each vector.
+void SoundProbe::Ready(const OReadyEvent&) {
+    readies++;
+    OSYSPRINT(("ready %d refs %d %d\n", readies, region[0]->NumberOfReference(), region[1]->NumberOfReference()));
+    Send();
+    Send();
+    subject[sbjSpeaker]->NotifyObservers();
+}

@@ -1,0 +1,31 @@
+// SoundProbe: plays a 1 kHz tone through the speaker, ten 32 ms vectors of 16 kHz 16-bit samples
+// from two regions, from t = 0 (aibo-sim's runtime tests read the recorded sound).
+#ifndef SoundProbe_h_DEFINED
+#define SoundProbe_h_DEFINED
+
+#include <OPENR/OObject.h>
+#include <OPENR/OSubject.h>
+#include <OPENR/OObserver.h>
+#include "def.h"
+
+class SoundProbe : public OObject {
+public:
+    SoundProbe() : sent(0), readies(0) {}
+    OSubject*  subject[numOfSubject];
+    OObserver* observer[numOfObserver];
+    virtual OStatus DoInit(const OSystemEvent& event);
+    virtual OStatus DoStart(const OSystemEvent& event);
+    void Ready(const OReadyEvent& event);
+
+private:
+    void Send();
+
+    static const int VECTORS = 10;
+    static const int SAMPLES = 512;  // 32 ms at 16 kHz
+    OPrimitiveID speaker;
+    RCRegion*    region[2];
+    int          sent;
+    int          readies;
+};
+
+#endif
