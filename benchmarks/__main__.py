@@ -14,7 +14,7 @@ import platform
 import sys
 from pathlib import Path
 
-MODULES = ("pipeline", "decode", "envs", "controllers")
+MODULES = ("pipeline", "decode", "envs", "controllers", "openr")
 
 
 def machine() -> str:
