@@ -30,14 +30,11 @@ Choices made where the spec leaves the hardware unconfirmed:
 
 How the bytes are computed (``encode_frame`` writes every band straight into the message's
 buffer): H's Y, Cr and Cb come from the forward colour table (``colour.rgb_to_ycrcb_packed``);
-the Y bands of M and L (and of H from a 416x320 frame) from two table lookups per 2x2 block
-(``_haar``); the chroma means from ``cv2.resize`` with ``INTER_AREA``, which for an exact
-halving of a uint8 image is (sum + 2) >> 2. Both were checked against the definitions above
-on all 2^32 blocks, at the widths used here; the tests compare whole messages with a direct
-integer implementation. Measured with warm caches (best of repeated runs, 2-core machine):
-a 208x160 rendered frame encodes in about 0.18 ms (0.72 ms when each band was numpy integer
-arithmetic), a 416x320 one in 1.2 ms (3.3 ms); random noise, whose colour lookups miss the
-caches, in 0.48 ms (0.71 ms) and 3.3 ms (3.4 ms).
+the Y bands of M and L (and of H from a 416x320 frame) and the chroma means from one integer
+loop over the 2x2 blocks, compiled with numba (``pyramid``); the tests compare whole messages
+with a direct integer implementation. Measured with warm caches (best of repeated runs, 2-core
+machine): a 416x320 frame of Y, Cr, Cb (the ``ers7`` sensor's) encodes in about 0.43 ms (0.85 ms
+with table lookups per block pair and ``cv2.resize``).
 
 ``reconstruct_luma`` is Sony's double-resolution reconstruction. It returns exactly the luma
 whose 2x2 blocks the bands can hold: four values of one parity whose sum is a multiple of 4.
@@ -127,8 +124,8 @@ def _encode(frame, fill_h, frame_number, field_counter, cdt, primitive_id) -> OF
         for (width, height), offset, size in zip(LAYER_SIZE, _OFFSETS, _SIZES)
     )
     fill_h(frame, h_layer)
-    _next_level(h_layer, m_layer)
-    _next_level(m_layer, l_layer)
+    _pyramid().next_level(h_layer, m_layer)
+    _pyramid().next_level(m_layer, l_layer)
     cdt_bits = cdt_layer(m_layer[:, 0], m_layer[:, 1], m_layer[:, 2], cdt)
     c_layer[:, 0] = cdt_bits
     tag = _tag(field_counter, cdt_bits)
@@ -140,9 +137,9 @@ def _encode(frame, fill_h, frame_number, field_counter, cdt, primitive_id) -> OF
 def haar_analysis(luma: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """(Y_LL, Y_LH, Y_HL, Y_HH) uint8 bands of a (2h, 2w) uint8 luma."""
     luma = np.ascontiguousarray(luma, np.uint8)
-    bands = np.empty((luma.shape[0] // 2, 4, luma.shape[1] // 2), np.uint8)
-    _haar(luma, [bands[:, k] for k in range(4)])
-    return tuple(bands[:, k] for k in range(4))
+    layer = np.empty((luma.shape[0] // 2, 6, luma.shape[1] // 2), np.uint8)
+    _pyramid().from_pixels(luma.reshape(*luma.shape, 1), layer, False)
+    return tuple(layer[:, k] for k in (0, 3, 4, 5))
 
 
 def reconstruct_luma(message: OFbkImageVectorData, layer: int = ofbkimageLAYER_H) -> np.ndarray:
@@ -179,7 +176,7 @@ def _layer_h(rgb: np.ndarray, layer: np.ndarray) -> None:
         cv2.split(ycrcb, [layer[:, 0], layer[:, 1], layer[:, 2], np.empty(layer[:, 0].shape, np.uint8)])
         layer[:, 3:] = 128
         return
-    _haar(cv2.extractChannel(ycrcb, 0), [layer[:, 0], layer[:, 3], layer[:, 4], layer[:, 5]])
+    _pyramid().from_pixels(ycrcb, layer, False)
     _, layer[:, 1], layer[:, 2] = rgb_to_ycrcb(_sum2x2(rgb), pixels=4)
 
 
@@ -189,49 +186,14 @@ def _layer_h_from_ycrcb(ycrcb: np.ndarray, layer: np.ndarray) -> None:
         cv2.split(ycrcb, [layer[:, 0], layer[:, 1], layer[:, 2]])
         layer[:, 3:] = 128
         return
-    _haar(np.ascontiguousarray(ycrcb[..., 0]), [layer[:, 0], layer[:, 3], layer[:, 4], layer[:, 5]])
-    for band, channel in ((1, 1), (2, 2)):
-        cv2.resize(np.ascontiguousarray(ycrcb[..., channel]), layer[:, band].shape[::-1], dst=layer[:, band],
-                   interpolation=cv2.INTER_AREA)
-
-
-def _next_level(src: np.ndarray, dst: np.ndarray) -> None:
-    """Fill the layer ``dst`` from the layer ``src`` of twice its size (both HPF)."""
-    height, _, width = dst.shape
-    _haar(src[:, 0], [dst[:, 0], dst[:, 3], dst[:, 4], dst[:, 5]])
-    # Cr and Cb side by side; INTER_AREA halving a uint8 image is (sum + 2) >> 2 per 2x2 block.
-    chroma = dst[:, 1:3].reshape(height, 2 * width)
-    cv2.resize(src[:, 1:3].reshape(2 * height, 4 * width), chroma.shape[::-1], dst=chroma, interpolation=cv2.INTER_AREA)
-
-
-def _haar(luma: np.ndarray, bands: list[np.ndarray]) -> None:
-    """Write Y_LL, Y_LH, Y_HL, Y_HH of a (2h, 2w) uint8 luma with contiguous rows to ``bands``.
-
-    Each pair of pixels of a row, read as a uint16, indexes a table (one for even rows, one
-    for odd) of four 16-bit lanes: the pair's share of 4 Y_LL, 4 Y_LH, 4 Y_HL and 4 Y_HH
-    before rounding (the detail bands' 128 as 512). A block's two shares add up without
-    carries, every lane staying in 0..1022, and convertScaleAbs makes a lane v the byte
-    |round(v / 4 + 1/8)| = floor((v + 2) / 4), saturated at 255: rounded half up and clipped.
-    """
-    height, width = luma.shape[0] // 2, luma.shape[1] // 2
-    top, bottom = _pair_tables()
-    pairs = luma.view("<u2")
-    lanes = np.take(top, pairs[0::2])
-    lanes += np.take(bottom, pairs[1::2])
-    packed = cv2.convertScaleAbs(lanes.view("<i2"), alpha=0.25, beta=0.125)
-    cv2.split(packed.reshape(height, width, 4), bands)
+    _pyramid().from_pixels(np.ascontiguousarray(ycrcb), layer, True)
 
 
 @cache
-def _pair_tables() -> tuple[np.ndarray, np.ndarray]:
-    """The lanes of ``_haar`` for pairs (p0, p1) = (index & 0xFF, index >> 8), as little-endian
-    uint64: s, 512 - s, 256 + d, 256 - d in even rows and s, s, 256 + d, 256 + d in odd rows,
-    with s = p0 + p1 and d = p1 - p0."""
-    p0, p1 = np.arange(256 * 256) & 0xFF, np.arange(256 * 256) >> 8
-    s, d = p0 + p1, p1 - p0
-    top = np.stack([s, 512 - s, 256 + d, 256 - d], axis=-1).astype("<u2")
-    bottom = np.stack([s, s, 256 + d, 256 + d], axis=-1).astype("<u2")
-    return top.view("<u8").reshape(-1), bottom.view("<u8").reshape(-1)
+def _pyramid():
+    from . import pyramid  # numba, loaded on first use
+
+    return pyramid
 
 
 def _sum2x2(image: np.ndarray) -> np.ndarray:

@@ -32,7 +32,7 @@ from openr_bridge import (
     reconstruct_luma,
     rgb_to_ycrcb,
 )
-from openr_bridge.encoder import _next_level
+from openr_bridge.pyramid import next_level
 
 H, M, L, C = ofbkimageLAYER_H, ofbkimageLAYER_M, ofbkimageLAYER_L, ofbkimageLAYER_C
 Y_BANDS = (ofbkimageBAND_Y, ofbkimageBAND_Y_LH, ofbkimageBAND_Y_HL, ofbkimageBAND_Y_HH)
@@ -292,7 +292,7 @@ def test_pyramid_step_matches_the_integer_definitions_on_all_low_bit_blocks():
     src = np.full((plane.shape[0], 6, 2 * width), 128, np.uint8)
     src[:, 0], src[:, 1], src[:, 2] = plane, np.roll(plane, 2), plane[::-1]
     dst = np.zeros((plane.shape[0] // 2, 6, width), np.uint8)
-    _next_level(src, dst)
+    next_level(src, dst)
     expected = integer_next_level(src[:, 0], src[:, 1], src[:, 2])
     for run, want in enumerate(expected):
         assert np.array_equal(dst[:, run], want), f"run {run}"

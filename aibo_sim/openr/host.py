@@ -37,6 +37,7 @@ import socket
 import struct
 import sys
 import tempfile
+import time
 import wave
 from pathlib import Path
 
@@ -60,6 +61,7 @@ SYSTEM_SERVICES = {
     "OVirtualRobotAudioComm": ("OVirtualRobotAudioComm.Speaker.OSoundVectorData.O",
                                "OVirtualRobotAudioComm.Mic.OSoundVectorData.S"),
 }
+SPIN_S = 0.005  # how long _reply polls before it blocks
 STANDARD_PSHIFT = 0x0E  # Sony's fixed PSHIFT (Model Information 2.2): the P register's scale
 TOUCH_AD_PER_NEWTON, TOUCH_AD_MAX = 100, 80  # UNCONFIRMED, see the module docstring
 # The battery at the start (UNCONFIRMED): status bits, capacity %, temperature (0.01 C),
@@ -99,8 +101,7 @@ class SensorFrame:
                         + [(index[s.locator], kinds["SWITCH"] if switch else kinds["TOUCH"])
                            for s, switch in zip(touches, self.switch)]
                         + [(index[ers7.WLAN_SWITCH_LOCATOR], kinds["SWITCH"])])
-        n, distances = len(self.joints), len(ers7.DISTANCE_SENSORS)
-        self._n = n
+        distances = len(ers7.DISTANCE_SENSORS)
         self._qpos = np.array([sim.model.joint(ers7.JOINTS[i].name).qposadr[0] for i in self.joints])
         self._touch_adr = np.array([sim.model.sensor(s.name).adr[0] for s in touches])
         self._threshold = np.array([s.threshold for s in touches])
@@ -112,33 +113,18 @@ class SensorFrame:
         self._silent = np.zeros((2, distances), bool)
         for turn, sensor in enumerate(head):
             self._silent[1 - turn, sensor] = True
-        self._distance_rows = slice(n, n + distances)
-        self._touch_rows = slice(n + distances + 3, n + distances + 3 + len(touches))
         self._raw = np.zeros((len(self.entries), protocol.VALUES_PER_SENSOR))  # the values before rounding
-        self._scaled = np.zeros_like(self._raw)
         self._values = np.zeros(self._raw.shape, np.int32)
-        # Each entry's value in OPEN-R's unit: micro-radians, micrometres (from mm), micrometres/s^2.
-        self._units = np.ones_like(self._raw)
-        self._units[:n + distances + 3, 0] = [1e6] * n + [1e3] * distances + [1e6] * 3
+        from .sensor_values import fill  # compiled with numba on first use
+
+        self._fill = fill
+        self._layout = (self._qpos, self._joints, self._max_force, self._touch_adr, self.switch, self._threshold,
+                        float(TOUCH_AD_PER_NEWTON), float(TOUCH_AD_MAX))
 
     def at(self, tick: int) -> bytes:
-        sim, raw, n = self.sim, self._raw, self._n
-        data = sim.data
-        raw[:n, 0] = data.qpos[self._qpos]
-        duty = data.actuator_force[self._joints] / self._max_force
-        raw[:n, 2] = np.minimum(np.maximum(duty, -1), 1) * 255  # np.clip's overhead is 5x
-        raw[:n, 3] = sim.servos.command[self._joints] * 1e6
-        distances, silent = raw[self._distance_rows], self._silent[tick % 2]
-        mm = np.array(sim.distances_mm())
-        distances[:, 0] = np.where(silent, distances[:, 0], mm)
-        distances[:, 1] = np.where(silent, 0, np.minimum(mm, 0xFFFF))
-        raw[self._distance_rows.stop:self._touch_rows.start, 0] = sim.acceleration()
-        force = data.sensordata[self._touch_adr]
-        touch = np.where(self.switch, force > self._threshold, np.minimum(TOUCH_AD_MAX, force * TOUCH_AD_PER_NEWTON))
-        raw[self._touch_rows, 0] = touch
-        raw[self._touch_rows, 1] = np.where(self.switch, 0, touch)
-        np.multiply(raw, self._units, out=self._scaled)
-        self._values[:] = np.rint(self._scaled, out=self._scaled)
+        sim, data = self.sim, self.sim.data
+        self._fill(data.qpos, data.actuator_force, sim.servos.command, np.array(sim.distances_mm()),
+                   self._silent[tick % 2], sim.acceleration(), data.sensordata, *self._layout, self._raw, self._values)
         return self._values.tobytes()
 
 
@@ -395,10 +381,10 @@ class MemoryStickRun:
         """The next reply's payload if it is ``expected``; raises for FAILED and CRASHED."""
         buffer = self._buffer
         while len(buffer) < 4 or len(buffer) < 4 + struct.unpack_from("<I", buffer)[0]:
-            if not self._child.wait(self._channel, protocol.WAIT_NOTICE_S, self._waiting):
-                chunk = b""
-            else:
-                chunk = self._channel.recv(1 << 20)
+            chunk = self._poll()
+            if chunk is None:
+                chunk = self._channel.recv(1 << 20) if self._child.wait(self._channel, protocol.WAIT_NOTICE_S,
+                                                                         self._waiting) else b""
             if not chunk:
                 self._gone()
             buffer += chunk
@@ -417,6 +403,18 @@ class MemoryStickRun:
         if kind != expected:
             raise RuntimeError(f"openr-host answered {kind} where {expected} was expected")
         return payload
+
+    def _poll(self) -> bytes | None:
+        """What the runtime sent within ``SPIN_S`` (b"": it closed the channel), else None,
+        yielding the core between looks: a process that blocked resumes slower (see HybridVectorEnv)."""
+        deadline = time.perf_counter() + SPIN_S
+        while True:
+            try:
+                return self._channel.recv(1 << 20, socket.MSG_DONTWAIT)
+            except BlockingIOError:
+                if time.perf_counter() > deadline:
+                    return None
+                os.sched_yield()
 
     def _gone(self) -> None:
         """The runtime has exited (or must be stopped): raise what ended it."""

@@ -1,0 +1,45 @@
+"""The sensor vector's values of one frame, compiled with numba (``SensorFrame.at``: a frame's
+thirty-odd values in one call, where numpy takes a call per operation).
+
+Rows follow ``SensorFrame.entries``: the joints (angle, -, duty, command), the distance sensors
+(mm, signal), the accelerometer's three axes (one primitive each), the touch sensors and switches,
+the wireless LAN switch. Values are rounded to OPEN-R's integer units once: micro-radians,
+micrometres, micrometres per second squared; the duty in 1/255 of the motor's force.
+"""
+
+import numba
+import numpy as np
+
+
+@numba.njit(cache=True, nogil=True)
+def fill(qpos, actuator_force, command, distances_mm, silent, acceleration, sensordata, qpos_adr, joints, max_force,
+         touch_adr, switch, threshold, touch_ad_per_newton, touch_ad_max, raw, values):
+    """Write a frame's values into ``raw`` (floats; a silent head distance sensor keeps its last
+    value there) and, rounded half to even, into the int32 ``values``."""
+    n = joints.shape[0]
+    for k in range(n):
+        duty = actuator_force[joints[k]] / max_force[k]
+        raw[k, 0] = qpos[qpos_adr[k]] * 1e6
+        raw[k, 2] = min(max(duty, -1.0), 1.0) * 255
+        raw[k, 3] = command[joints[k]] * 1e6
+    row = n
+    for k in range(distances_mm.shape[0]):
+        if silent[k]:
+            raw[row, 1] = 0.0  # not this head sensor's turn: its last value stays, no signal
+        else:
+            raw[row, 0] = distances_mm[k] * 1e3
+            raw[row, 1] = min(distances_mm[k], 65535.0)
+        row += 1
+    for axis in range(3):  # the accelerometer's three primitives, one axis each
+        raw[row, 0] = acceleration[axis] * 1e6
+        row += 1
+    for k in range(touch_adr.shape[0]):
+        force = sensordata[touch_adr[k]]
+        if switch[k]:
+            raw[row, 0], raw[row, 1] = (1.0 if force > threshold[k] else 0.0), 0.0
+        else:
+            raw[row, 0] = raw[row, 1] = min(touch_ad_max, force * touch_ad_per_newton)
+        row += 1
+    for r in range(raw.shape[0]):
+        for c in range(raw.shape[1]):
+            values[r, c] = np.int32(np.rint(raw[r, c]))
