@@ -258,6 +258,17 @@ def test_a_compile_error_names_the_file_and_line(tmp_path):
         make(program)
 
 
+def test_a_networking_program_is_told_that_networking_is_not_emulated(tmp_path):
+    program = tmp_path / "Net"
+    program.mkdir()
+    (program / "Net.cc").write_text("#include <OPENR/OObject.h>\n#include <ant.h>\n#include <TCPEndpointMsg.h>\n")
+    (program / "Makefile").write_text("OPENRSDK_ROOT?=/usr/local/OPEN_R_SDK\nall:\n\t$(OPENRSDK_ROOT)/bin/mipsel-linux-g++ "
+                                      "-I$(OPENRSDK_ROOT)/OPEN_R/include/MCOOP -c Net.cc\n")
+    with pytest.raises(AssertionError, match=r"ant\.h:2:2: error: #error \"MCOOP/ant\.h: aibo-sim's host OPEN-R SDK does "
+                                             r"not emulate networking"):
+        make(program)
+
+
 def test_sensor_vector_values_are_the_simulators_state(objects, tmp_path):
     """JointProbe prints the pan's four values of each sensor vector: the joint's angle at each
     frame, in micro-radians, as the simulator had it at that frame's start."""

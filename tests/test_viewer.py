@@ -1,5 +1,6 @@
 """``aibo-sim run --view``: MuJoCo's viewer on the running simulation, on a virtual display."""
 
+import json
 import os
 import shutil
 import struct
@@ -13,6 +14,8 @@ import numpy as np
 import pytest
 
 from aibo_sim import cli
+
+from openr_support import build_programs, make_stick
 
 ROOT = Path(__file__).resolve().parents[1]
 CONTROLLER = ROOT / "controllers" / "ball_tracker.py"
@@ -84,6 +87,13 @@ def test_view_shows_the_robot_on_a_virtual_display(tmp_path):
                                 "--view"], env={**os.environ, "DISPLAY": display}, cwd=tmp_path, capture_output=True,
                                text=True, timeout=120)
         assert short.returncode == 0, short.stderr
+        # A memory stick's objects, watched the same way.
+        stick = make_stick(tmp_path / "ms", build_programs(tmp_path / "openr"), ["JPROBE"])
+        watched = subprocess.run([sys.executable, "-m", "aibo_sim.cli", "run", str(stick), "--duration", "0.3", "--view",
+                                  "--out", "stick"], env={**os.environ, "DISPLAY": display}, cwd=tmp_path,
+                                 capture_output=True, text=True, timeout=120)
+        assert watched.returncode == 0, watched.stderr
+        assert json.loads((tmp_path / "stick" / "run.json").read_text())["backend"] == "memory stick"
     finally:
         if run is not None:
             run.terminate()
