@@ -15,10 +15,7 @@ import ctypes.util
 import os
 
 HEADLESS_LIBRARIES = (("egl", "EGL"), ("osmesa", "OSMesa"))
-SYSTEM_PACKAGES = (
-    "EGL: Debian/Ubuntu 'libegl1 libgl1-mesa-dri' (Mesa's software renderer works); "
-    "OSMesa: 'libosmesa6'"
-)
+SYSTEM_PACKAGES = "EGL: Debian/Ubuntu 'libegl1 libgl1-mesa-dri' (Mesa's software renderer works); OSMesa: 'libosmesa6'"
 
 
 def choose_gl_backend() -> str | None:

@@ -15,8 +15,17 @@ from pathlib import Path
 import numpy as np
 
 from .mtn import MODES as MTN_MODES
-from .options import (ArgumentParser, add_world_options, camera_options, cut_long_words, finite_float, make_out_folder,
-                      path_text, place, world_options)
+from .options import (
+    ArgumentParser,
+    add_world_options,
+    camera_options,
+    cut_long_words,
+    finite_float,
+    make_out_folder,
+    path_text,
+    place,
+    world_options,
+)
 from .robot import BACKENDS
 
 EXIT_BAD_INPUT, EXIT_CONTROLLER, EXIT_DIVERGED, EXIT_INTERRUPTED, EXIT_BROKEN_PIPE = 2, 1, 3, 130, 141
@@ -30,8 +39,14 @@ def _run(args) -> int:
     viewer = LiveViewer() if args.view else None
     try:
         summary = run_controller(
-            args.controller, backend=args.backend, duration=args.duration, out=args.out, mtn_mode=args.mtn_mode,
-            memory_stick=args.memory_stick, frame_listeners=[viewer] if viewer else (), **world_options(args),
+            args.controller,
+            backend=args.backend,
+            duration=args.duration,
+            out=args.out,
+            mtn_mode=args.mtn_mode,
+            memory_stick=args.memory_stick,
+            frame_listeners=[viewer] if viewer else (),
+            **world_options(args),
             **camera_options(args),
         )
     finally:
@@ -39,11 +54,16 @@ def _run(args) -> int:
             viewer.close()
     path = Path(summary.controller)
     name = path.name if path.name.upper() != "MS" else f"{path.parent.name}/{path.name}"  # a program's MS folder
-    what = (f"memory stick {name} on the host OPEN-R runtime" if summary.backend == MEMORY_STICK
-            else f"{name} on the {summary.backend} backend")
-    print(f"ran {what}: {summary.simulated_s:.2f} s simulated "
-          f"in {summary.wall_s:.2f} s (real-time factor {summary.real_time_factor:.1f}), "
-          f"{summary.camera_frames} camera frames written" + (f" to {args.out}" if args.out else ""))
+    what = (
+        f"memory stick {name} on the host OPEN-R runtime"
+        if summary.backend == MEMORY_STICK
+        else f"{name} on the {summary.backend} backend"
+    )
+    print(
+        f"ran {what}: {summary.simulated_s:.2f} s simulated "
+        f"in {summary.wall_s:.2f} s (real-time factor {summary.real_time_factor:.1f}), "
+        f"{summary.camera_frames} camera frames written" + (f" to {args.out}" if args.out else "")
+    )
     return 0
 
 
@@ -86,8 +106,13 @@ def _settled_simulation(args, profile: str):
 
     world = world_options(args)
     try:
-        sim = Simulation(world["scene"], seed=world["seed"], keyframe=args.keyframe, ball_type=world["ball_type"],
-                         **{**camera_options(args), "camera_profile": profile})
+        sim = Simulation(
+            world["scene"],
+            seed=world["seed"],
+            keyframe=args.keyframe,
+            ball_type=world["ball_type"],
+            **{**camera_options(args), "camera_profile": profile},
+        )
     except KeyError as exc:  # MuJoCo's: no keyframe of that name; the message lists the valid ones
         raise ValueError(f"--keyframe {args.keyframe!r}: {exc.args[0] if exc.args else exc}") from None
     try:
@@ -129,10 +154,12 @@ def _build_ms(args) -> int:
     from .openr.build_ms import build_ms
 
     out = build_ms(args.controller, args.out)
-    print(f"wrote the memory-stick project {out}: build it for the simulator with\n"
-          f"  make -C {out} OPENRSDK_ROOT=$(aibo-sim openr sdk) install\n"
-          f"then run it with: aibo-sim run {out / 'MS'}\n"
-          f"(for the robot: make -C {out} install with Sony's OPEN-R SDK in /usr/local/OPEN_R_SDK)")
+    print(
+        f"wrote the memory-stick project {out}: build it for the simulator with\n"
+        f"  make -C {out} OPENRSDK_ROOT=$(aibo-sim openr sdk) install\n"
+        f"then run it with: aibo-sim run {out / 'MS'}\n"
+        f"(for the robot: make -C {out} install with Sony's OPEN-R SDK in /usr/local/OPEN_R_SDK)"
+    )
     return 0
 
 
@@ -166,8 +193,9 @@ def _mtn_play(args) -> int:
         raise ValueError(f"--repeat must be at least 1, not {args.repeat}")
     if args.no_ball and args.ball is not None:
         raise ValueError("--ball and --no-ball exclude each other")
-    result = play_motion(_motion_file(args.file), repeat=args.repeat, mode=args.mode, **world_options(args),
-                         **camera_options(args))
+    result = play_motion(
+        _motion_file(args.file), repeat=args.repeat, mode=args.mode, **world_options(args), **camera_options(args)
+    )
     if args.json:
         print(json.dumps(result, indent=2))
     else:
@@ -175,70 +203,109 @@ def _mtn_play(args) -> int:
         x, y, yaw = result["end_pose"]
         share = result["paw_stance_share"]
         paw_share = "no stance (never touched the ground)" if share is None else f"{100 * share:.0f} % of the stance"
-        print(f"displacement {dx:+.3f} m forward, {dy:+.3f} m left ({result['distance_m']:.3f} m), "
-              f"heading {result['heading_change_deg']:+.1f} deg, {'FELL' if result['fell'] else 'did not fall'}, "
-              f"{result['duration_s']:.2f} s; ended at x {x:+.3f} m, y {y:+.3f} m, yaw {yaw:+.1f} deg; "
-              f"kinematic distance {result['kinematic_distance_m']:+.3f} m; peak leg joint speed "
-              f"{result['peak_leg_joint_speed_rad_s']:.1f} rad/s; paws carry {paw_share}")
+        print(
+            f"displacement {dx:+.3f} m forward, {dy:+.3f} m left ({result['distance_m']:.3f} m), "
+            f"heading {result['heading_change_deg']:+.1f} deg, {'FELL' if result['fell'] else 'did not fall'}, "
+            f"{result['duration_s']:.2f} s; ended at x {x:+.3f} m, y {y:+.3f} m, yaw {yaw:+.1f} deg; "
+            f"kinematic distance {result['kinematic_distance_m']:+.3f} m; peak leg joint speed "
+            f"{result['peak_leg_joint_speed_rad_s']:.1f} rad/s; paws carry {paw_share}"
+        )
     return 0
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = ArgumentParser(prog="aibo-sim", description="Sony Aibo ERS-7 simulator: run controllers, render the camera, inspect and play MTN files, dump camera frames.")
+    parser = ArgumentParser(
+        prog="aibo-sim",
+        description="Sony Aibo ERS-7 simulator: run controllers, render the camera, inspect and play MTN files, "
+        "dump camera frames.",
+    )
     commands = parser.add_subparsers(dest="command", required=True)
 
     run = commands.add_parser("run", help="run a controller headless")
-    run.add_argument("controller", type=path_text,
-                     help="controller (Webots-era Aibo API): a Python file, or a C or C++ file or folder (compiled with "
-                          "the system compiler); or a memory stick folder (OPEN-R/MW/CONF/OBJECT.CFG: its OPEN-R objects "
-                          "run on the host runtime)")
+    run.add_argument(
+        "controller",
+        type=path_text,
+        help="controller (Webots-era Aibo API): a Python file, or a C or C++ file or folder (compiled with "
+        "the system compiler); or a memory stick folder (OPEN-R/MW/CONF/OBJECT.CFG: its OPEN-R objects "
+        "run on the host runtime)",
+    )
     run.add_argument("--backend", choices=BACKENDS, help="the controller's robot side: sim (default) or openr")
     run.add_argument("--duration", type=finite_float, default=10.0, help="simulated seconds (default 10)")
     run.add_argument("--out", type=path_text, help="folder for camera frames, the controller's files and run.json")
-    run.add_argument("--mtn-mode", choices=MTN_MODES,
-                     help="MTN playback: OPEN-R interpolation (default openr) or Webots keyframe stepping")
-    run.add_argument("--memory-stick", type=path_text, metavar="DIR", help="OPEN-R memory stick folder for the openr backend")
-    run.add_argument("--view", action="store_true",
-                     help="watch it in MuJoCo's viewer, in real time (needs a display; space pauses, right arrow steps)")
+    run.add_argument(
+        "--mtn-mode",
+        choices=MTN_MODES,
+        help="MTN playback: OPEN-R interpolation (default openr) or Webots keyframe stepping",
+    )
+    run.add_argument(
+        "--memory-stick", type=path_text, metavar="DIR", help="OPEN-R memory stick folder for the openr backend"
+    )
+    run.add_argument(
+        "--view",
+        action="store_true",
+        help="watch it in MuJoCo's viewer, in real time (needs a display; space pauses, right arrow steps)",
+    )
     add_world_options(run)
     run.set_defaults(handler=_run)
 
     render = commands.add_parser("render", help="render the head camera and a third-person view")
     render.add_argument("--keyframe", default="stand", help="the scene's keyframe to start from (default stand)")
     render.add_argument("--settle", type=finite_float, default=0.5, help="seconds to simulate first (default 0.5)")
-    render.add_argument("--out", type=path_text, default="renders",
-                        help="folder for head_camera.png, head_camera.json (its lens, settings, pose) and tracking.png")
-    render.add_argument("--side-by-side", nargs="?", const="", metavar="EASYTRAIN_PNG",
-                        help="also write side_by_side.png: the ers7 and ideal pictures of the view, after a real "
-                             "ERS-7 frame when one is given (Tekkotsu EasyTrain PNG, R, G, B = Y, Cb, Cr)")
+    render.add_argument(
+        "--out",
+        type=path_text,
+        default="renders",
+        help="folder for head_camera.png, head_camera.json (its lens, settings, pose) and tracking.png",
+    )
+    render.add_argument(
+        "--side-by-side",
+        nargs="?",
+        const="",
+        metavar="EASYTRAIN_PNG",
+        help="also write side_by_side.png: the ers7 and ideal pictures of the view, after a real "
+        "ERS-7 frame when one is given (Tekkotsu EasyTrain PNG, R, G, B = Y, Cb, Cr)",
+    )
     add_world_options(render)
     render.set_defaults(handler=_render)
 
     mtn = commands.add_parser("mtn", help="OPEN-R motion files").add_subparsers(dest="mtn_command", required=True)
     info = mtn.add_parser("info", help="print a file's name, creator, design, frames, length, locators")
-    info.add_argument("file", type=path_text, help="an MTN file, or the name of a bundled motion (WALKFWD.MTN, TURNL.MTN, ...)")
+    info.add_argument(
+        "file", type=path_text, help="an MTN file, or the name of a bundled motion (WALKFWD.MTN, TURNL.MTN, ...)"
+    )
     info.add_argument("--json", action="store_true")
     info.set_defaults(handler=_mtn_info)
-    play = mtn.add_parser("play", help="play a file on the standing robot and report how it moved",
-                          description="Play a motion on the standing robot and report how it moved. It takes "
-                          "the options of every aibo-sim command; it renders no camera frame and reads no "
-                          "noisy sensor, so --seed and the camera options leave its report unchanged.")
+    play = mtn.add_parser(
+        "play",
+        help="play a file on the standing robot and report how it moved",
+        description="Play a motion on the standing robot and report how it moved. It takes "
+        "the options of every aibo-sim command; it renders no camera frame and reads no "
+        "noisy sensor, so --seed and the camera options leave its report unchanged.",
+    )
     play.add_argument("file", type=path_text, help="an MTN file, or the name of a bundled motion")
     play.add_argument("--repeat", type=int, default=1)
     play.add_argument("--mode", choices=MTN_MODES, default="openr")
     play.add_argument("--json", action="store_true")
-    play.add_argument("--no-ball", action="store_true",
-                      help="no ball in the scene: the default, unless --ball places one")
+    play.add_argument(
+        "--no-ball", action="store_true", help="no ball in the scene: the default, unless --ball places one"
+    )
     add_world_options(play)  # the camera options too, so that one option set works with every command
     play.set_defaults(handler=_mtn_play)
 
     openr = commands.add_parser("openr", help="real OPEN-R programs: the host OPEN-R SDK").add_subparsers(
-        dest="openr_command", required=True)
-    sdk = openr.add_parser("sdk", help="print the host OPEN-R SDK's folder (made on first use), for Sony's Makefiles: "
-                                       "make OPENRSDK_ROOT=$(aibo-sim openr sdk) install")
+        dest="openr_command", required=True
+    )
+    sdk = openr.add_parser(
+        "sdk",
+        help="print the host OPEN-R SDK's folder (made on first use), for Sony's Makefiles: "
+        "make OPENRSDK_ROOT=$(aibo-sim openr sdk) install",
+    )
     sdk.set_defaults(handler=_openr_sdk)
-    build_ms = commands.add_parser("build-ms", help="write a memory-stick project for a C or C++ controller: the "
-                                                     "controller with the Webots OPEN-R wrapper object")
+    build_ms = commands.add_parser(
+        "build-ms",
+        help="write a memory-stick project for a C or C++ controller: the "
+        "controller with the Webots OPEN-R wrapper object",
+    )
     build_ms.add_argument("controller", type=path_text, help="a .c, .cc or .cpp controller, or a folder of them")
     build_ms.add_argument("--out", type=path_text, required=True, help="the project's folder (new or empty)")
     build_ms.set_defaults(handler=_build_ms)
@@ -318,8 +385,17 @@ def main(argv: list[str] | None = None) -> int:
             return EXIT_BROKEN_PIPE
         print(f"aibo-sim: error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
-    except (ModelError, MtnError, OpenRError, DeviceError, RenderingUnavailable, ViewerUnavailable, CompileError,
-            OSError, ValueError) as exc:
+    except (
+        ModelError,
+        MtnError,
+        OpenRError,
+        DeviceError,
+        RenderingUnavailable,
+        ViewerUnavailable,
+        CompileError,
+        OSError,
+        ValueError,
+    ) as exc:
         if isinstance(exc, OSError) and exc.filename is not None:
             exc = f"{exc.filename}: {exc.strerror or exc}"
         print(f"aibo-sim: error: {cut_long_words(exc)}", file=sys.stderr)

@@ -28,6 +28,7 @@ import threading
 import time
 
 import numpy as np
+
 from openr_bridge.ers7_camera import (
     ocamparamGAIN_HIGH,
     ocamparamGAIN_LOW,
@@ -42,8 +43,18 @@ from openr_bridge.ers7_camera import (
 from openr_bridge.wrapper import camera_image_get_blue, camera_image_get_green, camera_image_get_red
 
 from .mtn import Motion, MtnError, format_motion_info, motion_info, mtn_get_error
-from .robot import (Accelerometer, Camera, Device, DeviceError, DistanceSensor, Led, Robot, Servo,
-                    SimulationEnd, TouchSensor)
+from .robot import (
+    Accelerometer,
+    Camera,
+    Device,
+    DeviceError,
+    DistanceSensor,
+    Led,
+    Robot,
+    Servo,
+    SimulationEnd,
+    TouchSensor,
+)
 
 _robot: Robot | None = None
 _thread: threading.Thread | None = None  # the thread that runs the controller: the camera renders there
@@ -74,8 +85,10 @@ def _rendering(function: str) -> Robot:
     controller's (an OpenGL context is current in one thread; another's call would break it)."""
     robot, thread = current_robot(), threading.current_thread()
     if thread is not _thread:
-        raise DeviceError(f"{function} called from thread {thread.name!r}: the camera renders in the thread that "
-                          f"runs the controller ({_thread.name!r}) only; call {function} there")
+        raise DeviceError(
+            f"{function} called from thread {thread.name!r}: the camera renders in the thread that "
+            f"runs the controller ({_thread.name!r}) only; call {function} there"
+        )
     return robot
 
 
@@ -169,6 +182,7 @@ def robot_console_printf(fmt: str, *args) -> None:
 
 # ------------------------------------------------------------------------- servo
 
+
 def servo_enable_position(tag, ms: int) -> None:
     _device(tag, Servo).enable(ms)
 
@@ -230,10 +244,17 @@ def camera_get_fov(tag) -> float:
 
 
 # Sony's camera settings values (OPrimitiveControl.h's ocamparam*), by Webots-style names.
-CAMERA_WB_INDOOR, CAMERA_WB_OUTDOOR, CAMERA_WB_FL = ocamparamWB_INDOOR_MODE, ocamparamWB_OUTDOOR_MODE, ocamparamWB_FL_MODE
+CAMERA_WB_INDOOR, CAMERA_WB_OUTDOOR, CAMERA_WB_FL = (
+    ocamparamWB_INDOOR_MODE,
+    ocamparamWB_OUTDOOR_MODE,
+    ocamparamWB_FL_MODE,
+)
 CAMERA_GAIN_LOW, CAMERA_GAIN_MID, CAMERA_GAIN_HIGH = ocamparamGAIN_LOW, ocamparamGAIN_MID, ocamparamGAIN_HIGH
-CAMERA_SHUTTER_SLOW, CAMERA_SHUTTER_MID, CAMERA_SHUTTER_FAST = (ocamparamSHUTTER_SLOW, ocamparamSHUTTER_MID,
-                                                                ocamparamSHUTTER_FAST)
+CAMERA_SHUTTER_SLOW, CAMERA_SHUTTER_MID, CAMERA_SHUTTER_FAST = (
+    ocamparamSHUTTER_SLOW,
+    ocamparamSHUTTER_MID,
+    ocamparamSHUTTER_FAST,
+)
 
 
 def camera_set_white_balance(tag, value: int) -> None:
@@ -371,11 +392,18 @@ def mtn_get_name(motion) -> str:
 
 def _motion(motion, function: str = "mtn") -> Motion:
     if motion is None:
-        raise MtnError(None, None, f"{function}: MTN is NULL: mtn_new failed ("
-                       + (mtn_get_error() or "no error recorded") + ")")
+        raise MtnError(
+            None, None, f"{function}: MTN is NULL: mtn_new failed (" + (mtn_get_error() or "no error recorded") + ")"
+        )
     return Robot._motion(function, motion)  # MtnError naming the function and the argument unless a motion
 
 
-__all__ = [name for name in dir() if name.split("_")[0] in {
-    "robot", "servo", "camera", "distance", "touch", "accelerometer", "led", "mtn"}] + [
-    name for name in dir() if name.startswith(("CAMERA_", "ocamparam"))] + ["SimulationEnd", "DeviceError"]
+__all__ = (
+    [
+        name
+        for name in dir()
+        if name.split("_")[0] in {"robot", "servo", "camera", "distance", "touch", "accelerometer", "led", "mtn"}
+    ]
+    + [name for name in dir() if name.startswith(("CAMERA_", "ocamparam"))]
+    + ["SimulationEnd", "DeviceError"]
+)

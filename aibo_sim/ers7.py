@@ -166,6 +166,9 @@ MIC_LOCATOR = "PRM:/r1/c1/c2/c3/m1-Mic:M1"
 
 def all_locators() -> list[str]:
     """Every device locator the simulated robot has (joints, sensors, LEDs)."""
-    return [j.locator for j in JOINTS] + [s.locator for s in SENSORS] + list(ACCELEROMETER_ALIASES) + [
-        led.locator for led in LEDS
-    ]
+    return (
+        [j.locator for j in JOINTS]
+        + [s.locator for s in SENSORS]
+        + list(ACCELEROMETER_ALIASES)
+        + [led.locator for led in LEDS]
+    )

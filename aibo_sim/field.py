@@ -62,8 +62,11 @@ def _line_segments() -> tuple[tuple[float, float, float, float], ...]:
     box_x, box_y = hl - PENALTY_BOX_DEPTH, PENALTY_BOX_WIDTH / 2
     segments = [(-hl, hw, hl, hw), (-hl, -hw, hl, -hw), (hl, -hw, hl, hw), (-hl, -hw, -hl, hw), (0, -hw, 0, hw)]
     for s in (1, -1):
-        segments += [(s * box_x, -box_y, s * box_x, box_y), (s * box_x, box_y, s * hl, box_y),
-                     (s * box_x, -box_y, s * hl, -box_y)]
+        segments += [
+            (s * box_x, -box_y, s * box_x, box_y),
+            (s * box_x, box_y, s * hl, box_y),
+            (s * box_x, -box_y, s * hl, -box_y),
+        ]
     return tuple(segments)
 
 

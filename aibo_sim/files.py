@@ -35,9 +35,11 @@ class SymlinkRefused(OSError):
     """A symbolic link where aibo-sim reads or writes a file or folder of its own."""
 
     @classmethod
-    def at(cls, path) -> "SymlinkRefused":
-        return cls(f"{path} is a symbolic link: refusing to follow it (aibo-sim reads and writes only its own "
-                   "files there); remove it or choose another folder")
+    def at(cls, path) -> SymlinkRefused:
+        return cls(
+            f"{path} is a symbolic link: refusing to follow it (aibo-sim reads and writes only its own "
+            "files there); remove it or choose another folder"
+        )
 
 
 def open_file(path, flags: int, mode: int = 0o666) -> int:
@@ -140,8 +142,17 @@ class FolderLock:
     process: ``error`` (an OSError class) saying "FOLDER is being written by another WHAT
     (its pid, start time and command): ADVICE; nothing was changed"."""
 
-    def __init__(self, folder: Path, name: str, what: str, advice: str, *, wait_s: float = 0.0,
-                 command: str | None = None, error: type[OSError] = OSError):
+    def __init__(
+        self,
+        folder: Path,
+        name: str,
+        what: str,
+        advice: str,
+        *,
+        wait_s: float = 0.0,
+        command: str | None = None,
+        error: type[OSError] = OSError,
+    ):
         self.path, self._fd = folder / name, None
         if fcntl is None:
             return
@@ -162,8 +173,9 @@ class FolderLock:
                     continue
                 holder = self._holder(fd)
                 os.close(fd)
-                raise error(f"{folder} is being written by another {what} ({holder}): {advice}; "
-                            "nothing was changed") from None
+                raise error(
+                    f"{folder} is being written by another {what} ({holder}): {advice}; nothing was changed"
+                ) from None
             except OSError as exc:
                 os.close(fd)
                 raise error(f"cannot lock {self.path}: {exc.strerror or exc}") from exc

@@ -8,15 +8,16 @@ from __future__ import annotations
 
 import math
 import xml.etree.ElementTree as ET
-from xml.sax.saxutils import escape
 from dataclasses import dataclass
 from pathlib import Path
+from xml.sax.saxutils import escape
 
 import numpy as np
 
+from openr_bridge import FULL_HEIGHT, FULL_WIDTH, HORIZONTAL_FOV_DEG, VERTICAL_FOV_DEG
+
 from . import field as F
 from .ers7 import HEAD_CAMERA, JOINT_BY_NAME, JOINTS, LED_OFF_RGBA, LEGS, SENSORS
-from openr_bridge import FULL_HEIGHT, FULL_WIDTH, HORIZONTAL_FOV_DEG, VERTICAL_FOV_DEG
 
 MODELS_DIR = Path(__file__).resolve().parent.parent / "models"
 
@@ -40,12 +41,18 @@ SERVO_ARMATURE = 0.004  # kg m^2: reflected rotor inertia of a geared servo
 # with the Webots default head. Unlisted joints take their table default.
 POSES = {
     "stand": {
-        "neck_tilt": -30, "head_tilt": 15, "mouth": -3, "tail_tilt": 10,
+        "neck_tilt": -30,
+        "head_tilt": 15,
+        "mouth": -3,
+        "tail_tilt": 10,
         **{f"{leg}_j{i}": v for leg in ("lf", "rf") for i, v in zip((1, 2, 3), (-10, 0, 30))},
         **{f"{leg}_j{i}": v for leg in ("lh", "rh") for i, v in zip((1, 2, 3), (0, 0, 25))},
     },
     "sit": {
-        "neck_tilt": -40, "head_tilt": 5, "mouth": -5, "tail_tilt": 5,
+        "neck_tilt": -40,
+        "head_tilt": 5,
+        "mouth": -5,
+        "tail_tilt": 5,
         **{f"{leg}_j{i}": v for leg in ("lf", "rf") for i, v in zip((1, 2, 3), (-25, -4, 20))},
         **{f"{leg}_j{i}": v for leg in ("lh", "rh") for i, v in zip((1, 2, 3), (-78, 20, 110))},
     },
@@ -131,11 +138,23 @@ def _defaults() -> ET.Element:
             ),
             E(
                 "default",
-                E("geom", group=3, contype=2, conaffinity=1, density=0, friction=(0.99, 0.005, 0.0001), rgba=(0.5, 0.5, 0.9, 0.4)),
+                E(
+                    "geom",
+                    group=3,
+                    contype=2,
+                    conaffinity=1,
+                    density=0,
+                    friction=(0.99, 0.005, 0.0001),
+                    rgba=(0.5, 0.5, 0.9, 0.4),
+                ),
                 E("default", E("geom", type="sphere", size=PAW_RADIUS, condim=3, priority=1), class_="paw"),
                 class_="collision",
             ),
-            E("default", E("geom", type="sphere", size=0.0025, group=1, contype=0, conaffinity=0, density=0, rgba=LED_OFF_RGBA), class_="led"),
+            E(
+                "default",
+                E("geom", type="sphere", size=0.0025, group=1, contype=0, conaffinity=0, density=0, rgba=LED_OFF_RGBA),
+                class_="led",
+            ),
             E("default", E("site", type="sphere", group=5), class_="touch"),
             class_="ers7",
         ),
@@ -157,21 +176,29 @@ def _camera() -> ET.Element:
     # Both Sony fields of view hold exactly: sensor size = 2 f tan(fov / 2) on each axis.
     sensor = [2 * CAMERA_FOCAL * math.tan(math.radians(f) / 2) for f in (HORIZONTAL_FOV_DEG, VERTICAL_FOV_DEG)]
     return E(
-        "camera", name=HEAD_CAMERA, pos=(0.08106, 0, -0.0146), xyaxes=(0, -1, 0, 0, 0, 1),
-        focal=(CAMERA_FOCAL, CAMERA_FOCAL), sensorsize=sensor, resolution=(FULL_WIDTH, FULL_HEIGHT),
+        "camera",
+        name=HEAD_CAMERA,
+        pos=(0.08106, 0, -0.0146),
+        xyaxes=(0, -1, 0, 0, 0, 1),
+        focal=(CAMERA_FOCAL, CAMERA_FOCAL),
+        sensorsize=sensor,
+        resolution=(FULL_WIDTH, FULL_HEIGHT),
     )
 
 
 def _head() -> ET.Element:
     ears = []
     for side, sign in (("l", 1), ("r", -1)):
-        ears.append(E(
-            "body",
-            E("inertial", pos=(0, 0, -0.015), mass=0.005, diaginertia=box_inertia(0.005, (0.012, 0.004, 0.03))),
-            joint(f"ear_{side}", (sign, 0, 0)),
-            hidden_visual(type="box", size=(0.011, 0.002, 0.017), pos=(0, 0, -0.016), material="dark"),
-            name=f"ear_{side}", pos=(-0.011, sign * 0.042, 0.0145),
-        ))
+        ears.append(
+            E(
+                "body",
+                E("inertial", pos=(0, 0, -0.015), mass=0.005, diaginertia=box_inertia(0.005, (0.012, 0.004, 0.03))),
+                joint(f"ear_{side}", (sign, 0, 0)),
+                hidden_visual(type="box", size=(0.011, 0.002, 0.017), pos=(0, 0, -0.016), material="dark"),
+                name=f"ear_{side}",
+                pos=(-0.011, sign * 0.042, 0.0145),
+            )
+        )
     face_leds = [
         led(f"led_face_{i + 1}", pos=(0.062, 0.024 * math.cos(a), 0.016 + 0.012 * math.sin(a)))
         for i, a in enumerate(np.linspace(math.pi * 0.15, math.pi * 0.85, 14))
@@ -191,7 +218,8 @@ def _head() -> ET.Element:
         hidden_visual(type="ellipsoid", size=(0.022, 0.019, 0.008), pos=(0.013, 0, -0.007), material="dark"),
         collision(type="capsule", fromto=(0.0, 0, -0.007, 0.028, 0, -0.009), size=0.008),
         touch_site("touch_chin", (0.015, 0, -0.015), 0.012),
-        name="mouth", pos=(0.04, 0, -0.0175),
+        name="mouth",
+        pos=(0.04, 0, -0.0175),
     )
     return E(
         "body",
@@ -199,7 +227,9 @@ def _head() -> ET.Element:
         joint("head_tilt", (0, -1, 0)),
         hidden_visual(type="ellipsoid", size=(0.054, 0.036, 0.036), pos=(0.018, 0, 0.008)),
         hidden_visual(type="ellipsoid", size=(0.03, 0.03, 0.022), pos=(0.046, 0, 0.002), material="visor"),
-        hidden_visual(type="cylinder", size=(0.0045, 0.004), pos=(0.0765, 0, -0.0146), zaxis=(1, 0, 0), material="lens"),
+        hidden_visual(
+            type="cylinder", size=(0.0045, 0.004), pos=(0.0765, 0, -0.0146), zaxis=(1, 0, 0), material="lens"
+        ),
         collision(type="sphere", size=0.033),
         collision(type="capsule", fromto=(-0.0116, 0, 0.0111, 0.0516, 0, -0.0083), size=0.034),
         _camera(),
@@ -210,7 +240,8 @@ def _head() -> ET.Element:
         *head_leds,
         mouth,
         *ears,
-        name="head", pos=(0, 0, 0),
+        name="head",
+        pos=(0, 0, 0),
     )
 
 
@@ -221,7 +252,8 @@ def _neck() -> ET.Element:
         joint("head_pan", (0, 0, 1)),
         hidden_visual(type="sphere", size=0.03, material="dark"),
         _head(),
-        name="head_pan_link", pos=(0, 0, 0.080),
+        name="head_pan_link",
+        pos=(0, 0, 0.080),
     )
     return E(
         "body",
@@ -230,7 +262,8 @@ def _neck() -> ET.Element:
         hidden_visual(type="cylinder", fromto=(0, 0, 0, 0, 0, 0.08), size=0.0117, material="dark"),
         collision(type="cylinder", fromto=(0, 0, 0, 0, 0, 0.08), size=0.0117),
         pan,
-        name="neck", pos=(0.0675, 0, 0.0195),
+        name="neck",
+        pos=(0.0675, 0, 0.0195),
     )
 
 
@@ -254,7 +287,8 @@ def _leg(leg: str) -> ET.Element:
         collision(type="capsule", fromto=(0, 0, 0, *(SHIN_COLLISION_REACH * paw)), size=SHIN_COLLISION_RADIUS),
         collision(name=f"{leg}_paw", class_="paw", pos=paw),
         touch_site(f"touch_paw_{leg}", paw, PAW_TOUCH_RADIUS),
-        name=f"{leg}_j3", pos=knee,
+        name=f"{leg}_j3",
+        pos=knee,
     )
     thigh = E(
         "body",
@@ -263,7 +297,8 @@ def _leg(leg: str) -> ET.Element:
         visual(type="capsule", fromto=(0, 0, 0, *knee), size=0.017),
         collision(type="box", size=(0.0165, 0.014, 0.0325), pos=(0, 0, -0.021)),
         shin,
-        name=f"{leg}_j2", pos=(0, 0, 0),
+        name=f"{leg}_j2",
+        pos=(0, 0, 0),
     )
     disc_y = side * (0.049 - HIP_OFFSET[1])
     return E(
@@ -273,7 +308,8 @@ def _leg(leg: str) -> ET.Element:
         visual(type="sphere", size=0.024),
         collision(type="cylinder", fromto=(0, disc_y - 0.005, 0, 0, disc_y + 0.005, 0), size=0.032),
         thigh,
-        name=f"{leg}_j1", pos=(fb * HIP_OFFSET[0], side * HIP_OFFSET[1], HIP_OFFSET[2]),
+        name=f"{leg}_j1",
+        pos=(fb * HIP_OFFSET[0], side * HIP_OFFSET[1], HIP_OFFSET[2]),
     )
 
 
@@ -284,7 +320,8 @@ def _tail() -> ET.Element:
         E("inertial", pos=0.03 * tail_dir, mass=0.005, diaginertia=box_inertia(0.005, (0.06, 0.012, 0.012))),
         joint("tail_pan", (1, 0, 0)),
         hidden_visual(type="capsule", fromto=(0, 0, 0, *(0.06 * tail_dir)), size=0.006, material="dark"),
-        name="tail", pos=(0, 0, 0),
+        name="tail",
+        pos=(0, 0, 0),
     )
     return E(
         "body",
@@ -292,7 +329,8 @@ def _tail() -> ET.Element:
         joint("tail_tilt", (0, 1, 0)),
         hidden_visual(type="sphere", size=0.008, material="dark"),
         tail,
-        name="tail_base", pos=(-0.102, 0, 0.033),
+        name="tail_base",
+        pos=(-0.102, 0, 0.033),
     )
 
 
@@ -300,9 +338,12 @@ def _torso() -> ET.Element:
     back_leds = [
         led(name, pos=(x, dy, 0.063), size=0.005 if "colour" in name else 0.003)
         for name, x, dy in (
-            ("led_back_front_colour", 0.03, 0.0), ("led_back_front_white", 0.03, 0.01),
-            ("led_back_middle_colour", 0.0, 0.0), ("led_back_middle_white", 0.0, 0.01),
-            ("led_back_rear_colour", -0.03, 0.0), ("led_back_rear_white", -0.03, 0.01),
+            ("led_back_front_colour", 0.03, 0.0),
+            ("led_back_front_white", 0.03, 0.01),
+            ("led_back_middle_colour", 0.0, 0.0),
+            ("led_back_middle_white", 0.0, 0.01),
+            ("led_back_rear_colour", -0.03, 0.0),
+            ("led_back_rear_white", -0.03, 0.01),
         )
     ]
     return E(
@@ -316,7 +357,13 @@ def _torso() -> ET.Element:
         collision(type="sphere", size=0.064, pos=(0.058, 0, 0.005)),
         collision(type="sphere", size=0.062, pos=(-0.061, 0, 0.002)),
         E("site", name="imu", pos=(0, 0, 0)),
-        E("camera", name="tracking", mode="trackcom", pos=(-0.35, -0.55, 0.3), xyaxes=(0.84, -0.54, 0, 0.2, 0.31, 0.93)),
+        E(
+            "camera",
+            name="tracking",
+            mode="trackcom",
+            pos=(-0.35, -0.55, 0.3),
+            xyaxes=(0.84, -0.54, 0, 0.2, 0.31, 0.93),
+        ),
         E("site", name="ir_chest", pos=(0.10864, 0, -0.00425), zaxis=(0.866025, 0, -0.5)),
         touch_site("touch_back_front", (0.035, 0, 0.06), 0.03),
         touch_site("touch_back_middle", (0.0, 0, 0.06), 0.03),
@@ -325,12 +372,16 @@ def _torso() -> ET.Element:
         _neck(),
         *(_leg(leg) for leg in LEGS),
         _tail(),
-        name="body", pos=(0, 0, 0.16), childclass="ers7",
+        name="body",
+        pos=(0, 0, 0.16),
+        childclass="ers7",
     )
 
 
 def _actuators() -> ET.Element:
-    return E("actuator", *(E("position", name=j.name, joint=j.name, class_="ers7", kp=servo_stiffness(j)) for j in JOINTS))
+    return E(
+        "actuator", *(E("position", name=j.name, joint=j.name, class_="ers7", kp=servo_stiffness(j)) for j in JOINTS)
+    )
 
 
 def _sensors() -> ET.Element:
@@ -413,14 +464,28 @@ def _line_mesh(ring_segments: int = 48) -> ET.Element:
         length = math.hypot(x1 - x0, y1 - y0)
         ux, uy = (x1 - x0) / length, (y1 - y0) / length
         ax, ay, bx, by = x0 - ux * half, y0 - uy * half, x1 + ux * half, y1 + uy * half
-        quad([(ax + uy * half, ay - ux * half), (bx + uy * half, by - ux * half),
-              (bx - uy * half, by + ux * half), (ax - uy * half, ay + ux * half)])
+        quad(
+            [
+                (ax + uy * half, ay - ux * half),
+                (bx + uy * half, by - ux * half),
+                (bx - uy * half, by + ux * half),
+                (ax - uy * half, ay + ux * half),
+            ]
+        )
     r = F.CENTRE_CIRCLE_RADIUS
     for i in range(ring_segments):
         a0, a1 = (2 * math.pi * k / ring_segments for k in (i, i + 1))
-        quad([((r - half) * math.cos(a0), (r - half) * math.sin(a0)), ((r + half) * math.cos(a0), (r + half) * math.sin(a0)),
-              ((r + half) * math.cos(a1), (r + half) * math.sin(a1)), ((r - half) * math.cos(a1), (r - half) * math.sin(a1))])
-    return E("mesh", name="field_lines", vertex=np.array(vertices).ravel(), face=np.array(faces).ravel(), inertia="shell")
+        quad(
+            [
+                ((r - half) * math.cos(a0), (r - half) * math.sin(a0)),
+                ((r + half) * math.cos(a0), (r + half) * math.sin(a0)),
+                ((r + half) * math.cos(a1), (r + half) * math.sin(a1)),
+                ((r - half) * math.cos(a1), (r - half) * math.sin(a1)),
+            ]
+        )
+    return E(
+        "mesh", name="field_lines", vertex=np.array(vertices).ravel(), face=np.array(faces).ravel(), inertia="shell"
+    )
 
 
 @dataclass(frozen=True)
@@ -448,12 +513,18 @@ def _part_triangles(part: StaticPart, segments: int = 16) -> tuple[np.ndarray, l
         quads = [(0, 1, 3, 2), (4, 5, 7, 6), (0, 1, 5, 4), (2, 3, 7, 6), (0, 2, 6, 4), (1, 3, 7, 5)]
     else:
         radius, half_height = part.size
-        ring = [(radius * math.cos(a), radius * math.sin(a)) for a in np.linspace(0, 2 * math.pi, segments, endpoint=False)]
-        vertices = centre + np.array([(x, y, z) for z in (-half_height, half_height) for x, y in ring]
-                                     + [(0, 0, -half_height), (0, 0, half_height)])
+        ring = [
+            (radius * math.cos(a), radius * math.sin(a)) for a in np.linspace(0, 2 * math.pi, segments, endpoint=False)
+        ]
+        vertices = centre + np.array(
+            [(x, y, z) for z in (-half_height, half_height) for x, y in ring]
+            + [(0, 0, -half_height), (0, 0, half_height)]
+        )
         quads = [(i, (i + 1) % segments, segments + (i + 1) % segments, segments + i) for i in range(segments)]
         quads += [(2 * segments, i, (i + 1) % segments, 2 * segments) for i in range(segments)]
-        quads += [(2 * segments + 1, segments + i, segments + (i + 1) % segments, 2 * segments + 1) for i in range(segments)]
+        quads += [
+            (2 * segments + 1, segments + i, segments + (i + 1) % segments, 2 * segments + 1) for i in range(segments)
+        ]
     triangles = []
     for a, b, c, d in quads:
         for tri in ((a, b, c), (a, c, d)):
@@ -481,11 +552,23 @@ def static_parts(parts: list[StaticPart]) -> tuple[list[ET.Element], list[ET.Ele
         vertices.extend(part_vertices)
         if part.name is not None:
             collision_geoms.setdefault(part.body or part.name, []).append(
-                E("geom", name=part.name, type=part.shape, pos=part.pos, size=part.size, group=3, rgba=(0.5, 0.5, 0.9, 0.4)))
-    assets = [E("mesh", name=n, vertex=np.array(v).ravel(), face=np.array(f).ravel(), inertia="shell")
-              for n, (_, v, f) in meshes.items()]
-    visuals = [E("geom", name=n, type="mesh", mesh=n, material=m, contype=0, conaffinity=0)
-               for n, (m, _, _) in meshes.items()]
+                E(
+                    "geom",
+                    name=part.name,
+                    type=part.shape,
+                    pos=part.pos,
+                    size=part.size,
+                    group=3,
+                    rgba=(0.5, 0.5, 0.9, 0.4),
+                )
+            )
+    assets = [
+        E("mesh", name=n, vertex=np.array(v).ravel(), face=np.array(f).ravel(), inertia="shell")
+        for n, (_, v, f) in meshes.items()
+    ]
+    visuals = [
+        E("geom", name=n, type="mesh", mesh=n, material=m, contype=0, conaffinity=0) for n, (m, _, _) in meshes.items()
+    ]
     bodies = [E("body", *geoms, name=body) for body, geoms in collision_geoms.items()]
     return assets, visuals + bodies
 
@@ -495,11 +578,36 @@ def _goal(colour: str, line_x: float) -> list[StaticPart]:
     d, w, h, t = F.GOAL_DEPTH, F.GOAL_WIDTH, F.GOAL_HEIGHT, 0.01
     mesh = f"goal_{colour}"
     return [
-        StaticPart(mesh, colour, "box", (line_x + sign * (d - t / 2), 0, h / 2), (t / 2, w / 2 + t, h / 2), f"{mesh}_back", mesh),
-        *(StaticPart(mesh, colour, "box", (line_x + sign * d / 2, s * (w / 2 + t / 2), h / 2), (d / 2, t / 2, h / 2),
-                     f"{mesh}_{side}", mesh) for side, s in (("left", 1), ("right", -1))),
-        StaticPart(mesh, colour, "box", (line_x + sign * (d / 2 + t / 2), 0, h + t / 2), (d / 2 + t / 2, w / 2 + t, t / 2),
-                   f"{mesh}_roof", mesh),
+        StaticPart(
+            mesh,
+            colour,
+            "box",
+            (line_x + sign * (d - t / 2), 0, h / 2),
+            (t / 2, w / 2 + t, h / 2),
+            f"{mesh}_back",
+            mesh,
+        ),
+        *(
+            StaticPart(
+                mesh,
+                colour,
+                "box",
+                (line_x + sign * d / 2, s * (w / 2 + t / 2), h / 2),
+                (d / 2, t / 2, h / 2),
+                f"{mesh}_{side}",
+                mesh,
+            )
+            for side, s in (("left", 1), ("right", -1))
+        ),
+        StaticPart(
+            mesh,
+            colour,
+            "box",
+            (line_x + sign * (d / 2 + t / 2), 0, h + t / 2),
+            (d / 2 + t / 2, w / 2 + t, t / 2),
+            f"{mesh}_roof",
+            mesh,
+        ),
     ]
 
 
@@ -508,8 +616,11 @@ def _beacon(b: F.Beacon) -> list[StaticPart]:
     c_top = 0.30 - ph  # bottom of the coloured part; centre of the coloured part at 0.30 m
     return [
         StaticPart(f"beacon_{material}", material, "cylinder", (b.x, b.y, z), (r, half), f"{b.name}_{part}", b.name)
-        for part, material, z, half in (("white", "white", c_top / 2, c_top / 2), ("middle", b.middle, c_top + ph / 2, ph / 2),
-                                        ("top", b.top, c_top + 1.5 * ph, ph / 2))
+        for part, material, z, half in (
+            ("white", "white", c_top / 2, c_top / 2),
+            ("middle", b.middle, c_top + ph / 2, ph / 2),
+            ("top", b.top, c_top + 1.5 * ph, ph / 2),
+        )
     ]
 
 
@@ -519,8 +630,10 @@ def _hall(half_x: float, half_y: float, height: float = 4.0) -> list[StaticPart]
     return [
         StaticPart("hall", "hall", "box", pos, size)
         for size, pos in (
-            ((half_x, 0.05, height / 2), (0, half_y, height / 2)), ((half_x, 0.05, height / 2), (0, -half_y, height / 2)),
-            ((0.05, half_y, height / 2), (half_x, 0, height / 2)), ((0.05, half_y, height / 2), (-half_x, 0, height / 2)),
+            ((half_x, 0.05, height / 2), (0, half_y, height / 2)),
+            ((half_x, 0.05, height / 2), (0, -half_y, height / 2)),
+            ((0.05, half_y, height / 2), (half_x, 0, height / 2)),
+            ((0.05, half_y, height / 2), (-half_x, 0, height / 2)),
             ((half_x, half_y, 0.05), (0, 0, height)),
         )
     ]
@@ -547,9 +660,18 @@ def _venue_lights() -> list[ET.Element]:
     lights = []
     for i, (sx, sy) in enumerate(((1, 1), (-1, 1), (-1, -1), (1, -1))):
         towards = np.array([-sx * math.cos(e) / math.sqrt(2), -sy * math.cos(e) / math.sqrt(2), -math.sin(e)])
-        lights.append(E("light", name=f"lamps_{i + 1}", type="directional", pos=-4.0 * towards, dir=towards,
-                        diffuse=(VENUE_LAMP_DIFFUSE,) * 3, specular=(0.2, 0.2, 0.2),
-                        castshadow="true" if i == 0 else "false"))
+        lights.append(
+            E(
+                "light",
+                name=f"lamps_{i + 1}",
+                type="directional",
+                pos=-4.0 * towards,
+                dir=towards,
+                diffuse=(VENUE_LAMP_DIFFUSE,) * 3,
+                specular=(0.2, 0.2, 0.2),
+                castshadow="true" if i == 0 else "false",
+            )
+        )
     return lights
 
 
@@ -589,15 +711,31 @@ def scene_xml() -> ET.Element:
         E(
             "worldbody",
             *_venue_lights(),
-            E("geom", name="field_carpet", type="plane", size=(cl + 0.5, cw + 0.5, 1.0), material="carpet", friction=(0.9, 0.005, 0.0001)),
+            E(
+                "geom",
+                name="field_carpet",
+                type="plane",
+                size=(cl + 0.5, cw + 0.5, 1.0),
+                material="carpet",
+                friction=(0.9, 0.005, 0.0001),
+            ),
             E("geom", name="field_lines", type="mesh", mesh="field_lines", material="line", contype=0, conaffinity=0),
             *fixed,
             E(
                 "body",
                 E("freejoint", name="ball"),
-                E("geom", name="ball", type="sphere", size=F.BALL_RADIUS, mass=F.BALL_MASS, material="orange",
-                  condim=6, friction=(0.7, 0.005, 0.002)),
-                name="ball", pos=(0.5, 0, F.BALL_RADIUS),
+                E(
+                    "geom",
+                    name="ball",
+                    type="sphere",
+                    size=F.BALL_RADIUS,
+                    mass=F.BALL_MASS,
+                    material="orange",
+                    condim=6,
+                    friction=(0.7, 0.005, 0.002),
+                ),
+                name="ball",
+                pos=(0.5, 0, F.BALL_RADIUS),
             ),
             E("camera", name="overview", pos=(-1.0, -1.4, 1.1), xyaxes=(0.8, -0.6, 0, 0.3, 0.4, 0.87)),
         ),
@@ -607,13 +745,22 @@ def scene_xml() -> ET.Element:
 
 # Webots' aibo_ers7.wbt world (spec E.1): a 2002-era 3.5 x 1.8 m pitch with six landmarks.
 WEBOTS_LANDMARKS = (  # x, y, bottom colour, top colour
-    (1.5, -1.03, "blue", "red"), (1.5, 1.03, "red", "blue"), (-1.5, 1.03, "red", "yellow"),
-    (-1.5, -1.03, "yellow", "red"), (0.0, -1.03, "green", "red"), (0.0, 1.03, "red", "green"),
+    (1.5, -1.03, "blue", "red"),
+    (1.5, 1.03, "red", "blue"),
+    (-1.5, 1.03, "red", "yellow"),
+    (-1.5, -1.03, "yellow", "red"),
+    (0.0, -1.03, "green", "red"),
+    (0.0, 1.03, "red", "green"),
 )
 WEBOTS_COLOURS = {
-    "pitch": (0.2, 0.55, 0.25, 1), "border": (0.15, 0.5, 0.2, 1), "white": (0.95, 0.95, 0.95, 1),
-    "blue": (0.1, 0.3, 0.9, 1), "yellow": (0.95, 0.85, 0.1, 1), "green": (0.1, 0.7, 0.2, 1),
-    "red": (0.9, 0.1, 0.1, 1), "pink": (1.0, 0.07, 0.40, 1),
+    "pitch": (0.2, 0.55, 0.25, 1),
+    "border": (0.15, 0.5, 0.2, 1),
+    "white": (0.95, 0.95, 0.95, 1),
+    "blue": (0.1, 0.3, 0.9, 1),
+    "yellow": (0.95, 0.85, 0.1, 1),
+    "green": (0.1, 0.7, 0.2, 1),
+    "red": (0.9, 0.1, 0.1, 1),
+    "pink": (1.0, 0.07, 0.40, 1),
 }
 
 
@@ -624,22 +771,49 @@ def webots_scene_xml() -> ET.Element:
         back, d, w, h, t, mesh = sign * 1.75, 0.25, 0.6, 0.3, 0.01, f"goal_{colour}"
         parts += [
             StaticPart(mesh, colour, "box", (back, 0, h / 2), (t / 2, w / 2, h / 2), f"{mesh}_back", mesh),
-            *(StaticPart(mesh, colour, "box", (back - sign * d / 2, s * w / 2, h / 2), (d / 2, t / 2, h / 2),
-                         f"{mesh}_{side}", mesh) for side, s in (("left", 1), ("right", -1))),
-            StaticPart(mesh, colour, "box", (back - sign * d / 2, 0, 0.305), (d / 2, w / 2, t / 2), f"{mesh}_roof", mesh),
+            *(
+                StaticPart(
+                    mesh,
+                    colour,
+                    "box",
+                    (back - sign * d / 2, s * w / 2, h / 2),
+                    (d / 2, t / 2, h / 2),
+                    f"{mesh}_{side}",
+                    mesh,
+                )
+                for side, s in (("left", 1), ("right", -1))
+            ),
+            StaticPart(
+                mesh, colour, "box", (back - sign * d / 2, 0, 0.305), (d / 2, w / 2, t / 2), f"{mesh}_roof", mesh
+            ),
         ]
     for i, (x, y, bottom, top) in enumerate(WEBOTS_LANDMARKS):
         parts += [
-            StaticPart("beacon_white", "white", "box", (x, y, 0.2), (0.005, 0.005, 0.2), f"beacon_{i}_post", f"beacon_{i}"),
-            StaticPart(f"beacon_{bottom}", bottom, "cylinder", (x, y, 0.425), (0.02, 0.025), f"beacon_{i}_bottom", f"beacon_{i}"),
-            StaticPart(f"beacon_{top}", top, "cylinder", (x, y, 0.475), (0.02, 0.025), f"beacon_{i}_top", f"beacon_{i}"),
+            StaticPart(
+                "beacon_white", "white", "box", (x, y, 0.2), (0.005, 0.005, 0.2), f"beacon_{i}_post", f"beacon_{i}"
+            ),
+            StaticPart(
+                f"beacon_{bottom}",
+                bottom,
+                "cylinder",
+                (x, y, 0.425),
+                (0.02, 0.025),
+                f"beacon_{i}_bottom",
+                f"beacon_{i}",
+            ),
+            StaticPart(
+                f"beacon_{top}", top, "cylinder", (x, y, 0.475), (0.02, 0.025), f"beacon_{i}_top", f"beacon_{i}"
+            ),
         ]
     parts += [
         StaticPart("wall_border", "border", "box", pos, size, f"wall_border_{n}")
         for n, size, pos in (
-            ("left", (1.65, 0.025, 0.1), (0, 0.98, 0.1)), ("right", (1.65, 0.025, 0.1), (0, -0.98, 0.1)),
-            *((f"end_{i}", (0.025, 0.34, 0.1), (sx * 1.58, sy * 0.64, 0.1))
-              for i, (sx, sy) in enumerate(((1, 1), (1, -1), (-1, 1), (-1, -1)))),
+            ("left", (1.65, 0.025, 0.1), (0, 0.98, 0.1)),
+            ("right", (1.65, 0.025, 0.1), (0, -0.98, 0.1)),
+            *(
+                (f"end_{i}", (0.025, 0.34, 0.1), (sx * 1.58, sy * 0.64, 0.1))
+                for i, (sx, sy) in enumerate(((1, 1), (1, -1), (-1, 1), (-1, -1)))
+            ),
         )
     ]
     meshes, fixed = static_parts(parts + _hall(4.0, 3.0))
@@ -647,19 +821,49 @@ def webots_scene_xml() -> ET.Element:
         "mujoco",
         E("include", file="ers7.xml"),
         E("statistic", center=(0, 0, 0.2), extent=1.5),
-        E("visual", E("headlight", diffuse=(0.5, 0.5, 0.5), ambient=(0.3, 0.3, 0.3), specular=(0, 0, 0)),
-          E("map", znear=0.002, zfar=20), E("global", offwidth=640, offheight=480)),
-        E("asset",
-          *(E("material", name=n, rgba=c, specular=0.1, emission=0.31 if n == "red" else 0) for n, c in WEBOTS_COLOURS.items()),
-          E("material", **HALL_MATERIAL), *meshes),
+        E(
+            "visual",
+            E("headlight", diffuse=(0.5, 0.5, 0.5), ambient=(0.3, 0.3, 0.3), specular=(0, 0, 0)),
+            E("map", znear=0.002, zfar=20),
+            E("global", offwidth=640, offheight=480),
+        ),
+        E(
+            "asset",
+            *(
+                E("material", name=n, rgba=c, specular=0.1, emission=0.31 if n == "red" else 0)
+                for n, c in WEBOTS_COLOURS.items()
+            ),
+            E("material", **HALL_MATERIAL),
+            *meshes,
+        ),
         E(
             "worldbody",
             E("light", name="ceiling", pos=(0, 0, 3), dir=(0, 0, -1), directional="false", diffuse=(0.6, 0.6, 0.58)),
-            E("geom", name="field_carpet", type="plane", size=(2.0, 1.5, 1.0), material="pitch", friction=(0.99, 0.005, 0.0001)),
+            E(
+                "geom",
+                name="field_carpet",
+                type="plane",
+                size=(2.0, 1.5, 1.0),
+                material="pitch",
+                friction=(0.99, 0.005, 0.0001),
+            ),
             *fixed,
-            E("body", E("freejoint", name="ball"),
-              E("geom", name="ball", type="sphere", size=0.035, mass=0.1, material="pink", condim=6, friction=(0.7, 0.005, 0.002)),
-              name="ball", pos=(0.5, 0, 0.035)),
+            E(
+                "body",
+                E("freejoint", name="ball"),
+                E(
+                    "geom",
+                    name="ball",
+                    type="sphere",
+                    size=0.035,
+                    mass=0.1,
+                    material="pink",
+                    condim=6,
+                    friction=(0.7, 0.005, 0.002),
+                ),
+                name="ball",
+                pos=(0.5, 0, 0.035),
+            ),
         ),
         model="ers7_webots_aibo_ers7_wbt",
     )

@@ -281,7 +281,7 @@ class GaitMeter:
     def __call__(self, sim: Simulation) -> None:
         m, d = sim.model, sim.data
         self.peak_speed = max(self.peak_speed, float(np.abs(d.qvel[self._dofs]).max()))
-        for i, (g1, g2) in enumerate(d.contact.geom[:d.ncon]):
+        for i, (g1, g2) in enumerate(d.contact.geom[: d.ncon]):
             leg = g1 if self._leg[g1] and not self._robot[g2] else g2 if self._leg[g2] and not self._robot[g1] else -1
             if leg >= 0:
                 mujoco.mj_contactForce(m, d, i, self._force)
@@ -293,10 +293,22 @@ class GaitMeter:
         return self.paw_force / self.leg_force if self.leg_force > 0 else None
 
 
-def play_motion(motion_or_path, repeat: int = 1, sim: Simulation | None = None, mode: str = "openr",
-                step_ms: int = 16, *, scene=None, seed: int = 0, pose: tuple[float, float, float] | None = None,
-                ball: tuple[float, float] | None = None, ball_type: str = "robocup", camera_profile: str = "ers7",
-                camera_full: bool = False, camera_settings=None) -> dict:
+def play_motion(
+    motion_or_path,
+    repeat: int = 1,
+    sim: Simulation | None = None,
+    mode: str = "openr",
+    step_ms: int = 16,
+    *,
+    scene=None,
+    seed: int = 0,
+    pose: tuple[float, float, float] | None = None,
+    ball: tuple[float, float] | None = None,
+    ball_type: str = "robocup",
+    camera_profile: str = "ers7",
+    camera_full: bool = False,
+    camera_settings=None,
+) -> dict:
     """Play a motion (or MTN file) ``repeat`` times on ``sim`` (default: a new robot standing in
     ``scene``, the RoboCup field by default, made with ``seed`` and the camera options, which
     ``mtn play`` takes like every ``aibo-sim`` command) and say where it went. ``pose`` (x, y
@@ -325,8 +337,15 @@ def play_motion(motion_or_path, repeat: int = 1, sim: Simulation | None = None, 
             raise ValueError("play_motion: give a scene or a simulation, not both")
         place(sim, pose, ball)
         return _play(sim, motion, player, repeat, mode, step_ms)
-    sim = Simulation(scene, seed=seed, camera_full=camera_full, camera_profile=camera_profile,
-                     camera_settings=camera_settings, ball=ball is not None, ball_type=ball_type)
+    sim = Simulation(
+        scene,
+        seed=seed,
+        camera_full=camera_full,
+        camera_profile=camera_profile,
+        camera_settings=camera_settings,
+        ball=ball is not None,
+        ball_type=ball_type,
+    )
     try:
         place(sim, pose, ball)
         return _play(sim, motion, player, repeat, mode, step_ms)

@@ -45,9 +45,9 @@ import contextlib
 import os
 import secrets
 import struct
+from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Iterable, Iterator, Sequence
 
 import numpy as np
 
@@ -83,16 +83,20 @@ class MtnError(ValueError):
         super().__init__(": ".join(where + [message]))
 
 
-def _beyond_limits(frame_time_ms: int, interpolate: np.ndarray, keyframes: np.ndarray,
-                   locators: Sequence[str]) -> tuple[str, int, int | None] | None:
+def _beyond_limits(
+    frame_time_ms: int, interpolate: np.ndarray, keyframes: np.ndarray, locators: Sequence[str]
+) -> tuple[str, int, int | None] | None:
     """The first of ``MAX_LENGTH_MS`` and ``MAX_JOINT_URAD`` a motion breaks, as (message, keyframe,
     joint): for the length, the keyframe that ends its longest segment and joint None."""
     length_ms = int(((interpolate + 1) * frame_time_ms).sum())
     if length_ms > MAX_LENGTH_MS:
         k = int(np.argmax(interpolate))
-        return (f"the motion lasts {length_ms / 1000:.0f} s, longer than the {MAX_LENGTH_MS // 1000} s a motion may "
-                f"last (segment {k} -> {k + 1}: numInterpolate {int(interpolate[k])} of {frame_time_ms} ms frames)",
-                k + 1, None)
+        return (
+            f"the motion lasts {length_ms / 1000:.0f} s, longer than the {MAX_LENGTH_MS // 1000} s a motion may "
+            f"last (segment {k} -> {k + 1}: numInterpolate {int(interpolate[k])} of {frame_time_ms} ms frames)",
+            k + 1,
+            None,
+        )
     beyond = np.argwhere(np.abs(keyframes) > MAX_JOINT_URAD)
     if beyond.size:
         k, j = beyond[0].tolist()
@@ -134,17 +138,22 @@ class Motion:
         self.interpolate = np.asarray(self.interpolate, dtype=np.int64).reshape(-1)
         self.source = self.name if self.source is None else self.source
         n, j = len(self.keyframes), len(self.locators)
-        _check(self.source, [
-            (n < 1, "a motion needs at least one keyframe"),
-            (j < 1, "a motion needs at least one joint"),
-            (len(set(self.locators)) != j, "duplicate locator"),
-            (self.keyframes.shape != (n, j), f"keyframes shape {self.keyframes.shape} is not ({n}, {j})"),
-            (self.attitudes.shape != (n, 3), f"attitudes shape {self.attitudes.shape} is not ({n}, 3)"),
-            (self.interpolate.shape != (max(n - 1, 0),),
-             f"interpolate has {self.interpolate.size} counts, want {n - 1}"),
-            (bool((self.interpolate < 0).any()), "negative interpolation count"),
-            (int(self.frame_time_ms) <= 0, f"frame time {self.frame_time_ms} ms is not positive"),
-        ])
+        _check(
+            self.source,
+            [
+                (n < 1, "a motion needs at least one keyframe"),
+                (j < 1, "a motion needs at least one joint"),
+                (len(set(self.locators)) != j, "duplicate locator"),
+                (self.keyframes.shape != (n, j), f"keyframes shape {self.keyframes.shape} is not ({n}, {j})"),
+                (self.attitudes.shape != (n, 3), f"attitudes shape {self.attitudes.shape} is not ({n}, 3)"),
+                (
+                    self.interpolate.shape != (max(n - 1, 0),),
+                    f"interpolate has {self.interpolate.size} counts, want {n - 1}",
+                ),
+                (bool((self.interpolate < 0).any()), "negative interpolation count"),
+                (int(self.frame_time_ms) <= 0, f"frame time {self.frame_time_ms} ms is not positive"),
+            ],
+        )
         self.frame_time_ms = int(self.frame_time_ms)
         self.option = int(self.option)
         problem = _beyond_limits(self.frame_time_ms, self.interpolate, self.keyframes, self.locators)
@@ -190,7 +199,7 @@ class Motion:
         creator: str = "aibo-sim",
         design: str = "DRX-1000",
         frame_time_ms: int = DEFAULT_FRAME_TIME_MS,
-    ) -> "Motion":
+    ) -> Motion:
         """Author a motion from poses in radians (N, J). ``locators=None`` means every ERS-7
         joint in ``ers7.JOINTS`` order. ``segment_ms`` (one value, or one per segment) must be
         positive multiples of ``frame_time_ms``. Values are rounded to the nearest µrad (ties to
@@ -207,8 +216,9 @@ class Motion:
         if seg.shape != (max(n - 1, 0),):
             raise MtnError(name, None, f"{seg.size} segment durations for {n} poses (want {n - 1})")
         if frame_time_ms <= 0 or any(int(s) != s or s <= 0 or int(s) % frame_time_ms for s in seg.tolist()):
-            raise MtnError(name, None,
-                           f"segment durations {seg.tolist()} must be positive multiples of {frame_time_ms} ms")
+            raise MtnError(
+                name, None, f"segment durations {seg.tolist()} must be positive multiples of {frame_time_ms} ms"
+            )
         micro = np.rint(poses * 1e6)
         if (micro < _S32_MIN).any() or (micro > _S32_MAX).any():
             raise MtnError(name, None, "pose out of the s32 micro-radian range")
@@ -311,8 +321,11 @@ def parse_mtn(data: bytes, source: str = "<bytes>") -> Motion:
     # A wrong joint count shows as nonsense in the keyframes: the size field's count, where it
     # differs, is named with the error (a hint only: OPEN-R does not read the field).
     implied, rest = divmod(size_field - 12 - 4 * (nkey - 1), 4 * nkey)
-    hint = f"; section 3's size field fits {implied - 3} joints, section 2 lists {njoint}" \
-        if not rest and implied > 3 and implied - 3 != njoint else ""
+    hint = (
+        f"; section 3's size field fits {implied - 3} joints, section 2 lists {njoint}"
+        if not rest and implied > 3 and implied - 3 != njoint
+        else ""
+    )
     if dtype != 0:
         raise r.fail(end2 + 8, f"data type {dtype}, expected 0")
     r.need(end2, size, f"section 3 ({nkey} keyframes of {njoint} joints{hint})")  # bytes after it are ignored
@@ -320,7 +333,11 @@ def parse_mtn(data: bytes, source: str = "<bytes>") -> Motion:
     # Keyframe 0, then (numInterpolate, keyframe) pairs: view as rows of 1 + kf_words s32,
     # with a dummy interpolation word in front of keyframe 0.
     body = end2 + 12
-    words = np.frombuffer(b"\0\0\0\0" + r.data[body:end2 + size], dtype="<i4").astype(np.int64).reshape(nkey, 1 + kf_words)
+    words = (
+        np.frombuffer(b"\0\0\0\0" + r.data[body : end2 + size], dtype="<i4")
+        .astype(np.int64)
+        .reshape(nkey, 1 + kf_words)
+    )
     interpolate = words[1:, 0]
     if (interpolate < 0).any():
         k = int(np.argmax(interpolate < 0)) + 1
@@ -384,8 +401,10 @@ def serialize_mtn(motion: Motion) -> bytes:
         (j > 0xFFFF, f"{j} joints, at most 65535"),
         (not 0 < m.frame_time_ms <= 0xFFFF, f"frame time {m.frame_time_ms} ms not in 1..65535"),
         (not 0 <= m.option <= 0xFFFFFFFF, f"option {m.option} is not a u32"),
-        (m.interpolate.size > 0 and not 0 <= int(m.interpolate.min()) <= int(m.interpolate.max()) <= _S32_MAX,
-         "interpolation count out of 0..2^31-1"),
+        (
+            m.interpolate.size > 0 and not 0 <= int(m.interpolate.min()) <= int(m.interpolate.max()) <= _S32_MAX,
+            "interpolation count out of 0..2^31-1",
+        ),
     ]
     for arr, what in ((m.keyframes, "joint value"), (m.attitudes, "attitude")):
         checks.append((bool(((arr < _S32_MIN) | (arr > _S32_MAX)).any()), f"{what} out of the s32 range"))
@@ -451,8 +470,9 @@ class MotionPlayer:
         self.motion, self.mode = motion, mode
         if mode == "openr":
             if motion.frame_time_ms % SUBFRAME_MS:
-                raise MtnError(motion.source, None,
-                               f"frame time {motion.frame_time_ms} ms is not a multiple of {SUBFRAME_MS} ms")
+                raise MtnError(
+                    motion.source, None, f"frame time {motion.frame_time_ms} ms is not a multiple of {SUBFRAME_MS} ms"
+                )
             self._subframes = (motion.interpolate + 1) * (motion.frame_time_ms // SUBFRAME_MS)
             self._start = np.concatenate(([0], np.cumsum(self._subframes)))  # segment k starts at _start[k]
             kf = motion.keyframes
@@ -552,8 +572,11 @@ def mtn_new(path: str | os.PathLike, available_locators: Iterable[str] | None = 
     try:
         if not isinstance(path, (str, os.PathLike)):
             text = repr(path)
-            raise MtnError(None, None, f"mtn_new({printable(text, 60)}): the file name must be a str or a path, "
-                                       f"not {type(path).__name__}")
+            raise MtnError(
+                None,
+                None,
+                f"mtn_new({printable(text, 60)}): the file name must be a str or a path, not {type(path).__name__}",
+            )
         try:
             motion = read_mtn(path)
         except OSError as exc:

@@ -34,8 +34,11 @@ def cut_long_words(message) -> str:
     """An error line with each run of more than ``LONG_WORD`` characters without a space or a
     quote (a path, an argument: a file's text given in place of its name) cut, saying how long
     it was."""
-    return re.sub(rf"[^\s:,'\"`()\[\]]{{{LONG_WORD + 1},}}", lambda m: f"{m[0][:LONG_WORD]}... ({len(m[0])} characters)",
-                  str(message))
+    return re.sub(
+        rf"[^\s:,'\"`()\[\]]{{{LONG_WORD + 1},}}",
+        lambda m: f"{m[0][:LONG_WORD]}... ({len(m[0])} characters)",
+        str(message),
+    )
 
 
 class ArgumentParser(argparse.ArgumentParser):
@@ -82,37 +85,74 @@ def seed_number(text: str) -> int:
 def add_world_options(parser: argparse.ArgumentParser, camera: bool = True) -> None:
     """--scene, --pose, --ball, --seed and (with ``camera``) the camera options; see
     ``world_options`` and ``camera_options`` for what they become."""
-    parser.add_argument("--scene", type=path_text, metavar="FILE", help="MJCF scene file (default: the RoboCup 2005 field)")
-    parser.add_argument("--pose", type=finite_float, nargs=3, metavar=("X", "Y", "YAW_DEG"),
-                        help="robot position on the field (m) and heading (deg); default: the scene's start")
-    parser.add_argument("--ball", type=finite_float, nargs=2, metavar=("X", "Y"),
-                        help="ball position on the field (m); default: the scene's")
-    parser.add_argument("--ball-type", choices=BALL_TYPES, default="robocup",
-                        help="the scene's ball: robocup (the orange RoboCup ball, 84 mm; default) or pink "
-                             "(Sony's pink AIBO ball, 70 mm, which Sony's samples look for)")
-    parser.add_argument("--seed", type=seed_number, default=0, metavar="N",
-                        help="random seed (IR and camera noise, randomised choices; default 0)")
+    parser.add_argument(
+        "--scene", type=path_text, metavar="FILE", help="MJCF scene file (default: the RoboCup 2005 field)"
+    )
+    parser.add_argument(
+        "--pose",
+        type=finite_float,
+        nargs=3,
+        metavar=("X", "Y", "YAW_DEG"),
+        help="robot position on the field (m) and heading (deg); default: the scene's start",
+    )
+    parser.add_argument(
+        "--ball",
+        type=finite_float,
+        nargs=2,
+        metavar=("X", "Y"),
+        help="ball position on the field (m); default: the scene's",
+    )
+    parser.add_argument(
+        "--ball-type",
+        choices=BALL_TYPES,
+        default="robocup",
+        help="the scene's ball: robocup (the orange RoboCup ball, 84 mm; default) or pink "
+        "(Sony's pink AIBO ball, 70 mm, which Sony's samples look for)",
+    )
+    parser.add_argument(
+        "--seed",
+        type=seed_number,
+        default=0,
+        metavar="N",
+        help="random seed (IR and camera noise, randomised choices; default 0)",
+    )
     if not camera:
         return
-    parser.add_argument("--camera-profile", choices=tuple(PROFILES), default="ers7",
-                        help="head camera model: ers7 (the calibrated sensor, default) or ideal (the rendered picture)")
+    parser.add_argument(
+        "--camera-profile",
+        choices=tuple(PROFILES),
+        default="ers7",
+        help="head camera model: ers7 (the calibrated sensor, default) or ideal (the rendered picture)",
+    )
     for name, option in CAMERA_SETTING_OPTIONS:
-        parser.add_argument(option, choices=tuple(CAMERA_SETTINGS[name][1]), default=CAMERA_DEFAULTS[name],
-                            help=f"camera {name.replace('_', ' ')} at the start (default {CAMERA_DEFAULTS[name]})")
+        parser.add_argument(
+            option,
+            choices=tuple(CAMERA_SETTINGS[name][1]),
+            default=CAMERA_DEFAULTS[name],
+            help=f"camera {name.replace('_', ' ')} at the start (default {CAMERA_DEFAULTS[name]})",
+        )
     parser.add_argument("--camera-full", action="store_true", help="render 416x320 (else the 208x160 layer)")
 
 
 def world_options(args: argparse.Namespace) -> dict:
     """Keyword arguments ``scene``, ``seed``, ``pose`` (x, y, yaw in degrees, or None), ``ball``
     (x, y, or None) and ``ball_type`` from the world options."""
-    return {"scene": args.scene, "seed": args.seed, "pose": None if args.pose is None else tuple(args.pose),
-            "ball": None if args.ball is None else tuple(args.ball), "ball_type": args.ball_type}
+    return {
+        "scene": args.scene,
+        "seed": args.seed,
+        "pose": None if args.pose is None else tuple(args.pose),
+        "ball": None if args.ball is None else tuple(args.ball),
+        "ball_type": args.ball_type,
+    }
 
 
 def camera_options(args: argparse.Namespace) -> dict:
     """Keyword arguments for ``Simulation`` (and ``run_controller``) from the camera options."""
-    return {"camera_profile": args.camera_profile, "camera_full": args.camera_full,
-            "camera_settings": CameraSettings(args.camera_wb, args.camera_gain, args.camera_shutter)}
+    return {
+        "camera_profile": args.camera_profile,
+        "camera_full": args.camera_full,
+        "camera_settings": CameraSettings(args.camera_wb, args.camera_gain, args.camera_shutter),
+    }
 
 
 def start_values(name: str, values, count: int) -> tuple[float, ...] | None:
@@ -138,8 +178,9 @@ def make_out_folder(path) -> Path:
     return path
 
 
-def check_place(scene, pose: tuple[float, float, float] | None, ball: tuple[float, float] | None,
-                ball_type: str = "robocup") -> None:
+def check_place(
+    scene, pose: tuple[float, float, float] | None, ball: tuple[float, float] | None, ball_type: str = "robocup"
+) -> None:
     """``place``'s errors for these placements in ``scene``, before a command writes anything."""
     sim = Simulation(scene, camera_profile="ideal", ball_type=ball_type)
     try:
@@ -154,6 +195,7 @@ def place(sim, pose: tuple[float, float, float] | None = None, ball: tuple[float
     placed would sink more than ``PLACEMENT_OVERLAP_M`` into something (a wall, a goal, the
     robot or the ball), which the first step would fling apart; naming ``--scene`` when the
     scene's own start does."""
+
     def given(option: str, values) -> str:
         return f"{option} {' '.join(f'{v:g}' for v in values)}"
 
@@ -174,5 +216,7 @@ def place(sim, pose: tuple[float, float, float] | None = None, ball: tuple[float
                 raise ValueError(f"{given(option, values)}: {subject} would overlap {other} by {depth * 100:.1f} cm")
         for subject, other in pairs:
             if subject in placed and subject != other:
-                raise ValueError(f"--scene {sim.scene}: {subject} starts inside {other} ({depth * 100:.1f} cm deep); "
-                                 f"move it in the scene, or place it with {placed[subject][0]}")
+                raise ValueError(
+                    f"--scene {sim.scene}: {subject} starts inside {other} ({depth * 100:.1f} cm deep); "
+                    f"move it in the scene, or place it with {placed[subject][0]}"
+                )

@@ -32,7 +32,6 @@ import numpy as np
 
 from ._gl import SYSTEM_PACKAGES, choose_gl_backend
 
-
 GL_RGBA, GL_UNSIGNED_BYTE = 0x1908, 0x1401
 GL_PACK_INVERT_MESA = 0x8758  # Mesa's GL_MESA_pack_invert: glReadPixels gives the rows top to bottom
 
@@ -87,8 +86,12 @@ class _EglCurrent:
         context = egl.eglGetCurrentContext()
         if not context:
             return None
-        return (egl.eglGetCurrentDisplay(), egl.eglGetCurrentSurface(self.EGL_DRAW),
-                egl.eglGetCurrentSurface(self.EGL_READ), context)
+        return (
+            egl.eglGetCurrentDisplay(),
+            egl.eglGetCurrentSurface(self.EGL_DRAW),
+            egl.eglGetCurrentSurface(self.EGL_READ),
+            context,
+        )
 
     def restore(self, saved: tuple) -> None:
         self._egl.eglMakeCurrent(*saved)
@@ -106,9 +109,20 @@ class _OsmesaCurrent:
         osmesa = ctypes.CDLL(ctypes.util.find_library("OSMesa") or "libOSMesa.so")
         osmesa.OSMesaGetCurrentContext.restype, osmesa.OSMesaGetCurrentContext.argtypes = ctypes.c_void_p, []
         pointer = ctypes.POINTER
-        osmesa.OSMesaGetColorBuffer.argtypes = [ctypes.c_void_p, pointer(ctypes.c_int), pointer(ctypes.c_int),
-                                                pointer(ctypes.c_int), pointer(ctypes.c_void_p)]
-        osmesa.OSMesaMakeCurrent.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_uint, ctypes.c_int, ctypes.c_int]
+        osmesa.OSMesaGetColorBuffer.argtypes = [
+            ctypes.c_void_p,
+            pointer(ctypes.c_int),
+            pointer(ctypes.c_int),
+            pointer(ctypes.c_int),
+            pointer(ctypes.c_void_p),
+        ]
+        osmesa.OSMesaMakeCurrent.argtypes = [
+            ctypes.c_void_p,
+            ctypes.c_void_p,
+            ctypes.c_uint,
+            ctypes.c_int,
+            ctypes.c_int,
+        ]
         self._osmesa, self.address = osmesa, osmesa.OSMesaGetCurrentContext
 
     def save(self) -> tuple | None:
@@ -146,8 +160,15 @@ class Renderer:
     the view too (same pixels, slower); ``scene`` is the ``MjvScene`` last drawn.
     """
 
-    def __init__(self, model: mujoco.MjModel, width: int, height: int, quality: str = "fast",
-                 groups: tuple[int, ...] = (0, 1, 2), cull: bool = True):
+    def __init__(
+        self,
+        model: mujoco.MjModel,
+        width: int,
+        height: int,
+        quality: str = "fast",
+        groups: tuple[int, ...] = (0, 1, 2),
+        cull: bool = True,
+    ):
         if quality not in ("fast", "high"):
             raise ValueError(f"quality must be 'fast' or 'high', not {quality!r}")
         self.width, self.height, self.model = width, height, model
@@ -160,11 +181,14 @@ class Renderer:
                 gl = _context_class(backend)(width, height)  # mujoco.egl makes it current at once
             if not gl._context:  # GLFW without a display: a NULL window (and nothing for close to free)
                 why = "; ".join(str(w.message) for w in warned) or "no context"
-                raise RenderingUnavailable(f"MUJOCO_GL={backend}: cannot create an OpenGL context ({why}); "
-                                           "unset MUJOCO_GL to render headless with EGL or OSMesa")
+                raise RenderingUnavailable(
+                    f"MUJOCO_GL={backend}: cannot create an OpenGL context ({why}); "
+                    "unset MUJOCO_GL to render headless with EGL or OSMesa"
+                )
             self._gl = gl
-            self._context_address = (ctypes.cast(self._gl._context, ctypes.c_void_p).value
-                                     if self._current_context is not None else None)
+            self._context_address = (
+                ctypes.cast(self._gl._context, ctypes.c_void_p).value if self._current_context is not None else None
+            )
             self._gl.make_current()
             self._other_context = other
         except RenderingUnavailable:
@@ -290,7 +314,11 @@ class Renderer:
         or mirror), every group is shown (no group left to hide them in) or the camera is
         orthographic."""
         flags = self._scene.flags
-        if self._hidden_group is None or flags[mujoco.mjtRndFlag.mjRND_SHADOW] or flags[mujoco.mjtRndFlag.mjRND_REFLECTION]:
+        if (
+            self._hidden_group is None
+            or flags[mujoco.mjtRndFlag.mjRND_SHADOW]
+            or flags[mujoco.mjtRndFlag.mjRND_REFLECTION]
+        ):
             return np.empty(0, np.intp)
         shown, minus_radius = self._cullable_geoms()
         mujoco.mjv_updateCamera(self.model, data, cam, self._scene)

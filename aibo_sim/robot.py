@@ -56,7 +56,7 @@ class Device:
     kind = "device"
     enable_call = ""  # the API function that enables it, when not ``<kind>_enable``
 
-    def __init__(self, robot: "Robot", locator: str, name: str):
+    def __init__(self, robot: Robot, locator: str, name: str):
         self.robot, self.locator, self.name = robot, locator, name
         self.period: int | None = None
         self._next_sample_ms = 0
@@ -253,22 +253,33 @@ def find_file(path: str | Path, search_dirs) -> Path:
     found = next((c for c in candidates if _is_file(c)), None)
     if found is None:
         name = Path(path).name.lower()
-        found = next((f for d in map(Path, search_dirs) if d.is_dir() for f in d.iterdir() if f.name.lower() == name), None)
+        found = next(
+            (f for d in map(Path, search_dirs) if d.is_dir() for f in d.iterdir() if f.name.lower() == name), None
+        )
     return found if found is not None else Path(path)
 
 
 def check_memory_stick(backend: str, memory_stick) -> None:
     """ValueError for a memory stick given to a backend that reads none."""
     if memory_stick is not None and backend != "openr":
-        raise ValueError(f"--memory-stick applies to the openr backend (--backend openr): the {backend} backend "
-                         "reads no OPEN-R configuration")
+        raise ValueError(
+            f"--memory-stick applies to the openr backend (--backend openr): the {backend} backend "
+            "reads no OPEN-R configuration"
+        )
 
 
 class Robot:
     """A simulated ERS-7 seen through the controller API, on one backend."""
 
-    def __init__(self, sim: Simulation | None = None, *, backend: str = "sim", mtn_mode: str = "openr",
-                 memory_stick: str | Path | None = None, search_dirs: tuple[Path, ...] = ()):
+    def __init__(
+        self,
+        sim: Simulation | None = None,
+        *,
+        backend: str = "sim",
+        mtn_mode: str = "openr",
+        memory_stick: str | Path | None = None,
+        search_dirs: tuple[Path, ...] = (),
+    ):
         if backend not in BACKENDS:
             raise ValueError(f"backend must be one of {BACKENDS}, not {backend!r}")
         if mtn_mode not in MTN_MODES:
@@ -360,7 +371,7 @@ class Robot:
             raise MtnError(None, None, f"{function}({short_repr(motion)}): not an MTN (use the value mtn_new returned)")
         return motion
 
-    def _playing(self, motion) -> "_Playing | None":
+    def _playing(self, motion) -> _Playing | None:
         return next((p for p in self.playing if p.motion is motion), None)
 
     def mtn_is_over(self, motion) -> bool:

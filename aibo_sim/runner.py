@@ -22,8 +22,15 @@ from openr_bridge.memory_stick import MemoryStick, load_memory_stick, memory_sti
 
 from . import controller
 from .camera import CameraSettings
-from .cbind import (C_SUFFIXES, CControllerError, compile_controller, controller_sources, is_c_controller,
-                    run_c_controller, serve)
+from .cbind import (
+    C_SUFFIXES,
+    CControllerError,
+    compile_controller,
+    controller_sources,
+    is_c_controller,
+    run_c_controller,
+    serve,
+)
 from .files import FolderLock, SymlinkRefused, make_folder, png, read_file, write_file_atomic
 from .openr.host import MemoryStickRun, OpenRObjectCrashed
 from .options import make_out_folder, place, start_values
@@ -82,8 +89,11 @@ def check_python_controller(path: Path) -> None:
     the file and line of a syntax error (bad input, found before anything is run or written)."""
     if not path.is_file():
         main_files = " or ".join(path.name + suffix for suffix in C_SUFFIXES)
-        what = (f"a folder with no {main_files} (a C or C++ controller folder holds its main file under the "
-                "folder's name)" if path.is_dir() else "no such controller file")
+        what = (
+            f"a folder with no {main_files} (a C or C++ controller folder holds its main file under the folder's name)"
+            if path.is_dir()
+            else "no such controller file"
+        )
         raise FileNotFoundError(f"{path}: {what}")
     try:
         compile(path.read_bytes(), str(path), "exec")
@@ -138,8 +148,9 @@ class FrameWriter:
             except (OSError, ValueError):
                 previous = None
             if not (isinstance(previous, dict) and {"controller", "backend"} <= previous.keys()):
-                raise OSError(f"{run_json} is not an aibo-sim run's run.json: refusing to replace it; "
-                              "choose another --out")
+                raise OSError(
+                    f"{run_json} is not an aibo-sim run's run.json: refusing to replace it; choose another --out"
+                )
         try:
             names = os.listdir(frames)
         except FileNotFoundError:
@@ -147,13 +158,17 @@ class FrameWriter:
         except OSError as exc:
             raise OSError(f"cannot use {frames} for the frames: {exc.strerror or exc}") from exc
         if names and not earlier_run:
-            raise OSError(f"{frames} holds files but {self.out} holds no aibo-sim run ({RUN_FILE}): refusing to mix "
-                          "them with this run's frames; choose another --out")
+            raise OSError(
+                f"{frames} holds files but {self.out} holds no aibo-sim run ({RUN_FILE}): refusing to mix "
+                "them with this run's frames; choose another --out"
+            )
         foreign = sorted(name for name in names if not RUN_FRAME_NAMES.fullmatch(name))
         if foreign:
-            raise OSError(f"{frames} holds files that are not a run's frames ({foreign[0]!r}"
-                          f"{f' and {len(foreign) - 1} more' if len(foreign) > 1 else ''}): refusing to remove them; "
-                          "choose another --out")
+            raise OSError(
+                f"{frames} holds files that are not a run's frames ({foreign[0]!r}"
+                f"{f' and {len(foreign) - 1} more' if len(foreign) > 1 else ''}): refusing to remove them; "
+                "choose another --out"
+            )
         return names
 
     def _prepare(self, marker: dict) -> None:
@@ -199,14 +214,19 @@ class FrameWriter:
 
 
 # Where the frames that call a controller, and that its API calls raise from, live.
-_SIMULATOR_CODE = (*(str(Path(package.__file__).resolve().parent) + os.sep for package in (controller, openr_bridge)),
-                   runpy.__file__, "<frozen runpy>", threading.__file__)
+_SIMULATOR_CODE = (
+    *(str(Path(package.__file__).resolve().parent) + os.sep for package in (controller, openr_bridge)),
+    runpy.__file__,
+    "<frozen runpy>",
+    threading.__file__,
+)
 
 
 def controller_traceback(error: BaseException) -> str:
     """``error``'s traceback as the controller's author needs it: their own frames, without the
     simulator's and runpy's around them (an API call's error names what was wrong); chained
     exceptions raised inside the simulator alone are left out."""
+
     def controllers(exc: traceback.TracebackException) -> list[traceback.FrameSummary]:
         return [frame for frame in exc.stack if not frame.filename.startswith(_SIMULATOR_CODE)]
 
@@ -244,7 +264,7 @@ class _ControllerThreads:
     def __init__(self, robot: Robot):
         self._robot, self.error = robot, None
 
-    def __enter__(self) -> "_ControllerThreads":
+    def __enter__(self) -> _ControllerThreads:
         self._previous, threading.excepthook = threading.excepthook, self._hook
         return self
 
@@ -270,7 +290,7 @@ class _WaitNotices:
         self._name, self._robot, self._stop = name, robot, threading.Event()
         self._thread = threading.Thread(target=self._watch, name="aibo-sim wait notices", daemon=True)
 
-    def __enter__(self) -> "_WaitNotices":
+    def __enter__(self) -> _WaitNotices:
         self._thread.start()
         return self
 
@@ -314,8 +334,10 @@ class Progress:
             factor = (simulated_s - self._origin[1]) / max(now - self._origin[0], 1e-9)
             left = f"{max(0.0, self.duration_s - simulated_s) / factor:.0f} s" if factor > 0 else "?"
             counted = f"{frames} frames, " if frames is not None else ""
-            self.stream.write(f"\r[{bar:<30}] {counted}{simulated_s:.2f} / {self.duration_s:.2f} s, "
-                              f"{factor:.1f}x real time, {left} left\x1b[K")  # erase the longer line before
+            self.stream.write(
+                f"\r[{bar:<30}] {counted}{simulated_s:.2f} / {self.duration_s:.2f} s, "
+                f"{factor:.1f}x real time, {left} left\x1b[K"
+            )  # erase the longer line before
             self.stream.flush()
 
     def close(self) -> None:
@@ -323,12 +345,26 @@ class Progress:
             self.stream.write("\n")
 
 
-def run_controller(path: str | Path, *, backend: str | None = None, duration: float = 10.0, scene=None,
-                   seed: int = 0, out: str | Path | None = None, mtn_mode: str | None = None, memory_stick=None,
-                   camera_full: bool = False, camera_profile: str = "ers7",
-                   camera_settings: CameraSettings | None = None, pose: tuple[float, float, float] | None = None,
-                   ball: tuple[float, float] | None = None, ball_type: str = "robocup", frame_listeners=(),
-                   progress: bool = True, workdir: str | Path | None = None) -> RunSummary:
+def run_controller(
+    path: str | Path,
+    *,
+    backend: str | None = None,
+    duration: float = 10.0,
+    scene=None,
+    seed: int = 0,
+    out: str | Path | None = None,
+    mtn_mode: str | None = None,
+    memory_stick=None,
+    camera_full: bool = False,
+    camera_profile: str = "ers7",
+    camera_settings: CameraSettings | None = None,
+    pose: tuple[float, float, float] | None = None,
+    ball: tuple[float, float] | None = None,
+    ball_type: str = "robocup",
+    frame_listeners=(),
+    progress: bool = True,
+    workdir: str | Path | None = None,
+) -> RunSummary:
     """Run a controller for ``duration`` simulated seconds; frames, its files and ``run.json``
     (the summary) go to ``out``. The controller is a Python file, a C or C++ file or folder
     (``aibo_sim.cbind``: compiled first, a CompileError when it does not compile), or a memory
@@ -363,21 +399,33 @@ def run_controller(path: str | Path, *, backend: str | None = None, duration: fl
     if round(duration * 1000) < FRAME_MS:
         raise ValueError(f"--duration {duration} s is shorter than one {FRAME_MS} ms joint frame: nothing would run")
     pose, ball = start_values("--pose", pose, 3), start_values("--ball", ball, 2)
-    sim = Simulation(scene, seed=seed, camera_full=camera_full, camera_profile=camera_profile,
-                     camera_settings=camera_settings, ball_type=ball_type)
+    sim = Simulation(
+        scene,
+        seed=seed,
+        camera_full=camera_full,
+        camera_profile=camera_profile,
+        camera_settings=camera_settings,
+        ball_type=ball_type,
+    )
     writer = None
     try:
         place(sim, pose, ball)
         out = out and Path(out).resolve()
         folder = Path(workdir).resolve() if workdir is not None else out
         if stick is None:
-            program = Robot(sim, backend=backend, mtn_mode=mtn_mode, memory_stick=memory_stick,
-                            search_dirs=motion_dirs(path))
+            program = Robot(
+                sim, backend=backend, mtn_mode=mtn_mode, memory_stick=memory_stick, search_dirs=motion_dirs(path)
+            )
             camera_listeners = program.camera_source.listeners
             camera = sim.camera.describe((program.camera_source.width, program.camera_source.height))  # what it serves
         else:
-            program = MemoryStickRun(sim, stick, folder or Path.cwd(), log_path=out and out / CONSOLE_FILE,
-                                     sound_path=out and out / SOUND_FILE)
+            program = MemoryStickRun(
+                sim,
+                stick,
+                folder or Path.cwd(),
+                log_path=out and out / CONSOLE_FILE,
+                sound_path=out and out / SOUND_FILE,
+            )
             camera_listeners, camera = program.camera_listeners, sim.camera.describe()
         if out is not None:
             writer = FrameWriter(out, controller=path, backend=backend)
@@ -396,9 +444,17 @@ def run_controller(path: str | Path, *, backend: str | None = None, duration: fl
 
     def record_end(status: str, error: BaseException) -> None:
         """run.json of a run that did not reach its end: how it ended, the time and frames so far."""
-        writer.write_run_json({"controller": str(path), "backend": backend, "status": status,
-                               **({"error": str(error)} if status == "failed" else {}),
-                               "simulated_s": program.time_ms / 1000, "camera_frames": writer.count, "camera": camera})
+        writer.write_run_json(
+            {
+                "controller": str(path),
+                "backend": backend,
+                "status": status,
+                **({"error": str(error)} if status == "failed" else {}),
+                "simulated_s": program.time_ms / 1000,
+                "camera_frames": writer.count,
+                "camera": camera,
+            }
+        )
 
     try:
         if stick is None:
@@ -414,15 +470,27 @@ def run_controller(path: str | Path, *, backend: str | None = None, duration: fl
             writer.check()
         position, yaw, _ = sim.body_pose()
         ball_end = sim.ball_position()
-        summary = RunSummary(str(path), backend, program.time_ms / 1000, wall, program.time_ms / 1000 / max(wall, 1e-9),
-                             writer.count if writer else 0, (float(position[0]), float(position[1]), math.degrees(yaw)),
-                             None if ball_end is None else (float(ball_end[0]), float(ball_end[1])),
-                             scene=None if scene is None else str(Path(scene).resolve()), seed=seed, pose=pose,
-                             ball=ball, ball_type=ball_type, camera=camera)
+        summary = RunSummary(
+            str(path),
+            backend,
+            program.time_ms / 1000,
+            wall,
+            program.time_ms / 1000 / max(wall, 1e-9),
+            writer.count if writer else 0,
+            (float(position[0]), float(position[1]), math.degrees(yaw)),
+            None if ball_end is None else (float(ball_end[0]), float(ball_end[1])),
+            scene=None if scene is None else str(Path(scene).resolve()),
+            seed=seed,
+            pose=pose,
+            ball=ball,
+            ball_type=ball_type,
+            camera=camera,
+        )
         if writer is not None:
             done = asdict(summary)
-            writer.write_run_json({"controller": done.pop("controller"), "backend": done.pop("backend"),
-                                   "status": "done", **done})
+            writer.write_run_json(
+                {"controller": done.pop("controller"), "backend": done.pop("backend"), "status": "done", **done}
+            )
     except (ControllerFailed, SimulationDiverged, RenderingUnavailable, KeyboardInterrupt) as failure:
         if writer is not None:  # the frames so far stay, and run.json says how the run ended
             record_end("interrupted" if isinstance(failure, KeyboardInterrupt) else "failed", failure)
@@ -444,8 +512,9 @@ def _memory_stick(path: Path, backend: str | None, mtn_mode: str | None, memory_
         return None
     for option, value in (("--backend", backend), ("--mtn-mode", mtn_mode), ("--memory-stick", memory_stick)):
         if value not in (None, MEMORY_STICK if option == "--backend" else None):
-            raise ValueError(f"{option} applies to controllers: {folder} is a memory stick, whose OPEN-R objects run "
-                             "as on the robot")
+            raise ValueError(
+                f"{option} applies to controllers: {folder} is a memory stick, whose OPEN-R objects run as on the robot"
+            )
     return load_memory_stick(folder)
 
 
@@ -493,7 +562,8 @@ def _run_controller_program(path: Path, executable: Path | None, robot: Robot, w
             die_report = "".join(
                 f"\n{'then ' if error is not None or k else ''}its robot_die function "
                 f"{getattr(fn, '__qualname__', repr(fn))} raised:\n" + controller_traceback(exc).rstrip()
-                for k, (fn, exc) in enumerate(die_failures))
+                for k, (fn, exc) in enumerate(die_failures)
+            )
             if isinstance(error, (SimulationDiverged, RenderingUnavailable)):  # the simulator's, not the controller's
                 if die_report:
                     raise type(error)(f"{error}{die_report}") from error
@@ -501,13 +571,15 @@ def _run_controller_program(path: Path, executable: Path | None, robot: Robot, w
             if isinstance(error, SystemExit):
                 status = error.code if isinstance(error.code, int) else repr(error.code)
                 call = "sys.exit" if executable is None else "exit"
-                raise ControllerFailed(f"controller {path.name} exited with {call}({status}) {where}"
-                                       f"{die_report}", exit_status=error.code) from error
+                raise ControllerFailed(
+                    f"controller {path.name} exited with {call}({status}) {where}{die_report}", exit_status=error.code
+                ) from error
             if isinstance(error, CControllerError):
                 raise ControllerFailed(f"controller {path.name}: {error} {where}") from error
             if error is not None:
-                raise ControllerFailed(f"controller {path.name} raised {where}:\n"
-                                       + controller_traceback(error) + die_report) from error
+                raise ControllerFailed(
+                    f"controller {path.name} raised {where}:\n" + controller_traceback(error) + die_report
+                ) from error
             if die_report:
                 raise ControllerFailed(f"controller {path.name} ended {where};{die_report}")
     finally:

@@ -19,8 +19,8 @@ import numpy as np
 from openr_bridge import FRAME_RATE_HZ, FRAME_TICK_MS
 
 from .camera import CameraProfile, CameraSettings, HeadCamera, camera_size, scene_light
-from .field import BALL_TYPES, COLOURS, PINK_BALL_MASS, PINK_BALL_RADIUS, SPECULAR
 from .ers7 import DISTANCE_SENSORS, HEAD_CAMERA, JOINTS, LED_BY_NAME, LED_OFF_RGBA, SENSORS, TOUCH_SENSORS
+from .field import BALL_TYPES, COLOURS, PINK_BALL_MASS, PINK_BALL_RADIUS, SPECULAR
 
 FRAME_MS = FRAME_TICK_MS  # OPEN-R joint frame, 8 ms
 GRAVITY = 9.80665
@@ -121,6 +121,7 @@ def check_robot(model: mujoco.MjModel, path, keyframe: str = "stand") -> None:
     body, joints, actuators, sensors and head camera) and, when ``keyframe`` is ``"stand"``
     (the start pose every command uses), a keyframe of that name. Another keyframe a caller
     asks for is looked up when it is used (``reset``), whose KeyError lists the scene's."""
+
     def missing(kind: mujoco.mjtObj, names) -> list[str]:
         return [name for name in names if mujoco.mj_name2id(model, kind, name) < 0]
 
@@ -134,14 +135,20 @@ def check_robot(model: mujoco.MjModel, path, keyframe: str = "stand") -> None:
     }
     absent = {kind: names for kind, names in absent.items() if names}
     if absent:
-        listed = "; ".join(f"{kind} {', '.join(map(repr, names[:3]))}" + (f" and {len(names) - 3} more" if len(names) > 3 else "")
-                           for kind, names in absent.items())
-        raise ModelError(f"{path}: no ERS-7 robot in this scene (missing {listed}); "
-                         "a scene must <include file=\"ers7.xml\"/> (see models/scene.xml)")
+        listed = "; ".join(
+            f"{kind} {', '.join(map(repr, names[:3]))}" + (f" and {len(names) - 3} more" if len(names) > 3 else "")
+            for kind, names in absent.items()
+        )
+        raise ModelError(
+            f"{path}: no ERS-7 robot in this scene (missing {listed}); "
+            'a scene must <include file="ers7.xml"/> (see models/scene.xml)'
+        )
     if keyframe == "stand" and mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_KEY, keyframe) < 0:
         keys = [model.key(i).name for i in range(model.nkey)]
-        raise ModelError(f"{path}: no keyframe 'stand' (the robot's start pose, in models/ers7.xml); the scene's "
-                         f"keyframes: {', '.join(repr(k) for k in keys) if keys else 'none'}")
+        raise ModelError(
+            f"{path}: no keyframe 'stand' (the robot's start pose, in models/ers7.xml); the scene's "
+            f"keyframes: {', '.join(repr(k) for k in keys) if keys else 'none'}"
+        )
 
 
 MAX_PLACEMENT = 1e6  # metres (or radians of yaw): beyond this a placement is a typo, as on the command line
@@ -159,8 +166,9 @@ def _placement(function: str, **values) -> list[float]:
         except (TypeError, ValueError):
             raise ValueError(f"{function}: {name} must be a number, not {value!r}") from None
         if not math.isfinite(number) or abs(number) > MAX_PLACEMENT:
-            raise ValueError(f"{function}: {name} = {value!r} must be a finite number of magnitude at most "
-                             f"{MAX_PLACEMENT:g}")
+            raise ValueError(
+                f"{function}: {name} = {value!r} must be a finite number of magnitude at most {MAX_PLACEMENT:g}"
+            )
         numbers.append(number)
     return numbers
 
@@ -248,9 +256,19 @@ class Simulation:
     command waits 32 ms or more; how many vectors the Webots-era wrapper kept in flight is
     UNCONFIRMED, so the default is 0 (the set-point acts in the next frame)."""
 
-    def __init__(self, scene=None, *, seed: int = 0, keyframe: str = "stand", camera_full: bool = False,
-                 camera_profile: str | CameraProfile = "ers7", camera_settings: CameraSettings | None = None,
-                 ball: bool = True, ball_type: str = "robocup", command_latency_frames: int = 0):
+    def __init__(
+        self,
+        scene=None,
+        *,
+        seed: int = 0,
+        keyframe: str = "stand",
+        camera_full: bool = False,
+        camera_profile: str | CameraProfile = "ers7",
+        camera_settings: CameraSettings | None = None,
+        ball: bool = True,
+        ball_type: str = "robocup",
+        command_latency_frames: int = 0,
+    ):
         if not isinstance(command_latency_frames, int) or command_latency_frames < 0:
             raise ValueError(f"command_latency_frames must be a whole number >= 0, not {command_latency_frames!r}")
         self.command_latency_frames = command_latency_frames
@@ -262,8 +280,11 @@ class Simulation:
         self.steps_per_frame = round(FRAME_MS / 1000 / self.model.opt.timestep)
         self.servos = Servos(self.model)
         self._sensor_slices = {
-            s.name: slice(self.model.sensor(s.name).adr[0], self.model.sensor(s.name).adr[0] + self.model.sensor(s.name).dim[0])
-            for s in SENSORS if s.kind != "camera"
+            s.name: slice(
+                self.model.sensor(s.name).adr[0], self.model.sensor(s.name).adr[0] + self.model.sensor(s.name).dim[0]
+            )
+            for s in SENSORS
+            if s.kind != "camera"
         }
         self._distance_adr = np.array([self._sensor_slices[s.name].start for s in DISTANCE_SENSORS])
         self._distance_index = {s.name: i for i, s in enumerate(DISTANCE_SENSORS)}
@@ -273,9 +294,15 @@ class Simulation:
         self._joint_qpos = np.array([self.model.joint(j.name).qposadr[0] for j in JOINTS])
         # Views of the divergence counters, read after every frame (bad positions and velocities:
         # MuJoCo resets the state silently and counts them here).
-        self._divergence_warnings = [self.data.warning[w] for w in (
-            mujoco.mjtWarning.mjWARN_BADQACC, mujoco.mjtWarning.mjWARN_BADCTRL, mujoco.mjtWarning.mjWARN_BADQPOS,
-            mujoco.mjtWarning.mjWARN_BADQVEL)]
+        self._divergence_warnings = [
+            self.data.warning[w]
+            for w in (
+                mujoco.mjtWarning.mjWARN_BADQACC,
+                mujoco.mjtWarning.mjWARN_BADCTRL,
+                mujoco.mjtWarning.mjWARN_BADQPOS,
+                mujoco.mjtWarning.mjWARN_BADQVEL,
+            )
+        ]
         self._ball_body = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_BODY, "ball")  # -1: no ball
         self.camera = HeadCamera(self, camera_size(camera_full), camera_profile, camera_settings)
         self.reset(seed)
@@ -329,7 +356,7 @@ class Simulation:
         (6); ModelError as ``ball_joint``."""
         joint = ball_joint(self.model)
         qpos, dof = self.model.jnt_qposadr[joint], self.model.jnt_dofadr[joint]
-        return self.data.qpos[qpos:qpos + 7], self.data.qvel[dof:dof + 6]
+        return self.data.qpos[qpos : qpos + 7], self.data.qvel[dof : dof + 6]
 
     def ball_position(self) -> np.ndarray | None:
         """The ball's centre, or None in a scene without a ball."""
@@ -351,8 +378,11 @@ class Simulation:
             return model.geom(geom).name or model.body(body).name or f"geom {geom}"
 
         order = np.argsort(contacts.dist)
-        return [(name(contacts.geom1[i]), name(contacts.geom2[i]), -float(contacts.dist[i]))
-                for i in order if contacts.dist[i] < -depth]
+        return [
+            (name(contacts.geom1[i]), name(contacts.geom2[i]), -float(contacts.dist[i]))
+            for i in order
+            if contacts.dist[i] < -depth
+        ]
 
     @property
     def time_ms(self) -> int:
@@ -384,7 +414,11 @@ class Simulation:
         steps = [self.steps_per_frame] * frames
         steps[-1] -= sensors  # the last step, with sensors, after the loop
         # Camera ticks within these frames: after frame k (counted from 1) when the index moves.
-        ticks = [k for k in range(1, frames + 1) if self.camera_frame_index(self.frame + k) != self.camera_frame_index(self.frame + k - 1)]
+        ticks = [
+            k
+            for k in range(1, frames + 1)
+            if self.camera_frame_index(self.frame + k) != self.camera_frame_index(self.frame + k - 1)
+        ]
         flags = options.disableflags
         options.disableflags = flags | mujoco.mjtDisableBit.mjDSBL_SENSOR
         try:
@@ -434,7 +468,9 @@ class Simulation:
         metres = self.data.sensordata[self._distance_adr[which]].tolist()
         noise = self.rng.standard_normal(len(metres)).tolist()
         values = []
-        for reading, (low, high), draw in zip(metres, self._distance_ranges_mm[which], noise):  # a few sensors: scalar math is cheapest
+        for reading, (low, high), draw in zip(
+            metres, self._distance_ranges_mm[which], noise
+        ):  # a few sensors: scalar math is cheapest
             mm = high if reading < 0 else min(max(reading * 1000, low), high)  # < 0: no hit
             values.append(mm * (1 + IR_NOISE * (1 - abs(2 * (mm - low) / (high - low) - 1)) * draw))
         return values
@@ -453,7 +489,9 @@ class Simulation:
 
     def acceleration(self) -> np.ndarray:
         """Body-frame proper acceleration (x forward, y left, z up), m/s^2, within +-2 g."""
-        return np.minimum(np.maximum(self.sensor("accelerometer"), -ACCEL_RANGE), ACCEL_RANGE)  # np.clip's overhead is 5x
+        return np.minimum(
+            np.maximum(self.sensor("accelerometer"), -ACCEL_RANGE), ACCEL_RANGE
+        )  # np.clip's overhead is 5x
 
     def body_pose(self) -> tuple[np.ndarray, float, float]:
         """Body position, yaw (rad) and the angle between the body's up axis and vertical."""

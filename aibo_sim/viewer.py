@@ -32,12 +32,16 @@ class ViewerUnavailable(RuntimeError):
 def check_display() -> None:
     """Raise ViewerUnavailable unless a window can be opened."""
     if not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
-        raise ViewerUnavailable("--view needs a display (DISPLAY or WAYLAND_DISPLAY is not set); "
-                                "on a machine without one, run under a virtual display: xvfb-run -a aibo-sim run ... --view")
+        raise ViewerUnavailable(
+            "--view needs a display (DISPLAY or WAYLAND_DISPLAY is not set); "
+            "on a machine without one, run under a virtual display: xvfb-run -a aibo-sim run ... --view"
+        )
     import glfw
 
     if not glfw.init():
-        raise ViewerUnavailable(f"--view: cannot open the display {os.environ.get('DISPLAY') or os.environ.get('WAYLAND_DISPLAY')!r}")
+        raise ViewerUnavailable(
+            f"--view: cannot open the display {os.environ.get('DISPLAY') or os.environ.get('WAYLAND_DISPLAY')!r}"
+        )
 
 
 class LiveViewer:
@@ -103,4 +107,3 @@ class LiveViewer:
             self._handle = None
             for thread in self._threads:
                 thread.join(CLOSE_WAIT_S)
-

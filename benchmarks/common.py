@@ -17,8 +17,14 @@ def best_mean_seconds(run, iterations: int, repeats: int = REPEATS) -> float:
     return best
 
 
-def row(name: str, value: float, unit: str, reference: str | None = None, ratio: float | None = None,
-        target: tuple[str, str, float] | None = None) -> dict:
+def row(
+    name: str,
+    value: float,
+    unit: str,
+    reference: str | None = None,
+    ratio: float | None = None,
+    target: tuple[str, str, float] | None = None,
+) -> dict:
     """One table row; ``ratio`` compares with the row named ``reference`` (> 1: this is faster).
 
     ``target`` is the issue's goal for this row as (``"value"`` or ``"ratio"``, ``">="`` or

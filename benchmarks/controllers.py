@@ -20,7 +20,10 @@ from aibo_sim.runner import run_controller
 from .common import row
 
 ROOT = Path(__file__).resolve().parents[1]
-CONTROLLERS = {"Python": ROOT / "benchmarks" / "c_vs_python" / "sweep.py", "C": ROOT / "benchmarks" / "c_vs_python" / "sweep"}
+CONTROLLERS = {
+    "Python": ROOT / "benchmarks" / "c_vs_python" / "sweep.py",
+    "C": ROOT / "benchmarks" / "c_vs_python" / "sweep",
+}
 SIM_SECONDS = 10.0
 ROUNDS = 5
 
@@ -35,8 +38,14 @@ def measure() -> list[dict]:
     python = "real-time factor, a camera-reading controller in Python (sweep.py)"
     return [
         row(python, best["Python"], "x"),
-        row("real-time factor, the same controller in C (sweep.c, compiled)", best["C"], "x", python,
-            best["C"] / best["Python"], target=("ratio", ">=", 0.85)),  # within 15 % of Python
+        row(
+            "real-time factor, the same controller in C (sweep.c, compiled)",
+            best["C"],
+            "x",
+            python,
+            best["C"] / best["Python"],
+            target=("ratio", ">=", 0.85),
+        ),  # within 15 % of Python
     ]
 
 

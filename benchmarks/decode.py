@@ -61,8 +61,16 @@ def measure() -> list[dict]:
                 reference = f"report C loop, cc -O2 ({name})"
                 ratio = c_s / python_s
                 rows.append(row(reference, c_s * 1e6, "us"))
-            rows.append(row(f"camera_get_image, layer H to RGB ({name})", python_s * 1e6, "us", reference, ratio,
-                            target=("ratio", ">=", 1) if report_c is not None else None))
+            rows.append(
+                row(
+                    f"camera_get_image, layer H to RGB ({name})",
+                    python_s * 1e6,
+                    "us",
+                    reference,
+                    ratio,
+                    target=("ratio", ">=", 1) if report_c is not None else None,
+                )
+            )
     for height, width in [(320, 416), (160, 208)]:
         seconds = best_mean_seconds(partial(encode_frame, field_scene(height, width)), 30)
         rows.append(row(f"encode_frame {width}x{height} RGB to OFbkImageVectorData", seconds * 1e3, "ms"))

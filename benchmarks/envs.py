@@ -131,10 +131,18 @@ def _released_share(steps: int = 300) -> float:
     profile.runcall(_step, env, actions)
     env.close()
     stats = pstats.Stats(profile).stats
-    released = sum(total for (file, _, name), (_, _, total, _, _) in stats.items()
-                   if file == "~" and (name.startswith(("<built-in method mujoco.", "<method"))
-                                       or name[1:-1].isidentifier() and hasattr(cv2, name[1:-1]))
-                   or file.endswith(os.path.join("aibo_sim", "render.py")) and name == "_read_rgba")
+    released = sum(
+        total
+        for (file, _, name), (_, _, total, _, _) in stats.items()
+        if file == "~"
+        and (
+            name.startswith(("<built-in method mujoco.", "<method"))
+            or name[1:-1].isidentifier()
+            and hasattr(cv2, name[1:-1])
+        )
+        or file.endswith(os.path.join("aibo_sim", "render.py"))
+        and name == "_read_rgba"
+    )
     return released / sum(total for _, _, total, _, _ in stats.values())
 
 
@@ -153,8 +161,13 @@ def _environment(env_id: str) -> dict:
 
 def _in_fresh_process(*args: str) -> float:
     """Run this module with ``args`` in a new Python process and return the number it prints."""
-    result = subprocess.run([sys.executable, "-m", "benchmarks.envs", *args], cwd=ROOT, env=_environment(args[1]),
-                            capture_output=True, text=True)
+    result = subprocess.run(
+        [sys.executable, "-m", "benchmarks.envs", *args],
+        cwd=ROOT,
+        env=_environment(args[1]),
+        capture_output=True,
+        text=True,
+    )
     if result.returncode != 0:
         raise RuntimeError(f"benchmarks.envs {' '.join(args)} failed:\n{result.stderr}")
     return float(result.stdout.split()[-1])
@@ -170,9 +183,20 @@ def _alternating_best(*runs: tuple[str, str]) -> list[float]:
     try:
         for env_id, setting in runs:
             log = tempfile.TemporaryFile("w+")
-            children.append((subprocess.Popen([sys.executable, "-m", "benchmarks.envs", "--serve", env_id, setting],
-                                              cwd=ROOT, env=_environment(env_id), text=True, stdin=subprocess.PIPE,
-                                              stdout=subprocess.PIPE, stderr=log), log))
+            children.append(
+                (
+                    subprocess.Popen(
+                        [sys.executable, "-m", "benchmarks.envs", "--serve", env_id, setting],
+                        cwd=ROOT,
+                        env=_environment(env_id),
+                        text=True,
+                        stdin=subprocess.PIPE,
+                        stdout=subprocess.PIPE,
+                        stderr=log,
+                    ),
+                    log,
+                )
+            )
         for child in children:
             _read_line(*child)  # "ready"
         best = [0.0] * len(children)
@@ -208,8 +232,13 @@ def measure() -> list[dict]:
     """
     vector_rate, single_rate = _alternating_best(("CartPole-v1", "make_vec async, 2 workers"), ("CartPole-v1", "1 env"))
     vector_step, two_steps = 2 / vector_rate, 2 / single_rate  # rates count env steps
-    rows = [row("time make_vec async adds to a step of 2 envs on 2 workers (CartPole-v1)",
-                (vector_step - two_steps) * 1e3, "ms")]
+    rows = [
+        row(
+            "time make_vec async adds to a step of 2 envs on 2 workers (CartPole-v1)",
+            (vector_step - two_steps) * 1e3,
+            "ms",
+        )
+    ]
     for setting, (_, targeted) in SETTINGS.items():
         if setting == "1 env":  # both camera profiles, beside each other and the reference
             aibo, ideal, ant = _alternating_best((AIBO, setting), (AIBO_IDEAL, setting), (ANT, setting))
@@ -218,41 +247,91 @@ def measure() -> list[dict]:
         reference = f"{ANT} steps/s with render_mode='rgb_array' 208x160, {setting}"
         rows.append(row(reference, ant, "steps/s"))
         if ideal is not None:
-            rows.append(row(f"{AIBO} steps/s, camera profile 'ideal', {setting}", ideal, "steps/s", reference,
-                            ideal / ant))
-        rows.append(row(f"{AIBO} steps/s with camera observations (profile 'ers7'), {setting}", aibo, "steps/s",
-                        reference, aibo / ant, target=("ratio", ">=", 40) if targeted else None))
+            rows.append(
+                row(f"{AIBO} steps/s, camera profile 'ideal', {setting}", ideal, "steps/s", reference, ideal / ant)
+            )
+        rows.append(
+            row(
+                f"{AIBO} steps/s with camera observations (profile 'ers7'), {setting}",
+                aibo,
+                "steps/s",
+                reference,
+                aibo / ant,
+                target=("ratio", ">=", 40) if targeted else None,
+            )
+        )
         if ideal is not None:
-            rows.append(row(f"cost of an ers7 step over an ideal one, {setting} (ratio < 1.3: target)", ideal / aibo,
-                            "x", target=("value", "<=", 1.3)))
+            rows.append(
+                row(
+                    f"cost of an ers7 step over an ideal one, {setting} (ratio < 1.3: target)",
+                    ideal / aibo,
+                    "x",
+                    target=("value", "<=", 1.3),
+                )
+            )
     one = "1 env"
-    threads, async_, hybrid = (next(name for name in SETTINGS if name.startswith(start))
-                               for start in ("make_vec threads", "make_vec async, 2 workers, B", "HybridVectorEnv"))
+    threads, async_, hybrid = (
+        next(name for name in SETTINGS if name.startswith(start))
+        for start in ("make_vec threads", "make_vec async, 2 workers, B", "HybridVectorEnv")
+    )
     single, threaded, processes, both = _alternating_best((AIBO, one), (AIBO, threads), (AIBO, async_), (AIBO, hybrid))
     reference = f"{AIBO} steps/s, 1 env (beside the 2-env rows below)"
-    rows += [row(reference, single, "steps/s"),
-             row(f"{AIBO} steps/s, 2 envs in threads of one process (ThreadedVectorEnv)", threaded, "steps/s",
-                 reference, threaded / single, target=("ratio", ">=", 1.7)),
-             row(f"{AIBO} steps/s, 2 envs in 2 processes (make_vec async, BusyWaitWorker)", processes, "steps/s",
-                 reference, processes / single),
-             row(f"{AIBO} steps/s, 2 envs, one in this process, one in a worker (HybridVectorEnv)", both, "steps/s",
-                 reference, both / single),
-             row("share of a step's time in calls that release the GIL (MuJoCo, OpenCV, numpy; cProfile)",
-                 100 * _released_share(), "%")]
+    rows += [
+        row(reference, single, "steps/s"),
+        row(
+            f"{AIBO} steps/s, 2 envs in threads of one process (ThreadedVectorEnv)",
+            threaded,
+            "steps/s",
+            reference,
+            threaded / single,
+            target=("ratio", ">=", 1.7),
+        ),
+        row(
+            f"{AIBO} steps/s, 2 envs in 2 processes (make_vec async, BusyWaitWorker)",
+            processes,
+            "steps/s",
+            reference,
+            processes / single,
+        ),
+        row(
+            f"{AIBO} steps/s, 2 envs, one in this process, one in a worker (HybridVectorEnv)",
+            both,
+            "steps/s",
+            reference,
+            both / single,
+        ),
+        row(
+            "share of a step's time in calls that release the GIL (MuJoCo, OpenCV, numpy; cProfile)",
+            100 * _released_share(),
+            "%",
+        ),
+    ]
     reference = f"{ANT} peak RSS, one env rendering 208x160"
     ant_rss = _in_fresh_process("--peak-rss", ANT, "")
     rows.append(row(reference, ant_rss, "MiB"))
     for camera in ("rgb", "openr"):  # openr: + the 64 MiB colour tables each way
         aibo_rss = _in_fresh_process("--peak-rss", AIBO, camera)
-        rows.append(row(f"{AIBO} peak RSS, one env, camera={camera!r} (ratio < 1: smaller)", aibo_rss, "MiB",
-                        reference, aibo_rss / ant_rss, target=("value", "<=", 400e6 / 2**20)))  # 400 MB
+        rows.append(
+            row(
+                f"{AIBO} peak RSS, one env, camera={camera!r} (ratio < 1: smaller)",
+                aibo_rss,
+                "MiB",
+                reference,
+                aibo_rss / ant_rss,
+                target=("value", "<=", 400e6 / 2**20),
+            )
+        )  # 400 MB
     return rows
 
 
 if __name__ == "__main__":
     parser = argparse.ArgumentParser(prog="python -m benchmarks.envs", description=__doc__)
-    parser.add_argument("--serve", nargs=2, metavar=("ENV_ID", "SETTING"),
-                        help="print steps/s of one block of steps per line read from stdin")
+    parser.add_argument(
+        "--serve",
+        nargs=2,
+        metavar=("ENV_ID", "SETTING"),
+        help="print steps/s of one block of steps per line read from stdin",
+    )
     parser.add_argument("--peak-rss", nargs=2, metavar=("ENV_ID", "CAMERA"), help="print the peak RSS in MiB")
     args = parser.parse_args()
     if args.serve and args.serve[1] not in SETTINGS:

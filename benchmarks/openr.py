@@ -38,13 +38,20 @@ ROUNDS = 3
 
 def build(folder: Path) -> None:
     """Build and install a program as Sony's samples are built; CalledProcessError with make's output."""
-    subprocess.run(["make", f"OPENRSDK_ROOT={sdk_root()}", "install"], cwd=folder, check=True,
-                   stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    subprocess.run(
+        ["make", f"OPENRSDK_ROOT={sdk_root()}", "install"],
+        cwd=folder,
+        check=True,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+    )
 
 
 def real_time_factor(program: Path, rounds: int, **options) -> float:
-    return max(run_controller(program, duration=SIM_SECONDS, progress=False, **options).real_time_factor
-               for _ in range(rounds))
+    return max(
+        run_controller(program, duration=SIM_SECONDS, progress=False, **options).real_time_factor for _ in range(rounds)
+    )
 
 
 def measure() -> list[dict]:
@@ -58,11 +65,21 @@ def measure() -> list[dict]:
     twin = "wall time per 8 ms frame, head swing in Python (head_swing.py, sim backend)"
     rows = [
         row(twin, frame_ms["sim"], "ms"),
-        row("wall time per 8 ms frame, the same in Python on the openr backend (images through OPEN-R's message)",
-            frame_ms["openr"], "ms", twin, frame_ms["sim"] / frame_ms["openr"]),
-        row("wall time per 8 ms frame, the same program as an OPEN-R object on a memory stick (HeadSwing)",
-            frame_ms["stick"], "ms", twin, frame_ms["sim"] / frame_ms["stick"],
-            target=("ratio", ">=", 1 / 1.2)),  # at most 1.2x the Python controller's cost
+        row(
+            "wall time per 8 ms frame, the same in Python on the openr backend (images through OPEN-R's message)",
+            frame_ms["openr"],
+            "ms",
+            twin,
+            frame_ms["sim"] / frame_ms["openr"],
+        ),
+        row(
+            "wall time per 8 ms frame, the same program as an OPEN-R object on a memory stick (HeadSwing)",
+            frame_ms["stick"],
+            "ms",
+            twin,
+            frame_ms["sim"] / frame_ms["stick"],
+            target=("ratio", ">=", 1 / 1.2),
+        ),  # at most 1.2x the Python controller's cost
     ]
     if SAMPLES.is_dir():
         with tempfile.TemporaryDirectory() as scratch:

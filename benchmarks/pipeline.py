@@ -63,17 +63,34 @@ def measure() -> list[dict]:
     sim.close()
     floor = "bare MuJoCo: steps for 1/30 s + Renderer 208x160 + readback"
     rows = [
-        row(f"head-camera render alone, {width}x{height} (the ers7 lens renders wider, then remaps)", render_s * 1e3,
-            "ms"),
+        row(
+            f"head-camera render alone, {width}x{height} (the ers7 lens renders wider, then remaps)",
+            render_s * 1e3,
+            "ms",
+        ),
         row(floor, 1 / floor_s, "frames/s"),
     ]
     for backend in ("sim", "openr"):
         seconds = min(_run_seconds(backend, camera=True) for _ in range(3))
         fps = SIM_SECONDS * 30 / seconds
-        rows.append(row(f"camera pipeline, {backend} backend (physics + camera at 30 fps)", fps, "frames/s",
-                        floor, fps * floor_s, target=("ratio", ">=", 1 / 1.25)))  # at most 1.25x the floor's cost
-        rows.append(row(f"real-time factor, {backend} backend, camera at 30 fps", SIM_SECONDS / seconds, "x",
-                        target=("value", ">=", 15)))
+        rows.append(
+            row(
+                f"camera pipeline, {backend} backend (physics + camera at 30 fps)",
+                fps,
+                "frames/s",
+                floor,
+                fps * floor_s,
+                target=("ratio", ">=", 1 / 1.25),
+            )
+        )  # at most 1.25x the floor's cost
+        rows.append(
+            row(
+                f"real-time factor, {backend} backend, camera at 30 fps",
+                SIM_SECONDS / seconds,
+                "x",
+                target=("value", ">=", 15),
+            )
+        )
     blind = min(_run_seconds("sim", camera=False) for _ in range(3))
     rows.append(row("real-time factor, no camera", SIM_SECONDS / blind, "x", target=("value", ">=", 60)))
     return rows

@@ -32,13 +32,20 @@ loop = 0
 def init():
     global mtn, camera
     camera = robot_get_device("PRM:/r1/c1/c2/c3/i1-FbkImageSensor:F1")
-    sensors = [robot_get_device(name) for name in (
-        "PRM:/r1/c1/c2/c3/p1-Sensor:p1", "PRM:/r1/c1/c2/c3/p2-Sensor:p2", "PRM:/p1-Sensor:p1")]
+    sensors = [
+        robot_get_device(name)
+        for name in ("PRM:/r1/c1/c2/c3/p1-Sensor:p1", "PRM:/r1/c1/c2/c3/p2-Sensor:p2", "PRM:/p1-Sensor:p1")
+    ]
     touch = [robot_get_device(f"PRM:/r{leg}/c1/c2/c3/c4-Sensor:{leg}4") for leg in (2, 3, 4, 5)]
-    joints = [robot_get_device(f"PRM:/r{leg}/c1{part}-Joint2:{leg}{j}")
-              for leg in (2, 3, 4, 5) for j, part in ((1, ""), (2, "/c2"), (3, "/c2/c3"))]
-    joints += [robot_get_device(name) for name in (
-        "PRM:/r1/c1-Joint2:11", "PRM:/r1/c1/c2-Joint2:12", "PRM:/r1/c1/c2/c3-Joint2:13")]
+    joints = [
+        robot_get_device(f"PRM:/r{leg}/c1{part}-Joint2:{leg}{j}")
+        for leg in (2, 3, 4, 5)
+        for j, part in ((1, ""), (2, "/c2"), (3, "/c2/c3"))
+    ]
+    joints += [
+        robot_get_device(name)
+        for name in ("PRM:/r1/c1-Joint2:11", "PRM:/r1/c1/c2-Joint2:12", "PRM:/r1/c1/c2/c3-Joint2:13")
+    ]
 
     camera_enable(camera, SIMULATION_STEP)
     for tag in sensors:

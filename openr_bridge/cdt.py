@@ -92,13 +92,15 @@ class OCdtVectorData:
         """The vector from the robot's bytes: the 192-byte header (``numData`` at 32), then eight
         144-byte ``OCdtInfo`` (type, primitiveID, channel, table[32], padding), little-endian."""
         if len(data) != VECTOR_INFO_SIZE + ocdtNUM_CHANNELS * _CDT_INFO.size:
-            raise CdtError(f"an OCdtVectorData has {VECTOR_INFO_SIZE + ocdtNUM_CHANNELS * _CDT_INFO.size} bytes, "
-                           f"not {len(data)}")
+            raise CdtError(
+                f"an OCdtVectorData has {VECTOR_INFO_SIZE + ocdtNUM_CHANNELS * _CDT_INFO.size} bytes, not {len(data)}"
+            )
         vector = cls()
         vector.SetNumData(struct.unpack_from("<I", data, 32)[0])
         for index, info in enumerate(vector.info):
             info.type, info.primitiveID, info.channel, *table = _CDT_INFO.unpack_from(
-                data, VECTOR_INFO_SIZE + index * _CDT_INFO.size)
+                data, VECTOR_INFO_SIZE + index * _CDT_INFO.size
+            )
             info.table = table
         return vector
 

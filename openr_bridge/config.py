@@ -40,7 +40,9 @@ from .errors import ConfigError, NotRegularFile
 _NAME = r"[A-Za-z_][A-Za-z0-9_]*"
 _SERVICE_NAME = re.compile(rf"({_NAME})\.({_NAME})\.({_NAME})\.({_NAME})")
 _MEMBER = rf"null|{_NAME}\(\)"
-_STUB_LINE = re.compile(r"[ \t]*([A-Za-z]+)[ \t]*:(.*)")  # the value is stripped after (a lazy group would backtrack quadratically)
+_STUB_LINE = re.compile(
+    r"[ \t]*([A-Za-z]+)[ \t]*:(.*)"
+)  # the value is stripped after (a lazy group would backtrack quadratically)
 _SERVICE_LINE = re.compile(rf'"([^"]*)"[ \t]*,[ \t]*({_MEMBER})[ \t]*,[ \t]*({_MEMBER})')
 _COUNT_KEYS = {"NumOfOSubject": "S", "NumOfOObserver": "O"}
 _COUNT_ALIASES = {"NumOfSubject": "NumOfOSubject", "NumOfObserver": "NumOfOObserver"}
@@ -147,7 +149,9 @@ def parse_stub_cfg(source: bytes | str, path: str = "stub.cfg") -> StubConfig:
             raise ConfigError(f"{key} must be at least 1 (register a dummy {KINDS[kind]})", path, number)
         if int(count) != len(listed):
             raise ConfigError(
-                f"{key} is {int(count)} but {len(listed)} {KINDS[kind]} services are listed {_cut(listed)}", path, number
+                f"{key} is {int(count)} but {len(listed)} {KINDS[kind]} services are listed {_cut(listed)}",
+                path,
+                number,
             )
     return StubConfig(path, object_name, tuple(services), tuple(extras))
 
@@ -176,16 +180,20 @@ def parse_connect_cfg(source: bytes | str, path: str = "CONNECT.CFG") -> list[Co
         fields = line.split()
         if len(fields) != 2:
             raise ConfigError(f"expected 'subject-service observer-service', got {_quote(line.strip())}", path, number)
-        subject, observer = (names.get(field) or names.setdefault(field, _service_name(field, path, number))
-                             for field in fields)
+        subject, observer = (
+            names.get(field) or names.setdefault(field, _service_name(field, path, number)) for field in fields
+        )
         for name, kind in ((subject, "S"), (observer, "O")):
             if name.kind != kind:
                 raise ConfigError(
-                    f"{_cut(name)} should be {KINDS[kind]} ('.{kind}'), the line being subject then observer", path, number
+                    f"{_cut(name)} should be {KINDS[kind]} ('.{kind}'), the line being subject then observer",
+                    path,
+                    number,
                 )
         if subject.data != observer.data:
-            raise ConfigError(f"data names differ: {_quote(subject.data)} is sent, {_quote(observer.data)} expected",
-                              path, number)
+            raise ConfigError(
+                f"data names differ: {_quote(subject.data)} is sent, {_quote(observer.data)} expected", path, number
+            )
         if (subject, observer) in first_line:
             raise ConfigError(f"connection repeated from line {first_line[subject, observer]}", path, number)
         first_line[subject, observer] = number
@@ -266,9 +274,17 @@ def read_regular_file(path) -> bytes:
     try:
         mode = os.fstat(fd).st_mode
         if not stat.S_ISREG(mode):
-            kind = ("a FIFO" if stat.S_ISFIFO(mode) else "a folder" if stat.S_ISDIR(mode)
-                    else "a device" if stat.S_ISCHR(mode) or stat.S_ISBLK(mode)
-                    else "a socket" if stat.S_ISSOCK(mode) else "a special file")
+            kind = (
+                "a FIFO"
+                if stat.S_ISFIFO(mode)
+                else "a folder"
+                if stat.S_ISDIR(mode)
+                else "a device"
+                if stat.S_ISCHR(mode) or stat.S_ISBLK(mode)
+                else "a socket"
+                if stat.S_ISSOCK(mode)
+                else "a special file"
+            )
             raise NotRegularFile(f"{kind}, not a regular file")
         with os.fdopen(fd, "rb", closefd=False) as file:
             return file.read()

@@ -108,8 +108,9 @@ def encode_ycrcb(
     """The message for a (320, 416, 3) or (160, 208, 3) uint8 frame of Y, Cr, Cb per pixel
     (what the sensor delivers): H's bands are its bytes (208x160) or, from 416x320, the
     Haar bands of its Y and the 2x2 means of its Cr and Cb, rounded half up."""
-    return _encode(_checked_frame(ycrcb, "Y, Cr, Cb"), _layer_h_from_ycrcb, frame_number, field_counter, cdt,
-                   primitive_id)
+    return _encode(
+        _checked_frame(ycrcb, "Y, Cr, Cb"), _layer_h_from_ycrcb, frame_number, field_counter, cdt, primitive_id
+    )
 
 
 def _encode(frame, fill_h, frame_number, field_counter, cdt, primitive_id) -> OFbkImageVectorData:

@@ -34,6 +34,7 @@ def frame_number_for_image(index: int) -> int:
     """frameNumber of the index-th image at 30 fps: steps of 4 or 5, 25 per 6 images."""
     return index * 1000 // (FRAME_RATE_HZ * FRAME_TICK_MS)
 
+
 # Camera settings (OPrimitiveControl.h): OPENR::ControlPrimitive(cameraID, request, &value, ...).
 oprmreqCAM_BASE = 384
 oprmreqCAM_SET_WHITE_BALANCE = 384
@@ -44,10 +45,14 @@ ocamparamGAIN_LOW, ocamparamGAIN_MID, ocamparamGAIN_HIGH = 1, 2, 3
 ocamparamSHUTTER_SLOW, ocamparamSHUTTER_MID, ocamparamSHUTTER_FAST = 1, 2, 3
 # Each setting's values by name, as the command line and the settings API spell them.
 CAMERA_SETTINGS = {
-    "white_balance": (oprmreqCAM_SET_WHITE_BALANCE, {"indoor": ocamparamWB_INDOOR_MODE,
-                                                     "outdoor": ocamparamWB_OUTDOOR_MODE, "fl": ocamparamWB_FL_MODE}),
+    "white_balance": (
+        oprmreqCAM_SET_WHITE_BALANCE,
+        {"indoor": ocamparamWB_INDOOR_MODE, "outdoor": ocamparamWB_OUTDOOR_MODE, "fl": ocamparamWB_FL_MODE},
+    ),
     "gain": (oprmreqCAM_SET_GAIN, {"low": ocamparamGAIN_LOW, "mid": ocamparamGAIN_MID, "high": ocamparamGAIN_HIGH}),
-    "shutter": (oprmreqCAM_SET_SHUTTER_SPEED, {"slow": ocamparamSHUTTER_SLOW, "mid": ocamparamSHUTTER_MID,
-                                               "fast": ocamparamSHUTTER_FAST}),
+    "shutter": (
+        oprmreqCAM_SET_SHUTTER_SPEED,
+        {"slow": ocamparamSHUTTER_SLOW, "mid": ocamparamSHUTTER_MID, "fast": ocamparamSHUTTER_FAST},
+    ),
 }
 CAMERA_DEFAULTS = {"white_balance": "fl", "gain": "mid", "shutter": "mid"}  # Sony's defaults

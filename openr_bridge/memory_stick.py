@@ -16,7 +16,7 @@ import zlib
 from dataclasses import dataclass
 from pathlib import Path
 
-from .config import Connection, ConfigError, _quote, design_lines, find_in_stick, parse_connect_cfg, read_config
+from .config import ConfigError, Connection, _quote, design_lines, find_in_stick, parse_connect_cfg, read_config
 
 ELF_MAGIC = b"\x7fELF"
 GZIP_MAGIC = b"\x1f\x8b"
@@ -123,15 +123,21 @@ def read_object(stick_object: StickObject, config: Path) -> bytes:
         data = stick_object.file.read_bytes()
     except OSError as error:
         hint = " (not built? run make install in the program's folder)" if not stick_object.file.exists() else ""
-        raise ConfigError(f"cannot read {stick_object.ms_path}: {error.strerror or error}{hint}", config,
-                          stick_object.line) from None
+        raise ConfigError(
+            f"cannot read {stick_object.ms_path}: {error.strerror or error}{hint}", config, stick_object.line
+        ) from None
     if data[:2] == GZIP_MAGIC:
         try:
             data = gzip.decompress(data)
         except (OSError, EOFError, zlib.error) as error:
-            raise ConfigError(f"{stick_object.ms_path} is a damaged gzip file: {error}", config,
-                              stick_object.line) from None
+            raise ConfigError(
+                f"{stick_object.ms_path} is a damaged gzip file: {error}", config, stick_object.line
+            ) from None
     if data[:4] != ELF_MAGIC:
-        raise ConfigError(f"{stick_object.ms_path} is not an object built for this machine (a Sony SDK build for the "
-                          "robot? rebuild with OPENRSDK_ROOT=$(aibo-sim openr sdk))", config, stick_object.line)
+        raise ConfigError(
+            f"{stick_object.ms_path} is not an object built for this machine (a Sony SDK build for the "
+            "robot? rebuild with OPENRSDK_ROOT=$(aibo-sim openr sdk))",
+            config,
+            stick_object.line,
+        )
     return data

@@ -38,8 +38,8 @@ settings, as on the robot).
 from __future__ import annotations
 
 import numbers
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
 
 from .errors import PrimitiveError
 from .ers7_camera import CAMERA_DEFAULTS, CAMERA_LOCATOR, CAMERA_SETTINGS, oprmreqCAM_BASE
@@ -53,9 +53,16 @@ oNOT_FOUND = 6
 oOUT_OF_RANGE = 24
 oINVALID_PRIMITIVE_ID = 4096
 oINVALID_REQUEST = 4100
-OSTATUS_NAMES = {oSUCCESS: "oSUCCESS", oFAIL: "oFAIL", oNOT_SUPPORTED: "oNOT_SUPPORTED", oINVALID_ARG: "oINVALID_ARG",
-                 oNOT_FOUND: "oNOT_FOUND", oOUT_OF_RANGE: "oOUT_OF_RANGE",
-                 oINVALID_PRIMITIVE_ID: "oINVALID_PRIMITIVE_ID", oINVALID_REQUEST: "oINVALID_REQUEST"}
+OSTATUS_NAMES = {
+    oSUCCESS: "oSUCCESS",
+    oFAIL: "oFAIL",
+    oNOT_SUPPORTED: "oNOT_SUPPORTED",
+    oINVALID_ARG: "oINVALID_ARG",
+    oNOT_FOUND: "oNOT_FOUND",
+    oOUT_OF_RANGE: "oOUT_OF_RANGE",
+    oINVALID_PRIMITIVE_ID: "oINVALID_PRIMITIVE_ID",
+    oINVALID_REQUEST: "oINVALID_REQUEST",
+}
 
 oprimitiveID_UNDEF = 0xFFFFFFFF  # ObjcommTypes.h: the id of no primitive
 ocamparamUNDEF = 0  # OPrimitiveControl.h: what OPrimitiveControl_CameraParam() holds
@@ -64,15 +71,23 @@ oprmreqCAM_GET_CDT_TABLE = oprmreqCAM_BASE + 3
 oprmreqCAM_AE_ON, oprmreqCAM_AE_OFF = oprmreqCAM_BASE + 4, oprmreqCAM_BASE + 5
 oprmreqCAM_AWB_ON, oprmreqCAM_AWB_OFF = oprmreqCAM_BASE + 6, oprmreqCAM_BASE + 7
 _UNSUPPORTED_CAMERA_REQUESTS = {
-    oprmreqCAM_GET_CDT_TABLE: "oprmreqCAM_GET_CDT_TABLE", oprmreqCAM_AE_ON: "oprmreqCAM_AE_ON",
-    oprmreqCAM_AE_OFF: "oprmreqCAM_AE_OFF", oprmreqCAM_AWB_ON: "oprmreqCAM_AWB_ON",
-    oprmreqCAM_AWB_OFF: "oprmreqCAM_AWB_OFF"}
+    oprmreqCAM_GET_CDT_TABLE: "oprmreqCAM_GET_CDT_TABLE",
+    oprmreqCAM_AE_ON: "oprmreqCAM_AE_ON",
+    oprmreqCAM_AE_OFF: "oprmreqCAM_AE_OFF",
+    oprmreqCAM_AWB_ON: "oprmreqCAM_AWB_ON",
+    oprmreqCAM_AWB_OFF: "oprmreqCAM_AWB_OFF",
+}
 # Request code -> (setting name, {Sony value: value name}); and the requests' C names.
-CAMERA_REQUESTS = {request: (setting, {number: name for name, number in values.items()})
-                   for setting, (request, values) in CAMERA_SETTINGS.items()}
-REQUEST_NAMES = {CAMERA_SETTINGS["white_balance"][0]: "oprmreqCAM_SET_WHITE_BALANCE",
-                 CAMERA_SETTINGS["gain"][0]: "oprmreqCAM_SET_GAIN",
-                 CAMERA_SETTINGS["shutter"][0]: "oprmreqCAM_SET_SHUTTER_SPEED", **_UNSUPPORTED_CAMERA_REQUESTS}
+CAMERA_REQUESTS = {
+    request: (setting, {number: name for name, number in values.items()})
+    for setting, (request, values) in CAMERA_SETTINGS.items()
+}
+REQUEST_NAMES = {
+    CAMERA_SETTINGS["white_balance"][0]: "oprmreqCAM_SET_WHITE_BALANCE",
+    CAMERA_SETTINGS["gain"][0]: "oprmreqCAM_SET_GAIN",
+    CAMERA_SETTINGS["shutter"][0]: "oprmreqCAM_SET_SHUTTER_SPEED",
+    **_UNSUPPORTED_CAMERA_REQUESTS,
+}
 # The C names of each setting's values, for messages.
 VALUE_NAMES = {
     "white_balance": {1: "ocamparamWB_INDOOR_MODE", 2: "ocamparamWB_OUTDOOR_MODE", 3: "ocamparamWB_FL_MODE"},
@@ -132,8 +147,10 @@ class OCameraPrimitive(OPrimitive):
         self._settings = dict(CAMERA_DEFAULTS)
         for setting, value in (settings or {}).items():
             if setting not in CAMERA_SETTINGS or value not in CAMERA_SETTINGS[setting][1]:
-                raise ValueError(f"no camera setting {setting}={value!r}: settings are "
-                                 + "; ".join(f"{s}: {', '.join(v)}" for s, (_, v) in CAMERA_SETTINGS.items()))
+                raise ValueError(
+                    f"no camera setting {setting}={value!r}: settings are "
+                    + "; ".join(f"{s}: {', '.join(v)}" for s, (_, v) in CAMERA_SETTINGS.items())
+                )
             self._settings[setting] = value
         self.listeners: list[Callable[[dict[str, str]], None]] = []
 
@@ -188,8 +205,15 @@ class OPENR:
         self._open[primitive_id] = primitive
         return oSUCCESS, primitive_id
 
-    def ControlPrimitive(self, primitive_id: int, request: int, param=None, param_size: int | None = None,
-                         result=None, result_size: int = 0) -> int:
+    def ControlPrimitive(
+        self,
+        primitive_id: int,
+        request: int,
+        param=None,
+        param_size: int | None = None,
+        result=None,
+        result_size: int = 0,
+    ) -> int:
         """Send ``request`` with ``param`` (an ``OPrimitiveControl_CameraParam`` or its
         ``camparam`` as an int) to an open primitive; an OStatus (see the module docstring).
         ``result`` and ``result_size`` are accepted for the C signature; no request modelled

@@ -31,12 +31,23 @@ def from_pixels(pixels, layer, chroma):
     for y in range(height):
         for x in range(width):
             top, bottom = pixels[2 * y], pixels[2 * y + 1]
-            _y_bands(layer, y, x, np.int32(top[2 * x, 0]), np.int32(top[2 * x + 1, 0]), np.int32(bottom[2 * x, 0]),
-                     np.int32(bottom[2 * x + 1, 0]))
+            _y_bands(
+                layer,
+                y,
+                x,
+                np.int32(top[2 * x, 0]),
+                np.int32(top[2 * x + 1, 0]),
+                np.int32(bottom[2 * x, 0]),
+                np.int32(bottom[2 * x + 1, 0]),
+            )
             if chroma:
                 for c in (1, 2):
-                    total = (np.int32(top[2 * x, c]) + np.int32(top[2 * x + 1, c]) + np.int32(bottom[2 * x, c])
-                             + np.int32(bottom[2 * x + 1, c]))
+                    total = (
+                        np.int32(top[2 * x, c])
+                        + np.int32(top[2 * x + 1, c])
+                        + np.int32(bottom[2 * x, c])
+                        + np.int32(bottom[2 * x + 1, c])
+                    )
                     layer[y, c, x] = (total + 2) >> 2
 
 
@@ -46,9 +57,20 @@ def next_level(src, dst):
     height, _, width = dst.shape
     for y in range(height):
         for x in range(width):
-            _y_bands(dst, y, x, np.int32(src[2 * y, 0, 2 * x]), np.int32(src[2 * y, 0, 2 * x + 1]),
-                     np.int32(src[2 * y + 1, 0, 2 * x]), np.int32(src[2 * y + 1, 0, 2 * x + 1]))
+            _y_bands(
+                dst,
+                y,
+                x,
+                np.int32(src[2 * y, 0, 2 * x]),
+                np.int32(src[2 * y, 0, 2 * x + 1]),
+                np.int32(src[2 * y + 1, 0, 2 * x]),
+                np.int32(src[2 * y + 1, 0, 2 * x + 1]),
+            )
             for c in (1, 2):
-                total = (np.int32(src[2 * y, c, 2 * x]) + np.int32(src[2 * y, c, 2 * x + 1])
-                         + np.int32(src[2 * y + 1, c, 2 * x]) + np.int32(src[2 * y + 1, c, 2 * x + 1]))
+                total = (
+                    np.int32(src[2 * y, c, 2 * x])
+                    + np.int32(src[2 * y, c, 2 * x + 1])
+                    + np.int32(src[2 * y + 1, c, 2 * x])
+                    + np.int32(src[2 * y + 1, c, 2 * x + 1])
+                )
                 dst[y, c, x] = (total + 2) >> 2

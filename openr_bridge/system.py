@@ -25,8 +25,13 @@ DEFAULT_MEMORY_STICK = DATA_DIR / "ms"
 
 
 class OpenRSystem:
-    def __init__(self, connections: list[Connection], objects: list[OObject] | None = None, *,
-                 camera: OCameraPrimitive | None = None):
+    def __init__(
+        self,
+        connections: list[Connection],
+        objects: list[OObject] | None = None,
+        *,
+        camera: OCameraPrimitive | None = None,
+    ):
         """Connect ``objects`` (default: OVirtualRobotComm and Controller), then start them.
         ``camera``: the camera primitive (default: one at Sony's settings FL, MID, MID)."""
         self.camera = camera if camera is not None else OCameraPrimitive()
@@ -44,7 +49,10 @@ class OpenRSystem:
 
     @classmethod
     def from_memory_stick(
-        cls, memory_stick: str | Path = DEFAULT_MEMORY_STICK, objects: list[OObject] | None = None, *,
+        cls,
+        memory_stick: str | Path = DEFAULT_MEMORY_STICK,
+        objects: list[OObject] | None = None,
+        *,
         camera: OCameraPrimitive | None = None,
     ) -> "OpenRSystem":
         path = find_connect_cfg(memory_stick)

@@ -117,18 +117,23 @@ class Controller(OObject):
     def _camera_control(self, function: str, value) -> None:
         request, setting = CAMERA_SETTING_FUNCTIONS[function]
         if self.OPENR is None:
-            raise NotConnectedError(f"{function}: this Controller was not started by an OpenRSystem, "
-                                    "so it has no OPENR to open the camera primitive with")
+            raise NotConnectedError(
+                f"{function}: this Controller was not started by an OpenRSystem, "
+                "so it has no OPENR to open the camera primitive with"
+            )
         if self._camera_id is None:
             status, camera_id = self.OPENR.OpenPrimitive(CAMERA_LOCATOR)
-            check(status, f"{function}: OPENR::OpenPrimitive(\"{CAMERA_LOCATOR}\")")
+            check(status, f'{function}: OPENR::OpenPrimitive("{CAMERA_LOCATOR}")')
             self._camera_id = camera_id
         param = OPrimitiveControl_CameraParam(value)
         status = self.OPENR.ControlPrimitive(self._camera_id, request, param, sizeof(param), 0, 0)
         if status != oSUCCESS:
             hint = f"; the value must be {allowed_values(setting)}" if status in (oOUT_OF_RANGE, oINVALID_ARG) else ""
-            raise PrimitiveError(f"{function}({value!r}): OPENR::ControlPrimitive(fbkID, {REQUEST_NAMES[request]}, "
-                                 f"...) returned {status_name(status)} ({status}){hint}", status)
+            raise PrimitiveError(
+                f"{function}({value!r}): OPENR::ControlPrimitive(fbkID, {REQUEST_NAMES[request]}, "
+                f"...) returned {status_name(status)} ({status}){hint}",
+                status,
+            )
 
     def _band(self, band: int) -> OFbkImage:
         if not self._image_observer.is_connected():

@@ -20,8 +20,9 @@ SAMPLES = Path(__file__).resolve().parents[2] / "shared" / "data" / "openr-sampl
 
 def make(folder: Path, *arguments: str) -> str:
     """``make OPENRSDK_ROOT=<our SDK> ARGUMENTS`` in ``folder``; its output (AssertionError if it failed)."""
-    result = subprocess.run(["make", f"OPENRSDK_ROOT={sdk_root()}", *arguments], cwd=folder, capture_output=True,
-                            text=True)
+    result = subprocess.run(
+        ["make", f"OPENRSDK_ROOT={sdk_root()}", *arguments], cwd=folder, capture_output=True, text=True
+    )
     assert result.returncode == 0, result.stdout + result.stderr
     return result.stdout + result.stderr
 
@@ -33,8 +34,14 @@ def build_programs(folder: Path) -> Path:
     return folder / "MS" / "OPEN-R" / "MW" / "OBJS"
 
 
-def make_stick(folder: Path, objects: Path, names: list[str], connect: str = "", design_data: dict | None = None,
-               data: dict | None = None) -> Path:
+def make_stick(
+    folder: Path,
+    objects: Path,
+    names: list[str],
+    connect: str = "",
+    design_data: dict | None = None,
+    data: dict | None = None,
+) -> Path:
     """A memory stick in ``folder`` loading ``names`` (.BIN files of ``objects``), with a
     CONNECT.CFG, a DESIGNDB.CFG (keyword -> file name under DATA/P) and files under DATA/P."""
     conf, data_folder = folder / "OPEN-R" / "MW" / "CONF", folder / "OPEN-R" / "MW" / "DATA" / "P"
@@ -45,8 +52,9 @@ def make_stick(folder: Path, objects: Path, names: list[str], connect: str = "",
     (conf / "OBJECT.CFG").write_text("".join(f"/MS/OPEN-R/MW/OBJS/{name}.BIN\n" for name in names))
     (conf / "CONNECT.CFG").write_text(connect)
     if design_data:
-        (conf / "DESIGNDB.CFG").write_text("[ERS-7]\n" + "".join(f"{key} /MS/OPEN-R/MW/DATA/P/{file}\n"
-                                                                 for key, file in design_data.items()))
+        (conf / "DESIGNDB.CFG").write_text(
+            "[ERS-7]\n" + "".join(f"{key} /MS/OPEN-R/MW/DATA/P/{file}\n" for key, file in design_data.items())
+        )
     for name, text in (data or {}).items():
         (data_folder / name).write_text(text)
     return folder
@@ -73,8 +81,9 @@ def run_stick(stick: Path, seconds: float, workdir: Path, record=None, **simulat
     workdir.mkdir(parents=True, exist_ok=True)
     sim = Simulation(**simulation)
     try:
-        run = MemoryStickRun(sim, load_memory_stick(stick), workdir, log_path=workdir / "console.log",
-                             sound_path=workdir / "speaker.wav")
+        run = MemoryStickRun(
+            sim, load_memory_stick(stick), workdir, log_path=workdir / "console.log", sound_path=workdir / "speaker.wav"
+        )
         run.end_ms = round(seconds * 1000)
         result = Run(run, "")
         if record is not None:

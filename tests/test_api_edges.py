@@ -109,11 +109,14 @@ def test_other_motions_keep_playing_beside_a_restarted_one(robot):
 # ----------------------------------------------------------------------------- arguments
 
 
-@pytest.mark.parametrize("function", ["mtn_is_over", "mtn_play", "mtn_get_time", "mtn_get_length", "mtn_get_name",
-                                      "mtn_delete"])
+@pytest.mark.parametrize(
+    "function", ["mtn_is_over", "mtn_play", "mtn_get_time", "mtn_get_length", "mtn_get_name", "mtn_delete"]
+)
 @pytest.mark.parametrize("argument, shown", [(42, "42"), ("WALKFWD.MTN", "'WALKFWD.MTN'"), ("x" * 5000, "characters")])
 def test_mtn_functions_name_an_argument_that_is_not_a_motion(robot, function, argument, shown):
-    with pytest.raises(MtnError, match=rf"{function}\(.*{shown}.*\): not an MTN \(use the value mtn_new returned\)") as caught:
+    with pytest.raises(
+        MtnError, match=rf"{function}\(.*{shown}.*\): not an MTN \(use the value mtn_new returned\)"
+    ) as caught:
         getattr(api, function)(argument)
     assert len(str(caught.value)) < 200
 
@@ -126,9 +129,14 @@ def test_a_null_mtn_quotes_the_mtn_new_error(robot):
         api.mtn_play(None)
 
 
-@pytest.mark.parametrize("argument, words", [(None, "mtn_new(None): the file name must be a str or a path, not NoneType"),
-                                             (42, "mtn_new(42): the file name must be a str or a path, not int"),
-                                             ("x" * 5000, "File not found: xxxx")])
+@pytest.mark.parametrize(
+    "argument, words",
+    [
+        (None, "mtn_new(None): the file name must be a str or a path, not NoneType"),
+        (42, "mtn_new(42): the file name must be a str or a path, not int"),
+        ("x" * 5000, "File not found: xxxx"),
+    ],
+)
 def test_mtn_new_of_what_is_not_a_file_name_returns_none_with_the_reason(robot, argument, words):
     assert api.mtn_new(argument) is None  # the documented failure
     error = api.mtn_get_error()

@@ -61,19 +61,27 @@ def test_run_controller_refuses_a_bad_duration(value):
 
 def test_a_run_shorter_than_one_joint_frame_is_refused(tmp_path, capsys):
     assert main(["run", str(SCRIPTED), "--duration", "0.004", "--out", str(tmp_path / "out")]) == 2
-    assert one_error_line(capsys) == ("aibo-sim: error: --duration 0.004 s is shorter than one 8 ms joint frame: "
-                                      "nothing would run")
+    assert one_error_line(capsys) == (
+        "aibo-sim: error: --duration 0.004 s is shorter than one 8 ms joint frame: nothing would run"
+    )
     assert not (tmp_path / "out").exists()
 
 
-@pytest.mark.parametrize("command, argument", [
-    (["run", ""], "controller"), (["run", str(SCRIPTED), "--out", ""], "--out"),
-    (["run", str(SCRIPTED), "--backend", "openr", "--memory-stick", ""], "--memory-stick"),
-    (["render", "--scene", ""], "--scene"), (["render", "--out", ""], "--out"),
-    (["mtn", "info", ""], "file"), (["mtn", "play", ""], "file"),
-    (["dump", "", "--out", "d"], "controller"), (["dump", str(SCRIPTED), "--out", ""], "--out"),
-    (["dump", str(SCRIPTED), "--out", "d", "--backend", "openr", "--memory-stick", ""], "--memory-stick"),
-])
+@pytest.mark.parametrize(
+    "command, argument",
+    [
+        (["run", ""], "controller"),
+        (["run", str(SCRIPTED), "--out", ""], "--out"),
+        (["run", str(SCRIPTED), "--backend", "openr", "--memory-stick", ""], "--memory-stick"),
+        (["render", "--scene", ""], "--scene"),
+        (["render", "--out", ""], "--out"),
+        (["mtn", "info", ""], "file"),
+        (["mtn", "play", ""], "file"),
+        (["dump", "", "--out", "d"], "controller"),
+        (["dump", str(SCRIPTED), "--out", ""], "--out"),
+        (["dump", str(SCRIPTED), "--out", "d", "--backend", "openr", "--memory-stick", ""], "--memory-stick"),
+    ],
+)
 def test_an_empty_path_is_refused_not_read_as_the_current_folder(tmp_path, monkeypatch, capsys, command, argument):
     monkeypatch.chdir(tmp_path)
     with pytest.raises(SystemExit) as caught:
@@ -83,10 +91,17 @@ def test_an_empty_path_is_refused_not_read_as_the_current_folder(tmp_path, monke
     assert not list(tmp_path.iterdir())
 
 
-@pytest.mark.parametrize("command", [["run", str(ROOT / "controllers" / "ball_tracker.py"), "--duration", "0.1"],
-                                     ["render", "--settle", "0"], ["dump", str(SCRIPTED), "--steps", "2"]])
-def test_glfw_without_a_display_is_rendering_unavailable_not_the_controllers_fault(tmp_path, monkeypatch, capsys,
-                                                                                    command):
+@pytest.mark.parametrize(
+    "command",
+    [
+        ["run", str(ROOT / "controllers" / "ball_tracker.py"), "--duration", "0.1"],
+        ["render", "--settle", "0"],
+        ["dump", str(SCRIPTED), "--steps", "2"],
+    ],
+)
+def test_glfw_without_a_display_is_rendering_unavailable_not_the_controllers_fault(
+    tmp_path, monkeypatch, capsys, command
+):
     """GLFW makes no window without a display and only warns: one line naming MUJOCO_GL, exit 2
     (a run was reported as its controller raising MuJoCo's FatalError); run.json says failed; a
     dump checks before it makes its folder."""
@@ -124,8 +139,10 @@ def test_a_scene_without_the_robot_or_its_stand_keyframe_is_a_model_error(scenes
     Simulation(ROOT / "models" / "ers7.xml").close()  # the robot alone is a scene
 
 
-@pytest.mark.parametrize("command", [["run", str(SCRIPTED), "--duration", "0.1"], ["render", "--settle", "0"],
-                                     ["mtn", "play", "WALKFWD.MTN"]])
+@pytest.mark.parametrize(
+    "command",
+    [["run", str(SCRIPTED), "--duration", "0.1"], ["render", "--settle", "0"], ["mtn", "play", "WALKFWD.MTN"]],
+)
 def test_cli_with_a_scene_without_the_robot_exits_2(scenes, command, tmp_path, capsys):
     no_robot, no_stand = scenes
     out = ["--out", str(tmp_path / "out")] if command[0] == "render" else []
@@ -135,10 +152,16 @@ def test_cli_with_a_scene_without_the_robot_exits_2(scenes, command, tmp_path, c
     one_error_line(capsys, str(no_stand), "no keyframe 'stand'")
 
 
-@pytest.mark.parametrize("command", [["run", str(SCRIPTED), "--duration", "0.1"], ["render", "--settle", "0"],
-                                     ["dump", str(SCRIPTED), "--steps", "3"], ["dump", str(SCRIPTED), "--steps", "4",
-                                                                               "--workers", "2"],
-                                     ["mtn", "play", "STAND.MTN"]])
+@pytest.mark.parametrize(
+    "command",
+    [
+        ["run", str(SCRIPTED), "--duration", "0.1"],
+        ["render", "--settle", "0"],
+        ["dump", str(SCRIPTED), "--steps", "3"],
+        ["dump", str(SCRIPTED), "--steps", "4", "--workers", "2"],
+        ["mtn", "play", "STAND.MTN"],
+    ],
+)
 def test_ball_placed_in_a_scene_whose_ball_has_no_free_joint_exits_2(tmp_path, command, capsys):
     """A scene's 'ball' body fixed to the world (no joint) cannot take ``--ball``: one line, exit 2,
     and no output folder made."""
@@ -153,8 +176,15 @@ def test_ball_placed_in_a_scene_whose_ball_has_no_free_joint_exits_2(tmp_path, c
 
 
 @pytest.mark.parametrize("timestep", ["0", "-0.002", "0.003", "0.016"])
-@pytest.mark.parametrize("command", [["run", str(SCRIPTED), "--duration", "0.1"], ["render", "--settle", "0"],
-                                     ["dump", str(SCRIPTED), "--steps", "3"], ["mtn", "play", "STAND.MTN"]])
+@pytest.mark.parametrize(
+    "command",
+    [
+        ["run", str(SCRIPTED), "--duration", "0.1"],
+        ["render", "--settle", "0"],
+        ["dump", str(SCRIPTED), "--steps", "3"],
+        ["mtn", "play", "STAND.MTN"],
+    ],
+)
 def test_a_timestep_that_is_not_a_positive_divisor_of_8_ms_exits_2(tmp_path, command, timestep, capsys):
     """Zero (a division by zero), negative (physics that never ran: time stood still) or not
     dividing the 8 ms joint frame: one line naming the scene, and no output folder."""
@@ -194,11 +224,19 @@ def test_dump_of_a_non_aibo_environment_exits_2(tmp_path, capsys):
 # ----------------------------------------------------------------------------- placements
 
 
-@pytest.mark.parametrize("function, args, name", [
-    ("place_ball", (math.nan, 0.0), "x"), ("place_ball", (0.0, math.inf), "y"), ("place_ball", (1e300, 0.0), "x"),
-    ("place_ball", (0.0, "1"), "y"), ("place_robot", (math.nan, 0.0, 0.0), "x"), ("place_robot", (0.0, -math.inf, 0.0), "y"),
-    ("place_robot", (0.0, 0.0, 1e300), "yaw"), ("place_robot", (0.0, 0.0, None), "yaw"),
-])
+@pytest.mark.parametrize(
+    "function, args, name",
+    [
+        ("place_ball", (math.nan, 0.0), "x"),
+        ("place_ball", (0.0, math.inf), "y"),
+        ("place_ball", (1e300, 0.0), "x"),
+        ("place_ball", (0.0, "1"), "y"),
+        ("place_robot", (math.nan, 0.0, 0.0), "x"),
+        ("place_robot", (0.0, -math.inf, 0.0), "y"),
+        ("place_robot", (0.0, 0.0, 1e300), "yaw"),
+        ("place_robot", (0.0, 0.0, None), "yaw"),
+    ],
+)
 def test_placements_that_are_not_finite_are_refused_naming_the_argument(function, args, name):
     sim = Simulation()
     try:
@@ -211,14 +249,21 @@ def test_placements_that_are_not_finite_are_refused_naming_the_argument(function
         sim.close()
 
 
-PLACED = [["run", str(SCRIPTED), "--duration", "0.1"], ["render", "--settle", "0"], ["dump", str(SCRIPTED), "--steps", "3"]]
+PLACED = [
+    ["run", str(SCRIPTED), "--duration", "0.1"],
+    ["render", "--settle", "0"],
+    ["dump", str(SCRIPTED), "--steps", "3"],
+]
 
 
 @pytest.mark.parametrize("command", PLACED + [["mtn", "play", "STAND.MTN"]])
-@pytest.mark.parametrize("placement, message", [
-    (["--pose", "3", "0", "0"], r"--pose 3 0 0: the robot would overlap wall_skyblue by \d+\.\d cm"),
-    (["--ball", "-0.12", "0.06"], r"--ball -0.12 0.06: the ball would overlap the robot by \d+\.\d cm"),
-])
+@pytest.mark.parametrize(
+    "placement, message",
+    [
+        (["--pose", "3", "0", "0"], r"--pose 3 0 0: the robot would overlap wall_skyblue by \d+\.\d cm"),
+        (["--ball", "-0.12", "0.06"], r"--ball -0.12 0.06: the ball would overlap the robot by \d+\.\d cm"),
+    ],
+)
 def test_a_robot_or_ball_placed_into_something_exits_2_naming_the_option(tmp_path, command, placement, message, capsys):
     """Placed into a wall or into each other, the robot and ball would be flung apart at the
     first step: one line naming the option, exit 2, no output folder."""
@@ -253,15 +298,20 @@ def memory_stick(tmp_path, text) -> Path:
     return tmp_path / "ms"
 
 
-@pytest.mark.parametrize("text, words", [
-    ("", "has no connection"),
-    ("# nothing here\n\n", "has no connection"),
-    (DUMMY_LINE + "\n", "does not connect Controller.Image.OFbkImageVectorData.O"),
-])
+@pytest.mark.parametrize(
+    "text, words",
+    [
+        ("", "has no connection"),
+        ("# nothing here\n\n", "has no connection"),
+        (DUMMY_LINE + "\n", "does not connect Controller.Image.OFbkImageVectorData.O"),
+    ],
+)
 def test_a_memory_stick_without_the_camera_line_is_refused_when_loaded(tmp_path, capsys, text, words):
     stick = memory_stick(tmp_path, text)
     cfg = str(stick / "OPEN-R" / "MW" / "CONF" / "CONNECT.CFG")
-    with pytest.raises(ConfigError, match=re.escape(f"{cfg}: {words}: the camera needs the line '{CAMERA_CONNECTION}'")):
+    with pytest.raises(
+        ConfigError, match=re.escape(f"{cfg}: {words}: the camera needs the line '{CAMERA_CONNECTION}'")
+    ):
         OpenRSystem.from_memory_stick(stick)
     sim = Simulation()
     try:
@@ -294,8 +344,10 @@ def test_connect_cfg_of_20000_lines_reports_the_first_error_at_once(tmp_path):
 def test_stub_cfg_of_20000_services_and_long_blank_runs_parse_in_linear_time():
     services = "".join(f'Service : "Obj.S{i}.Data.O", null, Notify()\n' for i in range(20_000))
     start = time.perf_counter()
-    stub = parse_stub_cfg('ObjectName : Obj\nNumOfOSubject : 1\nNumOfOObserver : 20000\n'
-                          'Service : "Obj.Dummy.Data.S", null, null\n' + services)
+    stub = parse_stub_cfg(
+        "ObjectName : Obj\nNumOfOSubject : 1\nNumOfOObserver : 20000\n"
+        'Service : "Obj.Dummy.Data.S", null, null\n' + services
+    )
     assert len(stub.services) == 20_001 and time.perf_counter() - start < 1
     start = time.perf_counter()  # a lazy regular expression backtracked quadratically over blanks
     with pytest.raises(ConfigError, match="not a name"):
@@ -348,8 +400,11 @@ def test_a_fifo_in_place_of_connect_cfg_is_refused_without_waiting(tmp_path):
 
 
 def test_a_raising_robot_die_function_does_not_hide_the_controllers_exception(tmp_path, capsys):
-    bad = controller(tmp_path, "def cleanup():\n    raise OSError('cleanup failed')\n"
-                               "robot_die(cleanup)\nrobot_step(16)\nraise RuntimeError('boom')\n")
+    bad = controller(
+        tmp_path,
+        "def cleanup():\n    raise OSError('cleanup failed')\n"
+        "robot_die(cleanup)\nrobot_step(16)\nraise RuntimeError('boom')\n",
+    )
     with pytest.raises(ControllerFailed) as caught:
         run_controller(bad, duration=1.0)
     message = str(caught.value)
@@ -362,18 +417,25 @@ def test_a_raising_robot_die_function_does_not_hide_the_controllers_exception(tm
 
 
 def test_every_robot_die_function_runs_and_one_that_raises_fails_the_run(tmp_path):
-    ok = controller(tmp_path, "def first():\n    raise ValueError('first')\n"
-                              "def second():\n    open('second.txt', 'w').write('ran')\n"
-                              "robot_die(first)\nrobot_die(second)\nwhile True:\n    robot_step(32)\n")
-    with pytest.raises(ControllerFailed, match=r"ended at simulated t = 0\.200 s;\nits robot_die function first raised"):
+    ok = controller(
+        tmp_path,
+        "def first():\n    raise ValueError('first')\n"
+        "def second():\n    open('second.txt', 'w').write('ran')\n"
+        "robot_die(first)\nrobot_die(second)\nwhile True:\n    robot_step(32)\n",
+    )
+    with pytest.raises(
+        ControllerFailed, match=r"ended at simulated t = 0\.200 s;\nits robot_die function first raised"
+    ):
         run_controller(ok, duration=0.2, out=tmp_path / "out")
     assert (tmp_path / "out" / "second.txt").read_text() == "ran"
 
 
 @pytest.mark.parametrize("code, status", [("3", 1), ("'stopped by the user'", 1), ("0", 0), ("", 0), ("None", 0)])
 def test_sys_exit_from_a_controller_is_its_exit_not_a_divergence(tmp_path, capsys, code, status):
-    ctl = controller(tmp_path, "import sys\nrobot_die(lambda: open('die.txt', 'w').write('ran'))\n"
-                               f"robot_step(64)\nsys.exit({code})\n")
+    ctl = controller(
+        tmp_path,
+        f"import sys\nrobot_die(lambda: open('die.txt', 'w').write('ran'))\nrobot_step(64)\nsys.exit({code})\n",
+    )
     out = tmp_path / "out"
     assert main(["run", str(ctl), "--duration", "1", "--out", str(out)]) == status
     err = capsys.readouterr().err
@@ -384,12 +446,15 @@ def test_sys_exit_from_a_controller_is_its_exit_not_a_divergence(tmp_path, capsy
             run_controller(ctl, duration=1.0, out=tmp_path / "again")
         assert failed.value.exit_status == eval(code)
     else:
-        assert run_controller(ctl, duration=1.0, out=tmp_path / "again").simulated_s == pytest.approx(0.064)  # ends there
+        assert run_controller(ctl, duration=1.0, out=tmp_path / "again").simulated_s == pytest.approx(
+            0.064
+        )  # ends there
 
 
 def test_ctrl_c_in_a_controller_exits_130_after_its_robot_die_functions(tmp_path, capsys):
-    ctl = controller(tmp_path, "robot_die(lambda: open('die.txt', 'w').write('ran'))\n"
-                               "robot_step(8)\nraise KeyboardInterrupt\n")
+    ctl = controller(
+        tmp_path, "robot_die(lambda: open('die.txt', 'w').write('ran'))\nrobot_step(8)\nraise KeyboardInterrupt\n"
+    )
     out = tmp_path / "out"
     assert main(["run", str(ctl), "--duration", "1", "--out", str(out)]) == 130
     assert "interrupted" in capsys.readouterr().err
@@ -403,13 +468,19 @@ def test_sigterm_ends_a_run_as_ctrl_c_does_with_143(tmp_path):
     import subprocess
     import sys
 
-    ctl = controller(tmp_path, "camera = robot_get_device('PRM:/r1/c1/c2/c3/i1-FbkImageSensor:F1')\n"
-                               "camera_enable(camera, 32)\n"
-                               "robot_die(lambda: open('die.txt', 'w').write('ran'))\n"
-                               "while True:\n    robot_step(32)\n")
+    ctl = controller(
+        tmp_path,
+        "camera = robot_get_device('PRM:/r1/c1/c2/c3/i1-FbkImageSensor:F1')\n"
+        "camera_enable(camera, 32)\n"
+        "robot_die(lambda: open('die.txt', 'w').write('ran'))\n"
+        "while True:\n    robot_step(32)\n",
+    )
     out = tmp_path / "out"
-    process = subprocess.Popen([sys.executable, "-m", "aibo_sim.cli", "run", str(ctl), "--duration", "1e5",
-                                "--out", str(out)], stderr=subprocess.PIPE, text=True)
+    process = subprocess.Popen(
+        [sys.executable, "-m", "aibo_sim.cli", "run", str(ctl), "--duration", "1e5", "--out", str(out)],
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     deadline = time.monotonic() + 60
     while not list((out / "frames").glob("*.png")) and time.monotonic() < deadline:
         time.sleep(0.05)
@@ -453,8 +524,13 @@ def test_output_into_a_closed_pipe_ends_quietly_with_141():
     read_end, write_end = os.pipe()
     os.close(read_end)  # the reader leaves before the first line
     try:
-        done = subprocess.run([sys.executable, "-m", "aibo_sim.cli", "mtn", "info", str(ROOT / "models/motions/SIT.MTN")],
-                              stdout=write_end, stderr=subprocess.PIPE, text=True, timeout=60)
+        done = subprocess.run(
+            [sys.executable, "-m", "aibo_sim.cli", "mtn", "info", str(ROOT / "models/motions/SIT.MTN")],
+            stdout=write_end,
+            stderr=subprocess.PIPE,
+            text=True,
+            timeout=60,
+        )
     finally:
         os.close(write_end)
     assert (done.returncode, done.stderr) == (141, "")
@@ -489,18 +565,26 @@ def test_an_out_that_is_a_file_and_a_missing_side_by_side_frame_are_named(tmp_pa
     assert not (tmp_path / "out").exists()
 
 
-@pytest.mark.parametrize("length, message", [
-    (["--steps", "-5"], "--steps must be a whole number >= 1, not -5"),
-    (["--duration", "-2"], "--duration must be positive and finite, not -2.0"),
-    (["--duration", "0.01"], "--duration 0.01 s holds no camera frame: give at least 0.017 s (frames are 1/30 s apart)"),
-])
+@pytest.mark.parametrize(
+    "length, message",
+    [
+        (["--steps", "-5"], "--steps must be a whole number >= 1, not -5"),
+        (["--duration", "-2"], "--duration must be positive and finite, not -2.0"),
+        (
+            ["--duration", "0.01"],
+            "--duration 0.01 s holds no camera frame: give at least 0.017 s (frames are 1/30 s apart)",
+        ),
+    ],
+)
 def test_dump_names_a_length_that_holds_no_frame(tmp_path, capsys, length, message):
     assert main(["dump", str(SCRIPTED), *length, "--out", str(tmp_path / "out")]) == 2
     assert one_error_line(capsys) == f"aibo-sim: error: {message}"
     assert not (tmp_path / "out").exists()
 
 
-@pytest.mark.parametrize("command", [["run", str(SCRIPTED), "--duration", "0.1"], ["dump", str(SCRIPTED), "--steps", "2"]])
+@pytest.mark.parametrize(
+    "command", [["run", str(SCRIPTED), "--duration", "0.1"], ["dump", str(SCRIPTED), "--steps", "2"]]
+)
 def test_a_memory_stick_for_the_sim_backend_is_refused_not_ignored(tmp_path, capsys, command):
     stick = tmp_path / "stick"
     (stick / "OPEN-R" / "MW" / "CONF").mkdir(parents=True)

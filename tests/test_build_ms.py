@@ -18,7 +18,6 @@ What the memory stick does differently, and what these tests hold it to:
 
 import fnmatch
 import functools
-import re
 import shutil
 import subprocess
 from pathlib import Path
@@ -151,8 +150,9 @@ int main(void) {
 def build(controller: Path, project: Path) -> list[str]:
     """build_ms, then make install with the host SDK; the compiler's warning lines."""
     build_ms(controller, project)
-    result = subprocess.run(["make", f"OPENRSDK_ROOT={sdk_root()}", "install"], cwd=project, capture_output=True,
-                            text=True)
+    result = subprocess.run(
+        ["make", f"OPENRSDK_ROOT={sdk_root()}", "install"], cwd=project, capture_output=True, text=True
+    )
     assert result.returncode == 0, result.stdout + result.stderr
     assert (project / "MS" / "OPEN-R" / "MW" / "OBJS" / "CONTROLL.BIN").is_file()
     return [line for line in (result.stdout + result.stderr).splitlines() if "warning:" in line]
@@ -190,8 +190,16 @@ def run_reference(monkeypatch, controller: Path, frames: int, out: Path, ball=No
     """run_controller on the openr backend, the robot's command latency simulated."""
     monkeypatch.setattr(runner, "Simulation", functools.partial(Simulation, command_latency_frames=LATENCY_FRAMES))
     record = Recorder()
-    runner.run_controller(controller, backend="openr", duration=frames * 8 / 1000, out=out, ball=ball,
-                          progress=False, workdir=workdir, frame_listeners=[lambda robot: record(robot.sim)])
+    runner.run_controller(
+        controller,
+        backend="openr",
+        duration=frames * 8 / 1000,
+        out=out,
+        ball=ball,
+        progress=False,
+        workdir=workdir,
+        frame_listeners=[lambda robot: record(robot.sim)],
+    )
     monkeypatch.undo()
     return record
 
@@ -215,14 +223,14 @@ def test_annex_i_as_a_memory_stick_runs_as_on_the_openr_backend_bit_for_bit(tmp_
     assert np.array_equal(np.array(stick.qpos[:-1]), np.array(reference.qpos))
     assert np.array_equal(np.array(stick.ctrl[:-1]), np.array(reference.ctrl))
     assert np.ptp(np.array(reference.ctrl)[:, 6:18], axis=0).min() > 0.1  # every leg joint walked
-    assert len(reference.frames) == 164 and all(np.array_equal(stick.frames[i], picture)
-                                                for i, picture in reference.frames.items())
+    assert len(reference.frames) == 164 and all(
+        np.array_equal(stick.frames[i], picture) for i, picture in reference.frames.items()
+    )
     image = (tmp_path / "stick" / "image.raw").read_bytes()
     assert len(image) == 208 * 160 * 3 and image == (tmp_path / "reference" / "image.raw").read_bytes()
 
 
-def test_ball_tracker_c_as_a_memory_stick_follows_the_openr_backend_within_a_micro_radian_drift(tmp_path,
-                                                                                                monkeypatch):
+def test_ball_tracker_c_as_a_memory_stick_follows_the_openr_backend_within_a_micro_radian_drift(tmp_path, monkeypatch):
     assert build(TRACKER, tmp_path / "project") == []
     frames = 500
     stick, _ = run_stick(tmp_path / "project", frames, tmp_path / "stick", ball=BALL)
@@ -250,8 +258,13 @@ def test_ball_tracker_c_tracks_as_ball_tracker_py(tmp_path):
     records = []
     for controller in (TRACKER, ROOT / "controllers" / "ball_tracker.py"):
         record = Recorder()
-        runner.run_controller(controller, duration=2.0, ball=BALL, progress=False,
-                              frame_listeners=[lambda robot, record=record: record(robot.sim)])
+        runner.run_controller(
+            controller,
+            duration=2.0,
+            ball=BALL,
+            progress=False,
+            frame_listeners=[lambda robot, record=record: record(robot.sim)],
+        )
         records.append(np.array(record.ctrl))
     assert np.abs(records[0] - records[1]).max() < 1e-8 and np.ptp(records[1][:, 1]) > 0.1  # 1.4e-10 here
 
@@ -265,8 +278,12 @@ def probe(tmp_path_factory):
     (controller / "probe.c").write_text(PROBE)
     shutil.copy(WALK, controller / "Walk_Forward.long.mtn")
     walk = WALK.read_bytes()
-    bad = [b"OMTX" + walk[4:], walk[:-10], walk[:-4] + (7_000_000).to_bytes(4, "little"),
-           serialize_mtn(Motion.from_poses("odd", ["PRM:/r2/c1-Joint2:21", "PRM:/p1-Sensor:p1"], [[0, 0]], []))]
+    bad = [
+        b"OMTX" + walk[4:],
+        walk[:-10],
+        walk[:-4] + (7_000_000).to_bytes(4, "little"),
+        serialize_mtn(Motion.from_poses("odd", ["PRM:/r2/c1-Joint2:21", "PRM:/p1-Sensor:p1"], [[0, 0]], [])),
+    ]
     for number, data in enumerate(bad, start=1):
         (controller / f"bad{number}.mtn").write_bytes(data)
     assert build(controller, folder / "project") == []
@@ -281,8 +298,11 @@ def probe_runs(monkeypatch, probe, tmp_path, scenario: str, frames: int = 128):
     for folder in folders:
         folder.mkdir(parents=True)
         (folder / "scenario.txt").write_text(scenario + "\n")
-        locators = [j.locator for j in ers7.JOINTS if "-Joint2:" in j.locator] if scenario == "sensors" \
+        locators = (
+            [j.locator for j in ers7.JOINTS if "-Joint2:" in j.locator]
+            if scenario == "sensors"
             else ers7.all_locators()
+        )
         (folder / "locators.txt").write_text("".join(locator + "\n" for locator in locators))
     _, sim = run_stick(project, frames, folders[0])
     reference = run_reference(monkeypatch, controller, frames - 1, tmp_path / "out", workdir=folders[1])
@@ -355,9 +375,11 @@ def test_errors_end_the_controller_with_the_python_apis_message(probe, tmp_path)
         Robot(Simulation(ball=False)).get_device("no-such-device")
     with pytest.raises(MtnError) as missing:
         mtn_new("missing.mtn")
-    cases = {"device error": str(device.value),
-             "missing motion": f"mtn_play: MTN is NULL: mtn_new failed ({missing.value})",
-             "step": "robot_step(32): not on the robot: an OPEN-R object cannot wait for time to pass inside a call"}
+    cases = {
+        "device error": str(device.value),
+        "missing motion": f"mtn_play: MTN is NULL: mtn_new failed ({missing.value})",
+        "step": "robot_step(32): not on the robot: an OPEN-R object cannot wait for time to pass inside a call",
+    }
     for scenario, message in cases.items():
         folder = tmp_path / scenario.replace(" ", "_")
         folder.mkdir()
@@ -375,29 +397,42 @@ def test_the_wrappers_structure_sizes_are_checked_when_it_compiles(probe, tmp_pa
     shutil.copytree(probe[1], project, symlinks=True)
     source = project / "Controller" / "Controller.cc"
     source.write_text(source.read_text().replace("sizeof(OCommandInfo) == 32", "sizeof(OCommandInfo) == 64"))
-    result = subprocess.run(["make", f"OPENRSDK_ROOT={sdk_root()}", "Controller.o"], cwd=project / "Controller",
-                            capture_output=True, text=True)
+    result = subprocess.run(
+        ["make", f"OPENRSDK_ROOT={sdk_root()}", "Controller.o"],
+        cwd=project / "Controller",
+        capture_output=True,
+        text=True,
+    )
     assert result.returncode != 0 and "OCommandInfo_is_32_bytes" in result.stderr
 
 
 def test_the_project_is_sonys_form_and_its_device_table_is_ers7s(probe):
     controller = probe[1] / "Controller"
     makefile = (controller / "Makefile").read_text()
-    for line in ("OPENRSDK_ROOT?=/usr/local/OPEN_R_SDK", "STUBGEN=$(OPENRSDK_ROOT)/OPEN_R/bin/stubgen2",
-                 "MKBIN=$(OPENRSDK_ROOT)/OPEN_R/bin/mkbin", "CXX=$(OPENRSDK_ROOT)/bin/mipsel-linux-g++",
-                 "\tgzip -c controller.bin > $(INSTALLDIR)/OPEN-R/MW/OBJS/CONTROLL.BIN",
-                 "\t$(CC) $(CFLAGS) -Dmain=aibo_controller_main_c -o $@ -c $<"):
+    for line in (
+        "OPENRSDK_ROOT?=/usr/local/OPEN_R_SDK",
+        "STUBGEN=$(OPENRSDK_ROOT)/OPEN_R/bin/stubgen2",
+        "MKBIN=$(OPENRSDK_ROOT)/OPEN_R/bin/mkbin",
+        "CXX=$(OPENRSDK_ROOT)/bin/mipsel-linux-g++",
+        "\tgzip -c controller.bin > $(INSTALLDIR)/OPEN-R/MW/OBJS/CONTROLL.BIN",
+        "\t$(CC) $(CFLAGS) -Dmain=aibo_controller_main_c -o $@ -c $<",
+    ):
         assert line in makefile.splitlines()
     assert '"Controller.Image.OFbkImageVectorData.O", null, Notify()' in (controller / "stub.cfg").read_text()
     stick = probe[1] / "MS" / "OPEN-R" / "MW"
     assert (stick / "CONF" / "OBJECT.CFG").read_text() == "/MS/OPEN-R/MW/OBJS/CONTROLL.BIN\n"
-    assert "OVirtualRobotComm.FbkImageSensor.OFbkImageVectorData.S Controller.Image.OFbkImageVectorData.O" in (
-        stick / "CONF" / "CONNECT.CFG").read_text().splitlines()
+    assert (
+        "OVirtualRobotComm.FbkImageSensor.OFbkImageVectorData.S Controller.Image.OFbkImageVectorData.O"
+        in (stick / "CONF" / "CONNECT.CFG").read_text().splitlines()
+    )
     table = (controller / "Ers7Table.h").read_text()
     servos = Servos(load_model(ball=False))
     for i, joint in enumerate(ers7.JOINTS):
-        row = (f'{{"{joint.locator}", {float(servos.low[i])!r}, {float(servos.high[i])!r}, {joint.max_speed!r}, '
-               + ", ".join(f"{gain:#04x}" for gain in joint.gains) + "},")
+        row = (
+            f'{{"{joint.locator}", {float(servos.low[i])!r}, {float(servos.high[i])!r}, {joint.max_speed!r}, '
+            + ", ".join(f"{gain:#04x}" for gain in joint.gains)
+            + "},"
+        )
         assert f"    {row}" in table.splitlines()
     for locator in [s.locator for s in ers7.SENSORS] + [led.locator for led in ers7.LEDS]:
         assert f'"{locator}"' in table
@@ -419,14 +454,16 @@ def test_bad_input_is_refused_naming_the_argument(tmp_path):
     walker = tmp_path / "walker.c"
     walker.write_text('int main(void) { mtn_new("nowhere.mtn"); mtn_new("/MS/OPEN-R/LONGFOLDER/X.MTN"); return 0; }')
     shutil.copy(WALK, tmp_path / "x.mtn")
-    cases = [("", tmp_path / "o1", r"^controller is empty"),
-             (tmp_path / "none.c", tmp_path / "o2", r"^controller .*none\.c: no such file or folder$"),
-             (tmp_path / "notes.txt", tmp_path / "o3", r"^controller .*notes\.txt: not a C or C\+\+ file"),
-             (tmp_path / "empty", tmp_path / "o4", r"^controller .*empty: a folder with no empty\.c or empty\.cc or"),
-             (TRACKER, tmp_path / "full", r"^--out .*full: the folder exists and is not empty"),
-             (TRACKER, tmp_path / "notes.txt", r"^--out .*notes\.txt: exists and is not a folder$"),
-             (TRACKER, "", r"^--out is empty"),
-             (walker, tmp_path / "o5", r"^controller .*walker\.c opens 'nowhere\.mtn', which is neither in")]
+    cases = [
+        ("", tmp_path / "o1", r"^controller is empty"),
+        (tmp_path / "none.c", tmp_path / "o2", r"^controller .*none\.c: no such file or folder$"),
+        (tmp_path / "notes.txt", tmp_path / "o3", r"^controller .*notes\.txt: not a C or C\+\+ file"),
+        (tmp_path / "empty", tmp_path / "o4", r"^controller .*empty: a folder with no empty\.c or empty\.cc or"),
+        (TRACKER, tmp_path / "full", r"^--out .*full: the folder exists and is not empty"),
+        (TRACKER, tmp_path / "notes.txt", r"^--out .*notes\.txt: exists and is not a folder$"),
+        (TRACKER, "", r"^--out is empty"),
+        (walker, tmp_path / "o5", r"^controller .*walker\.c opens 'nowhere\.mtn', which is neither in"),
+    ]
     for controller, out, message in cases:
         with pytest.raises(BuildMsError, match=message) as error:
             build_ms(controller, out)

@@ -35,8 +35,9 @@ def own_cache(tmp_path_factory, monkeypatch):
 
 def c_file(tmp_path, name: str, body: str) -> Path:
     path = tmp_path / name
-    path.write_text("#include <stdio.h>\n#include <stdlib.h>\n#include <device/robot.h>\n#include <device/servo.h>\n"
-                    + body)
+    path.write_text(
+        "#include <stdio.h>\n#include <stdlib.h>\n#include <device/robot.h>\n#include <device/servo.h>\n" + body
+    )
     return path
 
 
@@ -65,8 +66,9 @@ def _as_received(name: str, result) -> str:
         return str(int(result != 0))
     if kind == "ddd":  # const float * in C
         return " ".join(f"{float(np.float32(v)):.9g}" for v in result)
-    return {"i": lambda: str(int(result)), "d": lambda: f"{result:.17g}", "s": lambda: str(result),
-            "m": lambda: ""}[kind]()
+    return {"i": lambda: str(int(result)), "d": lambda: f"{result:.17g}", "s": lambda: str(result), "m": lambda: ""}[
+        kind
+    ]()
 
 
 @pytest.mark.parametrize("backend", ["sim", "openr"])
@@ -85,10 +87,12 @@ def test_each_c_call_returns_what_the_python_api_returned_in_the_same_run(tmp_pa
                 called.add(name)
                 if {n: r for n, _, r in protocol.OPS}[name]:
                     on_motion = name.startswith("mtn_") and name not in ("mtn_new", "mtn_get_error")
-                    kept = bytes(image[:result[0] * result[1] * 3]) if name == "camera_get_image" else result
+                    kept = bytes(image[: result[0] * result[1] * 3]) if name == "camera_get_image" else result
                     returned[now, name, "mtn" if on_motion else str(args[0]) if args else "0"] = kept
                 return result
+
             return call
+
         return {name: record(name, function) for name, function in handlers(image).items()}
 
     monkeypatch.setattr(serve, "_handlers", recording)
@@ -107,10 +111,16 @@ def test_each_c_call_returns_what_the_python_api_returned_in_the_same_run(tmp_pa
     assert len(lines) == 62 and len(images) == 4
     assert (tmp_path / "images.bin").read_bytes() == b"".join(i.tobytes() for i in images)
     assert (tmp_path / "fprint.txt").read_text() == returned[0, "mtn_fprint", "mtn"]
-    pixel = (controller.camera_image_get_red, controller.camera_image_get_green, controller.camera_image_get_blue,
-             controller.camera_image_get_grey, controller.camera_image_get_gray)
+    pixel = (
+        controller.camera_image_get_red,
+        controller.camera_image_get_green,
+        controller.camera_image_get_blue,
+        controller.camera_image_get_grey,
+        controller.camera_image_get_gray,
+    )
     assert (tmp_path / "pixels.txt").read_text() == "".join(
-        " ".join(str(int(f(i, 208, 10, 20))) for f in pixel) + "\n" for i in images)
+        " ".join(str(int(f(i, 208, 10, 20))) for f in pixel) + "\n" for i in images
+    )
     assert "mtn_get_error 0 File not found: missing.mtn" in lines
 
 
@@ -141,7 +151,9 @@ def test_annex_i_in_cpp_writes_the_python_ports_image_raw_byte_for_byte(tmp_path
 def test_annex_i_in_cpp_without_its_motion_file_says_so(tmp_path):
     (tmp_path / "annex_capture_c").mkdir()
     shutil.copy(ANNEX_C / "annex_capture_c.cpp", tmp_path / "annex_capture_c")
-    with pytest.raises(ControllerFailed, match=r"mtn_is_over: MTN is NULL: mtn_new failed \(File not found: wwfwd.mtn\)"):
+    with pytest.raises(
+        ControllerFailed, match=r"mtn_is_over: MTN is NULL: mtn_new failed \(File not found: wwfwd.mtn\)"
+    ):
         run_controller(tmp_path / "annex_capture_c", duration=1)
 
 
@@ -164,17 +176,25 @@ def test_no_compiler_is_exit_2_naming_it_and_how_to_install_it(tmp_path, monkeyp
     monkeypatch.setenv("CC", "no-such-cc")
     source = c_file(tmp_path, "ctl.c", "int main(void) { return 0; }\n")
     assert main(["run", str(source)]) == 2
-    assert capsys.readouterr().err == ("aibo-sim: error: no compiler 'no-such-cc' found: this controller needs a C "
-                                       "compiler (Debian/Ubuntu: apt-get install gcc), or set CC\n")
+    assert capsys.readouterr().err == (
+        "aibo-sim: error: no compiler 'no-such-cc' found: this controller needs a C "
+        "compiler (Debian/Ubuntu: apt-get install gcc), or set CC\n"
+    )
 
 
 def test_a_crash_is_exit_1_with_the_signal_and_time_and_keeps_run_json_and_frames(tmp_path, capsys):
-    source = c_file(tmp_path, "crash.c", "#include <device/camera.h>\nint main(void) {\n  robot_live(0);\n"
-                    "  camera_enable(robot_get_device(\"PRM:/r1/c1/c2/c3/i1-FbkImageSensor:F1\"), 32);\n"
-                    "  robot_step(96);\n  *(volatile int *)0 = 1;\n  return 0;\n}\n")
+    source = c_file(
+        tmp_path,
+        "crash.c",
+        "#include <device/camera.h>\nint main(void) {\n  robot_live(0);\n"
+        '  camera_enable(robot_get_device("PRM:/r1/c1/c2/c3/i1-FbkImageSensor:F1"), 32);\n'
+        "  robot_step(96);\n  *(volatile int *)0 = 1;\n  return 0;\n}\n",
+    )
     out = tmp_path / "out"
     assert main(["run", str(source), "--out", str(out)]) == 1
-    assert "controller crash.c: crashed (SIGSEGV: Segmentation fault) at simulated t = 0.096 s" in capsys.readouterr().err
+    assert (
+        "controller crash.c: crashed (SIGSEGV: Segmentation fault) at simulated t = 0.096 s" in capsys.readouterr().err
+    )
     run = json.loads((out / "run.json").read_text())
     assert run["status"] == "failed" and run["simulated_s"] == 0.096 and run["camera_frames"] == 3
     assert sorted(p.name for p in (out / "frames").iterdir()) == ["000000.png", "000001.png", "000002.png"]
@@ -183,18 +203,29 @@ def test_a_crash_is_exit_1_with_the_signal_and_time_and_keeps_run_json_and_frame
 def test_abort_exit_status_and_api_errors_end_the_run_as_in_python(tmp_path):
     cases = {
         "abort.c": ("int main(void) { robot_live(0); robot_step(8); abort(); }", r"crashed \(SIGABRT"),
-        "status.cpp": ("int main() { robot_live(0); robot_step(16); exit(3); }", r"exited with exit\(3\) at simulated t = 0\.016 s"),
-        "tag.c": ("int main(void) { robot_live(0); servo_set_position(42, 0.1); robot_step(8); return 0; }",
-                  r"servo_set_position\(42, 0\.1\) raised DeviceError: invalid device tag 42"),
-        "unread.c": ("int main(void) { robot_live(0); robot_step(8);\n"
-                     "  printf(\"%f\", servo_get_position(robot_get_device(\"PRM:/r1/c1/c2-Joint2:12\"))); return 0; }",
-                     r"servo_get_position\(1\) raised DeviceError: .*not enabled"),
-        "disabled.c": ("int main(void) { robot_live(0); DeviceTag pan = robot_get_device(\"PRM:/r1/c1/c2-Joint2:12\");\n"
-                       "  servo_enable_position(pan, 8); robot_step(8); servo_get_position(pan); robot_step(8);\n"
-                       "  servo_get_position(pan); servo_disable_position(pan); servo_get_position(pan); return 0; }",
-                       r"servo_get_position\(1\) raised DeviceError: .*not enabled"),  # not the answer given ahead
-        "step.c": ("int main(void) { robot_live(0); robot_step(12); return 0; }",
-                   r"robot_step\(12\) raised ValueError: step of 12 ms: must be a positive whole multiple"),
+        "status.cpp": (
+            "int main() { robot_live(0); robot_step(16); exit(3); }",
+            r"exited with exit\(3\) at simulated t = 0\.016 s",
+        ),
+        "tag.c": (
+            "int main(void) { robot_live(0); servo_set_position(42, 0.1); robot_step(8); return 0; }",
+            r"servo_set_position\(42, 0\.1\) raised DeviceError: invalid device tag 42",
+        ),
+        "unread.c": (
+            "int main(void) { robot_live(0); robot_step(8);\n"
+            '  printf("%f", servo_get_position(robot_get_device("PRM:/r1/c1/c2-Joint2:12"))); return 0; }',
+            r"servo_get_position\(1\) raised DeviceError: .*not enabled",
+        ),
+        "disabled.c": (
+            'int main(void) { robot_live(0); DeviceTag pan = robot_get_device("PRM:/r1/c1/c2-Joint2:12");\n'
+            "  servo_enable_position(pan, 8); robot_step(8); servo_get_position(pan); robot_step(8);\n"
+            "  servo_get_position(pan); servo_disable_position(pan); servo_get_position(pan); return 0; }",
+            r"servo_get_position\(1\) raised DeviceError: .*not enabled",
+        ),  # not the answer given ahead
+        "step.c": (
+            "int main(void) { robot_live(0); robot_step(12); return 0; }",
+            r"robot_step\(12\) raised ValueError: step of 12 ms: must be a positive whole multiple",
+        ),
     }
     for name, (body, message) in cases.items():
         with pytest.raises(ControllerFailed, match=message) as failed:
@@ -205,11 +236,17 @@ def test_abort_exit_status_and_api_errors_end_the_run_as_in_python(tmp_path):
 
 def test_a_controller_that_computes_long_is_announced_as_such(tmp_path, monkeypatch, capsys):
     monkeypatch.setattr(cbind.serve, "WAIT_NOTICE_S", 0.2)
-    source = c_file(tmp_path, "busy.c", "#include <time.h>\nint main(void) {\n  robot_live(0); robot_step(40);\n"
-                    "  struct timespec t = {0, 500000000}; nanosleep(&t, 0);\n  robot_step(8); return 0;\n}\n")
+    source = c_file(
+        tmp_path,
+        "busy.c",
+        "#include <time.h>\nint main(void) {\n  robot_live(0); robot_step(40);\n"
+        "  struct timespec t = {0, 500000000}; nanosleep(&t, 0);\n  robot_step(8); return 0;\n}\n",
+    )
     assert run_controller(source, duration=1).simulated_s == 0.048
-    assert ("aibo-sim: waiting for controller busy.c: no API call for 0.2 s of wall time (simulated time stays at "
-            "t = 0.040 s)") in capsys.readouterr().err
+    assert (
+        "aibo-sim: waiting for controller busy.c: no API call for 0.2 s of wall time (simulated time stays at "
+        "t = 0.040 s)"
+    ) in capsys.readouterr().err
 
 
 def test_the_headers_settings_are_the_python_apis():
@@ -231,8 +268,23 @@ def test_a_folder_without_its_main_file_is_refused(tmp_path, capsys):
 def test_dump_takes_a_c_controller_as_it_takes_its_python_twin(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)  # the tour writes tour.txt where it runs
     for name, path in (("c", TOUR), ("python", TOUR / "api_tour.py")):
-        assert main(["dump", str(path), "--out", str(tmp_path / name), "--steps", "6", "--formats", "rgb",
-                     "--camera-profile", "ideal"]) == 0
+        assert (
+            main(
+                [
+                    "dump",
+                    str(path),
+                    "--out",
+                    str(tmp_path / name),
+                    "--steps",
+                    "6",
+                    "--formats",
+                    "rgb",
+                    "--camera-profile",
+                    "ideal",
+                ]
+            )
+            == 0
+        )
     frames = sorted((tmp_path / "python" / "rgb").iterdir())
     assert len(frames) == 6
     assert all((tmp_path / "c" / "rgb" / f.name).read_bytes() == f.read_bytes() for f in frames)
@@ -244,13 +296,20 @@ def test_ctrl_c_runs_the_c_robot_die_functions_then_exits_130(tmp_path):
     import sys
     import time
 
-    source = c_file(tmp_path, "loop.c", "static void bye(void) {\n  FILE *f = fopen(\"die.txt\", \"w\");\n"
-                    "  fprintf(f, \"%d\\n\", robot_step(8));\n  fclose(f);\n}\n"
-                    "int main(void) {\n  robot_live(0); robot_die(bye);\n  fclose(fopen(\"started.txt\", \"w\"));\n"
-                    "  for (;;) robot_step(8);\n}\n")
+    source = c_file(
+        tmp_path,
+        "loop.c",
+        'static void bye(void) {\n  FILE *f = fopen("die.txt", "w");\n'
+        '  fprintf(f, "%d\\n", robot_step(8));\n  fclose(f);\n}\n'
+        'int main(void) {\n  robot_live(0); robot_die(bye);\n  fclose(fopen("started.txt", "w"));\n'
+        "  for (;;) robot_step(8);\n}\n",
+    )
     out = tmp_path / "out"
-    run = subprocess.Popen([sys.executable, "-m", "aibo_sim.cli", "run", str(source), "--duration", "100000", "--out",
-                            str(out)], stderr=subprocess.PIPE, text=True)
+    run = subprocess.Popen(
+        [sys.executable, "-m", "aibo_sim.cli", "run", str(source), "--duration", "100000", "--out", str(out)],
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     deadline = time.monotonic() + 60
     while not (out / "started.txt").exists() and time.monotonic() < deadline:
         time.sleep(0.05)
@@ -267,9 +326,13 @@ def test_a_signal_right_after_a_call_is_read_loses_no_call(tmp_path, signal_name
     import subprocess
     import sys
 
-    source = c_file(tmp_path, "loop.c", "static void bye(void) {\n  FILE *f = fopen(\"die.txt\", \"w\");\n"
-                    "  fprintf(f, \"%d\\n\", robot_step(8));\n  fclose(f);\n}\n"
-                    "int main(void) {\n  robot_live(0); robot_die(bye);\n  for (;;) robot_step(8);\n}\n")
+    source = c_file(
+        tmp_path,
+        "loop.c",
+        'static void bye(void) {\n  FILE *f = fopen("die.txt", "w");\n'
+        '  fprintf(f, "%d\\n", robot_step(8));\n  fclose(f);\n}\n'
+        "int main(void) {\n  robot_live(0); robot_die(bye);\n  for (;;) robot_step(8);\n}\n",
+    )
     out = tmp_path / "out"
     script = (
         "import signal, sys\n"
@@ -282,7 +345,8 @@ def test_a_signal_right_after_a_call_is_read_loses_no_call(tmp_path, signal_name
         f"    if len(reads) == 30:\n        signal.raise_signal(signal.{signal_name})\n"
         "    return chunk\n"
         "serve._Calls._read = read_then_signal\n"
-        f"sys.exit(main(['run', {str(source)!r}, '--duration', '100000', '--out', {str(out)!r}]))\n")
+        f"sys.exit(main(['run', {str(source)!r}, '--duration', '100000', '--out', {str(out)!r}]))\n"
+    )
     run = subprocess.run([sys.executable, "-c", script], cwd=ROOT, capture_output=True, text=True, timeout=120)
     assert run.returncode == status, run.stderr
     assert (out / "die.txt").read_text() == "0\n"
@@ -290,10 +354,13 @@ def test_a_signal_right_after_a_call_is_read_loses_no_call(tmp_path, signal_name
 
 def test_the_wheel_ships_the_headers_and_the_binding():
     tomllib = pytest.importorskip("tomllib")  # Python 3.11+
-    patterns = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]["package-data"]["aibo_sim.cbind"]
+    patterns = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]["package-data"][
+        "aibo_sim.cbind"
+    ]
     package = Path(cbind.__file__).parent
-    data = [p.relative_to(package).as_posix() for p in package.rglob("*")
-            if p.is_file() and p.suffix not in (".py", ".pyc")]
+    data = [
+        p.relative_to(package).as_posix() for p in package.rglob("*") if p.is_file() and p.suffix not in (".py", ".pyc")
+    ]
     assert "include/device/robot.h" in data and "libaibo.c" in data
     assert all(any(fnmatch.fnmatch(name, pattern) for pattern in patterns) for name in data), data
 
@@ -303,10 +370,15 @@ def test_the_simulators_own_failures_in_a_c_controllers_call_are_not_blamed_on_i
     run as it ends a Python one's (both were 'controller ... raised', exit 1)."""
     from aibo_sim.sim import Simulation, SimulationDiverged
 
-    source = c_file(tmp_path, "look.c", "#include <device/camera.h>\nint main(void) {\n  robot_live(0);\n"
-                    "  camera_enable(robot_get_device(\"PRM:/r1/c1/c2/c3/i1-FbkImageSensor:F1\"), 32);\n"
-                    "  for (;;) robot_step(32);\n}\n")
+    source = c_file(
+        tmp_path,
+        "look.c",
+        "#include <device/camera.h>\nint main(void) {\n  robot_live(0);\n"
+        '  camera_enable(robot_get_device("PRM:/r1/c1/c2/c3/i1-FbkImageSensor:F1"), 32);\n'
+        "  for (;;) robot_step(32);\n}\n",
+    )
     with monkeypatch.context() as patch:
+
         def diverge(*args, **kwargs):
             raise SimulationDiverged("gone")
 
@@ -318,4 +390,6 @@ def test_the_simulators_own_failures_in_a_c_controllers_call_are_not_blamed_on_i
         monkeypatch.delenv(variable, raising=False)
     assert main(["run", str(source), "--duration", "0.5"]) == 2
     err = capsys.readouterr().err
-    assert err.startswith("aibo-sim: error: MUJOCO_GL=glfw: cannot create an OpenGL context") and "controller" not in err
+    assert (
+        err.startswith("aibo-sim: error: MUJOCO_GL=glfw: cannot create an OpenGL context") and "controller" not in err
+    )

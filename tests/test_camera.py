@@ -10,7 +10,14 @@ import pytest
 
 import openr_bridge
 from aibo_sim.camera import HEAD_CAMERA_GROUPS, LENSES, PROFILES, CameraProfile, CameraSettings, RobotColour, SceneLight
-from aibo_sim.camera.sensor import RING_CENTRES, VIGNETTING_TABLE, light_gains, planckian_rgb, vignetting_fit, vignetting_maps
+from aibo_sim.camera.sensor import (
+    RING_CENTRES,
+    VIGNETTING_TABLE,
+    light_gains,
+    planckian_rgb,
+    vignetting_fit,
+    vignetting_maps,
+)
 from aibo_sim.render import Renderer
 from aibo_sim.sim import ModelError, Simulation, models_dir
 
@@ -23,12 +30,13 @@ def target_scene(tmp_path, bodies: str, temperature: float = 5000.0, **numerics:
     """The robot, floating still (no gravity), before emissive targets (``emissive``) and no
     other light: what is drawn is the targets' colour. ``numerics``: more custom numerics."""
     colours = sorted(set(s.split('"')[0] for s in bodies.split('material="e')[1:]))
-    materials = "".join(f'<material name="e{c}" rgba="{c.replace("_", " ")} 1" emission="1" specular="0"/>'
-                        for c in colours)
+    materials = "".join(
+        f'<material name="e{c}" rgba="{c.replace("_", " ")} 1" emission="1" specular="0"/>' for c in colours
+    )
     numeric_elements = "".join(f'<numeric name="{name}" data="{value}"/>' for name, value in numerics.items())
     scene = tmp_path / "target.xml"
     scene.write_text(f"""<mujoco>
-  <include file="{models_dir() / 'ers7.xml'}"/>
+  <include file="{models_dir() / "ers7.xml"}"/>
   <visual><headlight diffuse="0 0 0" ambient="0 0 0" specular="0 0 0"/></visual>
   <custom><numeric name="light_temperature_K" data="{temperature}"/>{numeric_elements}</custom>
   <asset>{materials}</asset>
@@ -41,8 +49,10 @@ def target_scene(tmp_path, bodies: str, temperature: float = 5000.0, **numerics:
 
 def emissive(kind: str, pos, size, rgb) -> str:
     colour = "_".join(f"{c:g}" for c in rgb)
-    return (f'<geom type="{kind}" pos="{" ".join(map(str, pos))}" size="{" ".join(map(str, size))}" '
-            f'material="e{colour}" contype="0" conaffinity="0"/>')
+    return (
+        f'<geom type="{kind}" pos="{" ".join(map(str, pos))}" size="{" ".join(map(str, size))}" '
+        f'material="e{colour}" contype="0" conaffinity="0"/>'
+    )
 
 
 def wall(grey: float) -> str:
@@ -51,11 +61,15 @@ def wall(grey: float) -> str:
 
 def centre(image: np.ndarray, half: int = 5) -> np.ndarray:
     h, w = image.shape[:2]
-    return image[h // 2 - half:h // 2 + half + 1, w // 2 - half:w // 2 + half + 1].reshape(-1, image.shape[-1]).mean(0)
+    return (
+        image[h // 2 - half : h // 2 + half + 1, w // 2 - half : w // 2 + half + 1].reshape(-1, image.shape[-1]).mean(0)
+    )
 
 
 def corners(image: np.ndarray, size: int = 3) -> np.ndarray:
-    return np.mean([image[:size, :size], image[:size, -size:], image[-size:, :size], image[-size:, -size:]], axis=(0, 1, 2))
+    return np.mean(
+        [image[:size, :size], image[:size, -size:], image[-size:, :size], image[-size:, -size:]], axis=(0, 1, 2)
+    )
 
 
 def test_ideal_profile_is_the_render_bit_for_bit():
@@ -107,7 +121,9 @@ def test_vignetting_reproduces_the_measured_table():
     assert np.polyval(vignetting_maps(208, 160)[:, 0, 206, 0], 150.0) == pytest.approx(expected, abs=0.01)
 
 
-@pytest.mark.parametrize("colour", [(0.9, 0.1, 0.1), (0.1, 0.2, 0.9), (0.9, 0.85, 0.1), (0.1, 0.8, 0.1), (0.8, 0.2, 0.8)])
+@pytest.mark.parametrize(
+    "colour", [(0.9, 0.1, 0.1), (0.1, 0.2, 0.9), (0.9, 0.85, 0.1), (0.1, 0.8, 0.1), (0.8, 0.2, 0.8)]
+)
 def test_saturated_colours_keep_30_to_60_percent_of_their_chroma_in_the_corners(tmp_path, colour):
     """Spec: 30-60 %. Measured over 10 x 10 corners: red 0.39, blue 0.55, yellow 0.46, green
     0.35, magenta 0.59 (3 x 3: 0.34, 0.52, 0.41, 0.30, 0.56). A line per radius through
@@ -172,9 +188,14 @@ def test_a_flickering_light_changes_fast_frames_only(tmp_path):
     assert np.ptp(fast) > 15 and np.mean(fast) == pytest.approx(steady_fast[0], abs=6)
 
 
-@pytest.mark.parametrize("numerics, named", [({"light_flicker_depth": 1.5}, "light_flicker_depth"),
-                                             ({"mains_frequency_Hz": 0}, "mains_frequency_Hz"),
-                                             ({"temperature": 900}, "light_temperature_K")])
+@pytest.mark.parametrize(
+    "numerics, named",
+    [
+        ({"light_flicker_depth": 1.5}, "light_flicker_depth"),
+        ({"mains_frequency_Hz": 0}, "mains_frequency_Hz"),
+        ({"temperature": 900}, "light_temperature_K"),
+    ],
+)
 def test_a_scene_light_out_of_range_is_named(tmp_path, numerics, named):
     scene = target_scene(tmp_path, wall(0.5), **numerics)
     with pytest.raises(ModelError, match=rf"{scene}: scene custom numeric {named} must be a number from"):
@@ -203,8 +224,13 @@ def test_same_seed_same_noise_and_ir_untouched_by_rendering():
 
 
 def dot_grid(spacing=0.05, columns=11, rows=9) -> tuple[str, np.ndarray]:
-    points = np.array([(0.45, (c - columns // 2) * spacing, 0.17 + (r - rows // 2) * spacing)
-                       for r in range(rows) for c in range(columns)])
+    points = np.array(
+        [
+            (0.45, (c - columns // 2) * spacing, 0.17 + (r - rows // 2) * spacing)
+            for r in range(rows)
+            for c in range(columns)
+        ]
+    )
     geoms = "".join(emissive("sphere", p, (0.006,), (1, 1, 1)) for p in points)
     return geoms, points
 
@@ -218,8 +244,11 @@ def test_dots_appear_where_the_calibrated_lens_projects_them(tmp_path, lens):
     y = sim.camera.frame().ycrcb[..., 0]
     count, _, stats, centroids = cv2.connectedComponentsWithStats((y > 60).astype(np.uint8))
     pixels, _ = sim.camera.project(points)
-    pinhole = LENSES["pinhole"] if lens == "sony" else LENSES["tekkotsu"].__class__(
-        "p", *(getattr(LENSES["tekkotsu"], k) for k in ("fx", "fy", "cx", "cy")))
+    pinhole = (
+        LENSES["pinhole"]
+        if lens == "sony"
+        else LENSES["tekkotsu"].__class__("p", *(getattr(LENSES["tekkotsu"], k) for k in ("fx", "fy", "cx", "cy")))
+    )
     inside = (pixels[:, 0] > 4) & (pixels[:, 0] < 203) & (pixels[:, 1] > 4) & (pixels[:, 1] < 155)
     found = centroids[1:][stats[1:, cv2.CC_STAT_AREA] >= 3]
     errors = [np.min(np.linalg.norm(found - p, axis=1)) for p in pixels[inside]]
@@ -232,18 +261,29 @@ def test_dots_appear_where_the_calibrated_lens_projects_them(tmp_path, lens):
     sim.close()
 
 
-@pytest.mark.parametrize("lens, focal_fov, picture_fov", [("tekkotsu", (55.23, 43.52), (55.75, 44.03)),
-                                                          ("sony", (56.9, 45.2), (57.36, 45.78)),
-                                                          ("pinhole", (56.9, 45.2), (56.9, 45.2))])
+@pytest.mark.parametrize(
+    "lens, focal_fov, picture_fov",
+    [
+        ("tekkotsu", (55.23, 43.52), (55.75, 44.03)),
+        ("sony", (56.9, 45.2), (57.36, 45.78)),
+        ("pinhole", (56.9, 45.2), (56.9, 45.2)),
+    ],
+)
 def test_each_lens_spans_the_field_of_view_its_docstring_states(lens, focal_fov, picture_fov):
     """OpenCV's calibrationMatrixValues gives the focal lengths' field of view; the picture's,
     between the outer pixel edges, comes from OpenCV's undistortPoints, not from our lens code."""
     lens = LENSES[lens]
     fov_x, fov_y, *_ = cv2.calibrationMatrixValues(lens.camera_matrix(), (lens.width, lens.height), 1.0, 1.0)
     assert (fov_x, fov_y) == pytest.approx(focal_fov, abs=0.01)
-    edges = np.array([[[-0.5, lens.cy]], [[lens.width - 0.5, lens.cy]], [[lens.cx, -0.5]], [[lens.cx, lens.height - 0.5]]])
+    edges = np.array(
+        [[[-0.5, lens.cy]], [[lens.width - 0.5, lens.cy]], [[lens.cx, -0.5]], [[lens.cx, lens.height - 0.5]]]
+    )
     (left, _), (right, _), (_, top), (_, bottom) = cv2.undistortPoints(
-        edges, lens.camera_matrix(), np.array(lens.distortion), criteria=(cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 100, 1e-12))[:, 0]
+        edges,
+        lens.camera_matrix(),
+        np.array(lens.distortion),
+        criteria=(cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 100, 1e-12),
+    )[:, 0]
     picture = (math.degrees(math.atan(right) - math.atan(left)), math.degrees(math.atan(bottom) - math.atan(top)))
     assert picture == pytest.approx(picture_fov, abs=0.01)
     assert lens.field_of_view_deg() == pytest.approx(picture, abs=1e-3)
@@ -265,8 +305,9 @@ def test_image_offset_is_the_projection_in_half_sizes():
     camera = sim.camera
     frame = camera.frame()
     forward = -frame.xmat[:, 2]  # MuJoCo cameras look along -z
-    points = frame.position + np.array([forward * 0.8, forward * 0.5 + frame.xmat[:, 0] * 0.3,
-                                        forward * 0.4 + frame.xmat[:, 1] * 0.5, -forward * 0.5])
+    points = frame.position + np.array(
+        [forward * 0.8, forward * 0.5 + frame.xmat[:, 0] * 0.3, forward * 0.4 + frame.xmat[:, 1] * 0.5, -forward * 0.5]
+    )
     for point in points:
         (u, v), depth = (a[0] for a in camera.project(point))
         offset, visible = camera.image_offset(point)
@@ -292,14 +333,17 @@ def smear_px(still: np.ndarray, moving: np.ndarray) -> float:
 
 @pytest.mark.parametrize("shutter, expected", [("fast", 3.47), ("mid", 6.94), ("slow", 13.9)])
 def test_a_200_deg_per_s_pan_smears_as_the_formula_says(tmp_path, shutter, expected):
-    body = (emissive("box", (0.5, -1, 0.2), (0.01, 1, 2), (0.05, 0.05, 0.05))
-            + emissive("box", (0.5, 1, 0.2), (0.01, 1, 2), (0.9, 0.9, 0.9)))
-    sim = Simulation(target_scene(tmp_path, body), camera_profile=QUIET,
-                     camera_settings=CameraSettings(shutter=shutter, gain="low"))
+    body = emissive("box", (0.5, -1, 0.2), (0.01, 1, 2), (0.05, 0.05, 0.05)) + emissive(
+        "box", (0.5, 1, 0.2), (0.01, 1, 2), (0.9, 0.9, 0.9)
+    )
+    sim = Simulation(
+        target_scene(tmp_path, body), camera_profile=QUIET, camera_settings=CameraSettings(shutter=shutter, gain="low")
+    )
     still = sim.camera.frame().ycrcb[..., 0]
     pan = sim.model.joint("head_pan")
     sim.data.qvel[pan.dofadr[0]] = math.radians(200)
     import mujoco
+
     mujoco.mj_forward(sim.model, sim.data)
     sim.camera.moved()
     du, dv = sim.camera.image_motion(sim.data, CameraSettings(shutter=shutter).exposure_s)
@@ -311,21 +355,28 @@ def test_a_200_deg_per_s_pan_smears_as_the_formula_says(tmp_path, shutter, expec
 
 def test_brightness_follows_gain_and_shutter(tmp_path):
     scene = target_scene(tmp_path, wall(0.25))
+
     def luma(gain, shutter):
         sim = Simulation(scene, camera_profile=QUIET, camera_settings=CameraSettings(gain=gain, shutter=shutter))
         value = centre(sim.camera.frame().ycrcb.astype(float))[0]
         sim.close()
         return value
+
     assert luma("low", "fast") < luma("mid", "fast") < luma("high", "fast") < luma("high", "mid") < luma("high", "slow")
     assert luma("low", "slow") == pytest.approx(luma("high", "fast"), abs=1)  # each step doubles: the same exposure
 
 
-@pytest.mark.parametrize("kelvin, preset, cr, cb", [(3000, "fl", +18, -25), (3000, "indoor", -2, +4),
-                                                    (5000, "indoor", -19, +40), (4000, "outdoor", +13, -18)])
+@pytest.mark.parametrize(
+    "kelvin, preset, cr, cb",
+    [(3000, "fl", +18, -25), (3000, "indoor", -2, +4), (5000, "indoor", -19, +40), (4000, "outdoor", +13, -18)],
+)
 def test_white_balance_against_the_scene_light(tmp_path, kelvin, preset, cr, cb):
     """Spec section 6: directions are facts, magnitudes indicative (within half, or 6 levels)."""
-    sim = Simulation(target_scene(tmp_path, wall(0.45), kelvin), camera_profile=QUIET.with_options(vignetting=False),
-                     camera_settings=CameraSettings(white_balance=preset))
+    sim = Simulation(
+        target_scene(tmp_path, wall(0.45), kelvin),
+        camera_profile=QUIET.with_options(vignetting=False),
+        camera_settings=CameraSettings(white_balance=preset),
+    )
     _, got_cr, got_cb = centre(sim.camera.frame().ycrcb.astype(float)) - (0, 128, 128)
     for got, want in ((got_cr, cr), (got_cb, cb)):
         assert abs(got - want) <= max(6, abs(want) / 2)
@@ -392,10 +443,12 @@ def test_settings_apply_from_the_next_frame():
 def test_the_message_carries_the_sensor_bytes():
     sim = Simulation()
     frame = sim.camera.frame()
-    bands = [frame.message.band(openr_bridge.ofbkimageLAYER_H, b) for b in
-             (openr_bridge.ofbkimageBAND_Y, openr_bridge.ofbkimageBAND_Cr, openr_bridge.ofbkimageBAND_Cb)]
+    bands = [
+        frame.message.band(openr_bridge.ofbkimageLAYER_H, b)
+        for b in (openr_bridge.ofbkimageBAND_Y, openr_bridge.ofbkimageBAND_Cr, openr_bridge.ofbkimageBAND_Cb)
+    ]
     ycrcb = np.stack(bands, axis=-1)
-    ycrcb[-1, :openr_bridge.TAG_LENGTH, 0] = frame.ycrcb[-1, :openr_bridge.TAG_LENGTH, 0]  # OPEN-R's tag
+    ycrcb[-1, : openr_bridge.TAG_LENGTH, 0] = frame.ycrcb[-1, : openr_bridge.TAG_LENGTH, 0]  # OPEN-R's tag
     assert np.array_equal(ycrcb, frame.ycrcb)
     assert np.array_equal(openr_bridge.ycrcb_to_rgb(*np.moveaxis(frame.ycrcb, -1, 0)), frame.rgb)
     sim.close()
@@ -456,9 +509,9 @@ def edge_widths(luma: np.ndarray, step: float = 25, flat: float = 3.0) -> np.nda
         jumps = np.abs(np.diff(lines, axis=1))
         for line, jump in zip(lines, jumps):
             for x in range(5, len(line) - 6):
-                if jump[x] < step or jump[x] < jump[x - 3:x + 4].max():
+                if jump[x] < step or jump[x] < jump[x - 3 : x + 4].max():
                     continue
-                profile = line[x - 3:x + 6]  # the edge between samples 3 and 4
+                profile = line[x - 3 : x + 6]  # the edge between samples 3 and 4
                 left, right = profile[:3], profile[-3:]
                 if left.std() <= flat and right.std() <= flat and abs(right.mean() - left.mean()) >= 1.5 * step:
                     profiles.append(profile)
@@ -467,8 +520,14 @@ def edge_widths(luma: np.ndarray, step: float = 25, flat: float = 3.0) -> np.nda
     return EDGE_SIGMAS[best // len(EDGE_POSITIONS)]
 
 
-FIELD_VIEWS = ((-0.8, -1.0, -0.09), (0.5, 0.5, 0.8), (1.0, -0.5, -0.3), (-1.5, 0.8, 2.5), (2.0, 0.2, 0.1),
-               (-2.0, -0.3, 3.1))  # x, y, yaw: goals, beacons, lines, walls and the ball 0.4 m ahead
+FIELD_VIEWS = (
+    (-0.8, -1.0, -0.09),
+    (0.5, 0.5, 0.8),
+    (1.0, -0.5, -0.3),
+    (-1.5, 0.8, 2.5),
+    (2.0, 0.2, 0.1),
+    (-2.0, -0.3, 3.1),
+)  # x, y, yaw: goals, beacons, lines, walls and the ball 0.4 m ahead
 
 
 def field_edge_width(camera: CameraProfile | str = "ers7") -> float:
@@ -492,8 +551,12 @@ def test_softness_widens_the_edges():
 
 @pytest.mark.skipif(not REAL_FRAMES.is_dir(), reason="real ERS-7 frames not present (../shared/data)")
 def test_edges_are_as_sharp_as_in_real_ers7_frames():
-    real = np.concatenate([edge_widths(cv2.imread(str(path))[..., 2])  # EasyTrain: R = Y
-                           for path in sorted(REAL_FRAMES.glob("*.png"))])
+    real = np.concatenate(
+        [
+            edge_widths(cv2.imread(str(path))[..., 2])  # EasyTrain: R = Y
+            for path in sorted(REAL_FRAMES.glob("*.png"))
+        ]
+    )
     assert len(real) > 300
     assert field_edge_width() == pytest.approx(np.median(real), abs=0.05)
 
@@ -541,8 +604,9 @@ def test_render_side_by_side_shows_both_profiles_and_a_real_frame(tmp_path):
     assert main(["render", "--out", str(tmp_path), "--settle", "0", "--side-by-side"]) == 0
     both = cv2.imread(str(tmp_path / "side_by_side.png"))
     assert both.shape == (320, 832, 3) and not np.array_equal(both[:, :416], both[:, 416:])
-    fake = np.dstack([np.full((160, 208), 128, np.uint8), np.full((160, 208), 128, np.uint8),
-                      np.full((160, 208), 90, np.uint8)])  # B, G, R = Cr, Cb, Y: a grey frame
+    fake = np.dstack(
+        [np.full((160, 208), 128, np.uint8), np.full((160, 208), 128, np.uint8), np.full((160, 208), 90, np.uint8)]
+    )  # B, G, R = Cr, Cb, Y: a grey frame
     cv2.imwrite(str(tmp_path / "real.png"), fake)
     assert main(["render", "--out", str(tmp_path), "--settle", "0", "--side-by-side", str(tmp_path / "real.png")]) == 0
     three = cv2.imread(str(tmp_path / "side_by_side.png"))
@@ -550,7 +614,9 @@ def test_render_side_by_side_shows_both_profiles_and_a_real_frame(tmp_path):
     assert main(["render", "--out", str(tmp_path), "--side-by-side", str(tmp_path / "missing.png")]) == 2
 
 
-def _warp(image: np.ndarray, maps: tuple[np.ndarray, np.ndarray], outer: float = 0.0, centre: float = 1.0) -> np.ndarray:
+def _warp(
+    image: np.ndarray, maps: tuple[np.ndarray, np.ndarray], outer: float = 0.0, centre: float = 1.0
+) -> np.ndarray:
     """``image`` (h, w, 3) uint8 through ``kernels``' two passes on ``maps``, as bytes (h', w', 3):
     ``develop`` with a colour stage that changes nothing (identity response and matrix, no
     vignetting, no noise, no floor)."""
@@ -566,11 +632,28 @@ def _warp(image: np.ndarray, maps: tuple[np.ndarray, np.ndarray], outer: float =
     curve, slope, intercept = (np.full((3, 1, width), value, np.float32) for value in (0, 1, 0))
     out = np.empty((height, width, 3), np.uint8)
     taps = np.float32(outer), np.float32(centre)
-    kernels.develop(planes, warp.rows_frac, *warp.rows_runs, warp.columns_frac,
-                    *warp.columns_runs, np.float32(1), *taps, response, identity, curve, slope, intercept,
-                    np.zeros(height, np.int64), np.zeros((3, height * width), np.int8), np.zeros(3, np.float32), 0,
-                    np.float32(0), np.zeros((3, image.shape[1] + 4 + kernels.SLACK), np.float32),
-                    np.zeros((3, width + kernels.SLACK), np.float32), out)
+    kernels.develop(
+        planes,
+        warp.rows_frac,
+        *warp.rows_runs,
+        warp.columns_frac,
+        *warp.columns_runs,
+        np.float32(1),
+        *taps,
+        response,
+        identity,
+        curve,
+        slope,
+        intercept,
+        np.zeros(height, np.int64),
+        np.zeros((3, height * width), np.int8),
+        np.zeros(3, np.float32),
+        0,
+        np.float32(0),
+        np.zeros((3, image.shape[1] + 4 + kernels.SLACK), np.float32),
+        np.zeros((3, width + kernels.SLACK), np.float32),
+        out,
+    )
     return out
 
 
@@ -582,12 +665,16 @@ def test_pinhole_render_covers_the_image_with_its_margin_and_no_more(name, size)
     point is the lens's moved by whole pixels."""
     lens, margin = LENSES[name].scaled(*size), 1.5
     render = lens.render_pinhole(margin)
-    edges = np.meshgrid(np.linspace(-0.5, lens.width - 0.5, 4 * lens.width + 1),
-                        np.linspace(-0.5, lens.height - 0.5, 4 * lens.height + 1))
+    edges = np.meshgrid(
+        np.linspace(-0.5, lens.width - 0.5, 4 * lens.width + 1),
+        np.linspace(-0.5, lens.height - 0.5, 4 * lens.height + 1),
+    )
     ideal = lens.undistort(np.stack([edge.ravel() for edge in edges], axis=-1))
     at = ideal * render.focal + render.centre  # the same points in the render's pixels
     low, high = at.min(axis=0), at.max(axis=0)
-    assert np.all(low - margin >= -0.5 - 1e-9) and np.all(high + margin <= np.array([render.width, render.height]) - 0.5)
+    assert np.all(low - margin >= -0.5 - 1e-9) and np.all(
+        high + margin <= np.array([render.width, render.height]) - 0.5
+    )
     assert np.all(low - margin < 0.5) and np.all(high + margin > np.array([render.width, render.height]) - 1.5)
     offset = np.array(render.centre) - (lens.cx, lens.cy)
     assert np.allclose(offset, np.round(offset), atol=1e-9)
@@ -602,11 +689,15 @@ def test_two_pass_warp_is_the_lens_remap():
     noise = np.random.default_rng(7).integers(0, 256, (render.height, render.width, 3), dtype=np.uint8)
     picture = cv2.GaussianBlur(noise, (0, 0), 2.0)  # features a few pixels wide, as in a frame
     maps = lens.render_maps(render)
-    expected = cv2.remap(picture, *(m.astype(np.float32) for m in maps), cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+    expected = cv2.remap(
+        picture, *(m.astype(np.float32) for m in maps), cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE
+    )
     difference = np.abs(_warp(picture, maps).astype(int) - expected)
     assert difference.max() <= 1 and difference.mean() < 0.1
     identity = np.meshgrid(np.arange(lens.width, dtype=np.float64), np.arange(lens.height, dtype=np.float64))
-    assert np.array_equal(_warp(picture[:lens.height, :lens.width].copy(), identity), picture[:lens.height, :lens.width])
+    assert np.array_equal(
+        _warp(picture[: lens.height, : lens.width].copy(), identity), picture[: lens.height, : lens.width]
+    )
 
 
 def test_two_pass_warp_splits_rows_into_runs_of_one_source_offset():
@@ -664,8 +755,15 @@ def test_rolling_shutter_skews_rows_by_the_motion_during_the_readout():
     bottom row to the top, and by half of it at the middle row."""
     from aibo_sim.camera.sensor import Sensor
 
-    profile = CameraProfile("rolling", sensor=True, noise_sigma=(0.0, 0.0, 0.0), softness_px=0.0, vignetting=False,
-                            motion_blur=False, readout_ms=1000 * CameraSettings().exposure_s)
+    profile = CameraProfile(
+        "rolling",
+        sensor=True,
+        noise_sigma=(0.0, 0.0, 0.0),
+        softness_px=0.0,
+        vignetting=False,
+        motion_blur=False,
+        readout_ms=1000 * CameraSettings().exposure_s,
+    )
     height, width = 21, 32
     maps = tuple(m.astype(np.float64) for m in np.meshgrid(np.arange(width) + 12.0, np.arange(height) + 2.0))
     render = np.full((height + 4, width + 24, 4), 40, np.uint8)  # RGBA, as the renderer reads it (alpha unread)
@@ -694,8 +792,12 @@ def test_a_black_target_reads_the_black_level_above_the_floor(gain):
     height, width = 48, 64
     maps = tuple(m.astype(np.float64) for m in np.meshgrid(np.arange(width) + 2.0, np.arange(height) + 2.0))
     sensor = Sensor(profile, CameraSettings(gain=gain), 5000.0, maps, (width + 4, height + 4), (1.0, 1.0))
-    y = np.concatenate([sensor.expose(np.zeros((height + 4, width + 4, 4), np.uint8), (0.0, 0.0), 0, index)[..., 0]
-                        for index in range(4)])
+    y = np.concatenate(
+        [
+            sensor.expose(np.zeros((height + 4, width + 4, 4), np.uint8), (0.0, 0.0), 0, index)[..., 0]
+            for index in range(4)
+        ]
+    )
     assert 19 <= y.mean() <= 24 and y.min() >= 16, (y.mean(), y.min())
     assert np.mean(y == profile.y_floor) < 0.02
 
@@ -707,12 +809,19 @@ def test_exposure_scales_linear_light_through_the_gamma(gain, shutter, factor):
     Y = black + (white - black) / 255 x the code for a grey."""
     from aibo_sim.camera.sensor import Sensor
 
-    profile = CameraProfile("flat", sensor=True, noise_sigma=(0.0, 0.0, 0.0), softness_px=0.0, vignetting=False,
-                            motion_blur=False)
+    profile = CameraProfile(
+        "flat", sensor=True, noise_sigma=(0.0, 0.0, 0.0), softness_px=0.0, vignetting=False, motion_blur=False
+    )
     height, width = 6, 8
     maps = tuple(m.astype(np.float64) for m in np.meshgrid(np.arange(width) + 2.0, np.arange(height) + 2.0))
-    sensor = Sensor(profile, CameraSettings(white_balance="fl", gain=gain, shutter=shutter), 5000.0, maps,
-                    (width + 4, height + 4), (1.0, 1.0))
+    sensor = Sensor(
+        profile,
+        CameraSettings(white_balance="fl", gain=gain, shutter=shutter),
+        5000.0,
+        maps,
+        (width + 4, height + 4),
+        (1.0, 1.0),
+    )
     for code in (0, 5, 40, 100, 180, 250):
         light = factor * (code / 255) ** 2.2
         expected = min(255 * light ** (1 / 2.2), 255)

@@ -30,8 +30,13 @@ VIEWS = {
     "carpet": ("green", (-1.0, -0.8, 0.0), ("field_carpet", (-0.65, -0.8, 0.0)), -30, "field_carpet"),
     "skyblue_goal": ("lightblue", (2.0, 0.0, 0.0), ("goal_skyblue_back", (-0.01, 0, 0)), -5, "goal_skyblue"),
     "yellow_goal": ("yellow", (-2.0, 0.0, math.pi), ("goal_yellow_back", (0.01, 0, 0)), -5, "goal_yellow"),
-    "pink_beacon": ("pink", (1.35, 1.45, math.pi / 2), ("beacon_skyblue_left_middle", (0, -0.05, 0)), -5,
-                    "beacon_pink"),
+    "pink_beacon": (
+        "pink",
+        (1.35, 1.45, math.pi / 2),
+        ("beacon_skyblue_left_middle", (0, -0.05, 0)),
+        -5,
+        "beacon_pink",
+    ),
     "white_wall": ("white", (0.5, 1.4, math.pi / 2), ("wall_left", (0.5, -0.01, 0)), -5, "wall"),
 }
 
@@ -67,8 +72,8 @@ def measured() -> dict[str, np.ndarray]:
                 look_at(sim, sim.data.geom_xpos[sim.model.geom(geom).id] + offset, neck)
                 frame = sim.camera.frame().ycrcb.astype(float)
                 h, w = frame.shape[:2]
-                patches.append(frame[h // 2 - HALF:h // 2 + HALF + 1, w // 2 - HALF:w // 2 + HALF + 1])
-            ids = sim.camera.segmentation()[h // 2 - HALF:h // 2 + HALF + 1, w // 2 - HALF:w // 2 + HALF + 1]
+                patches.append(frame[h // 2 - HALF : h // 2 + HALF + 1, w // 2 - HALF : w // 2 + HALF + 1])
+            ids = sim.camera.segmentation()[h // 2 - HALF : h // 2 + HALF + 1, w // 2 - HALF : w // 2 + HALF + 1]
             assert np.all(ids == sim.model.geom(shown).id), f"{view}: the centre patch is not all {shown}"
             means[view] = np.mean(patches, axis=(0, 1, 2))
         return means

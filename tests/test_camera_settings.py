@@ -51,10 +51,21 @@ def open_camera(system: OpenRSystem) -> int:
 
 def test_status_codes_are_sonys():
     # OStatus.h and OPrimitiveControl.h / ObjcommTypes.h values.
-    assert (oSUCCESS, openr_bridge.oFAIL, oNOT_SUPPORTED, oINVALID_ARG, oNOT_FOUND, oOUT_OF_RANGE) == (0, 2, 3, 4, 6, 24)
+    assert (oSUCCESS, openr_bridge.oFAIL, oNOT_SUPPORTED, oINVALID_ARG, oNOT_FOUND, oOUT_OF_RANGE) == (
+        0,
+        2,
+        3,
+        4,
+        6,
+        24,
+    )
     assert (oINVALID_PRIMITIVE_ID, oINVALID_REQUEST, oprimitiveID_UNDEF) == (4096, 4100, 0xFFFFFFFF)
-    assert (openr_bridge.oprmreqCAM_SET_WHITE_BALANCE, openr_bridge.oprmreqCAM_SET_GAIN,
-            openr_bridge.oprmreqCAM_SET_SHUTTER_SPEED, openr_bridge.oprmreqCAM_AWB_OFF) == (384, 385, 386, 391)
+    assert (
+        openr_bridge.oprmreqCAM_SET_WHITE_BALANCE,
+        openr_bridge.oprmreqCAM_SET_GAIN,
+        openr_bridge.oprmreqCAM_SET_SHUTTER_SPEED,
+        openr_bridge.oprmreqCAM_AWB_OFF,
+    ) == (384, 385, 386, 391)
     assert sizeof(OPrimitiveControl_CameraParam) == 4 and OPrimitiveControl_CameraParam().camparam == 0
 
 
@@ -108,9 +119,12 @@ def test_wrapper_camera_functions_call_control_primitive():
     wrapper.camera_set_white_balance(openr_bridge.ocamparamWB_OUTDOOR_MODE)
     wrapper.camera_set_shutter_speed(openr_bridge.ocamparamSHUTTER_SLOW)
     assert changes == [{"gain": "low"}, {"white_balance": "outdoor"}, {"shutter": "slow"}]
-    with pytest.raises(PrimitiveError, match=r"camera_set_gain\(4\): OPENR::ControlPrimitive\(fbkID, "
-                       r"oprmreqCAM_SET_GAIN, \.\.\.\) returned oOUT_OF_RANGE \(24\); the value must be "
-                       r"1 \(ocamparamGAIN_LOW\), 2 \(ocamparamGAIN_MID\) or 3 \(ocamparamGAIN_HIGH\)") as error:
+    with pytest.raises(
+        PrimitiveError,
+        match=r"camera_set_gain\(4\): OPENR::ControlPrimitive\(fbkID, "
+        r"oprmreqCAM_SET_GAIN, \.\.\.\) returned oOUT_OF_RANGE \(24\); the value must be "
+        r"1 \(ocamparamGAIN_LOW\), 2 \(ocamparamGAIN_MID\) or 3 \(ocamparamGAIN_HIGH\)",
+    ) as error:
         wrapper.camera_set_gain(4)
     assert error.value.status == oOUT_OF_RANGE
     with pytest.raises(PrimitiveError, match=r"oINVALID_ARG.*ocamparamWB_FL_MODE"):
@@ -142,8 +156,11 @@ def test_the_openr_camera_primitive_starts_at_the_simulated_cameras_settings():
     sim = Simulation(camera_settings=CameraSettings(white_balance="indoor", gain="high", shutter="fast"))
     robot = Robot(sim, backend="openr")
     try:
-        assert robot.camera_source.system.camera.settings == {"white_balance": "indoor", "gain": "high",
-                                                              "shutter": "fast"}
+        assert robot.camera_source.system.camera.settings == {
+            "white_balance": "indoor",
+            "gain": "high",
+            "shutter": "fast",
+        }
     finally:
         sim.close()
 
@@ -156,22 +173,33 @@ def test_api_sets_the_camera_on_both_backends(robot):
     assert robot.sim.camera.settings == CameraSettings(white_balance="outdoor", gain="high", shutter="fast")
     assert robot.get_device(CAMERA_LOCATOR).settings == robot.sim.camera.settings
     if robot.backend == "openr":  # it went through the primitive
-        assert robot.camera_source.system.camera.settings == {"white_balance": "outdoor", "gain": "high",
-                                                              "shutter": "fast"}
+        assert robot.camera_source.system.camera.settings == {
+            "white_balance": "outdoor",
+            "gain": "high",
+            "shutter": "fast",
+        }
     assert (api.CAMERA_WB_INDOOR, api.CAMERA_WB_OUTDOOR, api.CAMERA_WB_FL) == (1, 2, 3)
     assert (api.CAMERA_GAIN_LOW, api.CAMERA_GAIN_MID, api.CAMERA_GAIN_HIGH) == (1, 2, 3)
     assert (api.CAMERA_SHUTTER_SLOW, api.CAMERA_SHUTTER_MID, api.CAMERA_SHUTTER_FAST) == (1, 2, 3)
     exported = set(api.__all__)
-    assert {"camera_set_white_balance", "camera_set_gain", "camera_set_shutter_speed", "CAMERA_GAIN_HIGH",
-            "ocamparamWB_FL_MODE"} <= exported
+    assert {
+        "camera_set_white_balance",
+        "camera_set_gain",
+        "camera_set_shutter_speed",
+        "CAMERA_GAIN_HIGH",
+        "ocamparamWB_FL_MODE",
+    } <= exported
 
 
 def test_api_bad_values_raise_device_error_and_change_nothing(robot):
     camera = api.robot_get_device(CAMERA_LOCATOR)
     before = robot.sim.camera.settings
     for value in (4, 0, "high", 2.0, True):
-        with pytest.raises(DeviceError, match=rf"camera_set_gain\({value!r}\): the value must be 1 "
-                           r"\(ocamparamGAIN_LOW\), 2 \(ocamparamGAIN_MID\) or 3 \(ocamparamGAIN_HIGH\)") as error:
+        with pytest.raises(
+            DeviceError,
+            match=rf"camera_set_gain\({value!r}\): the value must be 1 "
+            r"\(ocamparamGAIN_LOW\), 2 \(ocamparamGAIN_MID\) or 3 \(ocamparamGAIN_HIGH\)",
+        ) as error:
             api.camera_set_gain(camera, value)
         if robot.backend == "openr":  # refused by ControlPrimitive itself
             assert "OPENR::ControlPrimitive returned" in str(error.value)

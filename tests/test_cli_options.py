@@ -18,8 +18,18 @@ from aibo_sim.runner import run_controller
 ROOT = Path(__file__).resolve().parents[1]
 SCRIPTED = Path(__file__).parent / "controllers" / "scripted_head.py"
 ROBOT_ONLY = ROOT / "models" / "ers7.xml"  # a scene without a ball
-SHARED = ("--scene", "--pose", "--ball", "--ball-type", "--seed", "--camera-profile", "--camera-wb", "--camera-gain",
-          "--camera-shutter", "--camera-full")
+SHARED = (
+    "--scene",
+    "--pose",
+    "--ball",
+    "--ball-type",
+    "--seed",
+    "--camera-profile",
+    "--camera-wb",
+    "--camera-gain",
+    "--camera-shutter",
+    "--camera-full",
+)
 # Each command with the arguments it needs besides the shared options (argparse stops first).
 COMMANDS = {
     "run": ["run", str(SCRIPTED)],
@@ -35,8 +45,12 @@ def _subparsers(parser):
 
 def _command_parsers():
     commands = _subparsers(build_parser())
-    return {"run": commands["run"], "render": commands["render"], "dump": commands["dump"],
-            "mtn play": _subparsers(commands["mtn"])["play"]}
+    return {
+        "run": commands["run"],
+        "render": commands["render"],
+        "dump": commands["dump"],
+        "mtn play": _subparsers(commands["mtn"])["play"],
+    }
 
 
 def _shared_actions(parser):
@@ -45,8 +59,15 @@ def _shared_actions(parser):
     for action in parser._actions:
         for option in action.option_strings:
             if option in SHARED:
-                actions[option] = (action.dest, action.default, action.type, action.choices and tuple(action.choices),
-                                   action.nargs, type(action).__name__, action.metavar)
+                actions[option] = (
+                    action.dest,
+                    action.default,
+                    action.type,
+                    action.choices and tuple(action.choices),
+                    action.nargs,
+                    type(action).__name__,
+                    action.metavar,
+                )
     return actions
 
 
@@ -56,20 +77,52 @@ def test_every_command_takes_the_same_world_and_camera_options():
     for name, actions in options.items():
         assert sorted(actions) == sorted(SHARED), name
         assert actions == options["run"], f"{name} differs from run"
-    defaults = {name: vars(parser.parse_args(COMMANDS[name][2 if name == "mtn play" else 1:]))
-                for name, parser in parsers.items()}
-    expected = {"scene": None, "pose": None, "ball": None, "ball_type": "robocup", "seed": 0, "camera_profile": "ers7",
-                "camera_wb": "fl",
-                "camera_gain": "mid", "camera_shutter": "mid", "camera_full": False}
+    defaults = {
+        name: vars(parser.parse_args(COMMANDS[name][2 if name == "mtn play" else 1 :]))
+        for name, parser in parsers.items()
+    }
+    expected = {
+        "scene": None,
+        "pose": None,
+        "ball": None,
+        "ball_type": "robocup",
+        "seed": 0,
+        "camera_profile": "ers7",
+        "camera_wb": "fl",
+        "camera_gain": "mid",
+        "camera_shutter": "mid",
+        "camera_full": False,
+    }
     assert set(expected) == set(WORLD_DESTS + CAMERA_DESTS)
     for name, values in defaults.items():
         assert {k: values[k] for k in expected} == expected, name
 
 
 def test_shared_options_parse_to_the_same_values_everywhere():
-    given = ["--scene", "x.xml", "--pose", "-1", "0.5", "90", "--ball", "0.2", "-0.3", "--ball-type", "pink", "--seed", "7",
-             "--camera-profile", "ideal", "--camera-wb", "outdoor", "--camera-gain", "high",
-             "--camera-shutter", "fast", "--camera-full"]
+    given = [
+        "--scene",
+        "x.xml",
+        "--pose",
+        "-1",
+        "0.5",
+        "90",
+        "--ball",
+        "0.2",
+        "-0.3",
+        "--ball-type",
+        "pink",
+        "--seed",
+        "7",
+        "--camera-profile",
+        "ideal",
+        "--camera-wb",
+        "outdoor",
+        "--camera-gain",
+        "high",
+        "--camera-shutter",
+        "fast",
+        "--camera-full",
+    ]
     parsed = {}
     for name, argv in COMMANDS.items():
         args = build_parser().parse_args(argv + given)
@@ -134,8 +187,18 @@ def _run(tmp_path, name, *options):
 def test_run_camera_profile_changes_the_frames_and_run_json_records_it(tmp_path):
     frames, records = {}, {}
     for profile in ("ideal", "ers7"):
-        out, record = _run(tmp_path, profile, "--camera-profile", profile, "--camera-wb", "outdoor",
-                           "--camera-gain", "high", "--camera-shutter", "fast")
+        out, record = _run(
+            tmp_path,
+            profile,
+            "--camera-profile",
+            profile,
+            "--camera-wb",
+            "outdoor",
+            "--camera-gain",
+            "high",
+            "--camera-shutter",
+            "fast",
+        )
         frames[profile] = cv2.imread(str(out / "frames" / "000003.png"))
         records[profile] = record
     assert frames["ideal"].shape == frames["ers7"].shape == (160, 208, 3)
@@ -145,16 +208,25 @@ def test_run_camera_profile_changes_the_frames_and_run_json_records_it(tmp_path)
         assert camera["profile"] == profile and (camera["width"], camera["height"]) == (208, 160)
         assert (camera["white_balance"], camera["gain"], camera["shutter"]) == ("outdoor", "high", "fast")
         assert record["seed"] == 0 and record["pose"] is None and record["ball"] is None and record["scene"] is None
-        for key in ("controller", "backend", "simulated_s", "wall_s", "real_time_factor", "camera_frames",
-                    "robot_pose", "ball_xy"):  # the summary's fields are all still there
+        for key in (
+            "controller",
+            "backend",
+            "simulated_s",
+            "wall_s",
+            "real_time_factor",
+            "camera_frames",
+            "robot_pose",
+            "ball_xy",
+        ):  # the summary's fields are all still there
             assert key in record
     assert records["ers7"]["camera"]["lens"] != records["ideal"]["camera"]["lens"]
 
 
 def test_run_pose_ball_and_seed_are_applied_and_recorded(tmp_path):
     out, default = _run(tmp_path, "default")
-    out, placed = _run(tmp_path, "placed", "--pose", "1.0", "-0.5", "90", "--ball", "-0.3", "0.4", "--seed", "5",
-                       "--camera-full")
+    out, placed = _run(
+        tmp_path, "placed", "--pose", "1.0", "-0.5", "90", "--ball", "-0.3", "0.4", "--seed", "5", "--camera-full"
+    )
     # The controller's leg motion shifts the robot a little; the same shift, turned by the pose,
     # from where --pose put it (the carpet is flat and uniform).
     dx, dy, dyaw = default["robot_pose"]  # yaw in degrees, as --pose takes it
@@ -183,8 +255,27 @@ def test_render_takes_the_camera_and_world_options(tmp_path, capsys):
     pictures = {}
     for profile in ("ideal", "ers7"):
         out = tmp_path / profile
-        assert main(["render", "--out", str(out), "--settle", "0.1", "--camera-profile", profile,
-                     "--pose", "-0.8", "-1.0", "-5", "--ball", "-0.2", "-0.97"]) == 0
+        assert (
+            main(
+                [
+                    "render",
+                    "--out",
+                    str(out),
+                    "--settle",
+                    "0.1",
+                    "--camera-profile",
+                    profile,
+                    "--pose",
+                    "-0.8",
+                    "-1.0",
+                    "-5",
+                    "--ball",
+                    "-0.2",
+                    "-0.97",
+                ]
+            )
+            == 0
+        )
         pictures[profile] = cv2.imread(str(out / "head_camera.png"))
         assert cv2.imread(str(out / "tracking.png")).shape == (480, 640, 3)
         described = json.loads((out / "head_camera.json").read_text())

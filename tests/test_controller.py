@@ -111,8 +111,12 @@ def test_sensors_read_in_their_units(robot):
     paw = api.robot_get_device("PRM:/r2/c1/c2/c3/c4-Sensor:24")
     head = api.robot_get_device("PRM:/r1/c1/c2/c3/t1-Sensor:t1")
     accel = api.robot_get_device("PRM:/a1-Sensor:a1")
-    for tag, enable in ((chest, api.distance_sensor_enable), (paw, api.touch_sensor_enable),
-                        (head, api.touch_sensor_enable), (accel, api.accelerometer_enable)):
+    for tag, enable in (
+        (chest, api.distance_sensor_enable),
+        (paw, api.touch_sensor_enable),
+        (head, api.touch_sensor_enable),
+        (accel, api.accelerometer_enable),
+    ):
         enable(tag, 16)
     api.robot_step(320)
     assert 100 <= api.distance_sensor_get_value(chest) <= 900

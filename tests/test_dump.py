@@ -14,13 +14,22 @@ import numpy as np
 import pytest
 
 import openr_bridge
-from aibo_sim.dump import (FORMATS, DumpError, add_dump_parser, ball_in_image, dump, geom_classes, load_dump,
-                           yuv420_bytes, yuv444_bytes)
+from aibo_sim.camera import HEAD_CAMERA_GROUPS
+from aibo_sim.dump import (
+    FORMATS,
+    DumpError,
+    add_dump_parser,
+    ball_in_image,
+    dump,
+    geom_classes,
+    load_dump,
+    yuv420_bytes,
+    yuv444_bytes,
+)
 from aibo_sim.dump import formats as dump_formats
 from aibo_sim.dump.formats import mp4_boxes, mp4_faststart
 from aibo_sim.field import BALL_RADIUS, SEGMENTATION_CLASSES
 from aibo_sim.render import Renderer
-from aibo_sim.camera import HEAD_CAMERA_GROUPS
 from aibo_sim.sim import Simulation, models_dir
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -78,9 +87,24 @@ def test_video_has_every_frame(full_dump):
         count += 1
     assert count == 30 and video.get(cv2.CAP_PROP_FPS) == pytest.approx(30)
     if shutil.which("ffprobe"):
-        probe = subprocess.run(["ffprobe", "-v", "error", "-count_frames", "-select_streams", "v:0", "-show_entries",
-                                "stream=nb_read_frames,width,height", "-of", "json", str(out / "video.mp4")],
-                               capture_output=True, text=True, check=True)
+        probe = subprocess.run(
+            [
+                "ffprobe",
+                "-v",
+                "error",
+                "-count_frames",
+                "-select_streams",
+                "v:0",
+                "-show_entries",
+                "stream=nb_read_frames,width,height",
+                "-of",
+                "json",
+                str(out / "video.mp4"),
+            ],
+            capture_output=True,
+            text=True,
+            check=True,
+        )
         stream = json.loads(probe.stdout)["streams"][0]
         assert (int(stream["nb_read_frames"]), stream["width"], stream["height"]) == (30, W, H)
 
@@ -122,12 +146,33 @@ def test_ffmpeg_reads_the_yuv_files_as_their_layout_says(full_dump):
     blocks = rgb.reshape(H // 2, 2, W // 2, 2, 3)
     flat = np.repeat(np.repeat((blocks == blocks[:, :1, :, :1]).all(axis=(1, 3, 4)), 2, axis=0), 2, axis=1)
     layouts = json.loads((out / "meta.json").read_text())["files"]
-    for name, pixel_format, bound, where in (("yuv444", "yuv444p", YUV444_BOUND, np.ones_like(flat)),
-                                             ("yuv420", "yuv420p", YUV420_FLAT_BOUND, flat)):
+    for name, pixel_format, bound, where in (
+        ("yuv444", "yuv444p", YUV444_BOUND, np.ones_like(flat)),
+        ("yuv420", "yuv420p", YUV420_FLAT_BOUND, flat),
+    ):
         assert f"{W}x{H}" in layouts[name]["layout"]
-        decoded = subprocess.run(["ffmpeg", "-v", "error", "-f", "rawvideo", "-pix_fmt", pixel_format, "-s", f"{W}x{H}",
-                                  "-i", str(frame.path(name)), "-f", "rawvideo", "-pix_fmt", "rgb24", "-"],
-                                 capture_output=True, check=True).stdout
+        decoded = subprocess.run(
+            [
+                "ffmpeg",
+                "-v",
+                "error",
+                "-f",
+                "rawvideo",
+                "-pix_fmt",
+                pixel_format,
+                "-s",
+                f"{W}x{H}",
+                "-i",
+                str(frame.path(name)),
+                "-f",
+                "rawvideo",
+                "-pix_fmt",
+                "rgb24",
+                "-",
+            ],
+            capture_output=True,
+            check=True,
+        ).stdout
         assert len(decoded) == W * H * 3, name
         assert np.abs(np.frombuffer(decoded, np.uint8).reshape(H, W, 3) - rgb)[where].max() <= bound, name
 
@@ -155,16 +200,20 @@ def test_openr_message_bands_and_luma_are_the_encoding_of_the_png(full_dump):
     out, _ = full_dump
     for frame in load_dump(out)[::10]:
         message = frame.message
-        expected = openr_bridge.encode_frame(frame.rgb, frame_number=frame.meta["frame_number"],
-                                             field_counter=frame.meta["field_counter"])
+        expected = openr_bridge.encode_frame(
+            frame.rgb, frame_number=frame.meta["frame_number"], field_counter=frame.meta["field_counter"]
+        )
         assert bytes(message) == bytes(expected)
         assert message.GetInfo(openr_bridge.ofbkimageLAYER_H).frameNumber == frame.meta["frame_number"]
         for layer in ("H", "M", "L", "C"):
             index = getattr(openr_bridge, f"ofbkimageLAYER_{layer}")
             assert frame.path("bands", layer).read_bytes() == message.GetData(index).tobytes()
             bands = frame.bands(layer)
-            assert sorted(bands) == ([openr_bridge.ofbkimageBAND_CDT] if layer == "C" else
-                                     sorted(b for b in range(7) if b != openr_bridge.ofbkimageBAND_CDT))
+            assert sorted(bands) == (
+                [openr_bridge.ofbkimageBAND_CDT]
+                if layer == "C"
+                else sorted(b for b in range(7) if b != openr_bridge.ofbkimageBAND_CDT)
+            )
             for band, array in bands.items():
                 assert np.array_equal(array, message.band(index, band))
         assert np.array_equal(frame.luma, openr_bridge.reconstruct_luma(message))
@@ -243,7 +292,9 @@ def test_resume_after_an_interruption_is_byte_identical(full_dump, tmp_path):
     assert len(load_dump(resumed)) == 25
     summary = dump(resumed, controller=TRACKER, frames=30, formats=FORMATS, resume=True, camera_profile="ideal")
     assert (summary.frames, summary.new_frames) == (30, 5)
-    assert sorted(p.relative_to(resumed) for p in resumed.rglob("*")) == sorted(p.relative_to(out) for p in out.rglob("*"))
+    assert sorted(p.relative_to(resumed) for p in resumed.rglob("*")) == sorted(
+        p.relative_to(out) for p in out.rglob("*")
+    )
     for path in out.rglob("*"):
         if path.is_file():  # the video too: rebuilt from every frame, the encoder is deterministic
             assert (resumed / path.relative_to(out)).read_bytes() == path.read_bytes(), path
@@ -274,8 +325,11 @@ def test_full_disk_leaves_only_complete_frames_and_resumes(tmp_path, monkeypatch
         real_replace(source, target)
 
     monkeypatch.setattr(os, "replace", replace)
-    with pytest.raises(DumpError, match=f"cannot write {out / 'yuv420' / '000003.yuv'}: No space left on device; "
-                                        "free some space, then continue the dump with --resume$"):
+    with pytest.raises(
+        DumpError,
+        match=f"cannot write {out / 'yuv420' / '000003.yuv'}: No space left on device; "
+        "free some space, then continue the dump with --resume$",
+    ):
         dump(out, controller=TRACKER, frames=6)
     assert not list(out.rglob(".tmp.*")) and not (out / "video.mp4").exists()
     assert len(load_dump(out)) == 3 and (out / "rgb" / "000003.png").exists()  # written, but not complete
@@ -307,8 +361,21 @@ def test_command_line_env_dump(tmp_path):
         pytest.skip(f"HeadTrackBall-v0 is not available: {exc}")
     parser = argparse.ArgumentParser()
     add_dump_parser(parser.add_subparsers())
-    args = parser.parse_args(["dump", "--env", "aibo_sim/HeadTrackBall-v0", "--policy", "random", "--steps", "10",
-                              "--out", str(tmp_path / "env"), "--formats", "rgb,openr,seg"])
+    args = parser.parse_args(
+        [
+            "dump",
+            "--env",
+            "aibo_sim/HeadTrackBall-v0",
+            "--policy",
+            "random",
+            "--steps",
+            "10",
+            "--out",
+            str(tmp_path / "env"),
+            "--formats",
+            "rgb,openr,seg",
+        ]
+    )
     assert args.handler(args) == 0
     frames = load_dump(tmp_path / "env")
     assert len(frames) == 11  # the reset frame and one per step
@@ -320,7 +387,7 @@ def test_command_line_env_dump(tmp_path):
 def test_a_scene_without_a_ball_dumps_every_format_with_no_ball_record(tmp_path):
     scene = tmp_path / "no_ball.xml"
     scene.write_text(f"""<mujoco>
-  <include file="{models_dir() / 'ers7.xml'}"/>
+  <include file="{models_dir() / "ers7.xml"}"/>
   <worldbody><geom name="floor" type="plane" size="2 2 0.1" rgba="0.3 0.5 0.3 1"/></worldbody>
 </mujoco>""")
     summary = dump(tmp_path / "out", controller=TRACKER, frames=3, formats=FORMATS, scene=scene)
@@ -335,7 +402,9 @@ def test_faststart_moves_the_index_ahead_and_every_frame_decodes_the_same(tmp_pa
     path = tmp_path / "written.mp4"
     writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"mp4v"), 30, (208, 160))
     for k in range(40):  # noise and flat frames: chunks of very different sizes
-        writer.write(rng.integers(0, 256, (160, 208, 3), np.uint8) if k % 2 else np.full((160, 208, 3), 5 * k, np.uint8))
+        writer.write(
+            rng.integers(0, 256, (160, 208, 3), np.uint8) if k % 2 else np.full((160, 208, 3), 5 * k, np.uint8)
+        )
     writer.release()
     moved = tmp_path / "moved.mp4"
     shutil.copy(path, moved)
@@ -374,40 +443,49 @@ def _chunk_offsets(data: bytes) -> list[int]:
                 walk(box_start + header, box_end)
             elif kind in (b"stco", b"co64"):
                 width, at = (4 if kind == b"stco" else 8), box_start + header + 8
-                count = int.from_bytes(data[at - 4:at], "big")
-                found.extend(int.from_bytes(data[at + k * width:at + (k + 1) * width], "big") for k in range(count))
+                count = int.from_bytes(data[at - 4 : at], "big")
+                found.extend(int.from_bytes(data[at + k * width : at + (k + 1) * width], "big") for k in range(count))
 
     walk(0, len(data))
     return found
 
 
-@pytest.mark.parametrize("table, large_moov, large_stbl", [(b"stco", False, False), (b"co64", False, False),
-                                                           (b"stco", True, False), (b"stco", False, True)])
-def test_faststart_shifts_each_kind_of_chunk_table_behind_any_box_header(tmp_path, monkeypatch, table, large_moov,
-                                                                        large_stbl):
+@pytest.mark.parametrize(
+    "table, large_moov, large_stbl",
+    [(b"stco", False, False), (b"co64", False, False), (b"stco", True, False), (b"stco", False, True)],
+)
+def test_faststart_shifts_each_kind_of_chunk_table_behind_any_box_header(
+    tmp_path, monkeypatch, table, large_moov, large_stbl
+):
     monkeypatch.setattr(dump_formats, "_MOVE_BLOCK", 7)  # many overlapping blocks
     ftyp, frames = _box(b"ftyp", b"isom\0\0\0\0isom"), bytes(range(200))
     offsets = [len(ftyp) + 8, len(ftyp) + 8 + 150]
     width = 4 if table == b"stco" else 8
-    chunks = _box(table, bytes(4) + len(offsets).to_bytes(4, "big") + b"".join(o.to_bytes(width, "big") for o in offsets))
+    chunks = _box(
+        table, bytes(4) + len(offsets).to_bytes(4, "big") + b"".join(o.to_bytes(width, "big") for o in offsets)
+    )
     moov = _box(b"moov", _box(b"trak", _box(b"mdia", _box(b"minf", _box(b"stbl", chunks, large_stbl)))), large_moov)
     path = tmp_path / "synthetic.mp4"
     before = ftyp + _box(b"mdat", frames) + moov
     path.write_bytes(before)
     assert mp4_faststart(path)
     after = path.read_bytes()
-    assert [box[0] for box in mp4_boxes(after, 0, len(after))] == [b"ftyp", b"moov", b"mdat"] and len(after) == len(before)
+    assert [box[0] for box in mp4_boxes(after, 0, len(after))] == [b"ftyp", b"moov", b"mdat"] and len(after) == len(
+        before
+    )
     moved = _chunk_offsets(after)
     assert moved == [o + len(moov) for o in offsets]
-    assert all(after[new:new + 20] == before[old:old + 20] for new, old in zip(moved, offsets))
+    assert all(after[new : new + 20] == before[old : old + 20] for new, old in zip(moved, offsets))
 
 
 def test_faststart_leaves_a_file_it_cannot_move_as_it_was(tmp_path):
     ftyp = _box(b"ftyp", b"isom\0\0\0\0isom")
     chunks = _box(b"stco", bytes(4) + (1).to_bytes(4, "big") + (len(ftyp) + 8).to_bytes(4, "big"))
     moov = _box(b"moov", _box(b"trak", _box(b"mdia", _box(b"minf", _box(b"stbl", chunks)))))
-    for name, data in {"index first": ftyp + moov + _box(b"mdat", bytes(64)),
-                       "truncated": (ftyp + _box(b"mdat", bytes(64)) + moov)[:-3]}.items():
+    for name, data in {
+        "index first": ftyp + moov + _box(b"mdat", bytes(64)),
+        "truncated": (ftyp + _box(b"mdat", bytes(64)) + moov)[:-3],
+    }.items():
         path = tmp_path / f"{name}.mp4"
         path.write_bytes(data)
         assert not mp4_faststart(path), name

@@ -33,7 +33,8 @@ def coco_dump(tmp_path_factory):
 def test_coco_file_loads_and_the_ball_box_is_centred_on_its_projection(coco_dump):
     coco = COCO(str(coco_dump / "coco.json"))
     assert {c["name"]: c["id"] for c in coco.loadCats(coco.getCatIds())} == {
-        name: SEGMENTATION_CLASSES.index(name) for name in ("ball", "goal", "beacon", "robot")}
+        name: SEGMENTATION_CLASSES.index(name) for name in ("ball", "goal", "beacon", "robot")
+    }
     frames = load_dump(coco_dump)
     assert sorted(coco.getImgIds()) == list(range(1, 31))
     ball_id = SEGMENTATION_CLASSES.index("ball")
@@ -87,11 +88,15 @@ def test_records_without_masks_still_give_boxes(coco_dump, tmp_path):
     assert boxes == [{k: v for k, v in a.items() if k != "segmentation"} for a in masked] and boxes
 
 
-@pytest.mark.parametrize("mask, counts", [
-    ([[0, 1], [0, 1], [0, 0]], [3, 2, 1]),  # column-major: down the first column, then the second
-    ([[1, 0], [1, 0], [0, 1]], [0, 2, 3, 1]),  # set at (0, 0): a first run of no zeros
-    ([[1, 1]], [0, 2]), ([[0, 0]], [2]),
-])
+@pytest.mark.parametrize(
+    "mask, counts",
+    [
+        ([[0, 1], [0, 1], [0, 0]], [3, 2, 1]),  # column-major: down the first column, then the second
+        ([[1, 0], [1, 0], [0, 1]], [0, 2, 3, 1]),  # set at (0, 0): a first run of no zeros
+        ([[1, 1]], [0, 2]),
+        ([[0, 0]], [2]),
+    ],
+)
 def test_mask_rle_counts_runs_down_the_columns_from_zeros(mask, counts):
     mask = np.array(mask, bool)
     assert mask_rle(mask) == {"size": list(mask.shape), "counts": counts}

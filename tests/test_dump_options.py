@@ -69,17 +69,25 @@ def test_memory_stick_is_checked_first_recorded_and_checked_on_resume(writer, tm
     assert (out / CONTROLLER_FILES / "where.txt").read_text() == "openr openr"
     with pytest.raises(DumpError, match=r"other parameters \(memory_stick\)"):
         dump(out, controller=writer, frames=2, formats=("rgb",), backend="openr", memory_stick=second, resume=True)
-    assert dump(out, controller=writer, frames=2, formats=("rgb",), backend="openr", memory_stick=first,
-                resume=True).new_frames == 0
+    assert (
+        dump(
+            out, controller=writer, frames=2, formats=("rgb",), backend="openr", memory_stick=first, resume=True
+        ).new_frames
+        == 0
+    )
 
 
-@pytest.mark.parametrize("option", [["--memory-stick", str(openr_bridge.DEFAULT_MEMORY_STICK)],
-                                    ["--mtn-mode", "openr"]], ids=["memory-stick", "mtn-mode"])
+@pytest.mark.parametrize(
+    "option",
+    [["--memory-stick", str(openr_bridge.DEFAULT_MEMORY_STICK)], ["--mtn-mode", "openr"]],
+    ids=["memory-stick", "mtn-mode"],
+)
 def test_controller_options_with_env_are_refused(tmp_path, capsys, option):
     out = tmp_path / "dump"
     assert main(["dump", "--env", ENV, "--steps", "2", "--out", str(out), *option]) == 2
-    assert capsys.readouterr().err == ("aibo-sim: error: --mtn-mode and --memory-stick apply to controller dumps, "
-                                       "not to --env\n")
+    assert capsys.readouterr().err == (
+        "aibo-sim: error: --mtn-mode and --memory-stick apply to controller dumps, not to --env\n"
+    )
     assert not out.exists()
 
 

@@ -33,8 +33,11 @@ def ray():
 
 
 def _files(folder: Path) -> dict:
-    return {str(p.relative_to(folder)): p.read_bytes() for p in sorted(folder.rglob("*"))
-            if p.is_file() and p.name != LOCK_NAME}
+    return {
+        str(p.relative_to(folder)): p.read_bytes()
+        for p in sorted(folder.rglob("*"))
+        if p.is_file() and p.name != LOCK_NAME
+    }
 
 
 @pytest.fixture(scope="module")
@@ -99,8 +102,25 @@ def test_a_bad_ray_address_is_one_line_and_changes_nothing(tmp_path, capsys):
     assert main(["dump", str(TRACKER), "--out", str(out), "--steps", "4", "--ray-address", "auto"]) == 2
     assert "--ray-address applies to --engine ray" in capsys.readouterr().err
     pytest.importorskip("ray")
-    assert main(["dump", str(TRACKER), "--out", str(out), "--steps", "4", "--workers", "2", "--engine", "ray",
-                 "--ray-address", "127.0.0.1:1"]) == 2  # nothing listens on port 1
+    assert (
+        main(
+            [
+                "dump",
+                str(TRACKER),
+                "--out",
+                str(out),
+                "--steps",
+                "4",
+                "--workers",
+                "2",
+                "--engine",
+                "ray",
+                "--ray-address",
+                "127.0.0.1:1",
+            ]
+        )
+        == 2
+    )  # nothing listens on port 1
     error = capsys.readouterr().err
     assert error.count("\n") == 1 and "--ray-address 127.0.0.1:1: no Ray cluster answers there" in error
     assert not out.exists()

@@ -37,8 +37,11 @@ def _cli(*args: str) -> list[str]:
 def _snapshot(folder: Path, lock: bool = True) -> dict:
     """Every entry below ``folder``: its bytes (files), with its modification time; without the
     lock file unless ``lock`` (a writer refused after taking the lock has written its name there)."""
-    return {str(p.relative_to(folder)): (p.read_bytes() if p.is_file() else None, p.stat().st_mtime_ns)
-            for p in sorted(folder.rglob("*")) if lock or p.name != LOCK_NAME}
+    return {
+        str(p.relative_to(folder)): (p.read_bytes() if p.is_file() else None, p.stat().st_mtime_ns)
+        for p in sorted(folder.rglob("*"))
+        if lock or p.name != LOCK_NAME
+    }
 
 
 def _alive(pid: int) -> bool:
@@ -168,8 +171,9 @@ def test_a_locked_folder_is_refused_naming_the_holder_and_nothing_changes(small_
     lock = FolderLock(out, command="aibo-sim dump elsewhere --out somewhere")
     try:
         before = _snapshot(out)
-        assert main(["dump", str(TRACKER), "--out", str(out), "--steps", "4", "--formats", "rgb,yuv420",
-                     "--resume"]) == 2
+        assert (
+            main(["dump", str(TRACKER), "--out", str(out), "--steps", "4", "--formats", "rgb,yuv420", "--resume"]) == 2
+        )
         error = capsys.readouterr().err
         assert error.count("\n") == 1
         assert f"(pid {os.getpid()}, started " in error and "command: aibo-sim dump elsewhere --out somewhere" in error
@@ -192,8 +196,11 @@ def uninterrupted(tmp_path_factory):
 
 def test_resume_after_a_kill_is_byte_identical_whatever_the_formats(uninterrupted, tmp_path):
     out = tmp_path / "dump"
-    process = subprocess.Popen(_cli("dump", str(TRACKER), "--out", str(out), "--steps", "30", "--seed", "2",
-                                    "--formats", ",".join(NO_VIDEO)), cwd=ROOT, stderr=subprocess.DEVNULL)
+    process = subprocess.Popen(
+        _cli("dump", str(TRACKER), "--out", str(out), "--steps", "30", "--seed", "2", "--formats", ",".join(NO_VIDEO)),
+        cwd=ROOT,
+        stderr=subprocess.DEVNULL,
+    )
     try:
         _wait_for(lambda: _lines(out) >= 6 or process.poll() is not None, STARTUP_S, "six frames")
         process.kill()
@@ -243,8 +250,10 @@ def test_a_folder_that_is_not_a_dump_is_refused_and_untouched(tmp_path, capsys, 
     argv = ["dump", str(TRACKER), "--out", str(out), "--steps", "2"] + ["--resume"] * resume
     assert main(argv) == 2
     error = capsys.readouterr().err
-    assert error == f"aibo-sim: error: {out} is not empty and is not a dump (no meta.json): refusing to write into " \
-                    "it; choose a new or empty folder for --out\n"
+    assert (
+        error == f"aibo-sim: error: {out} is not empty and is not a dump (no meta.json): refusing to write into "
+        "it; choose a new or empty folder for --out\n"
+    )
     (out / "meta.json").write_text('{"not": "a dump"}')
     before = _snapshot(out)
     assert main(argv) == 2
@@ -255,10 +264,19 @@ def test_a_folder_that_is_not_a_dump_is_refused_and_untouched(tmp_path, capsys, 
 def test_only_the_dumps_own_temporary_files_are_removed(small_dump, tmp_path):
     out = tmp_path / "dump"
     shutil.copytree(small_dump, out)
-    own = [out / ".tmp.video.mp4", out / ".tmp.meta.json", out / "rgb" / ".tmp.000002.png",
-           out / "yuv420" / ".tmp.000009.yuv"]
-    others = [out / ".tmp.notes", out / "rgb" / ".tmp.notes.txt", out / "rgb" / ".tmp.000002.jpg",
-              out / "extra" / ".tmp.000001.png", out / "extra" / "rgb" / ".tmp.000001.png"]
+    own = [
+        out / ".tmp.video.mp4",
+        out / ".tmp.meta.json",
+        out / "rgb" / ".tmp.000002.png",
+        out / "yuv420" / ".tmp.000009.yuv",
+    ]
+    others = [
+        out / ".tmp.notes",
+        out / "rgb" / ".tmp.notes.txt",
+        out / "rgb" / ".tmp.000002.jpg",
+        out / "extra" / ".tmp.000001.png",
+        out / "extra" / "rgb" / ".tmp.000001.png",
+    ]
     for path in own + others:
         path.parent.mkdir(parents=True, exist_ok=True)
         path.write_text("partial")
@@ -321,11 +339,12 @@ def test_load_dump_names_a_damaged_file(small_dump, tmp_path):
         file.truncate(0)
     png.write_bytes(b"not a PNG")
     frames = load_dump(out)
-    with pytest.raises(DumpError, match=f"^{re.escape(str(yuv))}: 0 bytes, expected 49920; the file is truncated "
-                                        "or corrupt$"):
-        frames[1].yuv420
+    with pytest.raises(
+        DumpError, match=f"^{re.escape(str(yuv))}: 0 bytes, expected 49920; the file is truncated or corrupt$"
+    ):
+        _ = frames[1].yuv420
     with pytest.raises(DumpError, match=f"^{re.escape(str(png))}: not a readable PNG; the file is corrupt$"):
-        frames[2].rgb
+        _ = frames[2].rgb
     assert frames[2].yuv420[0].shape == frames[1].rgb.shape[:2]
 
 
@@ -369,8 +388,11 @@ def test_a_reused_run_folder_holds_one_run(tmp_path, capsys):
     refused = {
         "foreign run.json": {"run.json": '{"mine": true}'},
         "frames without run.json": {"frames/000001.png": "ffmpeg's"},
-        "foreign file in frames": {"run.json": json.dumps({"controller": "x", "backend": "sim"}),
-                                   "frames/000001.png": "", "frames/notes.txt": "mine"},
+        "foreign file in frames": {
+            "run.json": json.dumps({"controller": "x", "backend": "sim"}),
+            "frames/000001.png": "",
+            "frames/notes.txt": "mine",
+        },
     }
     for case, files in refused.items():
         folder = tmp_path / case.replace(" ", "_")
@@ -388,14 +410,22 @@ def test_a_reused_run_folder_holds_one_run(tmp_path, capsys):
 @pytest.mark.skipif(not hasattr(resource, "RLIMIT_FSIZE"), reason="needs RLIMIT_FSIZE")
 def test_run_out_on_a_full_disk_is_exit_2_naming_the_file(tmp_path):
     """A write the system refuses (here the file-size limit: EFBIG, as ENOSPC on a full disk)."""
+
     def limit():
         resource.setrlimit(resource.RLIMIT_FSIZE, (4096, 4096))  # run.json's start fits, no frame does
         signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
 
     out = tmp_path / "run"
     env = {**os.environ, "PYTHONDONTWRITEBYTECODE": "1", "MESA_SHADER_CACHE_DISABLE": "true"}
-    result = subprocess.run(_cli("run", str(TRACKER), "--duration", "0.3", "--out", str(out)), cwd=ROOT, env=env,
-                            preexec_fn=limit, capture_output=True, text=True, timeout=60)
+    result = subprocess.run(
+        _cli("run", str(TRACKER), "--duration", "0.3", "--out", str(out)),
+        cwd=ROOT,
+        env=env,
+        preexec_fn=limit,
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
     assert result.returncode == 2, result.stderr
     assert result.stderr == f"aibo-sim: error: cannot write {out / 'frames' / '000000.png'}: File too large\n"
     assert list((out / "frames").iterdir()) == []  # no partial file
@@ -424,7 +454,9 @@ def test_a_shards_error_names_the_shard(tmp_path):
 
     bad = tmp_path / "bad.py"
     bad.write_text("from aibo_sim.controller import *\nrobot_step(64)\nraise RuntimeError('lost the ball')\n")
-    with pytest.raises(ControllerFailed, match=r"^shard_\d: controller bad\.py raised at simulated t = 0\.064 s") as failed:
+    with pytest.raises(
+        ControllerFailed, match=r"^shard_\d: controller bad\.py raised at simulated t = 0\.064 s"
+    ) as failed:
         dump(tmp_path / "dump", controller=bad, frames=8, workers=2, formats=("rgb",))
     assert "lost the ball" in str(failed.value)
 
@@ -460,7 +492,10 @@ def test_a_set_whose_target_is_a_folder_is_not_half_replaced(tmp_path):
     (tmp_path / "b.png").mkdir()
     with pytest.raises(OSError, match=rf"^cannot write {tmp_path / 'b.png'}: Is a directory$"):
         write_files_atomic({tmp_path / "a.png": b"new", tmp_path / "b.png": b"new"})
-    assert (tmp_path / "a.png").read_bytes() == b"old" and sorted(p.name for p in tmp_path.iterdir()) == ["a.png", "b.png"]
+    assert (tmp_path / "a.png").read_bytes() == b"old" and sorted(p.name for p in tmp_path.iterdir()) == [
+        "a.png",
+        "b.png",
+    ]
 
 
 # ---------------------------------------------------------------- bad input refused before anything is written
@@ -472,7 +507,7 @@ def _scene(tmp_path: Path, ball: str) -> Path:
 
     scene = tmp_path / "scene.xml"
     scene.write_text(f"""<mujoco>
-  <include file="{models_dir() / 'ers7.xml'}"/>
+  <include file="{models_dir() / "ers7.xml"}"/>
   <worldbody><geom name="floor" type="plane" size="2 2 0.1"/>{ball}</worldbody>
 </mujoco>""")
     return scene
@@ -481,12 +516,26 @@ def _scene(tmp_path: Path, ball: str) -> Path:
 FIXED_BALL = '<body name="ball" pos="0.5 0 0.042"><geom name="ball" type="sphere" size="0.042"/></body>'
 
 
-@pytest.mark.parametrize("env, ball, workers", [("ReachBall", "", "1"), ("HeadTrackBall", FIXED_BALL, "2")],
-                         ids=["reach-no-ball", "track-fixed-ball-sharded"])
+@pytest.mark.parametrize(
+    "env, ball, workers",
+    [("ReachBall", "", "1"), ("HeadTrackBall", FIXED_BALL, "2")],
+    ids=["reach-no-ball", "track-fixed-ball-sharded"],
+)
 def test_an_env_dump_in_a_scene_whose_ball_cannot_be_placed_writes_nothing(tmp_path, capsys, env, ball, workers):
     scene, out = _scene(tmp_path, ball), tmp_path / "dump"
-    argv = ["dump", "--env", f"aibo_sim/{env}-v0", "--scene", str(scene), "--out", str(out), "--steps", "4",
-            "--workers", workers]
+    argv = [
+        "dump",
+        "--env",
+        f"aibo_sim/{env}-v0",
+        "--scene",
+        str(scene),
+        "--out",
+        str(out),
+        "--steps",
+        "4",
+        "--workers",
+        workers,
+    ]
     assert main(argv) == 2
     error = capsys.readouterr().err
     assert error.startswith(f"aibo-sim: error: --scene {scene}: environment aibo_sim/{env}-v0 places the ball, but ")
@@ -504,11 +553,18 @@ def test_a_sharded_controller_dump_in_a_scene_without_a_ball_runs_as_one_worker_
         assert (tmp_path / "two" / "shard_0" / name).read_bytes() == (tmp_path / "one" / name).read_bytes()
 
 
-@pytest.mark.parametrize("argv, message", [
-    (["--seed", str(2**64 - 1), "--workers", "2"], "--seed must be a whole number from 0 to 2**64 - 2 with "
-                                                   "--workers 2 (shard k uses seed + k), not 18446744073709551615"),
-    (["--formats", "all,rgb"], "--formats all,rgb: all (every format) cannot be combined with other names"),
-], ids=["seed", "formats"])
+@pytest.mark.parametrize(
+    "argv, message",
+    [
+        (
+            ["--seed", str(2**64 - 1), "--workers", "2"],
+            "--seed must be a whole number from 0 to 2**64 - 2 with "
+            "--workers 2 (shard k uses seed + k), not 18446744073709551615",
+        ),
+        (["--formats", "all,rgb"], "--formats all,rgb: all (every format) cannot be combined with other names"),
+    ],
+    ids=["seed", "formats"],
+)
 def test_options_that_cannot_work_together_are_refused_before_the_folder(tmp_path, capsys, argv, message):
     out = tmp_path / "dump"
     assert main(["dump", str(TRACKER), "--out", str(out), "--steps", "4", *argv]) == 2
@@ -526,15 +582,19 @@ def coco_dump(tmp_path_factory):
 BALL = {"category": "ball", "object": "ball", "bbox": [1, 2, 3, 4], "area": 9, "visibility": 1.0}
 
 
-@pytest.mark.parametrize("change, message", [
-    ({"objects": None}, '"objects" is not a list of detections'),
-    ({"objects": {"a": 1}}, '"objects" is not a list of detections'),
-    ({"objects": [1]}, '"objects" is not a list of detections'),
-    ({"objects": [{}]}, '"objects" is not a list of detections'),
-    ({"objects": [{k: v for k, v in BALL.items() if k != "object"}]}, '"objects" is not a list of detections'),
-    ({"objects": [{**BALL, "category": "nope"}]}, '"objects" is not a list of detections'),
-    ({"index": 99999999}, "frame index 99999999 is past the dump's frames (its indices are below 4)"),
-], ids=["null", "object", "number", "empty", "no-object", "category", "index"])
+@pytest.mark.parametrize(
+    "change, message",
+    [
+        ({"objects": None}, '"objects" is not a list of detections'),
+        ({"objects": {"a": 1}}, '"objects" is not a list of detections'),
+        ({"objects": [1]}, '"objects" is not a list of detections'),
+        ({"objects": [{}]}, '"objects" is not a list of detections'),
+        ({"objects": [{k: v for k, v in BALL.items() if k != "object"}]}, '"objects" is not a list of detections'),
+        ({"objects": [{**BALL, "category": "nope"}]}, '"objects" is not a list of detections'),
+        ({"index": 99999999}, "frame index 99999999 is past the dump's frames (its indices are below 4)"),
+    ],
+    ids=["null", "object", "number", "empty", "no-object", "category", "index"],
+)
 def test_a_bad_frame_record_is_a_corrupt_line_and_nothing_changes(coco_dump, tmp_path, capsys, change, message):
     out = tmp_path / "dump"
     shutil.copytree(coco_dump, out)
@@ -560,22 +620,31 @@ def _set(meta: dict, path: str, value) -> None:
         meta[key] = value
 
 
-@pytest.mark.parametrize("path, value, field", [
-    ("files.rgb.path", KeyError, '"files"."rgb"."path"'), ("files.rgb.path", 3, '"files"."rgb"."path"'),
-    ("files.rgb.path", "rgb/{frame}.png", '"files"."rgb"."path"'), ("files.rgb", "x", '"files"."rgb"'),
-    ("files.yuv420.bytes", "x", '"files"."yuv420"."bytes"'), ("camera.width", KeyError, '"camera"."width"'),
-    ("camera.width", "x", '"camera"."width"'), ("camera.height", 0, '"camera"."height"'),
-    ("segmentation_classes", 5, '"segmentation_classes"'), ("parameters.frames", None, '"parameters"."frames"'),
-    ("camera", [], '"camera"'),
-])
+@pytest.mark.parametrize(
+    "path, value, field",
+    [
+        ("files.rgb.path", KeyError, '"files"."rgb"."path"'),
+        ("files.rgb.path", 3, '"files"."rgb"."path"'),
+        ("files.rgb.path", "rgb/{frame}.png", '"files"."rgb"."path"'),
+        ("files.rgb", "x", '"files"."rgb"'),
+        ("files.yuv420.bytes", "x", '"files"."yuv420"."bytes"'),
+        ("camera.width", KeyError, '"camera"."width"'),
+        ("camera.width", "x", '"camera"."width"'),
+        ("camera.height", 0, '"camera"."height"'),
+        ("segmentation_classes", 5, '"segmentation_classes"'),
+        ("parameters.frames", None, '"parameters"."frames"'),
+        ("camera", [], '"camera"'),
+    ],
+)
 def test_load_dump_names_a_damaged_field_of_meta_json(small_dump, tmp_path, path, value, field):
     out = tmp_path / "dump"
     shutil.copytree(small_dump, out)
     meta = json.loads((out / "meta.json").read_text())
     _set(meta, path, value)
     (out / "meta.json").write_text(json.dumps(meta))
-    with pytest.raises(DumpError, match=f"^{re.escape(str(out / 'meta.json'))}: {re.escape(field)} must be .*; "
-                                        "the file is corrupt$"):
+    with pytest.raises(
+        DumpError, match=f"^{re.escape(str(out / 'meta.json'))}: {re.escape(field)} must be .*; the file is corrupt$"
+    ):
         load_dump(out)
 
 
@@ -588,8 +657,10 @@ def test_a_shard_without_meta_json_is_named_as_damaged_with_the_way_out(tmp_path
     capsys.readouterr()
     assert main([*argv, "--resume"]) == 2
     shard = out / "shard_1"
-    assert capsys.readouterr().err == f"aibo-sim: error: {shard}: this shard of the dump in {out} has no meta.json: " \
-                                      f"the shard is damaged; remove {shard} and --resume to write the shard again\n"
+    assert (
+        capsys.readouterr().err == f"aibo-sim: error: {shard}: this shard of the dump in {out} has no meta.json: "
+        f"the shard is damaged; remove {shard} and --resume to write the shard again\n"
+    )
     assert {name: data for name, (data, _) in _snapshot(out, lock=False).items()} == before
     shutil.rmtree(shard)
     assert main([*argv, "--resume"]) == 0 and len(load_dump(out)) == 2
@@ -601,6 +672,8 @@ def test_a_file_in_place_of_the_controllers_folder_is_named(small_dump, tmp_path
     shutil.rmtree(out / "controller_files")
     (out / "controller_files").write_text("mine")
     assert main(["dump", str(TRACKER), "--out", str(out), "--steps", "4", "--formats", "rgb,yuv420", "--resume"]) == 2
-    assert capsys.readouterr().err == f"aibo-sim: error: {out / 'controller_files'}: not a folder (the controller " \
-                                      "runs in it): move it away, then --resume\n"
+    assert (
+        capsys.readouterr().err == f"aibo-sim: error: {out / 'controller_files'}: not a folder (the controller "
+        "runs in it): move it away, then --resume\n"
+    )
     assert (out / "controller_files").read_text() == "mine"

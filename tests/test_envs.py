@@ -74,13 +74,23 @@ def test_make_in_a_fresh_process_by_naming_the_module_in_the_id():
         "print(obs['image'].shape, env.spec.max_episode_steps)\n"
     )
     env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")]))
-    result = subprocess.run([sys.executable, "-c", code], cwd=ROOT, env=env, capture_output=True, text=True, timeout=120)
+    result = subprocess.run(
+        [sys.executable, "-c", code], cwd=ROOT, env=env, capture_output=True, text=True, timeout=120
+    )
     assert result.returncode == 0, result.stderr
     assert result.stdout.split() == ["(160,", "208,", "3)", "300"]
 
 
-@pytest.mark.parametrize("options", [{}, {"render_mode": "rgb_array"}, {"camera": "openr"}, {"camera": None},
-                                     {"image_only": True, "camera_layer": "M"}])
+@pytest.mark.parametrize(
+    "options",
+    [
+        {},
+        {"render_mode": "rgb_array"},
+        {"camera": "openr"},
+        {"camera": None},
+        {"image_only": True, "camera_layer": "M"},
+    ],
+)
 @pytest.mark.parametrize("env_id", AIBO_IDS)
 def test_check_env_passes_with_warnings_as_errors(env_id, options):
     env = gym.make(env_id, **options)
@@ -96,8 +106,9 @@ def test_image_only_observes_the_dict_s_image_and_takes_gymnasium_s_image_wrappe
     (obs, _), (image, _) = whole.reset(seed=3), alone.reset(seed=3)
     action = whole.action_space.sample()
     assert np.array_equal(obs["image"], image) and np.array_equal(whole.step(action)[0]["image"], alone.step(action)[0])
-    wrapped = gym.wrappers.FrameStackObservation(gym.wrappers.GrayscaleObservation(
-        gym.wrappers.ResizeObservation(alone, (80, 104))), 4)
+    wrapped = gym.wrappers.FrameStackObservation(
+        gym.wrappers.GrayscaleObservation(gym.wrappers.ResizeObservation(alone, (80, 104))), 4
+    )
     stacked, _ = wrapped.reset(seed=3)
     assert stacked.shape == (4, 80, 104) and wrapped.observation_space.contains(stacked)
     for env in (whole, wrapped):
@@ -150,8 +161,14 @@ def test_a_step_runs_the_joint_frames_up_to_the_next_camera_frame_at_once(monkey
     env.reset(seed=0)
     sim = env.unwrapped.sim
     step_frames, calls = sim.step_frames, []
-    monkeypatch.setattr(sim, "step_frames", lambda frames, before_frame=None, sensors=True: (
-        calls.append((frames, sensors)), step_frames(frames, before_frame, sensors)))
+    monkeypatch.setattr(
+        sim,
+        "step_frames",
+        lambda frames, before_frame=None, sensors=True: (
+            calls.append((frames, sensors)),
+            step_frames(frames, before_frame, sensors),
+        ),
+    )
     lengths = set()
     for _ in range(12):
         calls.clear()
@@ -234,8 +251,14 @@ YCRCB_BANDS = (openr_bridge.ofbkimageBAND_Y, openr_bridge.ofbkimageBAND_Cr, open
 
 @pytest.mark.parametrize(
     "camera, layer, shape",
-    [("rgb", "H", (160, 208, 3)), ("rgb", "M", (80, 104, 3)), ("rgb", "L", (40, 52, 3)),
-     ("ycrcb", "H", (160, 208, 3)), ("ycrcb", "L", (40, 52, 3)), ("openr", "H", (160, 208, 3))],
+    [
+        ("rgb", "H", (160, 208, 3)),
+        ("rgb", "M", (80, 104, 3)),
+        ("rgb", "L", (40, 52, 3)),
+        ("ycrcb", "H", (160, 208, 3)),
+        ("ycrcb", "L", (40, 52, 3)),
+        ("openr", "H", (160, 208, 3)),
+    ],
 )
 def test_camera_options(camera, layer, shape):
     env = gym.make(HEAD_TRACK, camera=camera, camera_layer=layer)

@@ -63,8 +63,19 @@ def check_walk(results: list[dict], direction: int) -> None:
     forward = np.array([r["displacement_m"][0] for r in results])
     heading = np.array([r["heading_change_deg"] for r in results])
     for r in results:
-        summary = json.dumps({k: r[k] for k in ("displacement_m", "heading_change_deg", "kinematic_distance_m",
-                                                 "peak_leg_joint_speed_rad_s", "paw_stance_share", "fell")})
+        summary = json.dumps(
+            {
+                k: r[k]
+                for k in (
+                    "displacement_m",
+                    "heading_change_deg",
+                    "kinematic_distance_m",
+                    "peak_leg_joint_speed_rad_s",
+                    "paw_stance_share",
+                    "fell",
+                )
+            }
+        )
         assert not r["fell"], summary
         assert direction * r["kinematic_distance_m"] > 0.3, summary
         assert 0.7 <= r["displacement_m"][0] / r["kinematic_distance_m"] <= 1.25, summary
@@ -107,7 +118,7 @@ def test_own_trot_converges_with_the_timestep(tmp_path):
         assert 0.7 <= r["displacement_m"][0] / r["kinematic_distance_m"] <= 1.25, r
         assert abs(r["heading_change_deg"]) <= 15 and abs(r["displacement_m"][1]) <= 0.08, r
     for k in (k for k, stiffness in enumerate(STIFFNESS) if stiffness >= 1):
-        same_stiffness = results[k::len(STIFFNESS)]
+        same_stiffness = results[k :: len(STIFFNESS)]
         forward = [r["displacement_m"][0] for r in same_stiffness]
         heading = [r["heading_change_deg"] for r in same_stiffness]
         assert np.ptp(forward) <= 0.06 and np.ptp(heading) <= 12, (STIFFNESS[k], forward, heading)

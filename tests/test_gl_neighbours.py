@@ -81,14 +81,20 @@ def test_mujoco_renderer_and_ours_draw_the_same_beside_each_other():
     assert all(np.array_equal(a, b) for a, b in zip(*ours))
 
 
-@pytest.mark.skipif(not __import__("ctypes.util").util.find_library("OSMesa"), reason="needs libOSMesa (CI installs it)")
+@pytest.mark.skipif(
+    not __import__("ctypes.util").util.find_library("OSMesa"), reason="needs libOSMesa (CI installs it)"
+)
 def test_the_same_holds_with_osmesa():
     """MUJOCO_GL=osmesa (read when MuJoCo is imported, hence another process): the tests above."""
     import os
     import subprocess
     import sys
 
-    result = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", __file__, "-k", "not osmesa"],
-                            env={**os.environ, "MUJOCO_GL": "osmesa", "PYOPENGL_PLATFORM": "osmesa"},
-                            capture_output=True, text=True, timeout=600)
+    result = subprocess.run(
+        [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", __file__, "-k", "not osmesa"],
+        env={**os.environ, "MUJOCO_GL": "osmesa", "PYOPENGL_PLATFORM": "osmesa"},
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
     assert result.returncode == 0 and "2 passed" in result.stdout, result.stdout[-2000:]

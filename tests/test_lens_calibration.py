@@ -38,24 +38,34 @@ import cv2
 import mujoco
 import numpy as np
 import pytest
+from test_camera import emissive, target_scene
 
 from aibo_sim.camera import LENSES, PROFILES, Lens
 from aibo_sim.sim import Simulation
-from test_camera import emissive, target_scene
 
 COLUMNS, ROWS, SQUARE = 9, 7, 0.02  # inner corners, metres
-BORDER = 1.0  # white plate beyond the outer squares, in squares (at 0.7, OpenCV put one outer corner 11 px off in one view)
+BORDER = (
+    1.0  # white plate beyond the outer squares, in squares (at 0.7, OpenCV put one outer corner 11 px off in one view)
+)
 PATTERN = (COLUMNS, ROWS)
-OBJECT_POINTS = np.array([((c - (COLUMNS - 1) / 2) * SQUARE, (r - (ROWS - 1) / 2) * SQUARE, 0.0)
-                          for r in range(ROWS) for c in range(COLUMNS)], np.float32)
+OBJECT_POINTS = np.array(
+    [
+        ((c - (COLUMNS - 1) / 2) * SQUARE, (r - (ROWS - 1) / 2) * SQUARE, 0.0)
+        for r in range(ROWS)
+        for c in range(COLUMNS)
+    ],
+    np.float32,
+)
 # What must be inside the picture: the squares and 0.2 square of white around them.
 _HALF_X, _HALF_Y = (COLUMNS + 1.2) / 2 * SQUARE, (ROWS + 1.2) / 2 * SQUARE
 OUTLINE = np.array([(x, y, 0.0) for x in np.linspace(-_HALF_X, _HALF_X, 9) for y in np.linspace(-_HALF_Y, _HALF_Y, 9)])
 AIMS = ((-1, -1), (1, -1), (-1, 1), (1, 1), (0, 0), (-1, 0), (1, 0), (0, -1), (0, 1))
 TILT_AXES = ((1, 0, 0), (1, -1, 0), (0, 1, 0), (-1, -1, 0), (-1, 0, 0), (-1, 1, 0), (0, -1, 0), (1, 1, 0))
-CHECKER = ('<texture name="checker" type="2d" builtin="checker" rgb1="0 0 0" rgb2="1 1 1" width="512" height="512"/>'
-           f'<material name="checker" texture="checker" texrepeat="{(COLUMNS + 1) / 2} {(ROWS + 1) / 2}" emission="1" '
-           'specular="0"/>')
+CHECKER = (
+    '<texture name="checker" type="2d" builtin="checker" rgb1="0 0 0" rgb2="1 1 1" width="512" height="512"/>'
+    f'<material name="checker" texture="checker" texrepeat="{(COLUMNS + 1) / 2} {(ROWS + 1) / 2}" emission="1" '
+    'specular="0"/>'
+)
 _MUJOCO_TO_OPENCV = np.diag([1.0, -1.0, -1.0])
 # Board distances (m; the centred shots, the others) and cornerSubPix's half window by width:
 # squares of ~17-26 px at 416 x 320, ~16-20 px at 208 x 160.
@@ -68,8 +78,10 @@ def checkerboard() -> str:
     plane facing -z on a white plate 0.1 mm behind it."""
     width, height = (COLUMNS + 1 + 2 * BORDER) * SQUARE / 2, (ROWS + 1 + 2 * BORDER) * SQUARE / 2
     plate = emissive("box", (0, 0, 0.0011), (width, height, 0.001), (1, 1, 1))
-    squares = (f'<geom type="plane" size="{(COLUMNS + 1) * SQUARE / 2} {(ROWS + 1) * SQUARE / 2} 0.01" quat="0 1 0 0" '
-               'material="checker" contype="0" conaffinity="0"/>')
+    squares = (
+        f'<geom type="plane" size="{(COLUMNS + 1) * SQUARE / 2} {(ROWS + 1) * SQUARE / 2} 0.01" quat="0 1 0 0" '
+        'material="checker" contype="0" conaffinity="0"/>'
+    )
     return f'<body name="board" mocap="true" pos="1 0 0">{plate}{squares}</body>'
 
 
@@ -146,11 +158,13 @@ def shoot_and_calibrate(sim: Simulation, new_frame_each_shot: bool = False) -> d
         place_board(sim, turn, position)
         frame = sim.camera.frame()
         luma = np.ascontiguousarray(frame.ycrcb[..., 0])
-        ok, corners = cv2.findChessboardCorners(luma, PATTERN, flags=cv2.CALIB_CB_ADAPTIVE_THRESH
-                                                | cv2.CALIB_CB_NORMALIZE_IMAGE)
+        ok, corners = cv2.findChessboardCorners(
+            luma, PATTERN, flags=cv2.CALIB_CB_ADAPTIVE_THRESH | cv2.CALIB_CB_NORMALIZE_IMAGE
+        )
         assert ok, f"view {index} (aim {aim}): no chessboard found"
-        corners = cv2.cornerSubPix(luma, corners, (window, window), (-1, -1),
-                                   (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_MAX_ITER, 100, 1e-4)).reshape(-1, 2)
+        corners = cv2.cornerSubPix(
+            luma, corners, (window, window), (-1, -1), (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_MAX_ITER, 100, 1e-4)
+        ).reshape(-1, 2)
         world = frame.position + (OBJECT_POINTS @ turn.T + position) @ (frame.xmat @ _MUJOCO_TO_OPENCV).T
         projected, _ = sim.camera.project(world, frame)
         if np.linalg.norm(corners[0] - projected[0]) > np.linalg.norm(corners[-1] - projected[0]):
@@ -160,13 +174,28 @@ def shoot_and_calibrate(sim: Simulation, new_frame_each_shot: bool = False) -> d
     points = [OBJECT_POINTS] * len(found)
     image_points = [c.reshape(-1, 1, 2) for c in found]
     size = (lens.width, lens.height)
-    rms, matrix, distortion, _, _, std, _, per_view = cv2.calibrateCameraExtended(points, image_points, size,
-                                                                                  None, None)
-    pinhole_rms = cv2.calibrateCamera(points, image_points, size, None, None, flags=cv2.CALIB_FIX_K1 | cv2.CALIB_FIX_K2
-                                      | cv2.CALIB_FIX_K3 | cv2.CALIB_ZERO_TANGENT_DIST)[0]
-    return {"lens": lens, "rms": rms, "matrix": matrix, "distortion": distortion.ravel()[:5], "std": std.ravel()[:4],
-            "per_view": per_view.ravel(), "pinhole_rms": pinhole_rms, "found": np.concatenate(found),
-            "expected": np.concatenate(expected)}
+    rms, matrix, distortion, _, _, std, _, per_view = cv2.calibrateCameraExtended(
+        points, image_points, size, None, None
+    )
+    pinhole_rms = cv2.calibrateCamera(
+        points,
+        image_points,
+        size,
+        None,
+        None,
+        flags=cv2.CALIB_FIX_K1 | cv2.CALIB_FIX_K2 | cv2.CALIB_FIX_K3 | cv2.CALIB_ZERO_TANGENT_DIST,
+    )[0]
+    return {
+        "lens": lens,
+        "rms": rms,
+        "matrix": matrix,
+        "distortion": distortion.ravel()[:5],
+        "std": std.ravel()[:4],
+        "per_view": per_view.ravel(),
+        "pinhole_rms": pinhole_rms,
+        "found": np.concatenate(found),
+        "expected": np.concatenate(expected),
+    }
 
 
 def mapping_error(lens: Lens, matrix: np.ndarray, distortion, turned: bool = False) -> tuple[np.ndarray, float]:
@@ -195,8 +224,11 @@ def displacement_error(lens: Lens, matrix: np.ndarray, distortion) -> np.ndarray
     rays = np.hstack([lens.undistort(np.stack([u.ravel(), v.ravel()], axis=-1)), np.ones((u.size, 1))])
 
     def field(k, d):
-        project = lambda dist: cv2.projectPoints(rays, np.zeros(3), np.zeros(3), k, dist)[0].reshape(-1, 2)
+        def project(dist):
+            return cv2.projectPoints(rays, np.zeros(3), np.zeros(3), k, dist)[0].reshape(-1, 2)
+
         return project(np.asarray(d, float)) - project(np.zeros(5))
+
     return np.linalg.norm(field(matrix, distortion) - field(lens.camera_matrix(), lens.distortion), axis=1)
 
 
@@ -205,17 +237,19 @@ def report(name: str, result: dict, started: float) -> str:
     offsets = result["found"] - result["expected"]
     strict, _ = mapping_error(lens, matrix, k)
     turned, degrees = mapping_error(lens, matrix, k, turned=True)
-    return (f"\n{name} {lens.width}x{lens.height}, {len(result['per_view'])} views: rms {result['rms']:.3f} px"
-            f" (worst view {result['per_view'].max():.3f}; pinhole model {result['pinhole_rms']:.3f});"
-            f" fx {matrix[0, 0]:.3f} / {lens.fx:.3f}, fy {matrix[1, 1]:.3f} / {lens.fy:.3f},"
-            f" cx {matrix[0, 2]:.3f} / {lens.cx:.3f}, cy {matrix[1, 2]:.3f} / {lens.cy:.3f}"
-            f" (std {np.round(result['std'], 3).tolist()});"
-            f" distortion {np.round(k, 5).tolist()} / {list(lens.distortion)};"
-            f" mapping max {strict.max():.3f} px, mean {strict.mean():.3f}; turned by {degrees:.3f} deg: max"
-            f" {turned.max():.3f}, mean {turned.mean():.3f}; displacement fields max"
-            f" {displacement_error(lens, matrix, k).max():.3f}; corners - recorded projection: mean"
-            f" {np.round(offsets.mean(0), 4).tolist()}, rms {np.sqrt((offsets ** 2).sum(1).mean()):.3f};"
-            f" {time.perf_counter() - started:.2f} s")
+    return (
+        f"\n{name} {lens.width}x{lens.height}, {len(result['per_view'])} views: rms {result['rms']:.3f} px"
+        f" (worst view {result['per_view'].max():.3f}; pinhole model {result['pinhole_rms']:.3f});"
+        f" fx {matrix[0, 0]:.3f} / {lens.fx:.3f}, fy {matrix[1, 1]:.3f} / {lens.fy:.3f},"
+        f" cx {matrix[0, 2]:.3f} / {lens.cx:.3f}, cy {matrix[1, 2]:.3f} / {lens.cy:.3f}"
+        f" (std {np.round(result['std'], 3).tolist()});"
+        f" distortion {np.round(k, 5).tolist()} / {list(lens.distortion)};"
+        f" mapping max {strict.max():.3f} px, mean {strict.mean():.3f}; turned by {degrees:.3f} deg: max"
+        f" {turned.max():.3f}, mean {turned.mean():.3f}; displacement fields max"
+        f" {displacement_error(lens, matrix, k).max():.3f}; corners - recorded projection: mean"
+        f" {np.round(offsets.mean(0), 4).tolist()}, rms {np.sqrt((offsets**2).sum(1).mean()):.3f};"
+        f" {time.perf_counter() - started:.2f} s"
+    )
 
 
 def assert_not_vacuous(result: dict) -> None:
@@ -247,7 +281,7 @@ def test_opencv_calibration_recovers_the_recorded_lens(tmp_path, profile, full):
 
     # The corners are where the recorded lens projects the board's corners.
     offsets = result["found"] - result["expected"]
-    assert np.all(np.abs(offsets.mean(axis=0)) < 0.02) and np.sqrt((offsets ** 2).sum(1).mean()) < 0.15
+    assert np.all(np.abs(offsets.mean(axis=0)) < 0.02) and np.sqrt((offsets**2).sum(1).mean()) < 0.15
 
     # OpenCV's calibration: every view fits, and the intrinsics are the recorded ones.
     assert result["rms"] < 0.15 and result["per_view"].max() < 0.2

@@ -13,8 +13,14 @@ SCENES = sorted(models_dir().glob("scene*.xml"))
 
 # Sony hardware limits in degrees, typed in from the spec's table A.4 (not read from ers7.py).
 SPEC_HW_LIMITS = {
-    "neck_tilt": (-80, 3), "head_pan": (-93, 93), "head_tilt": (-20, 50), "mouth": (-60, 0),
-    "ear_l": (0, 15), "ear_r": (0, 15), "tail_tilt": (0, 65), "tail_pan": (-60, 60),
+    "neck_tilt": (-80, 3),
+    "head_pan": (-93, 93),
+    "head_tilt": (-20, 50),
+    "mouth": (-60, 0),
+    "ear_l": (0, 15),
+    "ear_r": (0, 15),
+    "tail_tilt": (0, 65),
+    "tail_pan": (-60, 60),
     **{f"{leg}_j1": (-120, 135) for leg in ("lf", "rf")},
     **{f"{leg}_j1": (-135, 120) for leg in ("lh", "rh")},
     **{f"{leg}_j2": (-15, 93) for leg in ("lf", "lh", "rf", "rh")},
@@ -301,8 +307,8 @@ def test_culling_geoms_out_of_view_changes_no_pixel():
     """Random robot poses and head angles on the field, the ball near the robot, and two head
     poses that see the front legs: RGB, depth and segmentation from the culling renderer
     equal those drawn with every geom."""
-    from aibo_sim.render import Renderer
     from aibo_sim.camera import HEAD_CAMERA_GROUPS
+    from aibo_sim.render import Renderer
 
     sim = Simulation()
     sim.place_ball(0.35, 0.05)
@@ -319,7 +325,10 @@ def test_culling_geoms_out_of_view_changes_no_pixel():
             sim.data.qpos[sim.model.joint(name).qposadr[0]] = angle
         mujoco.mj_forward(sim.model, sim.data)
         for method in ("render", "render_depth", "render_segmentation"):
-            culled, full = getattr(culling, method)(sim.data, "camera"), getattr(drawing_all, method)(sim.data, "camera")
+            culled, full = (
+                getattr(culling, method)(sim.data, "camera"),
+                getattr(drawing_all, method)(sim.data, "camera"),
+            )
             assert np.array_equal(culled, full), method
         drawn.append(culling.scene.ngeom)
         total.append(drawing_all.scene.ngeom)
@@ -334,8 +343,8 @@ def test_renderers_taking_turns_each_draw_in_their_own_context():
     """Renderers skip making their OpenGL context current when it already is: interleaved
     with another renderer (another size, scene and camera), each one's frames equal those it
     draws alone."""
-    from aibo_sim.render import Renderer
     from aibo_sim.camera import HEAD_CAMERA_GROUPS
+    from aibo_sim.render import Renderer
 
     sim, other = Simulation(), Simulation(models_dir() / "scene_webots.xml")
     head = Renderer(sim.model, 208, 160, groups=HEAD_CAMERA_GROUPS)

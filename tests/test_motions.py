@@ -62,7 +62,9 @@ def test_shipped_files_are_what_the_generator_writes(tmp_path):
     for name, motion in motions.motions().items():
         data = serialize_mtn(motion)
         assert (tmp_path / name).read_bytes() == data
-        assert (MOTION_DIR / name).read_bytes() == data, f"models/motions/{name} is stale: run python -m aibo_sim.motions"
+        assert (MOTION_DIR / name).read_bytes() == data, (
+            f"models/motions/{name} is stale: run python -m aibo_sim.motions"
+        )
 
 
 @pytest.mark.parametrize("file", sorted(SHIPPED))
@@ -141,4 +143,6 @@ def test_a_fall_ends_the_report_s_kinematic_distance_too():
     sit = models_dir() / "motions" / "SIT.MTN"
     played = motions.play_motion(sit, repeat=50)
     assert played["fell"] and played["duration_s"] < 50 * read_mtn(sit).length_ms / 1000
-    assert played["kinematic_distance_m"] == pytest.approx(motions.kinematic_speed(read_mtn(sit)) * played["duration_s"])
+    assert played["kinematic_distance_m"] == pytest.approx(
+        motions.kinematic_speed(read_mtn(sit)) * played["duration_s"]
+    )

@@ -135,7 +135,8 @@ def tiny_motion() -> Motion:
 
 TINY = bytes.fromhex(
     "4f4d544e"  # 0   "OMTN"
-    "00000000 18000000 04000000 0100 0200 0200 1000 00000000"  # 4   sec0: num 0, size 24, 4 sections, v1.2, 2 keyframes, 16 ms, option
+    # 4   sec0: num 0, size 24, 4 sections, v1.2, 2 keyframes, 16 ms, option
+    "00000000 18000000 04000000 0100 0200 0200 1000 00000000"
     "01000000 1c000000"  # 28  sec1: num 1, size 28 = 8 + 17 + 3 padding
     "04 77616c6b 02 6d65 08 4452582d31303030 000000"  # 36  "walk", "me", "DRX-1000", pad
     "02000000 10000000 0200"  # 56  sec2: num 2, size 16 = 8 + 7 + 1 padding; 2 joints
@@ -194,8 +195,10 @@ def test_a_wrong_joint_count_is_named_from_section_3s_size_field():
     3's size field fits. A right count adds nothing."""
     with pytest.raises(MtnError) as info:
         parse_mtn(_patch(TINY, 64, "<H", 1), "tiny")
-    assert str(info.value) == ("tiny: byte 100 (0x64): negative interpolation count -2 before keyframe 1; "
-                               "section 3's size field fits 2 joints, section 2 lists 1")
+    assert str(info.value) == (
+        "tiny: byte 100 (0x64): negative interpolation count -2 before keyframe 1; "
+        "section 3's size field fits 2 joints, section 2 lists 1"
+    )
     with pytest.raises(MtnError, match=r"before keyframe 1$"):
         parse_mtn(_patch(TINY, 104, "<i", -1), "tiny")
 
@@ -251,9 +254,22 @@ def test_random_mutations_of_real_file_raise_only_mtn_error():
     raw = path.read_bytes()
     rng = random.Random(20050801)
     # u16/u32 header and size fields, plus the first few interpolation counts.
-    fields = [(8, "<I"), (12, "<I"), (16, "<H"), (18, "<H"), (20, "<H"), (22, "<H"), (32, "<I"),
-              (88, "<I"), (92, "<I"), (96, "<H"), (592, "<I"), (596, "<I"), (600, "<I"),
-              *((0x2B4 + 96 * k, "<I") for k in range(5))]
+    fields = [
+        (8, "<I"),
+        (12, "<I"),
+        (16, "<H"),
+        (18, "<H"),
+        (20, "<H"),
+        (22, "<H"),
+        (32, "<I"),
+        (88, "<I"),
+        (92, "<I"),
+        (96, "<H"),
+        (592, "<I"),
+        (596, "<I"),
+        (600, "<I"),
+        *((0x2B4 + 96 * k, "<I") for k in range(5)),
+    ]
     errors = parsed = 0
     for trial in range(360):
         kind = trial % 3
@@ -407,8 +423,16 @@ def test_webots_commands_only_at_keyframe_start():
     p = MotionPlayer(m, mode="webots")
     got = [p.step(8) for _ in range(8)]
     # keyframe 0 lasts 16 ms (2 calls), keyframe 1 lasts 32 ms (4 calls), the last 0 ms (1 call).
-    assert got == [{JOINT_LOCATORS[0]: 0.0}, None, {JOINT_LOCATORS[0]: 1.0}, None, None, None,
-                   {JOINT_LOCATORS[0]: 2.0}, None]
+    assert got == [
+        {JOINT_LOCATORS[0]: 0.0},
+        None,
+        {JOINT_LOCATORS[0]: 1.0},
+        None,
+        None,
+        None,
+        {JOINT_LOCATORS[0]: 2.0},
+        None,
+    ]
     assert p.is_over
 
 
@@ -460,8 +484,10 @@ def test_mtn_new_refuses_a_device_that_is_not_a_joint(tmp_path):
 @pytest.fixture
 def no_hang():
     """Fail a test that blocks (on a FIFO's open) instead of hanging the run."""
+
     def hung(signum, frame):
         raise TimeoutError("blocked for 10 s")
+
     previous = signal.signal(signal.SIGALRM, hung)
     signal.alarm(10)
     yield
@@ -496,10 +522,15 @@ def test_the_cli_refuses_a_fifo_or_a_device_in_one_line(tmp_path, command, speci
     if special == "fifo":
         special = str(tmp_path / "fifo.MTN")
         os.mkfifo(special)
-    done = subprocess.run([sys.executable, "-m", "aibo_sim.cli", "mtn", command, special],
-                          capture_output=True, text=True, timeout=60)
+    done = subprocess.run(
+        [sys.executable, "-m", "aibo_sim.cli", "mtn", command, special], capture_output=True, text=True, timeout=60
+    )
     kind = "a FIFO" if special.endswith("fifo.MTN") else "a device"
-    assert (done.returncode, done.stdout, done.stderr) == (2, "", f"aibo-sim: error: {special}: {kind}, not a regular file\n")
+    assert (done.returncode, done.stdout, done.stderr) == (
+        2,
+        "",
+        f"aibo-sim: error: {special}: {kind}, not a regular file\n",
+    )
 
 
 def test_play_escapes_a_locator_that_is_not_a_joint(tmp_path):

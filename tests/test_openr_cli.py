@@ -9,16 +9,17 @@ import time
 from pathlib import Path
 
 import pytest
+from openr_support import build_programs, make_stick
 
 from aibo_sim.cli import main
 from aibo_sim.dump import load_dump
 
-from openr_support import build_programs, make_stick
-
 ROOT = Path(__file__).resolve().parents[1]
 SENSOR = "OVirtualRobotComm.Sensor.OSensorFrameVectorData.S"
-JOINT_PROBE = ("JointProbe.Move.OCommandVectorData.S OVirtualRobotComm.Effector.OCommandVectorData.O\n"
-               f"{SENSOR} JointProbe.Sensor.OSensorFrameVectorData.O\n")
+JOINT_PROBE = (
+    "JointProbe.Move.OCommandVectorData.S OVirtualRobotComm.Effector.OCommandVectorData.O\n"
+    f"{SENSOR} JointProbe.Sensor.OSensorFrameVectorData.O\n"
+)
 
 
 @pytest.fixture(scope="module")
@@ -29,8 +30,15 @@ def objects(tmp_path_factory):
 def test_openr_sdk_prints_a_root_that_sonys_makefiles_use(capsys):
     assert main(["openr", "sdk"]) == 0
     root = Path(capsys.readouterr().out.strip())
-    for tool in ("bin/mipsel-linux-g++", "bin/mipsel-linux-strip", "OPEN_R/bin/stubgen2", "OPEN_R/bin/mkbin",
-                 "OPEN_R/lib/libOPENR.so", "OPEN_R/lib/libObjectComm.so", "OPEN_R/include/OPENR/OObject.h"):
+    for tool in (
+        "bin/mipsel-linux-g++",
+        "bin/mipsel-linux-strip",
+        "OPEN_R/bin/stubgen2",
+        "OPEN_R/bin/mkbin",
+        "OPEN_R/lib/libOPENR.so",
+        "OPEN_R/lib/libObjectComm.so",
+        "OPEN_R/include/OPENR/OObject.h",
+    ):
         assert (root / tool).exists(), tool
     assert (root / "OPEN_R" / "include" / "R4000").is_dir()
 
@@ -38,13 +46,35 @@ def test_openr_sdk_prints_a_root_that_sonys_makefiles_use(capsys):
 def test_run_writes_frames_console_and_run_json(objects, tmp_path, capfd):
     stick = make_stick(tmp_path / "program" / "MS", objects, ["JPROBE"], JOINT_PROBE)
     out = tmp_path / "out"
-    assert main(["run", str(stick.parent), "--duration", "0.2", "--out", str(out), "--seed", "3", "--ball-type",
-                 "pink", "--camera-profile", "ideal"]) == 0
+    assert (
+        main(
+            [
+                "run",
+                str(stick.parent),
+                "--duration",
+                "0.2",
+                "--out",
+                str(out),
+                "--seed",
+                "3",
+                "--ball-type",
+                "pink",
+                "--camera-profile",
+                "ideal",
+            ]
+        )
+        == 0
+    )
     printed = capfd.readouterr().out  # the objects' console is the runtime's standard output
     assert "JointProbe: sensor 0 4 " in printed and "ran memory stick program/MS on the host OPEN-R runtime" in printed
     run = json.loads((out / "run.json").read_text())
     assert (run["controller"], run["backend"], run["status"], run["seed"], run["ball_type"]) == (
-        str(stick), "memory stick", "done", 3, "pink")
+        str(stick),
+        "memory stick",
+        "done",
+        3,
+        "pink",
+    )
     assert run["camera"]["profile"] == "ideal" and run["simulated_s"] == 0.2
     assert len(list((out / "frames").glob("*.png"))) == run["camera_frames"] == 6  # at frames 0, 5, 9, ..., 21
     console = (out / "console.log").read_text()
@@ -55,22 +85,29 @@ def test_a_crash_exits_1_keeping_the_frames_and_saying_so_in_run_json(objects, t
     stick = make_stick(tmp_path / "ms", objects, ["CRASH"], f"{SENSOR} Crash.Sensor.OSensorFrameVectorData.O\n")
     out = tmp_path / "out"
     assert main(["run", str(stick), "--out", str(out)]) == 1
-    assert capsys.readouterr().err.strip() == ("aibo-sim: memory stick ms: OPEN-R object Crash (entry 7) crashed "
-                                               "(SIGSEGV: Segmentation fault) at simulated t = 0.088 s")
+    assert capsys.readouterr().err.strip() == (
+        "aibo-sim: memory stick ms: OPEN-R object Crash (entry 7) crashed "
+        "(SIGSEGV: Segmentation fault) at simulated t = 0.088 s"
+    )
     run = json.loads((out / "run.json").read_text())
     assert run["status"] == "failed" and run["simulated_s"] == 0.088 and run["camera_frames"] == 3
     assert len(list((out / "frames").glob("*.png"))) == 3
 
 
-@pytest.mark.parametrize("arguments, message", [
-    (["--backend", "openr"], "--backend applies to controllers: {stick} is a memory stick"),
-    (["--mtn-mode", "webots"], "--mtn-mode applies to controllers: {stick} is a memory stick"),
-])
+@pytest.mark.parametrize(
+    "arguments, message",
+    [
+        (["--backend", "openr"], "--backend applies to controllers: {stick} is a memory stick"),
+        (["--mtn-mode", "webots"], "--mtn-mode applies to controllers: {stick} is a memory stick"),
+    ],
+)
 def test_a_controllers_options_are_refused_with_a_stick(objects, tmp_path, capsys, arguments, message):
     stick = make_stick(tmp_path / "ms", objects, ["JPROBE"], JOINT_PROBE)
     assert main(["run", str(stick), *arguments, "--out", str(tmp_path / "out")]) == 2
-    assert capsys.readouterr().err.strip() == f"aibo-sim: error: {message.format(stick=stick)}, whose OPEN-R " \
-                                              "objects run as on the robot"
+    assert (
+        capsys.readouterr().err.strip() == f"aibo-sim: error: {message.format(stick=stick)}, whose OPEN-R "
+        "objects run as on the robot"
+    )
     assert not (tmp_path / "out").exists()
 
 
@@ -78,15 +115,22 @@ def test_a_bad_connect_cfg_exits_2_naming_its_line(objects, tmp_path, capsys):
     stick = make_stick(tmp_path / "ms", objects, ["JPROBE"], JOINT_PROBE + "Nobody.X.Y.S JointProbe.Z.Y.O\n")
     assert main(["run", str(stick), "--duration", "0.1"]) == 2
     err = capsys.readouterr().err
-    assert err.startswith(f"aibo-sim: error: {stick}/OPEN-R/MW/CONF/CONNECT.CFG:3: no object named 'Nobody' "
-                          "registers Nobody.X.Y.S (the objects: JointProbe, OVirtualRobotAudioComm, OVirtualRobotComm")
+    assert err.startswith(
+        f"aibo-sim: error: {stick}/OPEN-R/MW/CONF/CONNECT.CFG:3: no object named 'Nobody' "
+        "registers Nobody.X.Y.S (the objects: JointProbe, OVirtualRobotAudioComm, OVirtualRobotComm"
+    )
 
 
 def test_one_sigterm_ends_a_stick_run_with_143_and_an_honest_run_json(objects, tmp_path):
     stick = make_stick(tmp_path / "ms", objects, ["JPROBE"], JOINT_PROBE)
     out = tmp_path / "out"
-    run = subprocess.Popen([sys.executable, "-m", "aibo_sim.cli", "run", str(stick), "--duration", "100000",
-                            "--out", str(out)], cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    run = subprocess.Popen(
+        [sys.executable, "-m", "aibo_sim.cli", "run", str(stick), "--duration", "100000", "--out", str(out)],
+        cwd=ROOT,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     try:
         deadline = time.monotonic() + 120
         while not list((out / "frames").glob("*.png")) and time.monotonic() < deadline:
@@ -112,5 +156,7 @@ def test_dump_of_a_stick_records_frames_and_resumes(objects, tmp_path, capsys):
 
 def test_build_ms_bad_input_exits_2(tmp_path, capsys):
     assert main(["build-ms", str(tmp_path / "nothing.c"), "--out", str(tmp_path / "project")]) == 2
-    assert capsys.readouterr().err.strip() == f"aibo-sim: error: controller {tmp_path / 'nothing.c'}: no such file " \
-                                              "or folder"
+    assert (
+        capsys.readouterr().err.strip() == f"aibo-sim: error: controller {tmp_path / 'nothing.c'}: no such file "
+        "or folder"
+    )

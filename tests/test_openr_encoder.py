@@ -310,8 +310,13 @@ def test_frame_numbers_count_8ms_ticks():
     message = encode_frame(np.zeros((160, 208, 3), np.uint8), frame_number=2**32 + 5, field_counter=2**16 + 3)
     assert message.band(H, ofbkimageBAND_Y)[-1, :2].tolist() == [3, 0]
     # OPEN-R's frame numbers wrap to 1 after oframeMAX_NUMBER (0x0ffffff0), never to 0.
-    for tick, number in ((0, 0), (0x0FFFFFF0, 0x0FFFFFF0), (0x0FFFFFF1, 1), (2 * 0x0FFFFFF0 + 1, 1),
-                         (2**32 + 5, (2**32 + 4) % 0x0FFFFFF0 + 1)):
+    for tick, number in (
+        (0, 0),
+        (0x0FFFFFF0, 0x0FFFFFF0),
+        (0x0FFFFFF1, 1),
+        (2 * 0x0FFFFFF0 + 1, 1),
+        (2**32 + 5, (2**32 + 4) % 0x0FFFFFF0 + 1),
+    ):
         message = encode_frame(np.zeros((160, 208, 3), np.uint8), frame_number=tick)
         assert {message.GetInfo(layer).frameNumber for layer in range(4)} == {number}
 

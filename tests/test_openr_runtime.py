@@ -9,6 +9,7 @@ import wave
 
 import numpy as np
 import pytest
+from openr_support import build_programs, make, make_stick, run_stick
 
 import openr_bridge
 from aibo_sim import ers7
@@ -19,8 +20,6 @@ from openr_bridge import ConfigError, host_protocol
 from openr_bridge.cdt import OCdtVectorData, orange_ball_cdt, pink_ball_cdt
 from openr_bridge.config import parse_stub_cfg
 from openr_bridge.stubgen import generate
-
-from openr_support import build_programs, make, make_stick, run_stick
 
 PAN = ers7.JOINT_INDEX["head_pan"]
 EFFECTOR = "OVirtualRobotComm.Effector.OCommandVectorData.O"
@@ -35,16 +34,22 @@ def objects(tmp_path_factory):
 
 
 def test_stubgen2_numbers_entries_as_sony_does():
-    stub = parse_stub_cfg('ObjectName : Probe\nNumOfOSubject : 2\nNumOfOObserver : 3\n'
-                          'Service : "Probe.A.X.S", null, Ready()\nService : "Probe.B.X.S", Control(), null\n'
-                          'Service : "Probe.C.X.O", null, Notify()\nService : "Probe.D.X.O", Connect(), null\n'
-                          'Service : "Probe.E.X.O", null, null\nExtra : Power()\n')
+    stub = parse_stub_cfg(
+        "ObjectName : Probe\nNumOfOSubject : 2\nNumOfOObserver : 3\n"
+        'Service : "Probe.A.X.S", null, Ready()\nService : "Probe.B.X.S", Control(), null\n'
+        'Service : "Probe.C.X.O", null, Notify()\nService : "Probe.D.X.O", Connect(), null\n'
+        'Service : "Probe.E.X.O", null, null\nExtra : Power()\n'
+    )
     files = generate(stub)
     assert set(files) == {"def.h", "entry.h", "ProbeStub.h", "ProbeStub.cc"}
     entry = files["entry.h"]
-    for table, selectors in (("Hook   [numOfHook]    ", "0, 1, 2, 3"), ("Control[numOfSubject] ", "4, 5"),
-                             ("Ready  [numOfSubject] ", "6, 7"), ("Connect[numOfObserver]", "8, 9, 10"),
-                             ("Notify [numOfObserver]", "11, 12, 13")):
+    for table, selectors in (
+        ("Hook   [numOfHook]    ", "0, 1, 2, 3"),
+        ("Control[numOfSubject] ", "4, 5"),
+        ("Ready  [numOfSubject] ", "6, 7"),
+        ("Connect[numOfObserver]", "8, 9, 10"),
+        ("Notify [numOfObserver]", "11, 12, 13"),
+    ):
         assert f"const Selector Entry_{table} = {{ {selectors} }};" in entry
     assert "const Selector Extra_Entry[] = { 14 };" in entry and "const int entryPower = 0;" in entry
     assert "const longword numOfBasicEntries = 14;" in entry
@@ -52,17 +57,26 @@ def test_stubgen2_numbers_entries_as_sony_does():
     assert "const int sbjA = 0;" in definitions and "const int sbjB = 1;" in definitions
     assert "const int obsE = 2;" in definitions and '"Probe.D.X.O",' in definitions
     stub_cc = files["ProbeStub.cc"]
-    for line in ("StubFuncDefine_Ready(0, Ready)", "StubFuncDefine_Control_nofunc(0)", "StubFuncDefine_Control(1, Control)",
-                 "StubFuncDefine_Ready_nofunc(1)", "StubFuncDefine_Notify(0, Notify)", "StubFuncDefine_Connect(1, Connect)",
-                 "StubFuncDefine_Notify_nofunc(2)", "{Extra_Entry[0], (Entry)::_Power},", "Probe Self;"):
+    for line in (
+        "StubFuncDefine_Ready(0, Ready)",
+        "StubFuncDefine_Control_nofunc(0)",
+        "StubFuncDefine_Control(1, Control)",
+        "StubFuncDefine_Ready_nofunc(1)",
+        "StubFuncDefine_Notify(0, Notify)",
+        "StubFuncDefine_Connect(1, Connect)",
+        "StubFuncDefine_Notify_nofunc(2)",
+        "{Extra_Entry[0], (Entry)::_Power},",
+        "Probe Self;",
+    ):
         assert line in stub_cc
 
 
 def test_sdk_structures_read_the_encoders_bytes(tmp_path):
     """A C++ program of the SDK reads an OFbkImageVectorData our encoder wrote, field for field."""
     rgb = np.random.default_rng(3).integers(0, 256, (160, 208, 3), np.uint8)
-    message = openr_bridge.encode_frame(rgb, frame_number=1234, field_counter=77,
-                                        cdt=OCdtVectorData.of(orange_ball_cdt()))
+    message = openr_bridge.encode_frame(
+        rgb, frame_number=1234, field_counter=77, cdt=OCdtVectorData.of(orange_ball_cdt())
+    )
     (tmp_path / "image.bin").write_bytes(bytes(message))
     (tmp_path / "read.cc").write_text(r"""
 #include <OPENR/ODataFormats.h>
@@ -90,19 +104,34 @@ int main() {
 }
 """)
     library = sdk_root() / "OPEN_R" / "lib"
-    subprocess.run([str(sdk_root() / "bin" / "mipsel-linux-g++"), "-Wall", "-o", "read", "read.cc", f"-L{library}",
-                    "-lOPENR", f"-Wl,-rpath,{library}"], cwd=tmp_path, check=True)
+    subprocess.run(
+        [
+            str(sdk_root() / "bin" / "mipsel-linux-g++"),
+            "-Wall",
+            "-o",
+            "read",
+            "read.cc",
+            f"-L{library}",
+            "-lOPENR",
+            f"-Wl,-rpath,{library}",
+        ],
+        cwd=tmp_path,
+        check=True,
+    )
     out = subprocess.run(["./read"], cwd=tmp_path, capture_output=True, text=True, check=True).stdout.split("\n")
     assert out[0].split() == [str(len(bytes(message)))] * 2 + ["4", "192"]
     for layer in range(4):
         info = message.GetInfo(layer)
-        assert out[1 + layer].split() == [str(v) for v in (info.type, 1234, info.dataOffset, info.dataSize,
-                                                            info.width, info.height)]
+        assert out[1 + layer].split() == [
+            str(v) for v in (info.type, 1234, info.dataOffset, info.dataSize, info.width, info.height)
+        ]
     h_y, m_hh = message.band(0, openr_bridge.ofbkimageBAND_Y), message.band(1, openr_bridge.ofbkimageBAND_Y_HH)
     c = message.band(3, openr_bridge.ofbkimageBAND_CDT)
     c_band = openr_bridge.OFbkImage(message.GetInfo(3), message.GetData(3), openr_bridge.ofbkimageBAND_CDT)
-    assert out[5].split() == [str(v) for v in (h_y[33, 17], m_hh[7, 5], c[2, 9], 77,
-                                                c_band.ColorFrequency(openr_bridge.ocdtCHANNEL1), 5 * 208)]
+    assert out[5].split() == [
+        str(v)
+        for v in (h_y[33, 17], m_hh[7, 5], c[2, 9], 77, c_band.ColorFrequency(openr_bridge.ocdtCHANNEL1), 5 * 208)
+    ]
     assert out[6].split() == ["192", str(192 + 8 * 144), "256"]
 
 
@@ -115,8 +144,15 @@ def test_effector_plays_each_vector_and_asks_for_the_next_after_its_last_frame(o
     # one comes after a vector's last frame: that vector's region is given back (one reference
     # left: the program's) and the subject sends the other (two: the program's and the one the
     # subject holds until it is played; the effector takes its own when the notification arrives).
-    assert readies == ["ready assert refs 2 2", "ready assert refs 1 2", "ready assert refs 2 1",
-                       "ready assert refs 1 2", "ready assert refs 2 1", "ready assert refs 1 2", "ready assert refs 1 1"]
+    assert readies == [
+        "ready assert refs 2 2",
+        "ready assert refs 1 2",
+        "ready assert refs 2 1",
+        "ready assert refs 1 2",
+        "ready assert refs 2 1",
+        "ready assert refs 1 2",
+        "ready assert refs 1 1",
+    ]
     assert lines[2] == "no free region"  # the boot ready found both regions queued
     # Set-points: vector v's frame k is 10 + 4v + k degrees, one frame each, without a gap; then held.
     set_points = np.round(np.degrees([command for _, command in result.frames]), 6)
@@ -130,26 +166,40 @@ def test_effector_plays_each_vector_and_asks_for_the_next_after_its_last_frame(o
 
 @pytest.mark.parametrize("mode", ["nopower", "nogain"])
 def test_joints_stay_limp_without_motor_power_or_gain(objects, tmp_path, mode):
-    stick = make_stick(tmp_path / "ms", objects, ["JPROBE"], JOINT_PROBE, {"JOINTPROBE_MODE": "MODE.TXT"},
-                       {"MODE.TXT": mode})
+    stick = make_stick(
+        tmp_path / "ms", objects, ["JPROBE"], JOINT_PROBE, {"JOINTPROBE_MODE": "MODE.TXT"}, {"MODE.TXT": mode}
+    )
     result = run_stick(stick, 0.3, tmp_path / "out", lambda r: r.sim.joint_positions()[PAN])
     assert result.lines("JointProbe")[0] == f"mode [{mode}]"
     assert abs(np.degrees(result.frames[-1])) < 2  # commanded to 33 degrees, it did not move
 
 
 def test_files_are_the_memory_stick_and_the_runs_folder(objects, tmp_path):
-    stick = make_stick(tmp_path / "ms", objects, ["FPROBE"], design_data={"PROBE_TEXT": "TEXT.TXT"},
-                       data={"TEXT.TXT": "hello design\n"})
+    stick = make_stick(
+        tmp_path / "ms",
+        objects,
+        ["FPROBE"],
+        design_data={"PROBE_TEXT": "TEXT.TXT"},
+        data={"TEXT.TXT": "hello design\n"},
+    )
     out = tmp_path / "out"
     result = run_stick(stick, 1.0, out)
     assert result.run.time_ms == 0  # OPENR::Shutdown in DoStart ended the run before its first frame
     lines = result.lines("FileProbe")
-    assert lines[:5] == ["design ERS-7", "design data 13 bytes: hello design", "missing design data: 6",
-                         "write /ms/open-r/mw/data/p/probe.txt: ok", "read /MS/OPEN-R/MW/DATA/P/PROBE.TXT: on the stick"]
+    assert lines[:5] == [
+        "design ERS-7",
+        "design data 13 bytes: hello design",
+        "missing design data: 6",
+        "write /ms/open-r/mw/data/p/probe.txt: ok",
+        "read /MS/OPEN-R/MW/DATA/P/PROBE.TXT: on the stick",
+    ]
     assert "write here.txt: ok" in lines and "read /MS/OPEN-R/MW/DATA/P/STREAM.TXT: through a C++ stream" in lines
-    for refused in ("write /MS/OPEN-R/MW/DATA/P/longer_name.txt: refused (errno 13)",
-                    "read /etc/hostname: refused (errno 13)", "write ../escape.txt: refused (errno 13)",
-                    "write /MS/../escape.txt: refused (errno 13)"):
+    for refused in (
+        "write /MS/OPEN-R/MW/DATA/P/longer_name.txt: refused (errno 13)",
+        "read /etc/hostname: refused (errno 13)",
+        "write ../escape.txt: refused (errno 13)",
+        "write /MS/../escape.txt: refused (errno 13)",
+    ):
         assert refused in lines
     assert "[ERROR] refused to open /etc/hostname: not on the memory stick (/MS)" in lines
     data = stick / "OPEN-R" / "MW" / "DATA" / "P"
@@ -168,23 +218,29 @@ def test_colour_tables_fill_the_cdt_layer_of_the_next_frames(objects, tmp_path):
     tables = OCdtVectorData.of(pink_ball_cdt(), orange_ball_cdt())
     expected = []
     for index, frame in enumerate(result.images[:3]):
-        message = openr_bridge.encode_ycrcb(frame.ycrcb, frame_number=frame.frame_number, field_counter=frame.index,
-                                            cdt=tables)
+        message = openr_bridge.encode_ycrcb(
+            frame.ycrcb, frame_number=frame.frame_number, field_counter=frame.index, cdt=tables
+        )
         layer_c = message.band(3, openr_bridge.ofbkimageBAND_CDT)[:-1]
         rows, columns = np.nonzero(layer_c & openr_bridge.ocdtCHANNEL1)
         c = openr_bridge.OFbkImage(message.GetInfo(3), message.GetData(3), openr_bridge.ofbkimageBAND_CDT)
-        expected.append(f"image {index} frame {frame.frame_number} field {index} camera 1 C 104x80 orange "
-                        f"{len(rows)} {columns.sum()} {rows.sum()} freq {c.ColorFrequency(openr_bridge.ocdtCHANNEL0)} "
-                        f"{c.ColorFrequency(openr_bridge.ocdtCHANNEL1)} "
-                        f"Y(10,20) {message.band(0, openr_bridge.ofbkimageBAND_Y)[20, 10]}")
+        expected.append(
+            f"image {index} frame {frame.frame_number} field {index} camera 1 C 104x80 orange "
+            f"{len(rows)} {columns.sum()} {rows.sum()} freq {c.ColorFrequency(openr_bridge.ocdtCHANNEL0)} "
+            f"{c.ColorFrequency(openr_bridge.ocdtCHANNEL1)} "
+            f"Y(10,20) {message.band(0, openr_bridge.ofbkimageBAND_Y)[20, 10]}"
+        )
     assert lines[1:4] == expected
     assert int(expected[0].split()[11]) > 50  # the orange ball is in view: the table finds it
 
 
 def test_a_crashing_object_is_named_with_the_signal_and_the_time(objects, tmp_path):
     stick = make_stick(tmp_path / "ms", objects, ["CRASH"], f"{SENSOR} Crash.Sensor.OSensorFrameVectorData.O\n")
-    with pytest.raises(OpenRObjectCrashed, match=r"^OPEN-R object Crash \(entry 7\) crashed \(SIGSEGV: Segmentation fault\) at "
-                                                 r"simulated t = 0\.088 s$"):
+    with pytest.raises(
+        OpenRObjectCrashed,
+        match=r"^OPEN-R object Crash \(entry 7\) crashed \(SIGSEGV: Segmentation fault\) at "
+        r"simulated t = 0\.088 s$",
+    ):
         run_stick(stick, 1.0, tmp_path / "out")
 
 
@@ -199,13 +255,19 @@ def test_an_object_that_never_returns_is_announced_and_one_signal_ends_it(object
     finally:
         timer.cancel()
     err = capfd.readouterr().err
-    assert "aibo-sim: waiting for OPEN-R object Spin (entry 7): no answer for 0.2 s of wall time (simulated time stays " \
-           "at t = 0.056 s)" in err
+    assert (
+        "aibo-sim: waiting for OPEN-R object Spin (entry 7): no answer for 0.2 s of wall time (simulated time stays "
+        "at t = 0.056 s)" in err
+    )
 
 
 def test_runs_are_deterministic(objects, tmp_path):
-    stick = make_stick(tmp_path / "ms", objects, ["JPROBE", "CDTPROBE"],
-                       JOINT_PROBE + f"{IMAGE} CdtProbe.Image.OFbkImageVectorData.O\n")
+    stick = make_stick(
+        tmp_path / "ms",
+        objects,
+        ["JPROBE", "CDTPROBE"],
+        JOINT_PROBE + f"{IMAGE} CdtProbe.Image.OFbkImageVectorData.O\n",
+    )
     runs = [run_stick(stick, 0.2, tmp_path / f"out{k}", lambda r: r.sim.data.qpos.copy(), seed=5) for k in range(2)]
     assert runs[0].console == runs[1].console and "CdtProbe: image 4" in runs[0].console
     assert np.array_equal(np.array(runs[0].frames), np.array(runs[1].frames))
@@ -229,11 +291,18 @@ def test_frame_numbers_wrap_to_one_after_oframe_max_number(objects, tmp_path):
 
 
 def test_connect_cfg_naming_an_unregistered_service_names_its_line(objects, tmp_path):
-    stick = make_stick(tmp_path / "ms", objects, ["JPROBE"],
-                       JOINT_PROBE + "# the next line's observer has no such service\n"
-                                     f"{SENSOR} JointProbe.Sensors.OSensorFrameVectorData.O\n")
-    with pytest.raises(ConfigError, match=r"CONNECT\.CFG:4: JointProbe has no service "
-                                          r"JointProbe\.Sensors\.OSensorFrameVectorData\.O \(it registers "):
+    stick = make_stick(
+        tmp_path / "ms",
+        objects,
+        ["JPROBE"],
+        JOINT_PROBE + "# the next line's observer has no such service\n"
+        f"{SENSOR} JointProbe.Sensors.OSensorFrameVectorData.O\n",
+    )
+    with pytest.raises(
+        ConfigError,
+        match=r"CONNECT\.CFG:4: JointProbe has no service "
+        r"JointProbe\.Sensors\.OSensorFrameVectorData\.O \(it registers ",
+    ):
         run_stick(stick, 0.1, tmp_path / "out")
 
 
@@ -243,8 +312,11 @@ def test_an_object_that_is_not_built_for_this_machine_is_refused(objects, tmp_pa
     with pytest.raises(ConfigError, match=r"OBJECT\.CFG:1: /MS/OPEN-R/MW/OBJS/JPROBE\.BIN is a damaged gzip file"):
         run_stick(stick, 0.1, tmp_path / "out")
     (stick / "OPEN-R" / "MW" / "OBJS" / "JPROBE.BIN").unlink()
-    with pytest.raises(ConfigError, match=r"OBJECT\.CFG:1: cannot read /MS/OPEN-R/MW/OBJS/JPROBE\.BIN: No such file .*"
-                                          r"\(not built\? run make install"):
+    with pytest.raises(
+        ConfigError,
+        match=r"OBJECT\.CFG:1: cannot read /MS/OPEN-R/MW/OBJS/JPROBE\.BIN: No such file .*"
+        r"\(not built\? run make install",
+    ):
         run_stick(stick, 0.1, tmp_path / "out")
 
 
@@ -252,8 +324,9 @@ def test_a_compile_error_names_the_file_and_line(tmp_path):
     program = tmp_path / "Broken"
     program.mkdir()
     (program / "Broken.cc").write_text("#include <OPENR/OObject.h>\nint f() { return undefined_name; }\n")
-    (program / "Makefile").write_text("OPENRSDK_ROOT?=/usr/local/OPEN_R_SDK\nall:\n"
-                                      "\t$(OPENRSDK_ROOT)/bin/mipsel-linux-g++ -c Broken.cc\n")
+    (program / "Makefile").write_text(
+        "OPENRSDK_ROOT?=/usr/local/OPEN_R_SDK\nall:\n\t$(OPENRSDK_ROOT)/bin/mipsel-linux-g++ -c Broken.cc\n"
+    )
     with pytest.raises(AssertionError, match=r"Broken\.cc:2:\d+: error: .undefined_name. was not declared"):
         make(program)
 
@@ -262,10 +335,15 @@ def test_a_networking_program_is_told_that_networking_is_not_emulated(tmp_path):
     program = tmp_path / "Net"
     program.mkdir()
     (program / "Net.cc").write_text("#include <OPENR/OObject.h>\n#include <ant.h>\n#include <TCPEndpointMsg.h>\n")
-    (program / "Makefile").write_text("OPENRSDK_ROOT?=/usr/local/OPEN_R_SDK\nall:\n\t$(OPENRSDK_ROOT)/bin/mipsel-linux-g++ "
-                                      "-I$(OPENRSDK_ROOT)/OPEN_R/include/MCOOP -c Net.cc\n")
-    with pytest.raises(AssertionError, match=r"ant\.h:2:2: error: #error \"MCOOP/ant\.h: aibo-sim's host OPEN-R SDK does "
-                                             r"not emulate networking"):
+    (program / "Makefile").write_text(
+        "OPENRSDK_ROOT?=/usr/local/OPEN_R_SDK\nall:\n\t$(OPENRSDK_ROOT)/bin/mipsel-linux-g++ "
+        "-I$(OPENRSDK_ROOT)/OPEN_R/include/MCOOP -c Net.cc\n"
+    )
+    with pytest.raises(
+        AssertionError,
+        match=r"ant\.h:2:2: error: #error \"MCOOP/ant\.h: aibo-sim's host OPEN-R SDK does "
+        r"not emulate networking",
+    ):
         make(program)
 
 
@@ -295,17 +373,28 @@ def test_power_status_and_its_observers(objects, tmp_path):
     stick = make_stick(tmp_path / "ms", objects, ["PPROBE"])
     lines = run_stick(stick, 0.1, tmp_path / "out").lines("PowerProbe")
     battery = host.BATTERY
-    status = (f"robot 0x{battery['robotStatus']:08x} battery 0x{battery['batteryStatus']:04x} capacity "
-              f"{battery['remainingCapacity']} temperature {battery['temperature']} full "
-              f"{battery['fullyChargedCapacity']} voltage {battery['voltage']} current {battery['current']}")
+    status = (
+        f"robot 0x{battery['robotStatus']:08x} battery 0x{battery['batteryStatus']:04x} capacity "
+        f"{battery['remainingCapacity']} temperature {battery['temperature']} full "
+        f"{battery['fullyChargedCapacity']} voltage {battery['voltage']} current {battery['current']}"
+    )
     powered = status.replace(f"robot 0x{battery['robotStatus']:08x}", f"robot 0x{battery['robotStatus'] | 2:08x}")
-    assert lines == [f"status {status}", "observe 0", "observe again 4101",  # oALREADY_REGISTERED
-                     f"notified {powered}", "unobserve 0"]
+    assert lines == [
+        f"status {status}",
+        "observe 0",
+        "observe again 4101",  # oALREADY_REGISTERED
+        f"notified {powered}",
+        "unobserve 0",
+    ]
 
 
 def test_the_speaker_plays_sound_vectors_one_after_the_other_into_a_wav_file(objects, tmp_path):
-    stick = make_stick(tmp_path / "ms", objects, ["SPROBE"],
-                       "SoundProbe.Speaker.OSoundVectorData.S OVirtualRobotAudioComm.Speaker.OSoundVectorData.O\n")
+    stick = make_stick(
+        tmp_path / "ms",
+        objects,
+        ["SPROBE"],
+        "SoundProbe.Speaker.OSoundVectorData.S OVirtualRobotAudioComm.Speaker.OSoundVectorData.O\n",
+    )
     result = run_stick(stick, 0.5, tmp_path / "out")
     readies = result.lines("SoundProbe")
     assert readies[:3] == ["ready 1 refs 1 1", "ready 2 refs 1 2", "ready 3 refs 2 1"]  # a vector played at each

@@ -10,16 +10,22 @@ import wave
 import cv2
 import numpy as np
 import pytest
+from openr_support import SAMPLES, make, run_stick
 
 import openr_bridge
 from aibo_sim import ers7
 from aibo_sim.openr import host
 
-from openr_support import SAMPLES, make, run_stick
-
 pytestmark = pytest.mark.skipif(not SAMPLES.is_dir(), reason="Sony's OPEN-R samples not present (../shared/data)")
-PROGRAMS = ("common/HelloWorld", "common/ObjectComm", "common/ImageObserver", "ers7/BlinkingLED7", "ers7/MovingHead7",
-            "ers7/SensorObserver7", "ers7/BallTrackingHead7")
+PROGRAMS = (
+    "common/HelloWorld",
+    "common/ObjectComm",
+    "common/ImageObserver",
+    "ers7/BlinkingLED7",
+    "ers7/MovingHead7",
+    "ers7/SensorObserver7",
+    "ers7/BallTrackingHead7",
+)
 
 
 @pytest.fixture(scope="module")
@@ -39,16 +45,21 @@ def head_joints(run):
 
 def test_hello_world_prints_at_start_and_logs_at_stop(samples, tmp_path):
     result = run_stick(samples / "common/HelloWorld/MS", 0.2, tmp_path)
-    assert result.console.splitlines() == ["[    0.000 s] HELLO: !!! Hello World !!!",
-                                           "[    0.200 s] HELLO: [ERROR] Bye Bye ..."]
+    assert result.console.splitlines() == [
+        "[    0.000 s] HELLO: !!! Hello World !!!",
+        "[    0.200 s] HELLO: [ERROR] Bye Bye ...",
+    ]
 
 
 def test_object_comm_observer_receives_what_its_subject_sent(samples, tmp_path):
     result = run_stick(samples / "common/ObjectComm/MS", 0.1, tmp_path)
-    assert result.lines("SampleObserver") == ["SampleObserver::Notify() !!! Hello world !!!",
-                                              "SampleObserver::Notify() !!! Hello world again !!!"]
+    assert result.lines("SampleObserver") == [
+        "SampleObserver::Notify() !!! Hello world !!!",
+        "SampleObserver::Notify() !!! Hello world again !!!",
+    ]
     assert result.lines("SampleSubject") == ["SampleSubject::Ready() : ASSERT READY"] * 3 + [
-        "SampleSubject::Ready() : DEASSERT READY"]  # its observer's DoStop
+        "SampleSubject::Ready() : DEASSERT READY"
+    ]  # its observer's DoStop
 
 
 def test_blinking_led7_powers_the_motors_blinks_its_leds_and_flaps_the_ears(samples, tmp_path):
@@ -75,7 +86,9 @@ def test_blinking_led7_powers_the_motors_blinks_its_leds_and_flaps_the_ears(samp
 def test_moving_head7_moves_the_head_to_zero_then_swings_it(samples, tmp_path):
     """MovingHead7's set-points: 16 vectors of 16 frames to the zero posture, then the pan at
     80 sin(2 pi k / 2048) degrees (k: frames since the swing began), in OPEN-R's micro-radians."""
-    result = run_stick(samples / "ers7/MovingHead7/MS", 7.0, tmp_path, lambda r: (head_joints(r), r.sim.joint_positions()))
+    result = run_stick(
+        samples / "ers7/MovingHead7/MS", 7.0, tmp_path, lambda r: (head_joints(r), r.sim.joint_positions())
+    )
     commands = np.array([c for c, _ in result.frames])
     start = int(np.flatnonzero((commands == 0).all(axis=1))[0])  # the swing's first frame: all three at 0
     assert start == 17 * 16  # after the first vector (the current posture) and 16 to the zero posture
@@ -109,7 +122,7 @@ def test_sensor_observer7_prints_the_simulators_sensors(samples, tmp_path):
     checked = 0
     for start, end in zip(vectors, [*vectors[1:], len(lines)]):
         first = int(lines[start].split()[-1])
-        for line, following in zip(lines[start:end], lines[start + 1:end]):
+        for line, following in zip(lines[start:end], lines[start + 1 : end]):
             match = re.search(r"\| \[\s*(\d+)\] val\s+(-?\d+) (-?\d+) (-?\d+) (-?\d+)", line)
             if not match:
                 continue
@@ -129,17 +142,23 @@ def test_image_observer_saves_layer_h_as_the_frame_has_it(samples, tmp_path):
     first = result.images[0].message
     layer_h = first.GetData(openr_bridge.ofbkimageLAYER_H)
     assert (saved / "LAYER_H.RAW").read_bytes() == bytes(layer_h)
-    bands = [first.band(openr_bridge.ofbkimageLAYER_H, b) for b in (openr_bridge.ofbkimageBAND_Y,
-                                                                     openr_bridge.ofbkimageBAND_Cr,
-                                                                     openr_bridge.ofbkimageBAND_Cb)]
+    bands = [
+        first.band(openr_bridge.ofbkimageLAYER_H, b)
+        for b in (openr_bridge.ofbkimageBAND_Y, openr_bridge.ofbkimageBAND_Cr, openr_bridge.ofbkimageBAND_Cb)
+    ]
     bmp = cv2.imread(str(saved / "LAYER_H.BMP"), cv2.IMREAD_COLOR)[:, :, ::-1]
     assert np.array_equal(bmp, openr_bridge.ycrcb_to_rgb(*bands))
-    for name, frame, layer in (("LAYER_M.BMP", 1, openr_bridge.ofbkimageLAYER_M),
-                               ("LAYER_L.BMP", 2, openr_bridge.ofbkimageLAYER_L)):
+    for name, frame, layer in (
+        ("LAYER_M.BMP", 1, openr_bridge.ofbkimageLAYER_M),
+        ("LAYER_L.BMP", 2, openr_bridge.ofbkimageLAYER_L),
+    ):
         message = result.images[frame].message
-        expected = openr_bridge.ycrcb_to_rgb(*(message.band(layer, b) for b in (openr_bridge.ofbkimageBAND_Y,
-                                                                               openr_bridge.ofbkimageBAND_Cr,
-                                                                               openr_bridge.ofbkimageBAND_Cb)))
+        expected = openr_bridge.ycrcb_to_rgb(
+            *(
+                message.band(layer, b)
+                for b in (openr_bridge.ofbkimageBAND_Y, openr_bridge.ofbkimageBAND_Cr, openr_bridge.ofbkimageBAND_Cb)
+            )
+        )
         assert np.array_equal(cv2.imread(str(saved / name), cv2.IMREAD_COLOR)[:, :, ::-1], expected), name
     tags = [line for line in result.lines("ImageObserver") if line.startswith("FrameNumber")]
     assert tags[0] == f"FrameNumber {result.images[5].frame_number:x} FieldCounter 5 ColorFreq 0 0 0 0 0 0 0 0 "
@@ -169,4 +188,4 @@ def test_ball_tracking_head7_stands_up_and_keeps_the_pink_ball_centred_as_it_rol
     with wave.open(str(tmp_path / "speaker.wav")) as sound:
         samples_16k = np.frombuffer(sound.readframes(sound.getnframes()), "<i2")
         assert sound.getframerate() == 16000
-    assert np.abs(samples_16k[round(found_ms * 16):]).max() > 1000  # a sound after the ball was found
+    assert np.abs(samples_16k[round(found_ms * 16) :]).max() > 1000  # a sound after the ball was found

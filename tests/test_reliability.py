@@ -75,8 +75,23 @@ def _plant(link: Path, victim: Path) -> None:
 
 
 def _small_dump(out: Path, frames: int = 3) -> None:
-    assert main(["dump", str(SCRIPTED), "--out", str(out), "--steps", str(frames), "--formats", "rgb",
-                 "--camera-profile", "ideal"]) == 0
+    assert (
+        main(
+            [
+                "dump",
+                str(SCRIPTED),
+                "--out",
+                str(out),
+                "--steps",
+                str(frames),
+                "--formats",
+                "rgb",
+                "--camera-profile",
+                "ideal",
+            ]
+        )
+        == 0
+    )
 
 
 def _cut_to_first_frame(out: Path) -> None:
@@ -87,12 +102,16 @@ def _cut_to_first_frame(out: Path) -> None:
 
 PLACES = {  # what is planted (relative to --out), how the folder is made first, the command
     "dump lock": (".dump.lock", None, ["dump", str(SCRIPTED), "--steps", "2", "--formats", "rgb"]),
-    "dump frames.jsonl on --resume": ("frames.jsonl", _small_dump, ["dump", str(SCRIPTED), "--steps", "3", "--formats",
-                                                                    "rgb", "--camera-profile", "ideal", "--resume"]),
-    "dump leftover temporary frame on --resume": ("rgb/.tmp.000001.png", lambda out: (_small_dump(out),
-                                                                                       _cut_to_first_frame(out)),
-                                                  ["dump", str(SCRIPTED), "--steps", "3", "--formats", "rgb",
-                                                   "--camera-profile", "ideal", "--resume"]),
+    "dump frames.jsonl on --resume": (
+        "frames.jsonl",
+        _small_dump,
+        ["dump", str(SCRIPTED), "--steps", "3", "--formats", "rgb", "--camera-profile", "ideal", "--resume"],
+    ),
+    "dump leftover temporary frame on --resume": (
+        "rgb/.tmp.000001.png",
+        lambda out: (_small_dump(out), _cut_to_first_frame(out)),
+        ["dump", str(SCRIPTED), "--steps", "3", "--formats", "rgb", "--camera-profile", "ideal", "--resume"],
+    ),
     "run lock": (".run.lock", None, ["run", str(SCRIPTED), "--duration", "0.1"]),
     "run's temporary run.json": (".run.json.tmp", None, ["run", str(SCRIPTED), "--duration", "0.1"]),
     "run's frames folder": ("frames", None, ["run", str(SCRIPTED), "--duration", "0.1"]),
@@ -148,7 +167,7 @@ def test_a_frame_that_is_a_link_is_not_complete_on_resume_nor_read(tmp_path):
     shutil.move(frame, copy)
     frame.symlink_to(copy)
     with pytest.raises(DumpError, match=f"^{re.escape(str(frame))} is a symbolic link: refusing to follow it"):
-        load_dump(out)[1].rgb
+        _ = load_dump(out)[1].rgb
     summary = dump(out, controller=SCRIPTED, frames=3, formats=("rgb",), camera_profile="ideal", resume=True)
     assert (summary.new_frames, summary.repaired_frames) == (0, 1)
     assert not frame.is_symlink() and frame.read_bytes() == original == copy.read_bytes()
@@ -193,10 +212,14 @@ def _start_spinner(tmp_path) -> tuple[subprocess.Popen, Path, list[int]]:
     """aibo-sim running a C controller that forked a child and computes forever between calls."""
     source, out = tmp_path / "spin.c", tmp_path / "out"
     source.write_text(SPINNER)
-    run = subprocess.Popen(_cli("run", str(source), "--duration", "100000", "--out", str(out)), cwd=ROOT,
-                           stderr=subprocess.PIPE, text=True)
-    _wait_for(lambda: (out / "pids.txt").exists() and (out / "pids.txt").read_text().endswith("\n"), STARTUP_S,
-              "the controller's pids")
+    run = subprocess.Popen(
+        _cli("run", str(source), "--duration", "100000", "--out", str(out)), cwd=ROOT, stderr=subprocess.PIPE, text=True
+    )
+    _wait_for(
+        lambda: (out / "pids.txt").exists() and (out / "pids.txt").read_text().endswith("\n"),
+        STARTUP_S,
+        "the controller's pids",
+    )
     pids = [int(p) for p in (out / "pids.txt").read_text().split()]
     assert all(map(_alive, pids))
     return run, out, pids
@@ -215,8 +238,10 @@ def test_one_signal_ends_a_c_controller_that_computes_forever_and_its_group(tmp_
     finally:
         run.kill()
     assert run.returncode == status, err
-    assert (f"aibo-sim: controller spin.c made no call for 2 s after {signal_name}: stopped, with its process group; "
-            "its robot_die functions could not run") in err
+    assert (
+        f"aibo-sim: controller spin.c made no call for 2 s after {signal_name}: stopped, with its process group; "
+        "its robot_die functions could not run"
+    ) in err
     assert json.loads((out / "run.json").read_text())["status"] == "interrupted" and not (out / "die.txt").exists()
     _wait_for(lambda: not any(map(_alive, pids)), GONE_S, "the controller and its child to end")
 
@@ -235,12 +260,19 @@ def test_a_child_that_keeps_the_socket_open_does_not_hold_the_run(tmp_path):
     """The controller forks a child that inherits the socket and sleeps, then returns: the run ends
     there (exit 0), and the child is stopped with it."""
     source, out = tmp_path / "forks.c", tmp_path / "out"
-    source.write_text("#include <stdio.h>\n#include <unistd.h>\n#include <device/robot.h>\n"
-                      "int main(void) {\n  robot_live(0); robot_step(8);\n  pid_t child = fork();\n"
-                      "  if (child == 0) { for (;;) pause(); }\n  FILE *f = fopen(\"child.txt\", \"w\");\n"
-                      "  fprintf(f, \"%d\\n\", (int)child); fclose(f);\n  robot_step(8); return 0;\n}\n")
-    run = subprocess.run(_cli("run", str(source), "--duration", "10", "--out", str(out)), cwd=ROOT,
-                         capture_output=True, text=True, timeout=STARTUP_S)
+    source.write_text(
+        "#include <stdio.h>\n#include <unistd.h>\n#include <device/robot.h>\n"
+        "int main(void) {\n  robot_live(0); robot_step(8);\n  pid_t child = fork();\n"
+        '  if (child == 0) { for (;;) pause(); }\n  FILE *f = fopen("child.txt", "w");\n'
+        '  fprintf(f, "%d\\n", (int)child); fclose(f);\n  robot_step(8); return 0;\n}\n'
+    )
+    run = subprocess.run(
+        _cli("run", str(source), "--duration", "10", "--out", str(out)),
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=STARTUP_S,
+    )
     assert run.returncode == 0, run.stderr
     assert json.loads((out / "run.json").read_text())["simulated_s"] == 0.016
     _wait_for(lambda: not _alive(int((out / "child.txt").read_text())), GONE_S, "the controller's child to end")
@@ -249,14 +281,19 @@ def test_a_child_that_keeps_the_socket_open_does_not_hold_the_run(tmp_path):
 @needs_cc
 def test_a_c_controller_that_closes_its_socket_is_not_reported_as_exit_70(tmp_path):
     source = tmp_path / "closes.c"
-    source.write_text("#include <stdlib.h>\n#include <unistd.h>\n#include <device/robot.h>\n"
-                      "int main(void) {\n  robot_live(0); robot_step(8);\n  close(atoi(getenv(\"AIBO_SIM_FD\")));\n"
-                      "  robot_step(8); return 0;\n}\n")
+    source.write_text(
+        "#include <stdlib.h>\n#include <unistd.h>\n#include <device/robot.h>\n"
+        'int main(void) {\n  robot_live(0); robot_step(8);\n  close(atoi(getenv("AIBO_SIM_FD")));\n'
+        "  robot_step(8); return 0;\n}\n"
+    )
     with pytest.raises(ControllerFailed) as failed:
         run_controller(source, duration=1)
     message = str(failed.value)
-    assert re.fullmatch(r"controller closes\.c: closed its connection to the simulator \(descriptor \d+, AIBO_SIM_FD\), "
-                        r"then made a call at simulated t = 0\.008 s", message), message
+    assert re.fullmatch(
+        r"controller closes\.c: closed its connection to the simulator \(descriptor \d+, AIBO_SIM_FD\), "
+        r"then made a call at simulated t = 0\.008 s",
+        message,
+    ), message
     assert failed.value.exit_status is None
 
 
@@ -270,8 +307,11 @@ def test_a_second_run_into_a_folder_being_written_is_refused(tmp_path, capsys):
         before = {p.name: p.read_bytes() for p in out.iterdir() if p.is_file()}
         capsys.readouterr()
         assert main(["run", str(SCRIPTED), "--duration", "0.1", "--out", str(out)]) == 2
-        one_error_line(capsys, f"{out} is being written by another run (pid {os.getpid()}, started ",
-                       "wait for it to end or stop it, or choose another --out; nothing was changed")
+        one_error_line(
+            capsys,
+            f"{out} is being written by another run (pid {os.getpid()}, started ",
+            "wait for it to end or stop it, or choose another --out; nothing was changed",
+        )
         assert {p.name: p.read_bytes() for p in out.iterdir() if p.is_file()} == before
     finally:
         first.lock.release()
@@ -288,7 +328,9 @@ def test_more_dump_workers_than_memory_holds_are_refused_saying_how_many_fit(tmp
     monkeypatch.setattr(running, "available_memory_mb", lambda: 1000.0)
     out = tmp_path / "out"
     assert main(["dump", str(SCRIPTED), "--out", str(out), "--steps", "100", "--workers", "6"]) == 2
-    one_error_line(capsys, "--workers 6: this machine has memory for 5 workers (1.0 GB available, about 200 MB a worker)")
+    one_error_line(
+        capsys, "--workers 6: this machine has memory for 5 workers (1.0 GB available, about 200 MB a worker)"
+    )
     assert not out.exists()
 
 
@@ -314,8 +356,10 @@ def test_a_thread_reading_the_camera_ends_the_run_naming_the_rule(tmp_path, caps
     assert main(["run", str(controller), "--duration", "0.2", "--out", str(out)]) == 1
     err = capsys.readouterr().err
     assert err.startswith("aibo-sim: controller threaded.py raised in thread 'reader' at simulated t = 0.064 s:\n")
-    assert err.rstrip().endswith("DeviceError: camera_get_image called from thread 'reader': the camera renders in "
-                                 "the thread that runs the controller ('MainThread') only; call camera_get_image there")
+    assert err.rstrip().endswith(
+        "DeviceError: camera_get_image called from thread 'reader': the camera renders in "
+        "the thread that runs the controller ('MainThread') only; call camera_get_image there"
+    )
     run = json.loads((out / "run.json").read_text())
     assert run["status"] == "failed" and run["camera_frames"] == len(list((out / "frames").iterdir())) > 0
 
@@ -334,33 +378,47 @@ def test_a_dump_whose_controller_thread_reads_the_camera_stays_consistent(tmp_pa
 # ---------------------------------------------------------------- 6. the smaller promises
 
 
-@pytest.mark.parametrize("command", [["run", str(SCRIPTED), "--duration", "0.1"], ["render", "--settle", "0"],
-                                     ["dump", str(SCRIPTED), "--steps", "3"], ["mtn", "play", "STAND.MTN"]])
+@pytest.mark.parametrize(
+    "command",
+    [
+        ["run", str(SCRIPTED), "--duration", "0.1"],
+        ["render", "--settle", "0"],
+        ["dump", str(SCRIPTED), "--steps", "3"],
+        ["mtn", "play", "STAND.MTN"],
+    ],
+)
 def test_a_scene_whose_robot_starts_inside_a_wall_is_refused(tmp_path, capsys, command):
     from aibo_sim.sim import models_dir
 
     scene = tmp_path / "walled.xml"
     scene.write_text(f"""<mujoco>
-  <include file="{models_dir() / 'ers7.xml'}"/>
+  <include file="{models_dir() / "ers7.xml"}"/>
   <worldbody><geom name="floor" type="plane" size="2 2 0.1"/>
     <geom name="wall_through_the_robot" type="box" pos="0 0 0.15" size="0.02 1 0.15"/></worldbody>
 </mujoco>""")
     out = ["--out", str(tmp_path / "out")] if command[0] in ("render", "dump") else []
     assert main(command + out + ["--scene", str(scene)]) == 2
-    one_error_line(capsys, f"--scene {scene}: the robot starts inside wall_through_the_robot (",
-                   "cm deep); move it in the scene, or place it with --pose")
+    one_error_line(
+        capsys,
+        f"--scene {scene}: the robot starts inside wall_through_the_robot (",
+        "cm deep); move it in the scene, or place it with --pose",
+    )
     assert not (tmp_path / "out").exists()
 
 
 def test_a_python_controller_that_computes_long_is_announced_as_a_c_one_is(tmp_path, monkeypatch, capsys):
     monkeypatch.setattr(serve, "WAIT_NOTICE_S", 0.2)
     controller = tmp_path / "busy.py"
-    controller.write_text("import time\nfrom aibo_sim.controller import *\nrobot_live(None)\nrobot_step(40)\n"
-                          "time.sleep(0.5)\nrobot_step(8)\n")
+    controller.write_text(
+        "import time\nfrom aibo_sim.controller import *\nrobot_live(None)\nrobot_step(40)\n"
+        "time.sleep(0.5)\nrobot_step(8)\n"
+    )
     assert run_controller(controller, duration=1).simulated_s == 0.048
     err = capsys.readouterr().err
-    assert ("aibo-sim: waiting for controller busy.py: no API call for 0.2 s of wall time (simulated time stays at "
-            "t = 0.040 s)\n") in err
+    assert (
+        "aibo-sim: waiting for controller busy.py: no API call for 0.2 s of wall time (simulated time stays at "
+        "t = 0.040 s)\n"
+    ) in err
 
 
 def test_closing_an_env_gives_its_memory_back(monkeypatch):
@@ -405,6 +463,7 @@ def test_the_readmes_output_folders_are_ignored_by_git():
     tracked = subprocess.run(["git", "ls-files", "--", *folders], cwd=ROOT, capture_output=True, text=True).stdout
     folders -= {line.split("/")[0] for line in tracked.splitlines()}  # models/: written on purpose
     assert {"frames", "sweep", "annex", "dump", "dump_env"} <= folders
-    ignored = subprocess.run(["git", "check-ignore", *(f"{f}/x" for f in sorted(folders))], cwd=ROOT,
-                             capture_output=True, text=True).stdout.split()
+    ignored = subprocess.run(
+        ["git", "check-ignore", *(f"{f}/x" for f in sorted(folders))], cwd=ROOT, capture_output=True, text=True
+    ).stdout.split()
     assert sorted(ignored) == sorted(f"{f}/x" for f in folders)

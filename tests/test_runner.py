@@ -40,8 +40,10 @@ def test_one_controller_on_both_backends(tmp_path, profile, bound):
         summary = run_controller(SCRIPTED, backend=backend, duration=1.0, seed=3, out=out, camera_profile=profile)
         assert summary.camera_frames == 30 and summary.simulated_s == pytest.approx(1.0)
         runs[backend] = out
-    logs = {b: [line for line in (out / "joints.txt").read_text().splitlines() if not line.startswith("pixel")]
-            for b, out in runs.items()}
+    logs = {
+        b: [line for line in (out / "joints.txt").read_text().splitlines() if not line.startswith("pixel")]
+        for b, out in runs.items()
+    }
     assert len(logs["sim"]) > 50 and logs["sim"] == logs["openr"]  # identical joint trajectories
     frames = sorted(p.name for p in (runs["sim"] / "frames").iterdir())
     assert frames == sorted(p.name for p in (runs["openr"] / "frames").iterdir())
@@ -76,27 +78,38 @@ def test_a_controller_error_shows_the_controller_s_frames_only(tmp_path):
     """An API call's error: the controller's lines and the message, not the simulator's frames
     (runpy, runner, controller.py, robot.py) nor the exception the simulator raised it from."""
     bad = tmp_path / "bad.py"
-    bad.write_text("from aibo_sim.controller import *\n"
-                   "cam = robot_get_device('PRM:/r1/c1/c2/c3/i1-FbkImageSensor:F1')\n"
-                   "def run(ms):\n"
-                   "    camera_set_gain(cam, 7)\n"
-                   "robot_live(None)\nrobot_run(run)\n")
+    bad.write_text(
+        "from aibo_sim.controller import *\n"
+        "cam = robot_get_device('PRM:/r1/c1/c2/c3/i1-FbkImageSensor:F1')\n"
+        "def run(ms):\n"
+        "    camera_set_gain(cam, 7)\n"
+        "robot_live(None)\nrobot_run(run)\n"
+    )
     with pytest.raises(ControllerFailed) as failure:
         run_controller(bad, duration=0.1)
     report = str(failure.value)
     frames = re.findall(r'File "([^"]+)", line (\d+)', report)
     assert frames == [(str(bad), "6"), (str(bad), "4")], report
-    assert report.rstrip().endswith("the value must be 1 (ocamparamGAIN_LOW), 2 (ocamparamGAIN_MID) or 3 "
-                                    "(ocamparamGAIN_HIGH)") and "above exception" not in report, report
+    assert (
+        report.rstrip().endswith(
+            "the value must be 1 (ocamparamGAIN_LOW), 2 (ocamparamGAIN_MID) or 3 (ocamparamGAIN_HIGH)"
+        )
+        and "above exception" not in report
+    ), report
 
 
 def test_a_syntax_error_is_bad_input_found_before_anything_runs(tmp_path, capsys):
     bad = tmp_path / "syntax.py"
     bad.write_text("from aibo_sim.controller import *\ndef init(:\n    pass\n")
-    for command in (["run", str(bad), "--out", str(tmp_path / "run")],
-                    ["dump", str(bad), "--out", str(tmp_path / "dump"), "--steps", "2"]):
+    for command in (
+        ["run", str(bad), "--out", str(tmp_path / "run")],
+        ["dump", str(bad), "--out", str(tmp_path / "dump"), "--steps", "2"],
+    ):
         assert main(command) == 2
-        assert capsys.readouterr().err.strip() == f"aibo-sim: error: {bad}, line 2: SyntaxError: invalid syntax ('def init(:')"
+        assert (
+            capsys.readouterr().err.strip()
+            == f"aibo-sim: error: {bad}, line 2: SyntaxError: invalid syntax ('def init(:')"
+        )
     assert sorted(p.name for p in tmp_path.iterdir()) == ["syntax.py"]  # no folder made
     assert main(["run", str(tmp_path)]) == 2
     assert f"{tmp_path}: a folder with no {tmp_path.name}.c or {tmp_path.name}.cc or" in capsys.readouterr().err
@@ -156,8 +169,9 @@ def test_walk_to_ball_reaches_the_ball(capsys):
 
 
 def test_ball_tracker_centres_the_ball_on_the_openr_backend(tmp_path):
-    summary = run_controller(ROOT / "controllers" / "ball_tracker.py", backend="openr", duration=2.0,
-                             ball=(0.6, 0.25), out=tmp_path)
+    summary = run_controller(
+        ROOT / "controllers" / "ball_tracker.py", backend="openr", duration=2.0, ball=(0.6, 0.25), out=tmp_path
+    )
     assert np.hypot(*summary.robot_pose[:2]) < 0.02  # it stood still
     frames = sorted((tmp_path / "frames").iterdir())
     first, last = (cv2.imread(str(p)).astype(np.int16)[:, :, ::-1] for p in (frames[0], frames[-1]))
@@ -176,7 +190,12 @@ def test_cli_mtn_info_and_play(capsys, tmp_path):
     walk = ROOT / "models" / "motions" / "WALKFWD.MTN"
     assert main(["mtn", "info", str(walk), "--json"]) == 0
     info = json.loads(capsys.readouterr().out)
-    assert (info["name"], info["num_keyframes"], info["length_ms"], len(info["locators"])) == ("a_walk#walk_fwd", 21, 320, 12)
+    assert (info["name"], info["num_keyframes"], info["length_ms"], len(info["locators"])) == (
+        "a_walk#walk_fwd",
+        21,
+        320,
+        12,
+    )
     assert main(["mtn", "play", str(walk), "--repeat", "15", "--json"]) == 0
     played = json.loads(capsys.readouterr().out)
     assert played["displacement_m"][0] > 0.25 and not played["fell"] and abs(played["heading_change_deg"]) < 10

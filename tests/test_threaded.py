@@ -38,9 +38,14 @@ def assert_same(a, b):
         assert np.asarray(a).dtype == np.asarray(b).dtype
 
 
-@pytest.mark.parametrize("make_envs", [lambda: gym.make_vec(HEAD_TRACK, 3, max_episode_steps=4),
-                                       lambda: HybridVectorEnv(HEAD_TRACK, 3, max_episode_steps=4)],
-                         ids=["threads", "hybrid"])
+@pytest.mark.parametrize(
+    "make_envs",
+    [
+        lambda: gym.make_vec(HEAD_TRACK, 3, max_episode_steps=4),
+        lambda: HybridVectorEnv(HEAD_TRACK, 3, max_episode_steps=4),
+    ],
+    ids=["threads", "hybrid"],
+)
 def test_vector_envs_step_as_sync_bit_for_bit_through_autoreset_and_reset_mask(make_envs):
     # 3 envs, episodes of 4 steps: each autoresets twice within the 12 steps.
     threaded = make_envs()

@@ -204,7 +204,6 @@ def test_hybrid_env_after_ctrl_c_needs_a_reset_and_then_steps_as_sync(monkeypatc
         sync.close()
 
 
-
 def test_hybrid_env_infos_and_reset_options_are_sync_ones():
     from test_threaded import assert_same  # noqa: I001  (the threaded env's comparison, dtypes included)
 

@@ -12,10 +12,9 @@ from pathlib import Path
 import cv2
 import numpy as np
 import pytest
+from openr_support import build_programs, make_stick
 
 from aibo_sim import cli
-
-from openr_support import build_programs, make_stick
 
 ROOT = Path(__file__).resolve().parents[1]
 CONTROLLER = ROOT / "controllers" / "ball_tracker.py"
@@ -24,10 +23,16 @@ CONTROLLER = ROOT / "controllers" / "ball_tracker.py"
 def read_xwd(data: bytes) -> np.ndarray:
     """RGB pixels of an X window dump (``xwd``) of a 24/32-bit TrueColor screen."""
     header = struct.unpack(">25I", data[:100])
-    header_size, width, height, bytes_per_line, colormap_entries = header[0], header[4], header[5], header[12], header[19]
+    header_size, width, height, bytes_per_line, colormap_entries = (
+        header[0],
+        header[4],
+        header[5],
+        header[12],
+        header[19],
+    )
     offset = header_size + 12 * colormap_entries
-    rows = np.frombuffer(data[offset:offset + bytes_per_line * height], np.uint8).reshape(height, bytes_per_line)
-    return rows[:, :4 * width].reshape(height, width, 4)[..., 2::-1]  # B, G, R, x in memory
+    rows = np.frombuffer(data[offset : offset + bytes_per_line * height], np.uint8).reshape(height, bytes_per_line)
+    return rows[:, : 4 * width].reshape(height, width, 4)[..., 2::-1]  # B, G, R, x in memory
 
 
 def largest_white_blob(rgb: np.ndarray) -> int:
@@ -54,8 +59,12 @@ def screen_dump(display: str) -> np.ndarray | None:
 @pytest.mark.skipif(not (shutil.which("Xvfb") and shutil.which("xwd")), reason="needs Xvfb and xwd (CI installs them)")
 def test_view_shows_the_robot_on_a_virtual_display(tmp_path):
     read_fd, write_fd = os.pipe()
-    xvfb = subprocess.Popen(["Xvfb", "-displayfd", str(write_fd), "-screen", "0", "1280x800x24", "-nolisten", "tcp"],
-                            pass_fds=(write_fd,), stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    xvfb = subprocess.Popen(
+        ["Xvfb", "-displayfd", str(write_fd), "-screen", "0", "1280x800x24", "-nolisten", "tcp"],
+        pass_fds=(write_fd,),
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+    )
     os.close(write_fd)
     number = b""
     while not number.endswith(b"\n"):  # the whole line: Xvfb dies if the pipe closes while it writes
@@ -70,9 +79,13 @@ def test_view_shows_the_robot_on_a_virtual_display(tmp_path):
         while screen_dump(display) is None:  # the server takes connections
             assert time.monotonic() < deadline and xvfb.poll() is None, f"Xvfb {display} did not start"
             time.sleep(0.2)
-        run = subprocess.Popen([sys.executable, "-m", "aibo_sim.cli", "run", str(CONTROLLER), "--duration", "30",
-                                "--view"], env={**os.environ, "DISPLAY": display}, cwd=tmp_path,
-                               stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+        run = subprocess.Popen(
+            [sys.executable, "-m", "aibo_sim.cli", "run", str(CONTROLLER), "--duration", "30", "--view"],
+            env={**os.environ, "DISPLAY": display},
+            cwd=tmp_path,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+        )
         blob, screen, deadline = 0, None, time.monotonic() + 60
         while blob < 1000 and time.monotonic() < deadline and run.poll() is None:
             time.sleep(1)
@@ -83,15 +96,25 @@ def test_view_shows_the_robot_on_a_virtual_display(tmp_path):
         cv2.imwrite(str(tmp_path / "screenshot.png"), screen[..., ::-1])
         assert blob >= 1000, f"no robot on the screen (largest white patch {blob} px): {tmp_path / 'screenshot.png'}"
         # A run that ends by itself closes the window and exits cleanly (GLFW ends after the viewer).
-        short = subprocess.run([sys.executable, "-m", "aibo_sim.cli", "run", str(CONTROLLER), "--duration", "0.3",
-                                "--view"], env={**os.environ, "DISPLAY": display}, cwd=tmp_path, capture_output=True,
-                               text=True, timeout=120)
+        short = subprocess.run(
+            [sys.executable, "-m", "aibo_sim.cli", "run", str(CONTROLLER), "--duration", "0.3", "--view"],
+            env={**os.environ, "DISPLAY": display},
+            cwd=tmp_path,
+            capture_output=True,
+            text=True,
+            timeout=120,
+        )
         assert short.returncode == 0, short.stderr
         # A memory stick's objects, watched the same way.
         stick = make_stick(tmp_path / "ms", build_programs(tmp_path / "openr"), ["JPROBE"])
-        watched = subprocess.run([sys.executable, "-m", "aibo_sim.cli", "run", str(stick), "--duration", "0.3", "--view",
-                                  "--out", "stick"], env={**os.environ, "DISPLAY": display}, cwd=tmp_path,
-                                 capture_output=True, text=True, timeout=120)
+        watched = subprocess.run(
+            [sys.executable, "-m", "aibo_sim.cli", "run", str(stick), "--duration", "0.3", "--view", "--out", "stick"],
+            env={**os.environ, "DISPLAY": display},
+            cwd=tmp_path,
+            capture_output=True,
+            text=True,
+            timeout=120,
+        )
         assert watched.returncode == 0, watched.stderr
         assert json.loads((tmp_path / "stick" / "run.json").read_text())["backend"] == "memory stick"
     finally:

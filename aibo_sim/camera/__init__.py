@@ -10,5 +10,19 @@ from .head import HEAD_CAMERA_GROUPS, CameraFrame, HeadCamera, camera_size, desc
 from .lens import LENSES, Lens
 from .sensor import PROFILES, CameraProfile, CameraSettings, RobotColour, SceneLight, camera_profile
 
-__all__ = ["HEAD_CAMERA_GROUPS", "LENSES", "PROFILES", "CameraFrame", "CameraProfile", "CameraSettings", "HeadCamera",
-           "Lens", "RobotColour", "SceneLight", "camera_profile", "camera_size", "describe_camera", "scene_light"]
+__all__ = [
+    "HEAD_CAMERA_GROUPS",
+    "LENSES",
+    "PROFILES",
+    "CameraFrame",
+    "CameraProfile",
+    "CameraSettings",
+    "HeadCamera",
+    "Lens",
+    "RobotColour",
+    "SceneLight",
+    "camera_profile",
+    "camera_size",
+    "describe_camera",
+    "scene_light",
+]

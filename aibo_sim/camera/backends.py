@@ -27,10 +27,11 @@ from openr_bridge.primitive import allowed_values
 
 from .head import CameraFrame
 
-
 # Each setting's values by Sony's number: {"gain": {1: "low", 2: "mid", 3: "high"}, ...}.
-SETTING_VALUES = {setting: {number: name for name, number in values.items()}
-                  for setting, (_, values) in openr_bridge.CAMERA_SETTINGS.items()}
+SETTING_VALUES = {
+    setting: {number: name for name, number in values.items()}
+    for setting, (_, values) in openr_bridge.CAMERA_SETTINGS.items()
+}
 # The wrapper function that sets each setting.
 WRAPPER_FUNCTIONS = {setting: function for function, (_, setting) in openr_bridge.CAMERA_SETTING_FUNCTIONS.items()}
 
@@ -64,8 +65,9 @@ class OpenRCamera(SimCamera):
         super().__init__(sim)
         self.width, self.height = openr_bridge.LAYER_SIZE[openr_bridge.ofbkimageLAYER_H]
         primitive = openr_bridge.OCameraPrimitive(sim.camera.settings.as_dict())
-        self.system = openr_bridge.OpenRSystem.from_memory_stick(memory_stick or openr_bridge.DEFAULT_MEMORY_STICK,
-                                                                 camera=primitive)
+        self.system = openr_bridge.OpenRSystem.from_memory_stick(
+            memory_stick or openr_bridge.DEFAULT_MEMORY_STICK, camera=primitive
+        )
         self.wrapper = self.system.controller
         primitive.listeners.append(self._apply_settings)
 
@@ -76,8 +78,10 @@ class OpenRCamera(SimCamera):
         except openr_bridge.PrimitiveError as error:
             if error.status not in (openr_bridge.oOUT_OF_RANGE, openr_bridge.oINVALID_ARG):
                 raise
-            raise ValueError(f"the value must be {allowed_values(setting)} (OPENR::ControlPrimitive returned "
-                             f"{openr_bridge.status_name(error.status)})") from error
+            raise ValueError(
+                f"the value must be {allowed_values(setting)} (OPENR::ControlPrimitive returned "
+                f"{openr_bridge.status_name(error.status)})"
+            ) from error
 
     def _apply_settings(self, change: dict[str, str]) -> None:
         """The camera primitive's listener: its change, for the next frame."""

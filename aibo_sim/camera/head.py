@@ -14,7 +14,6 @@ pose at the exposure, and the OPEN-R message, encoded once.
 
 from __future__ import annotations
 
-
 import cv2
 import mujoco
 import numpy as np
@@ -41,32 +40,54 @@ def scene_light(model: mujoco.MjModel) -> SceneLight:
     """The scene's light from its custom numerics (``SceneLight``; the defaults where absent);
     ValueError naming a numeric out of range."""
     values = {}
-    for field_name, numeric in (("temperature_k", "light_temperature_K"), ("flicker_depth", "light_flicker_depth"),
-                                ("mains_hz", "mains_frequency_Hz")):
+    for field_name, numeric in (
+        ("temperature_k", "light_temperature_K"),
+        ("flicker_depth", "light_flicker_depth"),
+        ("mains_hz", "mains_frequency_Hz"),
+    ):
         index = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_NUMERIC, numeric)
         if index >= 0:
             values[field_name] = float(model.numeric_data[model.numeric_adr[index]])
     return SceneLight(**values)
 
 
-def describe_camera(profile: str | CameraProfile, settings: CameraSettings, size: tuple[int, int],
-                    light: SceneLight) -> dict:
+def describe_camera(
+    profile: str | CameraProfile, settings: CameraSettings, size: tuple[int, int], light: SceneLight
+) -> dict:
     """The head camera's profile (its name, and ``profile_options``: where it differs from the
     preset of that name), lens (OpenCV intrinsics and distortion at ``size``) and settings,
     as run.json and a dump's meta.json record them."""
     profile = camera_profile(profile)
     lens = LENSES[profile.lens].scaled(*size)
-    return {"profile": profile.name, "profile_options": profile.options(), "lens": lens.name,
-            "width": lens.width, "height": lens.height, "fx": lens.fx, "fy": lens.fy, "cx": lens.cx, "cy": lens.cy,
-            "distortion": list(lens.distortion),
-            "distortion_model": "OpenCV k1, k2, p1, p2, k3", **settings.as_dict(), **light.as_dict()}
+    return {
+        "profile": profile.name,
+        "profile_options": profile.options(),
+        "lens": lens.name,
+        "width": lens.width,
+        "height": lens.height,
+        "fx": lens.fx,
+        "fy": lens.fy,
+        "cx": lens.cx,
+        "cy": lens.cy,
+        "distortion": list(lens.distortion),
+        "distortion_model": "OpenCV k1, k2, p1, p2, k3",
+        **settings.as_dict(),
+        **light.as_dict(),
+    }
 
 
 class CameraFrame:
     """One 30 fps frame of the head camera; see the module docstring."""
 
-    def __init__(self, index: int, frame_number: int, settings: CameraSettings, pose: tuple[np.ndarray, np.ndarray],
-                 rgb: np.ndarray | None = None, ycrcb: np.ndarray | None = None):
+    def __init__(
+        self,
+        index: int,
+        frame_number: int,
+        settings: CameraSettings,
+        pose: tuple[np.ndarray, np.ndarray],
+        rgb: np.ndarray | None = None,
+        ycrcb: np.ndarray | None = None,
+    ):
         self.index, self.frame_number, self.settings = index, frame_number, settings
         self.position, self.xmat = pose  # camera position and MuJoCo rotation matrix (3, 3) at the exposure
         self._rgb, self._ycrcb, self._message = rgb, ycrcb, None
@@ -115,8 +136,14 @@ class _Exposure:
 class HeadCamera:
     """The ERS-7's head camera on one simulation: renderer, lens, sensor, frames and labels."""
 
-    def __init__(self, sim, size: tuple[int, int], profile: str | CameraProfile = "ers7",
-                 settings: CameraSettings | None = None, light: SceneLight | None = None):
+    def __init__(
+        self,
+        sim,
+        size: tuple[int, int],
+        profile: str | CameraProfile = "ers7",
+        settings: CameraSettings | None = None,
+        light: SceneLight | None = None,
+    ):
         self.sim, self.model = sim, sim.model
         self.width, self.height = size
         self.profile = camera_profile(profile)
@@ -133,8 +160,11 @@ class HeadCamera:
             self._pinhole = self._remap = None
             maps = tuple(np.meshgrid(np.arange(self.width, dtype=np.float64), np.arange(self.height, dtype=np.float64)))
             render_scale = (1.0, 1.0)
-        self.sensor = (Sensor(self.profile, self._settings, self.light.temperature_k, maps, self.render_size, render_scale)
-                       if self.profile.sensor else None)
+        self.sensor = (
+            Sensor(self.profile, self._settings, self.light.temperature_k, maps, self.render_size, render_scale)
+            if self.profile.sensor
+            else None
+        )
         self._renderer: Renderer | None = None
         self._spare: list[mujoco.MjData] = []
         self._exposures: list[_Exposure] = []
@@ -252,8 +282,12 @@ class HeadCamera:
     def _render(self, data: mujoco.MjData, kind: str) -> np.ndarray:
         if self._renderer is None:
             self._renderer = Renderer(self.model, *self.render_size, groups=HEAD_CAMERA_GROUPS)
-        render = {"rgb": self._renderer.render, "rgba": self._renderer.render_rgba, "depth": self._renderer.render_depth,
-                  "segmentation": self._renderer.render_segmentation}[kind]
+        render = {
+            "rgb": self._renderer.render,
+            "rgba": self._renderer.render_rgba,
+            "depth": self._renderer.render_depth,
+            "segmentation": self._renderer.render_segmentation,
+        }[kind]
         if self._pinhole is None:
             return render(data, self.camera_id)
         model, cam, pinhole = self.model, self.camera_id, self._pinhole
@@ -300,7 +334,7 @@ class HeadCamera:
         frame = self.frame()
         # The camera frame's axes are the columns of xmat, y and z flipped (``project``), in floats.
         relative = [float(p) - c for p, c in zip(point_world, frame.position.tolist())]
-        x, y, z = ([relative[0] * m[0] + relative[1] * m[1] + relative[2] * m[2] for m in zip(*frame.xmat.tolist())])
+        x, y, z = [relative[0] * m[0] + relative[1] * m[1] + relative[2] * m[2] for m in zip(*frame.xmat.tolist())]
         pixel = self.lens.project_point(x, -y, -z)
         if pixel is None:
             return (0.0, 0.0), False

@@ -89,12 +89,12 @@ def split(image, pad, out):
     flat = image.reshape(height, 4 * width)
     for y in range(height):
         row = flat[y]
-        red, green, blue = out[0, y, pad:pad + width], out[1, y, pad:pad + width], out[2, y, pad:pad + width]
+        red, green, blue = out[0, y, pad : pad + width], out[1, y, pad : pad + width], out[2, y, pad : pad + width]
         for x in range(width):
             red[x], green[x], blue[x] = row[4 * x], row[4 * x + 1], row[4 * x + 2]
         for c in range(3):
             out[c, y, :pad] = row[c]
-            out[c, y, pad + width:] = row[4 * width - 4 + c]
+            out[c, y, pad + width :] = row[4 * width - 4 + c]
 
 
 @_compiled
@@ -112,22 +112,48 @@ def smear(planes, pad, dx, dy, weights, out):
             row_out[:span] = 0
             for first in range(0, taps, 4):
                 t0, t1, t2, t3 = first, min(first + 1, taps - 1), min(first + 2, taps - 1), min(first + 3, taps - 1)
-                s0 = planes[c, min(max(y + dy[t0], 0), height - 1), pad + dx[t0]:pad + dx[t0] + span]
-                s1 = planes[c, min(max(y + dy[t1], 0), height - 1), pad + dx[t1]:pad + dx[t1] + span]
-                s2 = planes[c, min(max(y + dy[t2], 0), height - 1), pad + dx[t2]:pad + dx[t2] + span]
-                s3 = planes[c, min(max(y + dy[t3], 0), height - 1), pad + dx[t3]:pad + dx[t3] + span]
+                s0 = planes[c, min(max(y + dy[t0], 0), height - 1), pad + dx[t0] : pad + dx[t0] + span]
+                s1 = planes[c, min(max(y + dy[t1], 0), height - 1), pad + dx[t1] : pad + dx[t1] + span]
+                s2 = planes[c, min(max(y + dy[t2], 0), height - 1), pad + dx[t2] : pad + dx[t2] + span]
+                s3 = planes[c, min(max(y + dy[t3], 0), height - 1), pad + dx[t3] : pad + dx[t3] + span]
                 # past the last tap, the last again with weight 0
                 w0, w1 = weights[t0], weights[t1] if first + 1 < taps else np.uint16(0)
-                w2, w3 = weights[t2] if first + 2 < taps else np.uint16(0), weights[t3] if first + 3 < taps else np.uint16(0)
+                w2, w3 = (
+                    weights[t2] if first + 2 < taps else np.uint16(0),
+                    weights[t3] if first + 3 < taps else np.uint16(0),
+                )
                 for x in range(span):
-                    row_out[x] += (w0 * np.uint16(s0[x]) + w1 * np.uint16(s1[x])
-                                   + w2 * np.uint16(s2[x]) + w3 * np.uint16(s3[x]))
+                    row_out[x] += (
+                        w0 * np.uint16(s0[x]) + w1 * np.uint16(s1[x]) + w2 * np.uint16(s2[x]) + w3 * np.uint16(s3[x])
+                    )
 
 
 @_compiled
-def develop(planes, rows_frac, rows_pointers, rows_runs, columns_frac, columns_pointers, columns_runs, level,
-            outer, centre, response, matrix, curve, slope, intercept, coefficient_row, noise, noise_scale, start,
-            y_floor, across, line, out):
+def develop(
+    planes,
+    rows_frac,
+    rows_pointers,
+    rows_runs,
+    columns_frac,
+    columns_pointers,
+    columns_runs,
+    level,
+    outer,
+    centre,
+    response,
+    matrix,
+    curve,
+    slope,
+    intercept,
+    coefficient_row,
+    noise,
+    noise_scale,
+    start,
+    y_floor,
+    across,
+    line,
+    out,
+):
     """The lens's two passes and the colour, row by row of the picture ``out`` (h, w, 3):
 
     1. ``across[c, 2 + x]`` = the column x of ``planes`` (3, h', w') at row ``k + rows_frac[v,
@@ -163,13 +189,15 @@ def develop(planes, rows_frac, rows_pointers, rows_runs, columns_frac, columns_p
             for c in range(3):
                 a0, a1 = planes[c, r0, first:end], planes[c, r1, first:end]
                 a2, a3 = planes[c, r2, first:end], planes[c, r3, first:end]
-                o = across[c, first + 2:end + 2]
+                o = across[c, first + 2 : end + 2]
                 for i in range(end - first):
                     p = f[i]
                     q = np.float32(1.0) - p
-                    o[i] = (outer_level * (q * np.float32(a0[i]) + p * np.float32(a3[i]))
-                            + (centre_level * q + outer_level * p) * np.float32(a1[i])
-                            + (outer_level * q + centre_level * p) * np.float32(a2[i]))
+                    o[i] = (
+                        outer_level * (q * np.float32(a0[i]) + p * np.float32(a3[i]))
+                        + (centre_level * q + outer_level * p) * np.float32(a1[i])
+                        + (outer_level * q + centre_level * p) * np.float32(a2[i])
+                    )
         for c in range(3):
             across[c, 0] = across[c, 1] = across[c, 2]
             across[c, source_width + 2] = across[c, source_width + 3] = across[c, source_width + 1]
@@ -180,16 +208,19 @@ def develop(planes, rows_frac, rows_pointers, rows_runs, columns_frac, columns_p
             f = columns_frac[v, first:end]
             for c in range(3):
                 row = across[c]
-                a0, a1 = row[first + shift:end + shift], row[first + shift + 1:end + shift + 1]
-                a2, a3 = row[first + shift + 2:end + shift + 2], row[first + shift + 3:end + shift + 3]
+                a0, a1 = row[first + shift : end + shift], row[first + shift + 1 : end + shift + 1]
+                a2, a3 = row[first + shift + 2 : end + shift + 2], row[first + shift + 3 : end + shift + 3]
                 o = line[c, first:end]
                 for i in range(end - first):
                     p = f[i]
                     q = np.float32(1.0) - p
-                    o[i] = (outer * (q * a0[i] + p * a3[i]) + (centre * q + outer * p) * a1[i]
-                            + (outer * q + centre * p) * a2[i])
+                    o[i] = (
+                        outer * (q * a0[i] + p * a3[i])
+                        + (centre * q + outer * p) * a1[i]
+                        + (outer * q + centre * p) * a2[i]
+                    )
         at = start + v * width
-        noise_y, noise_cr, noise_cb = noise[0, at:at + width], noise[1, at:at + width], noise[2, at:at + width]
+        noise_y, noise_cr, noise_cb = noise[0, at : at + width], noise[1, at : at + width], noise[2, at : at + width]
         row = coefficient_row[v]
         curve_y, curve_cb = curve[0, row], curve[2, row]
         slope_y, slope_cr, slope_cb = slope[0, row], slope[1, row], slope[2, row]

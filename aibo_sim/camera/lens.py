@@ -30,7 +30,6 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, replace
 
-import cv2
 import numpy as np
 
 from openr_bridge import HORIZONTAL_FOV_DEG, LAYER_SIZE, VERTICAL_FOV_DEG
@@ -55,11 +54,18 @@ class Lens:
     def distorted(self) -> bool:
         return any(self.distortion)
 
-    def scaled(self, width: int, height: int) -> "Lens":
+    def scaled(self, width: int, height: int) -> Lens:
         """The same lens on an image of another size (pixel edges, not centres, scale)."""
         sx, sy = width / self.width, height / self.height
-        return replace(self, fx=self.fx * sx, fy=self.fy * sy, cx=(self.cx + 0.5) * sx - 0.5,
-                       cy=(self.cy + 0.5) * sy - 0.5, width=width, height=height)
+        return replace(
+            self,
+            fx=self.fx * sx,
+            fy=self.fy * sy,
+            cx=(self.cx + 0.5) * sx - 0.5,
+            cy=(self.cy + 0.5) * sy - 0.5,
+            width=width,
+            height=height,
+        )
 
     def camera_matrix(self) -> np.ndarray:
         return np.array([[self.fx, 0, self.cx], [0, self.fy, self.cy], [0, 0, 1.0]])
@@ -121,7 +127,7 @@ class Lens:
         None behind the camera."""
         return self._pixel(x / z, y / z) if z > 0 else None
 
-    def render_pinhole(self, margin: float = 1.5) -> "PinholeRender":
+    def render_pinhole(self, margin: float = 1.5) -> PinholeRender:
         """The square-pixel pinhole render that covers every pixel of this lens's image with
         ``margin`` pixels to spare on each side, at the lens's own pixel density (fx): no wider
         than that, its principal point off-centre as the lens's is. Its principal point sits a
@@ -140,13 +146,15 @@ class Lens:
         width, height = (math.ceil(c + focal * high + margin + 0.5) for c, high in zip(centre, highest))
         return PinholeRender(width, height, focal, centre)
 
-    def render_maps(self, render: "PinholeRender") -> tuple[np.ndarray, np.ndarray]:
+    def render_maps(self, render: PinholeRender) -> tuple[np.ndarray, np.ndarray]:
         """Where each pixel of this lens's image lies in the pinhole ``render``: x and y,
         float64 (height, width)."""
         u, v = np.meshgrid(np.arange(self.width, dtype=np.float64), np.arange(self.height, dtype=np.float64))
         ideal = self.undistort(np.stack([u.ravel(), v.ravel()], axis=-1))
-        return ((ideal[:, 0] * render.focal + render.centre[0]).reshape(self.height, self.width),
-                (ideal[:, 1] * render.focal + render.centre[1]).reshape(self.height, self.width))
+        return (
+            (ideal[:, 0] * render.focal + render.centre[0]).reshape(self.height, self.width),
+            (ideal[:, 1] * render.focal + render.centre[1]).reshape(self.height, self.width),
+        )
 
 
 @dataclass(frozen=True)
@@ -167,10 +175,21 @@ def _sony_focal(size: int, fov_deg: float) -> float:
 TEKKOTSU_DISTORTION = (-0.147005, 0.38485, -0.00347777, 0.00012873, 0.0)
 LENSES = {
     "tekkotsu": Lens("tekkotsu", 198.807, 200.333, 102.689, 85.0399, TEKKOTSU_DISTORTION),
-    "sony": Lens("sony", _sony_focal(LAYER_WIDTH, HORIZONTAL_FOV_DEG), _sony_focal(LAYER_HEIGHT, VERTICAL_FOV_DEG),
-                 (LAYER_WIDTH - 1) / 2, (LAYER_HEIGHT - 1) / 2, TEKKOTSU_DISTORTION),
-    "pinhole": Lens("pinhole", _sony_focal(LAYER_WIDTH, HORIZONTAL_FOV_DEG), _sony_focal(LAYER_HEIGHT, VERTICAL_FOV_DEG),
-                    (LAYER_WIDTH - 1) / 2, (LAYER_HEIGHT - 1) / 2),
+    "sony": Lens(
+        "sony",
+        _sony_focal(LAYER_WIDTH, HORIZONTAL_FOV_DEG),
+        _sony_focal(LAYER_HEIGHT, VERTICAL_FOV_DEG),
+        (LAYER_WIDTH - 1) / 2,
+        (LAYER_HEIGHT - 1) / 2,
+        TEKKOTSU_DISTORTION,
+    ),
+    "pinhole": Lens(
+        "pinhole",
+        _sony_focal(LAYER_WIDTH, HORIZONTAL_FOV_DEG),
+        _sony_focal(LAYER_HEIGHT, VERTICAL_FOV_DEG),
+        (LAYER_WIDTH - 1) / 2,
+        (LAYER_HEIGHT - 1) / 2,
+    ),
 }
 
 
@@ -193,7 +212,7 @@ class Warp:
     columns_runs: tuple[np.ndarray, np.ndarray]
 
     @classmethod
-    def from_maps(cls, map_x: np.ndarray, map_y: np.ndarray, render_width: int, slack: int = 0) -> "Warp":
+    def from_maps(cls, map_x: np.ndarray, map_y: np.ndarray, render_width: int, slack: int = 0) -> Warp:
         height, width = map_x.shape
         if np.any(np.diff(map_x, axis=1) < 0):
             raise ValueError("a two-pass warp needs a map that never decreases along a row")
@@ -201,8 +220,10 @@ class Warp:
         row_at_column = np.stack([np.interp(columns, map_x[v], map_y[v]) for v in range(height)])
         rows_base = np.floor(row_at_column).astype(np.int64)
         columns_base = np.floor(map_x).astype(np.int64)
-        rows_frac, columns_frac = (np.pad((position - base).astype(np.float32), ((0, 0), (0, slack)))
-                                   for position, base in ((row_at_column, rows_base), (map_x, columns_base)))
+        rows_frac, columns_frac = (
+            np.pad((position - base).astype(np.float32), ((0, 0), (0, slack)))
+            for position, base in ((row_at_column, rows_base), (map_x, columns_base))
+        )
         return cls(rows_frac, _runs(rows_base), columns_frac, _runs(columns_base - np.arange(width)))
 
 

@@ -65,11 +65,22 @@ REFERENCE_WHITE_K = 6504.0  # the render's neutral light: sRGB's D65 white
 # Section 3: rUNSWift 2005's vignetting, raw value at radius r for a centre value, per channel.
 VIGNETTING_RADII = (0, 40, 80, 100, 120, 130)
 VIGNETTING_TABLE = {  # channel: (centre values, raw values at each radius)
-    "Y": ((60, 120, 150, 210), ((60, 120, 150, 210), (58, 116, 146, 206), (52, 104, 133, 192), (48, 95, 123, 182),
-                                (42, 84, 110, 167), (38, 77, 102, 160))),
+    "Y": (
+        (60, 120, 150, 210),
+        (
+            (60, 120, 150, 210),
+            (58, 116, 146, 206),
+            (52, 104, 133, 192),
+            (48, 95, 123, 182),
+            (42, 84, 110, 167),
+            (38, 77, 102, 160),
+        ),
+    ),
     "Cr": ((64, 192), ((64, 192), (68, 188), (79, 177), (88, 168), (100, 157), (107, 150))),
-    "Cb": ((64, 128, 192), ((64, 128, 192), (68, 130, 190), (81, 135, 184), (91, 139, 180), (105, 145, 174),
-                            (113, 149, 171))),
+    "Cb": (
+        (64, 128, 192),
+        ((64, 128, 192), (68, 130, 190), (81, 135, 184), (91, 139, 180), (105, 145, 174), (113, 149, 171)),
+    ),
 }
 RING_CENTRES = ((110.0, 79.5), (105.0, 79.5), (97.0, 79.5))  # Y, Cr, Cb, layer-H pixels
 # Section 4: robot-to-robot spread as a linear map per channel, v' = pivot + gain (v - pivot) +
@@ -129,11 +140,16 @@ class SceneLight:
     mains_hz: float = 50.0
 
     def __post_init__(self):
-        checks = (("light_temperature_K", self.temperature_k, 1667.0, 25000.0),  # planckian_rgb's range
-                  ("light_flicker_depth", self.flicker_depth, 0.0, 1.0), ("mains_frequency_Hz", self.mains_hz, 1.0, 1000.0))
+        checks = (
+            ("light_temperature_K", self.temperature_k, 1667.0, 25000.0),  # planckian_rgb's range
+            ("light_flicker_depth", self.flicker_depth, 0.0, 1.0),
+            ("mains_frequency_Hz", self.mains_hz, 1.0, 1000.0),
+        )
         for name, value, low, high in checks:
             if not (isinstance(value, (int, float)) and low <= value <= high):  # NaN fails too
-                raise ValueError(f"scene custom numeric {name} must be a number from {low:g} to {high:g}, not {value!r}")
+                raise ValueError(
+                    f"scene custom numeric {name} must be a number from {low:g} to {high:g}, not {value!r}"
+                )
 
     def exposure_gain(self, end_s: float, exposure_s: float) -> float:
         """The light over the exposure [end_s - exposure_s, end_s] relative to its mean, the
@@ -144,8 +160,11 @@ class SceneLight:
         return 1 + self.flicker_depth * (math.sin(w * end_s) - math.sin(w * (end_s - exposure_s))) / (w * exposure_s)
 
     def as_dict(self) -> dict:
-        return {"light_temperature_K": self.temperature_k, "light_flicker_depth": self.flicker_depth,
-                "mains_frequency_Hz": self.mains_hz}
+        return {
+            "light_temperature_K": self.temperature_k,
+            "light_flicker_depth": self.flicker_depth,
+            "mains_frequency_Hz": self.mains_hz,
+        }
 
 
 @dataclass(frozen=True)
@@ -161,7 +180,7 @@ class RobotColour:
             raise ValueError(f"robot colour needs 3 finite gains and 3 finite offsets, not {self.gain}, {self.offset}")
 
     @classmethod
-    def draw(cls, rng: np.random.Generator, scale: float = 1.0) -> "RobotColour":
+    def draw(cls, rng: np.random.Generator, scale: float = 1.0) -> RobotColour:
         """A robot drawn from the measured spread (``scale`` 1) or a multiple of it."""
         gain = 1 + scale * np.asarray(ROBOT_GAIN_SIGMA) * rng.standard_normal(3)
         offset = scale * np.asarray(ROBOT_OFFSET_SIGMA) * rng.standard_normal(3)
@@ -192,30 +211,47 @@ class CameraProfile:
     robot: RobotColour = field(default_factory=RobotColour)
 
     def __post_init__(self):
-        numbers = (self.sensitivity, self.black_level, self.y_floor, self.white_level, *self.chroma_gain,
-                   *self.noise_sigma, self.softness_px, self.readout_ms)
-        if not all(math.isfinite(v) for v in numbers) or self.sensitivity <= 0 or min(self.noise_sigma) < 0 \
-                or self.softness_px < 0 or self.readout_ms < 0 \
-                or not 0 <= self.y_floor <= self.black_level < self.white_level <= 255:
+        numbers = (
+            self.sensitivity,
+            self.black_level,
+            self.y_floor,
+            self.white_level,
+            *self.chroma_gain,
+            *self.noise_sigma,
+            self.softness_px,
+            self.readout_ms,
+        )
+        if (
+            not all(math.isfinite(v) for v in numbers)
+            or self.sensitivity <= 0
+            or min(self.noise_sigma) < 0
+            or self.softness_px < 0
+            or self.readout_ms < 0
+            or not 0 <= self.y_floor <= self.black_level < self.white_level <= 255
+        ):
             raise ValueError(f"camera profile {self.name!r}: parameters out of range or not finite")
         if not isinstance(self.latency_frames, int) or self.latency_frames < 0:
             raise ValueError(f"camera profile {self.name!r}: latency_frames must be a whole number >= 0")
 
-    def with_options(self, **options) -> "CameraProfile":
+    def with_options(self, **options) -> CameraProfile:
         return replace(self, **options)
 
     def options(self) -> dict:
         """The parameters in which this profile differs from the preset of its name (all of
         them for a name that is no preset), as JSON takes them: what run.json and meta.json
         record beside the name."""
+
         def as_json(value):
             if isinstance(value, RobotColour):
                 return {part: list(values) for part, values in asdict(value).items()}
             return list(value) if isinstance(value, tuple) else value
 
         preset = PROFILES.get(self.name)
-        return {f.name: as_json(getattr(self, f.name)) for f in fields(self)
-                if f.name != "name" and (preset is None or getattr(self, f.name) != getattr(preset, f.name))}
+        return {
+            f.name: as_json(getattr(self, f.name))
+            for f in fields(self)
+            if f.name != "name" and (preset is None or getattr(self, f.name) != getattr(preset, f.name))
+        }
 
 
 PROFILES = {
@@ -230,8 +266,14 @@ def camera_profile(profile: str | CameraProfile, options: dict | None = None) ->
     if isinstance(profile, CameraProfile):
         return profile
     if options:
-        values = {name: RobotColour(**{part: tuple(v) for part, v in value.items()}) if name == "robot"
-                  else tuple(value) if isinstance(value, list) else value for name, value in options.items()}
+        values = {
+            name: RobotColour(**{part: tuple(v) for part, v in value.items()})
+            if name == "robot"
+            else tuple(value)
+            if isinstance(value, list)
+            else value
+            for name, value in options.items()
+        }
         return PROFILES[profile].with_options(**values) if profile in PROFILES else CameraProfile(profile, **values)
     if profile not in PROFILES:
         raise ValueError(f"camera profile must be one of {', '.join(PROFILES)}, not {profile!r}")
@@ -284,7 +326,7 @@ def vignetting_fit() -> np.ndarray:
     for c, (centre, rows) in enumerate(VIGNETTING_TABLE.values()):
         degree = min(2, len(centre) - 1)
         for i, raw in enumerate(rows):
-            fit[c, i, 2 - degree:] = np.polyfit(centre, raw, degree)
+            fit[c, i, 2 - degree :] = np.polyfit(centre, raw, degree)
     return fit
 
 
@@ -334,8 +376,15 @@ class Sensor:
     where each pixel of the picture lies in the render of ``render_size`` (width, height),
     ``render_scale`` its pixels per picture pixel (x, y)."""
 
-    def __init__(self, profile: CameraProfile, settings: CameraSettings, light_temperature_k: float,
-                 maps: tuple[np.ndarray, np.ndarray], render_size: tuple[int, int], render_scale: tuple[float, float]):
+    def __init__(
+        self,
+        profile: CameraProfile,
+        settings: CameraSettings,
+        light_temperature_k: float,
+        maps: tuple[np.ndarray, np.ndarray],
+        render_size: tuple[int, int],
+        render_scale: tuple[float, float],
+    ):
         self.profile, self.light_temperature_k = profile, light_temperature_k
         self.height, self.width = maps[0].shape
         self.maps, self.render_size, self.render_scale = maps, render_size, render_scale
@@ -347,8 +396,11 @@ class Sensor:
         sigma = profile.softness_px * self.width / 208 * render_scale[0]
         outer, centre, _ = cv2.getGaussianKernel(3, sigma).ravel() if sigma >= 0.05 else (0.0, 1.0, 0.0)
         self._taps = np.float32(outer), np.float32(centre)
-        vignetting = (vignetting_maps(self.width, self.height) if profile.vignetting
-                      else np.broadcast_to(np.array([0.0, 1.0, 0.0])[:, None, None, None], (3, self.height, self.width, 3)))
+        vignetting = (
+            vignetting_maps(self.width, self.height)
+            if profile.vignetting
+            else np.broadcast_to(np.array([0.0, 1.0, 0.0])[:, None, None, None], (3, self.height, self.width, 3))
+        )
         self._vignetting_rows, self._coefficient_row = self._distinct_rows(vignetting.transpose(0, 3, 1, 2))
         pixels = self.width * self.height
         self._pool = _noise_pool(NOISE_POOL_FRAMES * pixels * 3).reshape(3, -1)
@@ -363,19 +415,28 @@ class Sensor:
         """Take new settings or a new robot: the light's gains, colour maps and noise scale."""
         self.settings, self.robot = settings, robot
         p = self.profile
-        self._gains = light_gains(self.light_temperature_k, settings.white_balance) * settings.exposure_factor * p.sensitivity
+        self._gains = (
+            light_gains(self.light_temperature_k, settings.white_balance) * settings.exposure_factor * p.sensitivity
+        )
         self._responses: dict[float, np.ndarray] = {}
         # Sony's forward model with the black level on Y; rows Y, Cr, Cb; columns R, G, B, 1.
         luma = np.array([0.299, 0.587, 0.114])
         y_scale = (p.white_level - p.black_level) / 255
-        self._matrix = np.array([[*(y_scale * luma), p.black_level],
-                                 [*(p.chroma_gain[0] * (np.array([1.0, 0, 0]) - luma)), 128.0],
-                                 [*(p.chroma_gain[1] * (np.array([0, 0, 1.0]) - luma)), 128.0]], np.float32)
+        self._matrix = np.array(
+            [
+                [*(y_scale * luma), p.black_level],
+                [*(p.chroma_gain[0] * (np.array([1.0, 0, 0]) - luma)), 128.0],
+                [*(p.chroma_gain[1] * (np.array([0, 0, 1.0]) - luma)), 128.0],
+            ],
+            np.float32,
+        )
         curve, slope, intercept = self._vignetting_rows
         gain, pivot, offset = (np.asarray(values)[:, None, None] for values in (robot.gain, ROBOT_PIVOT, robot.offset))
         # Robot after vignetting: gain (c v^2 + a v + b - pivot) + pivot + offset, per channel.
-        self._coefficients = tuple(np.ascontiguousarray(values, np.float32) for values in
-                                   (gain * curve, gain * slope, gain * (intercept - pivot) + pivot + offset))
+        self._coefficients = tuple(
+            np.ascontiguousarray(values, np.float32)
+            for values in (gain * curve, gain * slope, gain * (intercept - pivot) + pivot + offset)
+        )
         sigma = np.asarray(p.noise_sigma) * math.sqrt(2.0 ** GAIN_STEPS[settings.gain])
         self._noise_scale = (sigma / NOISE_STEPS).astype(np.float32)
         self._y_floor = np.float32(p.y_floor)
@@ -387,7 +448,9 @@ class Sensor:
         memory the colour pass streams through each frame)."""
         by_row = planes.transpose(2, 0, 1, 3).reshape(self.height, -1)
         distinct, row_of = np.unique(by_row, axis=0, return_inverse=True)
-        return distinct.reshape(-1, *planes.shape[:2], self.width).transpose(1, 2, 0, 3), row_of.ravel().astype(np.int64)
+        return distinct.reshape(-1, *planes.shape[:2], self.width).transpose(1, 2, 0, 3), row_of.ravel().astype(
+            np.int64
+        )
 
     def _response(self, light: float) -> np.ndarray:
         """Stage 2 as (3,) float32: each channel's gain on the codes for ``light``
@@ -414,11 +477,13 @@ class Sensor:
         delay = (self.height - 1 - np.arange(self.height)) / (self.height - 1) * readout / self.settings.exposure_s
         (width, height), (map_x, map_y) = self.render_size, self.maps
         shift_x, shift_y = (m * scale * delay[:, np.newaxis] for m, scale in zip(motion_px, self.render_scale))
-        return Warp.from_maps(np.clip(map_x + shift_x, 0, width - 1), np.clip(map_y + shift_y, 0, height - 1), width,
-                              self._kernels.SLACK)
+        return Warp.from_maps(
+            np.clip(map_x + shift_x, 0, width - 1), np.clip(map_y + shift_y, 0, height - 1), width, self._kernels.SLACK
+        )
 
-    def expose(self, render: np.ndarray, motion_px: tuple[float, float], seed: int, index: int,
-               light: float = 1.0) -> np.ndarray:
+    def expose(
+        self, render: np.ndarray, motion_px: tuple[float, float], seed: int, index: int, light: float = 1.0
+    ) -> np.ndarray:
         """Y, Cr, Cb (h, w, 3) uint8 of the (h', w', 4) uint8 RGBA pinhole render (alpha unread),
         with ``motion_px`` the image motion (image pixels) and ``light`` the scene's light
         (relative to its mean) during the exposure."""
@@ -437,9 +502,24 @@ class Sensor:
             planes, level = self._buffer((3, height, width + slack), np.uint8), np.float32(1)
             kernels.split(render, 0, planes)
         ycrcb = np.empty((self.height, self.width, 3), np.uint8)
-        kernels.develop(planes, warp.rows_frac, *warp.rows_runs, warp.columns_frac, *warp.columns_runs, level,
-                        *self._taps, self._response(light), self._matrix, *self._coefficients, self._coefficient_row,
-                        self._pool, self._noise_scale, noise_offset(seed, index, self._choices), self._y_floor,
-                        self._buffer((3, width + 4 + slack), np.float32),
-                        self._buffer((3, self.width + slack), np.float32), ycrcb)
+        kernels.develop(
+            planes,
+            warp.rows_frac,
+            *warp.rows_runs,
+            warp.columns_frac,
+            *warp.columns_runs,
+            level,
+            *self._taps,
+            self._response(light),
+            self._matrix,
+            *self._coefficients,
+            self._coefficient_row,
+            self._pool,
+            self._noise_scale,
+            noise_offset(seed, index, self._choices),
+            self._y_floor,
+            self._buffer((3, width + 4 + slack), np.float32),
+            self._buffer((3, self.width + slack), np.float32),
+            ycrcb,
+        )
         return ycrcb

@@ -11,5 +11,12 @@ the semantics, the values and the errors are the Python API's by construction (`
 from .build import C_SUFFIXES, CompileError, compile_controller, controller_sources, is_c_controller
 from .serve import CControllerError, run_c_controller
 
-__all__ = ["C_SUFFIXES", "CControllerError", "CompileError", "compile_controller", "controller_sources",
-           "is_c_controller", "run_c_controller"]
+__all__ = [
+    "C_SUFFIXES",
+    "CControllerError",
+    "CompileError",
+    "compile_controller",
+    "controller_sources",
+    "is_c_controller",
+    "run_c_controller",
+]

@@ -25,8 +25,10 @@ LIBRARY = PACKAGE / "libaibo.c"
 # -ffp-contract=off: no fused multiply-add, so that a controller's double arithmetic rounds as
 # the source (and Python) says, on every machine.
 FLAGS = ("-O2", "-ffp-contract=off")
-INSTALL_HINT = {"cc": "a C compiler (Debian/Ubuntu: apt-get install gcc)",
-                "c++": "a C++ compiler (Debian/Ubuntu: apt-get install g++)"}
+INSTALL_HINT = {
+    "cc": "a C compiler (Debian/Ubuntu: apt-get install gcc)",
+    "c++": "a C++ compiler (Debian/Ubuntu: apt-get install g++)",
+}
 
 
 class CompileError(RuntimeError):
@@ -48,7 +50,9 @@ def controller_sources(path: str | os.PathLike) -> tuple[Path, list[Path]]:
     if path.is_dir():
         main = next((path / (path.name + s) for s in C_SUFFIXES if (path / (path.name + s)).is_file()), None)
         if main is None:
-            raise FileNotFoundError(f"{path}: no {' or '.join(path.name + s for s in C_SUFFIXES)} in this controller folder")
+            raise FileNotFoundError(
+                f"{path}: no {' or '.join(path.name + s for s in C_SUFFIXES)} in this controller folder"
+            )
         return main, sorted(p for p in path.iterdir() if p.suffix in C_SUFFIXES and p.is_file())
     if not path.is_file():
         raise FileNotFoundError(f"{path}: no such controller file")
@@ -84,9 +88,13 @@ def compile_controller(path: str | os.PathLike) -> Path:
         compilers["c++"] = _compiler("c++")
     header = c_header()
     digest = hashlib.sha256()
-    for part in (*FLAGS, header, LIBRARY.read_text(),
-                 *(f.read_text() for f in sorted(INCLUDE.rglob("*.h"))),
-                 *(compilers[k].encode() + _version(compilers[k]) for k in sorted(compilers))):
+    for part in (
+        *FLAGS,
+        header,
+        LIBRARY.read_text(),
+        *(f.read_text() for f in sorted(INCLUDE.rglob("*.h"))),
+        *(compilers[k].encode() + _version(compilers[k]) for k in sorted(compilers)),
+    ):
         digest.update(part.encode() if isinstance(part, str) else part)
         digest.update(b"\0")
     for source in sources:
@@ -103,8 +111,10 @@ def compile_controller(path: str | os.PathLike) -> Path:
         for source in [LIBRARY, *sources]:
             compiler = compilers["cc" if source.suffix == ".c" else "c++"]
             objects.append(build / f"{len(objects)}_{source.stem}.o")
-            _run([compiler, *FLAGS, "-I", str(INCLUDE), "-I", str(build), "-c", str(source), "-o", str(objects[-1])],
-                 source)
+            _run(
+                [compiler, *FLAGS, "-I", str(INCLUDE), "-I", str(build), "-c", str(source), "-o", str(objects[-1])],
+                source,
+            )
         _run([compilers.get("c++", compilers["cc"]), *map(str, objects), "-o", str(build / main.stem), "-lm"], main)
         try:
             os.replace(build, folder)  # whole or not at all; a racing build of the same key may have won

@@ -82,7 +82,7 @@ class Child:
     def returncode(self) -> int | None:
         return self._process.returncode
 
-    def start(self) -> "Child":
+    def start(self) -> Child:
         self._wake = os.pipe()
         for fd in self._wake:
             os.set_blocking(fd, False)
@@ -91,8 +91,13 @@ class Child:
                 if signal.getsignal(number) != signal.SIG_IGN:
                     self._previous[number] = signal.signal(number, self._note)
         try:
-            self._process = subprocess.Popen(self.argv, pass_fds=self.pass_fds, env=self.env, start_new_session=True,
-                                             preexec_fn=functools.partial(_in_child, os.getpid()))
+            self._process = subprocess.Popen(
+                self.argv,
+                pass_fds=self.pass_fds,
+                env=self.env,
+                start_new_session=True,
+                preexec_fn=functools.partial(_in_child, os.getpid()),
+            )
         except BaseException:
             self._close()
             raise
@@ -138,7 +143,7 @@ class Child:
             self._close()
         return self._process.returncode
 
-    def __enter__(self) -> "Child":
+    def __enter__(self) -> Child:
         return self.start()
 
     def __exit__(self, kind, error, traceback) -> None:
@@ -163,8 +168,12 @@ class Child:
         number, self.pending = self.pending, None
         self.stop()
         note = f"; {self.grace_note}" if self.grace_note else ""
-        print(f"aibo-sim: {self.name} made no call for {GRACE_S:g} s after {signal.Signals(number).name}: "
-              f"stopped, with its process group{note}", file=sys.stderr, flush=True)
+        print(
+            f"aibo-sim: {self.name} made no call for {GRACE_S:g} s after {signal.Signals(number).name}: "
+            f"stopped, with its process group{note}",
+            file=sys.stderr,
+            flush=True,
+        )
         signal.raise_signal(number)
 
     def _note(self, number, frame) -> None:

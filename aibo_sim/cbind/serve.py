@@ -84,7 +84,7 @@ def _handlers(image: memoryview) -> dict:
 
     def camera_get_image(tag):
         pixels = np.ascontiguousarray(api.camera_get_image(tag), np.uint8).reshape(-1)
-        image[:pixels.size] = pixels
+        image[: pixels.size] = pixels
         return api.camera_get_width(tag), api.camera_get_height(tag)
 
     def mtn_fprint(handle):
@@ -96,15 +96,21 @@ def _handlers(image: memoryview) -> dict:
         return lambda handle: function(motions[handle])
 
     handlers = {name: getattr(api, name) for name, _, _ in OPS if hasattr(api, name)}
-    handlers.update({name: on_motion(handlers[name]) for name in (
-        "mtn_delete", "mtn_play", "mtn_is_over", "mtn_get_length", "mtn_get_time", "mtn_get_name")})
-    handlers.update({
-        "robot_console_printf": lambda text: api.robot_console_printf("%s", text),
-        "camera_get_image": camera_get_image,
-        "mtn_new": motions.new,
-        "mtn_fprint": mtn_fprint,
-        "mtn_get_error": lambda: api.mtn_get_error() or "",
-    })
+    handlers.update(
+        {
+            name: on_motion(handlers[name])
+            for name in ("mtn_delete", "mtn_play", "mtn_is_over", "mtn_get_length", "mtn_get_time", "mtn_get_name")
+        }
+    )
+    handlers.update(
+        {
+            "robot_console_printf": lambda text: api.robot_console_printf("%s", text),
+            "camera_get_image": camera_get_image,
+            "mtn_new": motions.new,
+            "mtn_fprint": mtn_fprint,
+            "mtn_get_error": lambda: api.mtn_get_error() or "",
+        }
+    )
     return handlers
 
 
@@ -125,7 +131,7 @@ class _Call:
         if self._arguments is not None:
             return self._arguments.unpack(payload)[1:]
         size = _LENGTH.unpack_from(payload, 4)[0]
-        return (payload[8:8 + size].decode("utf-8", "replace"),)
+        return (payload[8 : 8 + size].decode("utf-8", "replace"),)
 
     def answer(self, result) -> bytes:
         if self.results == "s":
@@ -152,8 +158,8 @@ class _Calls:
                 return None
             buffer += chunk
         size = _LENGTH.unpack_from(buffer)[0]
-        payload = bytes(buffer[4:4 + size])
-        del buffer[:4 + size]
+        payload = bytes(buffer[4 : 4 + size])
+        del buffer[: 4 + size]
         return payload
 
     def _read(self) -> bytes:
@@ -181,8 +187,12 @@ class _Calls:
 
 def announce_wait(name: str, waited_s: float, time_ms: int) -> None:
     """The line that says the simulator waits for controller ``name`` (C here, Python in ``runner``)."""
-    print(f"aibo-sim: waiting for controller {name}: no API call for {waited_s:.1f} s of wall time "
-          f"(simulated time stays at t = {time_ms / 1000:.3f} s)", file=sys.stderr, flush=True)
+    print(
+        f"aibo-sim: waiting for controller {name}: no API call for {waited_s:.1f} s of wall time "
+        f"(simulated time stays at t = {time_ms / 1000:.3f} s)",
+        file=sys.stderr,
+        flush=True,
+    )
 
 
 def run_c_controller(executable: Path, name: str) -> None:
@@ -194,8 +204,13 @@ def run_c_controller(executable: Path, name: str) -> None:
         image = mmap.mmap(shared.fileno(), MAX_IMAGE_BYTES)
         ours, theirs = socket.socketpair()
         environment = {**os.environ, "AIBO_SIM_FD": str(theirs.fileno()), "AIBO_SIM_SHM": shared.name}
-        child = Child([str(executable)], name=f"controller {name}", pass_fds=(theirs.fileno(),), env=environment,
-                      grace_note="its robot_die functions could not run")
+        child = Child(
+            [str(executable)],
+            name=f"controller {name}",
+            pass_fds=(theirs.fileno(),),
+            env=environment,
+            grace_note="its robot_die functions could not run",
+        )
         try:
             with child, memoryview(image) as view:
                 theirs.close()
@@ -258,8 +273,11 @@ class _Server:
                 shown = ", ".join(repr(a) for a in args)
                 raise CControllerError(f"{call.name}({shown}) raised {type(exc).__name__}: {exc}") from exc
             if call.results:
-                self._channel.sendall(_with_answers_ahead(call.answer(result), self._wanted)
-                                      if call.name == "robot_step" else call.answer(result))
+                self._channel.sendall(
+                    _with_answers_ahead(call.answer(result), self._wanted)
+                    if call.name == "robot_step"
+                    else call.answer(result)
+                )
         self._child.wait(None, WAIT_NOTICE_S, self._calls.announce_wait)  # it may run on after closing its socket
         if ended and self._child.stop() == 0:
             raise SimulationEnd()

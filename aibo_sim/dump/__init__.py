@@ -95,12 +95,44 @@ Modules: ``formats`` (what each format writes), ``writing`` (atomic files, the l
 """
 
 from .command import add_dump_parser
-from .formats import (DEFAULT_FORMATS, DUMP_FORMAT, FORMATS, DumpError, annex_yuv, ball_in_image, file_layouts,
-                      frame_metadata, geom_classes, rgb_to_yuv_bt601, yuv420_bytes, yuv444_bytes)
+from .formats import (
+    DEFAULT_FORMATS,
+    DUMP_FORMAT,
+    FORMATS,
+    DumpError,
+    annex_yuv,
+    ball_in_image,
+    file_layouts,
+    frame_metadata,
+    geom_classes,
+    rgb_to_yuv_bt601,
+    yuv420_bytes,
+    yuv444_bytes,
+)
 from .reading import Dump, DumpFrame, load_dump
 from .running import POLICIES, DumpSummary, dump
 from .writing import DumpWriter, write_atomic
 
-__all__ = ["DEFAULT_FORMATS", "DUMP_FORMAT", "FORMATS", "POLICIES", "Dump", "DumpError", "DumpFrame", "DumpSummary",
-           "DumpWriter", "add_dump_parser", "annex_yuv", "ball_in_image", "dump", "file_layouts", "frame_metadata",
-           "geom_classes", "load_dump", "rgb_to_yuv_bt601", "write_atomic", "yuv420_bytes", "yuv444_bytes"]
+__all__ = [
+    "DEFAULT_FORMATS",
+    "DUMP_FORMAT",
+    "FORMATS",
+    "POLICIES",
+    "Dump",
+    "DumpError",
+    "DumpFrame",
+    "DumpSummary",
+    "DumpWriter",
+    "add_dump_parser",
+    "annex_yuv",
+    "ball_in_image",
+    "dump",
+    "file_layouts",
+    "frame_metadata",
+    "geom_classes",
+    "load_dump",
+    "rgb_to_yuv_bt601",
+    "write_atomic",
+    "yuv420_bytes",
+    "yuv444_bytes",
+]

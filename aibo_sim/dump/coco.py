@@ -79,11 +79,16 @@ class Objects:
             ys, xs = np.nonzero(owners == body)
             alone = self._render(sim, self.shown & (self.owner[:-1] == body))
             x, y = int(xs.min()), int(ys.min())
-            detections.append({
-                "category": self.category[body], "object": self.name[body],
-                "bbox": [x, y, int(xs.max()) - x + 1, int(ys.max()) - y + 1], "area": int(xs.size),
-                "visibility": round(xs.size / int((alone >= 0).sum()), VISIBILITY_DIGITS),
-                "segmentation": mask_rle(owners == body)})
+            detections.append(
+                {
+                    "category": self.category[body],
+                    "object": self.name[body],
+                    "bbox": [x, y, int(xs.max()) - x + 1, int(ys.max()) - y + 1],
+                    "area": int(xs.size),
+                    "visibility": round(xs.size / int((alone >= 0).sum()), VISIBILITY_DIGITS),
+                    "segmentation": mask_rle(owners == body),
+                }
+            )
         return detections
 
 
@@ -109,18 +114,36 @@ def coco_dataset(out: Path, folders: list[Path]) -> dict:
         records = {r["index"]: r for r in read_records(folder / LINES, frame_limit(meta))}
         for index in sorted(records):
             image_id = len(images) + 1
-            images.append({"id": image_id, "file_name": prefix + PATHS["rgb"].format(index=index),
-                           "width": camera["width"], "height": camera["height"]})
+            images.append(
+                {
+                    "id": image_id,
+                    "file_name": prefix + PATHS["rgb"].format(index=index),
+                    "width": camera["width"],
+                    "height": camera["height"],
+                }
+            )
             for item in records[index].get("objects", []):
-                annotations.append({"id": len(annotations) + 1, "image_id": image_id,
-                                    "category_id": SEGMENTATION_CLASSES.index(item["category"]), "bbox": item["bbox"],
-                                    "area": item["area"], "iscrowd": 0, "visibility": item["visibility"],
-                                    "object": item["object"],
-                                    # the records of dumps made before masks were recorded have none
-                                    **({"segmentation": item["segmentation"]} if "segmentation" in item else {})})
+                annotations.append(
+                    {
+                        "id": len(annotations) + 1,
+                        "image_id": image_id,
+                        "category_id": SEGMENTATION_CLASSES.index(item["category"]),
+                        "bbox": item["bbox"],
+                        "area": item["area"],
+                        "iscrowd": 0,
+                        "visibility": item["visibility"],
+                        "object": item["object"],
+                        # the records of dumps made before masks were recorded have none
+                        **({"segmentation": item["segmentation"]} if "segmentation" in item else {}),
+                    }
+                )
     categories = [{"id": SEGMENTATION_CLASSES.index(name), "name": name} for name in LABELLED]
-    return {"info": {"description": "aibo-sim dump: head-camera detections"}, "images": images,
-            "annotations": annotations, "categories": categories}
+    return {
+        "info": {"description": "aibo-sim dump: head-camera detections"},
+        "images": images,
+        "annotations": annotations,
+        "categories": categories,
+    }
 
 
 def coco_bytes(out: Path, folders: list[Path]) -> bytes:

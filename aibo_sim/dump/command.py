@@ -25,27 +25,50 @@ def _dump_command(args) -> int:
         raise ValueError(f"--duration must be positive and finite, not {args.duration}")  # as run says it
     frames = args.steps if args.steps is not None else round((args.duration or 10.0) * FRAME_RATE_HZ)
     if frames < 1:
-        raise ValueError(f"--duration {args.duration:g} s holds no camera frame: give at least "
-                         f"{0.5 / FRAME_RATE_HZ:.3f} s (frames are 1/{FRAME_RATE_HZ} s apart)")
+        raise ValueError(
+            f"--duration {args.duration:g} s holds no camera frame: give at least "
+            f"{0.5 / FRAME_RATE_HZ:.3f} s (frames are 1/{FRAME_RATE_HZ} s apart)"
+        )
     # Ctrl-C and SIGTERM (``cli.sigterm_stops_cleanly``) stop it cleanly: writers abort, workers stop.
-    summary = dump(args.out, controller=args.controller, env=args.env, policy=args.policy, frames=frames,
-                   backend=args.backend, scene=args.scene, seed=args.seed, pose=args.pose and tuple(args.pose),
-                   ball=args.ball and tuple(args.ball), ball_type=args.ball_type, formats=formats, resume=args.resume,
-                   workers=args.workers, engine=args.engine, ray_address=args.ray_address,
-                   mtn_mode=args.mtn_mode, memory_stick=args.memory_stick, **camera_options(args))
+    summary = dump(
+        args.out,
+        controller=args.controller,
+        env=args.env,
+        policy=args.policy,
+        frames=frames,
+        backend=args.backend,
+        scene=args.scene,
+        seed=args.seed,
+        pose=args.pose and tuple(args.pose),
+        ball=args.ball and tuple(args.ball),
+        ball_type=args.ball_type,
+        formats=formats,
+        resume=args.resume,
+        workers=args.workers,
+        engine=args.engine,
+        ray_address=args.ray_address,
+        mtn_mode=args.mtn_mode,
+        memory_stick=args.memory_stick,
+        **camera_options(args),
+    )
     repaired = f", {summary.repaired_frames} with missing or damaged files rewritten" if summary.repaired_frames else ""
     frames = f"{summary.frames} frame{'s' * (summary.frames != 1)}"
-    print(f"dumped {frames} to {summary.out} ({summary.new_frames} written now{repaired}) in "
-          f"{summary.wall_s:.1f} s: {summary.frames_per_s:.1f} frames/s, "
-          f"{summary.bytes_written / 1e6 / max(summary.wall_s, 1e-9):.2f} MB/s")
+    print(
+        f"dumped {frames} to {summary.out} ({summary.new_frames} written now{repaired}) in "
+        f"{summary.wall_s:.1f} s: {summary.frames_per_s:.1f} frames/s, "
+        f"{summary.bytes_written / 1e6 / max(summary.wall_s, 1e-9):.2f} MB/s"
+    )
     return 0
 
 
 def add_dump_parser(subcommands) -> argparse.ArgumentParser:
     """Add the ``dump`` subcommand to the ``aibo-sim`` subparsers."""
-    parser = subcommands.add_parser("dump", help="write every camera frame of a headless run (images, YUV, OPEN-R)",
-                                    description=sys.modules[__package__].__doc__,
-                                    formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = subcommands.add_parser(
+        "dump",
+        help="write every camera frame of a headless run (images, YUV, OPEN-R)",
+        description=sys.modules[__package__].__doc__,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     parser.add_argument("controller", nargs="?", type=path_text, help="controller file (or use --env)")
     parser.add_argument("--env", help="gymnasium environment id, e.g. aibo_sim/HeadTrackBall-v0")
     parser.add_argument("--policy", choices=POLICIES, help="environment dumps: the policy (default random)")
@@ -53,22 +76,40 @@ def add_dump_parser(subcommands) -> argparse.ArgumentParser:
     length = parser.add_mutually_exclusive_group()
     length.add_argument("--duration", type=finite_float, help="simulated seconds, 30 frames each (default 10)")
     length.add_argument("--steps", type=int, help="camera frames (controller) or environment steps")
-    parser.add_argument("--backend", choices=BACKENDS,
-                        help="controller dumps: what the controller sees (default sim); not for a memory stick")
-    parser.add_argument("--mtn-mode", choices=MTN_MODES,
-                        help="controller dumps: MTN playback, OPEN-R interpolation (default openr) or Webots "
-                             "keyframe stepping")
-    parser.add_argument("--memory-stick", type=path_text, metavar="DIR",
-                        help="controller dumps: OPEN-R memory stick folder for the openr backend")
+    parser.add_argument(
+        "--backend",
+        choices=BACKENDS,
+        help="controller dumps: what the controller sees (default sim); not for a memory stick",
+    )
+    parser.add_argument(
+        "--mtn-mode",
+        choices=MTN_MODES,
+        help="controller dumps: MTN playback, OPEN-R interpolation (default openr) or Webots keyframe stepping",
+    )
+    parser.add_argument(
+        "--memory-stick",
+        type=path_text,
+        metavar="DIR",
+        help="controller dumps: OPEN-R memory stick folder for the openr backend",
+    )
     add_world_options(parser)  # --scene, --pose, --ball, --seed (shard k of --workers: seed + k), camera
-    parser.add_argument("--formats", default=",".join(DEFAULT_FORMATS),
-                        help=f"comma-separated from {','.join(FORMATS)}, or all (default {','.join(DEFAULT_FORMATS)})")
+    parser.add_argument(
+        "--formats",
+        default=",".join(DEFAULT_FORMATS),
+        help=f"comma-separated from {','.join(FORMATS)}, or all (default {','.join(DEFAULT_FORMATS)})",
+    )
     parser.add_argument("--resume", action="store_true", help="continue an interrupted dump in --out")
     parser.add_argument("--workers", type=int, default=1, help="processes; the frames are split into shards")
-    parser.add_argument("--engine", choices=ENGINES, default="local",
-                        help="where the shards run: local processes (default) or Ray tasks "
-                             "(pip install 'aibo-sim[ray]')")
-    parser.add_argument("--ray-address", metavar="ADDR",
-                        help="with --engine ray: a running Ray cluster's address (default: start a local Ray)")
+    parser.add_argument(
+        "--engine",
+        choices=ENGINES,
+        default="local",
+        help="where the shards run: local processes (default) or Ray tasks (pip install 'aibo-sim[ray]')",
+    )
+    parser.add_argument(
+        "--ray-address",
+        metavar="ADDR",
+        help="with --engine ray: a running Ray cluster's address (default: start a local Ray)",
+    )
     parser.set_defaults(handler=_dump_command)
     return parser

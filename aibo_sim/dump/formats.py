@@ -37,8 +37,14 @@ PATHS = {
     "coco": "coco.json",
 }
 # Geoms by name prefix (first match wins); unnamed geoms of the robot's bodies are "robot".
-CLASS_PREFIXES = (("field_line", "line"), ("field", "field"), ("wall", "wall"), ("goal", "goal"),
-                  ("beacon", "beacon"), ("ball", "ball"))
+CLASS_PREFIXES = (
+    ("field_line", "line"),
+    ("field", "field"),
+    ("wall", "wall"),
+    ("goal", "goal"),
+    ("beacon", "beacon"),
+    ("ball", "ball"),
+)
 # Rows: Y, Cb, Cr from RGB / 255 (ITU-R BT.601, limited range), plus the offsets.
 BT601_LIMITED = np.array([[65.481, 128.553, 24.966], [-37.797, -74.203, 112.0], [112.0, -93.786, -18.214]])
 BT601_OFFSET = np.array([16.0, 128.0, 128.0])
@@ -109,25 +115,42 @@ def geom_classes(model: mujoco.MjModel) -> np.ndarray:
 def file_layouts(formats, width: int, height: int) -> dict:
     """meta.json's "files": each format's path pattern, layout and size in bytes (None: it varies)."""
     size, full = f"{width}x{height}", f"{openr_bridge.FULL_WIDTH}x{openr_bridge.FULL_HEIGHT}"
-    bands = {name: BAND_RUNS[layer_type][1] * w * h for name, (w, h), layer_type
-             in zip(openr_bridge.LAYER_NAMES, openr_bridge.LAYER_SIZE, openr_bridge.LAYER_TYPE, strict=True)}
+    bands = {
+        name: BAND_RUNS[layer_type][1] * w * h
+        for name, (w, h), layer_type in zip(
+            openr_bridge.LAYER_NAMES, openr_bridge.LAYER_SIZE, openr_bridge.LAYER_TYPE, strict=True
+        )
+    }
     layouts = {
         "rgb": (f"PNG, 8-bit RGB, {size}", None),
         "yuv444": (f"I444 planar, {size}, Y then U (Cb) then V (Cr), BT.601 limited range", 3 * width * height),
-        "yuv420": (f"I420 planar (ffmpeg yuv420p), {size}, Y then U (Cb) then V (Cr) at "
-                   f"{width // 2}x{height // 2}, BT.601 limited range", width * height * 3 // 2),
+        "yuv420": (
+            f"I420 planar (ffmpeg yuv420p), {size}, Y then U (Cb) then V (Cr) at "
+            f"{width // 2}x{height // 2}, BT.601 limited range",
+            width * height * 3 // 2,
+        ),
         "annex": (f"Annex I: Y, U, V bytes per pixel, row-major, {size}", 3 * width * height),
-        "openr": ("OFbkImageVectorData message bytes",  # the header, the layers' infos, the layers back to back
-                  VECTOR_INFO_SIZE + IMAGE_INFO_SIZE * len(bands) + sum(bands.values())),
-        "bands": ("a layer's GetData bytes: H, M, L rows of Y, Cr, Cb, Y_LH, Y_HL, Y_HH (6 w h bytes), C the CDT "
-                  "band (w h bytes)", bands),
+        "openr": (
+            "OFbkImageVectorData message bytes",  # the header, the layers' infos, the layers back to back
+            VECTOR_INFO_SIZE + IMAGE_INFO_SIZE * len(bands) + sum(bands.values()),
+        ),
+        "bands": (
+            "a layer's GetData bytes: H, M, L rows of Y, Cr, Cb, Y_LH, Y_HL, Y_HH (6 w h bytes), C the CDT "
+            "band (w h bytes)",
+            bands,
+        ),
         "luma": (f"PNG, 8-bit grey, {full}, reconstruct_luma of layer H", None),
-        "depth": (f"NumPy float32 {size}, metres along the optical axis",
-                  len(npy(np.zeros((height, width), np.float32)))),
+        "depth": (
+            f"NumPy float32 {size}, metres along the optical axis",
+            len(npy(np.zeros((height, width), np.float32))),
+        ),
         "seg": (f"PNG, 8-bit class ids (segmentation_classes), {size}", None),
         "mp4": (f"MP4 (mp4v), 30 fps, {size}", None),
-        "coco": ("COCO detection annotations (ball, goal, beacon, robot boxes and masks with visibility) "
-                 "of the rgb files, written at the end from frames.jsonl's \"objects\"", None),
+        "coco": (
+            "COCO detection annotations (ball, goal, beacon, robot boxes and masks with visibility) "
+            'of the rgb files, written at the end from frames.jsonl\'s "objects"',
+            None,
+        ),
     }
     return {f: dict(zip(("path", "layout", "bytes"), (PATHS[f], *layouts[f]))) for f in formats}
 
@@ -168,8 +191,11 @@ def ball_in_image(sim: Simulation) -> dict | None:
     groups = np.array([g in HEAD_CAMERA_GROUPS for g in range(6)], np.uint8)
     hit = np.array([-1], np.int32)
     mujoco.mj_ray(model, data, frame.position, offset, groups, 1, -1, hit)
-    return {"pixel": [float(u), float(v)], "visible": bool(inside and hit[0] == model.geom("ball").id),
-            "distance_m": distance}
+    return {
+        "pixel": [float(u), float(v)],
+        "visible": bool(inside and hit[0] == model.geom("ball").id),
+        "distance_m": distance,
+    }
 
 
 def frame_metadata(sim: Simulation, index: int) -> dict:
@@ -180,8 +206,11 @@ def frame_metadata(sim: Simulation, index: int) -> dict:
         "time_s": sim.time_ms / 1000,
         "frame_number": frame.frame_number,  # 8 ms ticks, the message's frameNumber
         "field_counter": frame.index,
-        "camera": {"position": frame.position.tolist(), "xmat": frame.xmat.reshape(-1).tolist(),
-                   **frame.settings.as_dict()},
+        "camera": {
+            "position": frame.position.tolist(),
+            "xmat": frame.xmat.reshape(-1).tolist(),
+            **frame.settings.as_dict(),
+        },
         "joints": dict(zip((j.name for j in JOINTS), sim.joint_positions().tolist())),
         "ball": ball_in_image(sim),
     }
@@ -194,9 +223,9 @@ _MOVE_BLOCK = 1 << 20  # faststart moves the frames in blocks of this many bytes
 def _box_header(data: bytes | memoryview, start: int, end: int) -> tuple[bytes, int, int]:
     """(type, size, header length) of the box at ``data[start:]`` (ISO/IEC 14496-12, 4.2: a
     32-bit size, or 1 and a 64-bit size after the type, or 0: up to ``end``)."""
-    size, kind, header = int.from_bytes(data[start:start + 4], "big"), bytes(data[start + 4:start + 8]), 8
+    size, kind, header = int.from_bytes(data[start : start + 4], "big"), bytes(data[start + 4 : start + 8]), 8
     if size == 1:
-        size, header = int.from_bytes(data[start + 8:start + 16], "big"), 16
+        size, header = int.from_bytes(data[start + 8 : start + 16], "big"), 16
     elif size == 0:
         size = end - start
     return kind, size, header
@@ -221,15 +250,15 @@ def _shift_chunk_offsets(moov: bytearray, start: int, end: int, moved: range, sh
             _shift_chunk_offsets(moov, box_start + header, box_end, moved, shift)
         elif kind in (b"stco", b"co64"):
             width, entries = (4 if kind == b"stco" else 8), box_start + header + 8  # after version, flags, count
-            count = int.from_bytes(moov[entries - 4:entries], "big")
+            count = int.from_bytes(moov[entries - 4 : entries], "big")
             if entries + count * width > box_end:
                 raise ValueError(f"{kind!r} lists more offsets than it holds")
             for at in range(entries, entries + count * width, width):
-                offset = int.from_bytes(moov[at:at + width], "big")
+                offset = int.from_bytes(moov[at : at + width], "big")
                 if offset in moved:
                     if offset + shift >= 1 << (8 * width):
                         raise ValueError("a chunk offset no longer fits its stco box")
-                    moov[at:at + width] = (offset + shift).to_bytes(width, "big")
+                    moov[at : at + width] = (offset + shift).to_bytes(width, "big")
 
 
 def mp4_faststart(path) -> bool:
@@ -254,8 +283,9 @@ def mp4_faststart(path) -> bool:
         file.seek(moov_start)
         moov = bytearray(file.read(moov_end - moov_start))
         try:
-            _shift_chunk_offsets(moov, _box_header(moov, 0, len(moov))[2], len(moov), range(mdat_start, moov_start),
-                                 len(moov))
+            _shift_chunk_offsets(
+                moov, _box_header(moov, 0, len(moov))[2], len(moov), range(mdat_start, moov_start), len(moov)
+            )
         except ValueError:
             return False
         # Everything from mdat to moov moves up by moov's length, last block first (they overlap).

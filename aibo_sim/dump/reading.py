@@ -45,7 +45,7 @@ def read_meta(path: Path) -> dict:
     except json.JSONDecodeError as exc:
         raise _json_error(path, exc) from None
     if not isinstance(meta, dict) or meta.get("format") != DUMP_FORMAT:
-        raise DumpError(f"{path}: not an aibo-sim dump's {META} (no \"format\": {DUMP_FORMAT!r})")
+        raise DumpError(f'{path}: not an aibo-sim dump\'s {META} (no "format": {DUMP_FORMAT!r})')
     return meta
 
 
@@ -62,8 +62,12 @@ DETECTION = {"category": str, "object": str, "bbox": list, "area": int, "visibil
 def _detections(objects) -> bool:
     """Whether ``objects`` is a list of detections that coco.json can be made from."""
     return isinstance(objects, list) and all(
-        isinstance(o, dict) and all(isinstance(o.get(k), t) for k, t in DETECTION.items())
-        and o["category"] in SEGMENTATION_CLASSES and isinstance(o.get("segmentation", {}), dict) for o in objects)
+        isinstance(o, dict)
+        and all(isinstance(o.get(k), t) for k, t in DETECTION.items())
+        and o["category"] in SEGMENTATION_CLASSES
+        and isinstance(o.get("segmentation", {}), dict)
+        for o in objects
+    )
 
 
 def parse_records(path: Path, data: bytes, limit: int) -> list[dict]:
@@ -79,13 +83,17 @@ def parse_records(path: Path, data: bytes, limit: int) -> list[dict]:
             raise _json_error(path, exc, number) from None
         index = record.get("index") if isinstance(record, dict) else None
         if isinstance(index, bool) or not isinstance(index, int) or index < 0:
-            raise DumpError(f"{path}: line {number}: not a frame record (no \"index\" >= 0); the file is corrupt")
+            raise DumpError(f'{path}: line {number}: not a frame record (no "index" >= 0); the file is corrupt')
         if index >= limit:
-            raise DumpError(f"{path}: line {number}: frame index {index} is past the dump's frames (its indices "
-                            f"are below {limit}); the file is corrupt")
+            raise DumpError(
+                f"{path}: line {number}: frame index {index} is past the dump's frames (its indices "
+                f"are below {limit}); the file is corrupt"
+            )
         if "objects" in record and not _detections(record["objects"]):
-            raise DumpError(f"{path}: line {number}: \"objects\" is not a list of detections (each with "
-                            f"{', '.join(DETECTION)}, a known category); the file is corrupt")
+            raise DumpError(
+                f'{path}: line {number}: "objects" is not a list of detections (each with '
+                f"{', '.join(DETECTION)}, a known category); the file is corrupt"
+            )
         records.append(record)
     return records
 
@@ -121,12 +129,13 @@ def _inside(path: str) -> bool:
 def check_meta(path: Path, meta: dict) -> None:
     """DumpError naming ``path`` and the field when a field that ``load_dump`` reads (in a shard's
     or an unsharded dump's meta.json) is missing or of the wrong type."""
+
     def bad(field: str, what: str) -> DumpError:
         return DumpError(f"{path}: {field} must be {what}; the file is corrupt")
 
     for key in ("parameters", "camera", "files"):
         if not isinstance(meta.get(key), dict):
-            raise bad(f"\"{key}\"", "an object")
+            raise bad(f'"{key}"', "an object")
     if not _whole(meta["parameters"].get("frames")):
         raise bad('"parameters"."frames"', "a whole number >= 1")
     for key in ("width", "height"):
@@ -249,7 +258,7 @@ class Dump:
         self.meta = read_meta(meta_path)
         shards = self.meta.get("shards", [])
         if not isinstance(shards, list) or not all(isinstance(s, str) and s and Path(s).name == s for s in shards):
-            raise DumpError(f"{meta_path}: \"shards\" must list the shard folders' names; the file is corrupt")
+            raise DumpError(f'{meta_path}: "shards" must list the shard folders\' names; the file is corrupt')
         if not shards:
             check_meta(meta_path, self.meta)
         for name in shards or {os.path.dirname(layout["path"]) for layout in self.meta["files"].values()} - {""}:

@@ -88,27 +88,42 @@ def _profile(parameters: dict) -> CameraProfile:
 def _dump_controller(parameters: dict, out: Path, resume: bool, **lock) -> DumpWriter:
     frames, camera_full = parameters["frames"], parameters["camera_full"]
     settings = CameraSettings(**parameters["camera_settings"])
-    model, profile = load_model(parameters["scene"], ball_type=parameters.get("ball_type", "robocup")), _profile(parameters)
-    camera = describe_camera(profile, settings, camera_size(camera_full),
-                             scene_light(model))
+    model, profile = (
+        load_model(parameters["scene"], ball_type=parameters.get("ball_type", "robocup")),
+        _profile(parameters),
+    )
+    camera = describe_camera(profile, settings, camera_size(camera_full), scene_light(model))
     progress = Progress(frames / FRAME_RATE_HZ, enabled=parameters.get("progress", True))
-    with DumpWriter(out, parameters["formats"], parameters, resume=resume, camera=camera, model=model,
-                    **lock) as writer:
+    with DumpWriter(
+        out, parameters["formats"], parameters, resume=resume, camera=camera, model=model, **lock
+    ) as writer:
         listener = _CameraFrames(writer, frames, progress)
         workdir = out / CONTROLLER_FILES  # the controller's own files: one folder per shard
         try:
             try:
                 make_folder(workdir)
             except NotADirectoryError:
-                raise DumpError(f"{workdir}: not a folder (the controller runs in it): move it away, then --resume") \
-                    from None
-            run_controller(parameters["controller"], backend=parameters["backend"], duration=frames / FRAME_RATE_HZ,
-                           scene=parameters["scene"], seed=parameters["seed"], pose=parameters["pose"],
-                           ball=parameters["ball"], ball_type=parameters.get("ball_type", "robocup"),
-                           mtn_mode=parameters["mtn_mode"],
-                           memory_stick=parameters["memory_stick"], camera_full=camera_full,
-                           camera_profile=profile, camera_settings=settings,
-                           frame_listeners=[listener], progress=False, workdir=workdir)
+                raise DumpError(
+                    f"{workdir}: not a folder (the controller runs in it): move it away, then --resume"
+                ) from None
+            run_controller(
+                parameters["controller"],
+                backend=parameters["backend"],
+                duration=frames / FRAME_RATE_HZ,
+                scene=parameters["scene"],
+                seed=parameters["seed"],
+                pose=parameters["pose"],
+                ball=parameters["ball"],
+                ball_type=parameters.get("ball_type", "robocup"),
+                mtn_mode=parameters["mtn_mode"],
+                memory_stick=parameters["memory_stick"],
+                camera_full=camera_full,
+                camera_profile=profile,
+                camera_settings=settings,
+                frame_listeners=[listener],
+                progress=False,
+                workdir=workdir,
+            )
         finally:
             progress.close()
         if listener.error is not None:
@@ -130,17 +145,24 @@ def _policy(name: str, action_space, seed: int):
 def _dump_env(parameters: dict, out: Path, resume: bool, **lock) -> DumpWriter:
     camera, settings = "openr" if parameters["backend"] == "openr" else "rgb", parameters["camera_settings"]
     try:
-        env = gymnasium.make(parameters["env"], camera=camera, scene=parameters["scene"],
-                             camera_profile=_profile(parameters), camera_wb=settings["white_balance"],
-                             camera_gain=settings["gain"], camera_shutter=settings["shutter"])
+        env = gymnasium.make(
+            parameters["env"],
+            camera=camera,
+            scene=parameters["scene"],
+            camera_profile=_profile(parameters),
+            camera_wb=settings["white_balance"],
+            camera_gain=settings["gain"],
+            camera_shutter=settings["shutter"],
+        )
     except gymnasium.error.Error as exc:
         raise ValueError(f"environment {parameters['env']!r}: {exc}") from None
     steps, seed = parameters["frames"], parameters["seed"]
     progress = Progress(steps / FRAME_RATE_HZ, enabled=parameters.get("progress", True))
     try:
         sim = env.unwrapped.sim
-        with DumpWriter(out, parameters["formats"], parameters, resume=resume, camera=sim.camera.describe(),
-                        model=sim.model, **lock) as writer:
+        with DumpWriter(
+            out, parameters["formats"], parameters, resume=resume, camera=sim.camera.describe(), model=sim.model, **lock
+        ) as writer:
             policy = _policy(parameters["policy"], env.action_space, seed)
             env.reset(seed=seed)
             index, episode = 0, 0
@@ -149,8 +171,9 @@ def _dump_env(parameters: dict, out: Path, resume: bool, **lock) -> DumpWriter:
                 action = policy(step)
                 _, reward, terminated, truncated, _ = env.step(action)
                 index += 1
-                writer.write(sim, index, {"episode": episode, "action": np.asarray(action).tolist(),
-                                          "reward": float(reward)})
+                writer.write(
+                    sim, index, {"episode": episode, "action": np.asarray(action).tolist(), "reward": float(reward)}
+                )
                 if (terminated or truncated) and step + 1 < steps:
                     env.reset()
                     index, episode = index + 1, episode + 1
@@ -166,8 +189,14 @@ def dump_one(parameters: dict, out: Path, resume: bool, **lock) -> DumpSummary:
     start = time.perf_counter()
     run = _dump_env if parameters["env"] else _dump_controller
     writer = run(parameters, out, resume, **lock)
-    return DumpSummary(str(out), len(writer.complete), writer.new_frames, writer.bytes_written,
-                       time.perf_counter() - start, writer.repaired_frames)
+    return DumpSummary(
+        str(out),
+        len(writer.complete),
+        writer.new_frames,
+        writer.bytes_written,
+        time.perf_counter() - start,
+        writer.repaired_frames,
+    )
 
 
 def available_memory_mb() -> float | None:
@@ -195,8 +224,10 @@ def _check_env(env_id: str) -> None:
         raise ValueError(f"environment {env_id!r}: {exc}") from None
     entry = spec.entry_point if isinstance(spec.entry_point, str) else getattr(spec.entry_point, "__module__", "")
     if not str(entry).startswith("aibo_sim."):
-        raise ValueError(f"environment {env_id!r} is not an aibo_sim environment; a dump needs the robot's camera "
-                         f"({', '.join(ENV_SPECS)})")
+        raise ValueError(
+            f"environment {env_id!r} is not an aibo_sim environment; a dump needs the robot's camera "
+            f"({', '.join(ENV_SPECS)})"
+        )
 
 
 def file_sha256(path: Path) -> str:
@@ -227,8 +258,9 @@ def controller_sha256(path: Path) -> str:
         for name in ("CONNECT.CFG", "DESIGNDB.CFG"):
             with contextlib.suppress(openr_bridge.ConfigError):
                 files.append(find_in_stick(stick.root, name))
-        return hashlib.sha256("".join(f"{f.relative_to(stick.root)}\0{file_sha256(f)}\0"
-                                      for f in files).encode()).hexdigest()
+        return hashlib.sha256(
+            "".join(f"{f.relative_to(stick.root)}\0{file_sha256(f)}\0" for f in files).encode()
+        ).hexdigest()
     if not is_c_controller(path):
         check_python_controller(path)
         return file_sha256(path)
@@ -239,13 +271,30 @@ def controller_sha256(path: Path) -> str:
     return hashlib.sha256("".join(f"{s.name}\0{file_sha256(s)}\0" for s in sources).encode()).hexdigest()
 
 
-def dump(out, *, controller: str | Path | None = None, env: str | None = None, policy: str | None = None,
-         frames: int = 300, backend: str | None = None, scene: str | Path | None = None, seed: int = 0,
-         pose: tuple[float, float, float] | None = None, ball: tuple[float, float] | None = None,
-         ball_type: str = "robocup", formats=DEFAULT_FORMATS, camera_full: bool = False, camera_profile: str | CameraProfile = "ers7",
-         camera_settings: CameraSettings | None = None, resume: bool = False, workers: int = 1,
-         engine: str = "local", ray_address: str | None = None, mtn_mode: str | None = None,
-         memory_stick: str | Path | None = None) -> DumpSummary:
+def dump(
+    out,
+    *,
+    controller: str | Path | None = None,
+    env: str | None = None,
+    policy: str | None = None,
+    frames: int = 300,
+    backend: str | None = None,
+    scene: str | Path | None = None,
+    seed: int = 0,
+    pose: tuple[float, float, float] | None = None,
+    ball: tuple[float, float] | None = None,
+    ball_type: str = "robocup",
+    formats=DEFAULT_FORMATS,
+    camera_full: bool = False,
+    camera_profile: str | CameraProfile = "ers7",
+    camera_settings: CameraSettings | None = None,
+    resume: bool = False,
+    workers: int = 1,
+    engine: str = "local",
+    ray_address: str | None = None,
+    mtn_mode: str | None = None,
+    memory_stick: str | Path | None = None,
+) -> DumpSummary:
     """Dump a controller run (``frames`` camera frames) or an env run (``frames`` steps of
     ``policy``, default random) to ``out``;
     ``pose`` (x, y, yaw in degrees), ``ball``, ``mtn_mode`` (default openr) and ``memory_stick``
@@ -262,8 +311,10 @@ def dump(out, *, controller: str | Path | None = None, env: str | None = None, p
     if controller is not None and memory_stick_folder(controller) is not None:
         for option, value in (("--backend", backend), ("--mtn-mode", mtn_mode), ("--memory-stick", memory_stick)):
             if value is not None:
-                raise ValueError(f"{option} applies to controllers: {controller} is a memory stick, whose OPEN-R "
-                                 "objects run as on the robot")
+                raise ValueError(
+                    f"{option} applies to controllers: {controller} is a memory stick, whose OPEN-R "
+                    "objects run as on the robot"
+                )
         backend = MEMORY_STICK
     backend = backend or "sim"
     if backend not in (*BACKENDS, MEMORY_STICK):
@@ -281,8 +332,10 @@ def dump(out, *, controller: str | Path | None = None, env: str | None = None, p
         raise ValueError(f"--workers must be between 1 and the number of frames ({frames}), not {workers}")
     available = available_memory_mb() if engine == "local" and workers > 1 else None
     if available is not None and workers * WORKER_MEMORY_MB > available:
-        raise ValueError(f"--workers {workers}: this machine has memory for {int(available // WORKER_MEMORY_MB)} "
-                         f"workers ({available / 1024:.1f} GB available, about {WORKER_MEMORY_MB} MB a worker)")
+        raise ValueError(
+            f"--workers {workers}: this machine has memory for {int(available // WORKER_MEMORY_MB)} "
+            f"workers ({available / 1024:.1f} GB available, about {WORKER_MEMORY_MB} MB a worker)"
+        )
     if not is_seed(seed, workers):
         shards = f" with --workers {workers} (shard k uses seed + k)" if workers > 1 else ""
         raise ValueError(f"--seed must be a whole number from 0 to 2**64 - {workers}{shards}, not {seed!r}")
@@ -300,7 +353,9 @@ def dump(out, *, controller: str | Path | None = None, env: str | None = None, p
     if env is not None and camera_full:
         raise ValueError("--camera-full applies to controller dumps; environments render their own layer")
     if env is not None and (ball is not None or pose is not None):
-        raise ValueError("--ball and --pose apply to controller dumps; environments place the robot and ball themselves")
+        raise ValueError(
+            "--ball and --pose apply to controller dumps; environments place the robot and ball themselves"
+        )
     if env is not None and (mtn_mode is not None or memory_stick is not None):
         raise ValueError("--mtn-mode and --memory-stick apply to controller dumps, not to --env")
     if mtn_mode is not None and mtn_mode not in MTN_MODES:
@@ -323,19 +378,31 @@ def dump(out, *, controller: str | Path | None = None, env: str | None = None, p
         placeable_ball = False
     pose, ball = start_values("--pose", pose, 3), start_values("--ball", ball, 2)
     if controller is not None:
-        check_place(scene, pose, ball, ball_type)  # the scene's ModelError, or a start's ValueError, before the folder is made
+        check_place(
+            scene, pose, ball, ball_type
+        )  # the scene's ModelError, or a start's ValueError, before the folder is made
     source_sha256 = None
     if controller is not None:
         controller = Path(controller).resolve()
         source_sha256 = controller_sha256(controller)
     out = Path(out).resolve()
-    parameters = {"controller": controller and str(controller), "env": env, "policy": env and policy,
-                  "frames": frames, "backend": backend, "scene": scene and str(Path(scene).resolve()), "seed": seed,
-                  "pose": pose and list(pose), "ball": ball and list(ball),
-                  "mtn_mode": controller and backend != MEMORY_STICK and (mtn_mode or "openr") or None,
-                  "memory_stick": memory_stick and str(memory_stick),
-                  "formats": [f for f in FORMATS if f in formats], "camera_full": camera_full,
-                  "camera_profile": profile.name, "camera_settings": (camera_settings or CameraSettings()).as_dict()}
+    parameters = {
+        "controller": controller and str(controller),
+        "env": env,
+        "policy": env and policy,
+        "frames": frames,
+        "backend": backend,
+        "scene": scene and str(Path(scene).resolve()),
+        "seed": seed,
+        "pose": pose and list(pose),
+        "ball": ball and list(ball),
+        "mtn_mode": controller and backend != MEMORY_STICK and (mtn_mode or "openr") or None,
+        "memory_stick": memory_stick and str(memory_stick),
+        "formats": [f for f in FORMATS if f in formats],
+        "camera_full": camera_full,
+        "camera_profile": profile.name,
+        "camera_settings": (camera_settings or CameraSettings()).as_dict(),
+    }
     if ball_type != "robocup":  # only then: a dump resumes one made before the pink ball existed
         parameters["ball_type"] = ball_type
     options = profile.options()

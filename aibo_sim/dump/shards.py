@@ -113,9 +113,12 @@ def _run_shards(shards: list[tuple[dict, Path]], resume: bool, progress: _ShardP
     try:
         for k, (parameters, folder) in enumerate(shards):
             receive, send = context.Pipe(duplex=False)
-            process = context.Process(target=_shard_worker, name=f"aibo-sim dump {folder.name}", daemon=True,
-                                      args=(send, parent, parameters, folder, resume,
-                                            f"{command} (worker of pid {parent}: {folder.name})"))
+            process = context.Process(
+                target=_shard_worker,
+                name=f"aibo-sim dump {folder.name}",
+                daemon=True,
+                args=(send, parent, parameters, folder, resume, f"{command} (worker of pid {parent}: {folder.name})"),
+            )
             process.start()
             send.close()
             processes.append(process)
@@ -128,8 +131,10 @@ def _run_shards(shards: list[tuple[dict, Path]], resume: bool, progress: _ShardP
                     status, value = receive.recv()
                 except EOFError:
                     processes[k].join()
-                    raise DumpError(f"{shards[k][1]}: its worker process ended without a result "
-                                    f"(exit status {processes[k].exitcode}); continue with --resume") from None
+                    raise DumpError(
+                        f"{shards[k][1]}: its worker process ended without a result "
+                        f"(exit status {processes[k].exitcode}); continue with --resume"
+                    ) from None
                 if status == "error":
                     raise _in_shard(value, shards[k][1])
                 results[k] = value
@@ -192,8 +197,10 @@ def _run_ray_shards(shards: list[tuple[dict, Path]], progress: _ShardProgress) -
 
     task = ray.remote(num_cpus=1, max_retries=RAY_MAX_RETRIES)(_ray_shard)
     command = command_line()
-    pending = {task.remote(parameters, folder, f"{command} (Ray task: {folder.name})"): k
-               for k, (parameters, folder) in enumerate(shards)}
+    pending = {
+        task.remote(parameters, folder, f"{command} (Ray task: {folder.name})"): k
+        for k, (parameters, folder) in enumerate(shards)
+    }
     results = [None] * len(shards)
     try:
         while pending:
@@ -204,10 +211,14 @@ def _run_ray_shards(shards: list[tuple[dict, Path]], progress: _ShardProgress) -
                 try:
                     results[k] = ray.get(ref)
                 except ray.exceptions.RayTaskError as exc:  # the shard's own error, as the local engine raises it
-                    raise _in_shard(exc.cause, folder) if exc.cause is not None else DumpError(f"{folder}: {exc}") from None
+                    raise (
+                        _in_shard(exc.cause, folder) if exc.cause is not None else DumpError(f"{folder}: {exc}")
+                    ) from None
                 except ray.exceptions.RayError as exc:
-                    raise DumpError(f"{folder}: its Ray task was lost ({type(exc).__name__}) {RAY_MAX_RETRIES + 1} "
-                                    "times; continue with --resume") from None
+                    raise DumpError(
+                        f"{folder}: its Ray task was lost ({type(exc).__name__}) {RAY_MAX_RETRIES + 1} "
+                        "times; continue with --resume"
+                    ) from None
         return results
     finally:
         for ref in pending:
@@ -217,13 +228,17 @@ def _run_ray_shards(shards: list[tuple[dict, Path]], progress: _ShardProgress) -
             _remove_temporary_files(shards)
 
 
-def dump_sharded(parameters: dict, out: Path, resume: bool, workers: int, engine: str,
-                 placeable_ball: bool) -> DumpSummary:
+def dump_sharded(
+    parameters: dict, out: Path, resume: bool, workers: int, engine: str, placeable_ball: bool
+) -> DumpSummary:
     """The dump as ``workers`` shards; in a controller dump without a ball position, each
     shard's ball is drawn from its seed where the scene's ball can be placed."""
     start = time.perf_counter()
-    meta = {"format": DUMP_FORMAT, "parameters": {**parameters, "workers": workers},
-            "shards": [f"shard_{k}" for k in range(workers)]}
+    meta = {
+        "format": DUMP_FORMAT,
+        "parameters": {**parameters, "workers": workers},
+        "shards": [f"shard_{k}" for k in range(workers)],
+    }
     prepared = prepare_folder(out, meta, resume)
     try:
         shards = []
@@ -247,6 +262,11 @@ def dump_sharded(parameters: dict, out: Path, resume: bool, workers: int, engine
             write_atomic(out / COCO, coco)
     finally:
         prepared.lock.release()
-    return DumpSummary(str(out), sum(r.frames for r in results), sum(r.new_frames for r in results),
-                       sum(r.bytes_written for r in results) + len(coco), time.perf_counter() - start,
-                       sum(r.repaired_frames for r in results))
+    return DumpSummary(
+        str(out),
+        sum(r.frames for r in results),
+        sum(r.new_frames for r in results),
+        sum(r.bytes_written for r in results) + len(coco),
+        time.perf_counter() - start,
+        sum(r.repaired_frames for r in results),
+    )

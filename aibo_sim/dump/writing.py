@@ -16,13 +16,26 @@ import numpy as np
 import openr_bridge
 from openr_bridge import FRAME_RATE_HZ
 
-from ..field import SEGMENTATION_CLASSES
 from .. import files
+from ..field import SEGMENTATION_CLASSES
 from ..files import SymlinkRefused, make_folder, open_file, png, read_file, write_file_atomic
 from ..sim import Simulation
 from .coco import Objects, coco_bytes
-from .formats import (DUMP_FORMAT, LAYERS, PATHS, DumpError, annex_yuv, file_layouts, frame_files, frame_metadata,
-                      geom_classes, mp4_faststart, npy, yuv420_bytes, yuv444_bytes)
+from .formats import (
+    DUMP_FORMAT,
+    LAYERS,
+    PATHS,
+    DumpError,
+    annex_yuv,
+    file_layouts,
+    frame_files,
+    frame_metadata,
+    geom_classes,
+    mp4_faststart,
+    npy,
+    yuv420_bytes,
+    yuv444_bytes,
+)
 from .reading import LINES, META, frame_limit, parse_records, read_meta, split_lines
 
 TEMP_PREFIX = ".tmp."  # a file being written: ".tmp." + its final name, in the same folder
@@ -86,8 +99,15 @@ class FolderLock(files.FolderLock):
     """The dump's lock, ``.dump.lock`` (``files.FolderLock``): DumpError while another dump holds it."""
 
     def __init__(self, folder: Path, *, wait_s: float = 0.0, command: str | None = None):
-        super().__init__(folder, LOCK_NAME, "dump", "wait for it to end or stop it, then --resume", wait_s=wait_s,
-                         command=command, error=DumpError)
+        super().__init__(
+            folder,
+            LOCK_NAME,
+            "dump",
+            "wait for it to end or stop it, then --resume",
+            wait_s=wait_s,
+            command=command,
+            error=DumpError,
+        )
 
 
 # ---------------------------------------------------------------- the folder
@@ -108,10 +128,14 @@ def check_destination(out: Path, shard_of: Path | None = None) -> None:
         read_meta(out / META)  # a clear error when it is not a dump's
         return
     if shard_of is not None:
-        raise DumpError(f"{out}: this shard of the dump in {shard_of} has no {META}: the shard is damaged; "
-                        f"remove {out} and --resume to write the shard again")
-    raise DumpError(f"{out} is not empty and is not a dump (no {META}): refusing to write into it; "
-                    "choose a new or empty folder for --out")
+        raise DumpError(
+            f"{out}: this shard of the dump in {shard_of} has no {META}: the shard is damaged; "
+            f"remove {out} and --resume to write the shard again"
+        )
+    raise DumpError(
+        f"{out} is not empty and is not a dump (no {META}): refusing to write into it; "
+        "choose a new or empty folder for --out"
+    )
 
 
 def _changed_parameters(previous: dict, parameters: dict) -> list[str]:
@@ -145,8 +169,9 @@ def _frames_on_disk(out: Path, layouts: dict, limit: int, truncate: bool) -> tup
         if folder and folder not in sizes:
             sizes[folder] = {}
             with contextlib.suppress(FileNotFoundError), os.scandir(out / folder) as entries:
-                sizes[folder] = {e.name: e.stat(follow_symlinks=False).st_size for e in entries
-                                 if e.is_file(follow_symlinks=False)}
+                sizes[folder] = {
+                    e.name: e.stat(follow_symlinks=False).st_size for e in entries if e.is_file(follow_symlinks=False)
+                }
     missing = set()
     for index in complete:
         for _, path, expected in frame_files(layouts, index):
@@ -165,8 +190,9 @@ class Prepared:
         self.lock, self.complete, self.missing = lock, complete, missing
 
 
-def prepare_folder(out: Path, meta: dict, resume: bool, *, lock_wait_s: float = 0.0,
-                   command: str | None = None) -> Prepared:
+def prepare_folder(
+    out: Path, meta: dict, resume: bool, *, lock_wait_s: float = 0.0, command: str | None = None
+) -> Prepared:
     """Check, create and lock the folder, check a dump being resumed, write meta.json.
 
     Refused (DumpError, nothing changed): a non-empty folder that is not a dump, a dump
@@ -191,14 +217,20 @@ def prepare_folder(out: Path, meta: dict, resume: bool, *, lock_wait_s: float = 
             previous = read_meta(meta_path).get("parameters")
             previous = previous if isinstance(previous, dict) else {}
             parameters = meta["parameters"]
-            if "controller_sha256" in parameters and parameters.get("controller") == previous.get("controller") \
-                    and previous.get("controller_sha256") != parameters["controller_sha256"]:
-                raise DumpError(f"{meta_path}: cannot resume, the controller file {parameters['controller']} changed "
-                                "since the dump began (another SHA-256); dump to another --out")
+            if (
+                "controller_sha256" in parameters
+                and parameters.get("controller") == previous.get("controller")
+                and previous.get("controller_sha256") != parameters["controller_sha256"]
+            ):
+                raise DumpError(
+                    f"{meta_path}: cannot resume, the controller file {parameters['controller']} changed "
+                    "since the dump began (another SHA-256); dump to another --out"
+                )
             changed = _changed_parameters(previous, parameters)
             if changed:
-                raise DumpError(f"{meta_path}: cannot resume, the dump was made with other parameters "
-                                f"({', '.join(changed)})")
+                raise DumpError(
+                    f"{meta_path}: cannot resume, the dump was made with other parameters ({', '.join(changed)})"
+                )
             complete, missing = _frames_on_disk(out, layouts, frame_limit(meta), truncate=True)
         remove_temporary_files(out, layouts)
         write_atomic(meta_path, (json.dumps(meta, indent=2) + "\n").encode())
@@ -215,13 +247,28 @@ class DumpWriter:
     """Writes the chosen formats of each camera frame into a dump folder, atomically; holds
     the folder's lock until ``finish`` or ``abort``."""
 
-    def __init__(self, out: Path, formats, parameters: dict, *, resume: bool, camera: dict, model: mujoco.MjModel,
-                 lock_wait_s: float = 0.0, command: str | None = None):
+    def __init__(
+        self,
+        out: Path,
+        formats,
+        parameters: dict,
+        *,
+        resume: bool,
+        camera: dict,
+        model: mujoco.MjModel,
+        lock_wait_s: float = 0.0,
+        command: str | None = None,
+    ):
         self.out, self.formats = out, tuple(formats)
         width, height = camera["width"], camera["height"]
         self.layouts = file_layouts(self.formats, width, height)
-        meta = {"format": DUMP_FORMAT, "parameters": parameters, "camera": camera, "files": self.layouts,
-                "segmentation_classes": list(SEGMENTATION_CLASSES)}
+        meta = {
+            "format": DUMP_FORMAT,
+            "parameters": parameters,
+            "camera": camera,
+            "files": self.layouts,
+            "segmentation_classes": list(SEGMENTATION_CLASSES),
+        }
         prepared = prepare_folder(out, meta, resume, lock_wait_s=lock_wait_s, command=command)
         self._lock, self.complete, self.missing = prepared.lock, prepared.complete, prepared.missing
         self.new_frames = self.repaired_frames = self.bytes_written = 0
@@ -239,8 +286,9 @@ class DumpWriter:
             if "mp4" in self.formats:
                 self._video_path = out / (TEMP_PREFIX + VIDEO)
                 os.close(self._open(self._video_path, os.O_EXCL))  # ours, not a link, when OpenCV opens it
-                self._video = cv2.VideoWriter(str(self._video_path), cv2.VideoWriter_fourcc(*"mp4v"),
-                                              FRAME_RATE_HZ, (width, height))
+                self._video = cv2.VideoWriter(
+                    str(self._video_path), cv2.VideoWriter_fourcc(*"mp4v"), FRAME_RATE_HZ, (width, height)
+                )
                 if not self._video.isOpened():
                     raise DumpError(f"cannot write {self._video_path}: OpenCV's mp4v video writer did not open")
         except BaseException:
@@ -313,7 +361,7 @@ class DumpWriter:
         if "seg" in wants:
             yield path("seg"), png(self._classes[sim.camera.segmentation()])
 
-    def __enter__(self) -> "DumpWriter":
+    def __enter__(self) -> DumpWriter:
         return self
 
     def __exit__(self, kind, error, traceback) -> None:

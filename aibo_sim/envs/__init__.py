@@ -36,8 +36,12 @@ def register_envs() -> None:
     """Register the environments with Gymnasium; calling it again changes nothing."""
     for env_id, (entry_point, max_episode_steps) in ENV_SPECS.items():
         if env_id not in gymnasium.registry:
-            gymnasium.register(env_id, entry_point=entry_point, max_episode_steps=max_episode_steps,
-                               vector_entry_point=partial(_threaded_vector_env, env_id))
+            gymnasium.register(
+                env_id,
+                entry_point=entry_point,
+                max_episode_steps=max_episode_steps,
+                vector_entry_point=partial(_threaded_vector_env, env_id),
+            )
 
 
 register_envs()

@@ -48,11 +48,12 @@ from collections.abc import Mapping
 import gymnasium as gym
 import mujoco
 import numpy as np
+
 import openr_bridge
 
-from ..ers7 import DISTANCE_SENSORS, JOINT_INDEX, JOINTS, LEGS, TOUCH_SENSORS
 from ..camera import CameraSettings, RobotColour
 from ..camera.backends import OpenRCamera
+from ..ers7 import DISTANCE_SENSORS, JOINT_INDEX, JOINTS, LEGS, TOUCH_SENSORS
 from ..render import Renderer
 from ..sim import ACCEL_RANGE, MAX_PLACEMENT, Simulation, release_freed_memory
 
@@ -71,9 +72,20 @@ class AiboEnv(gym.Env):
     metadata = {"render_modes": ["rgb_array"], "render_fps": openr_bridge.FRAME_RATE_HZ}
     actuated_joints: tuple[str, ...] = ()
 
-    def __init__(self, camera: str | None = "rgb", camera_layer: str = "H", render_mode: str | None = None,
-                 randomize: dict[str, float] | None = None, *, scene=None, camera_profile: str = "ers7",
-                 camera_wb: str = "fl", camera_gain: str = "mid", camera_shutter: str = "mid", image_only: bool = False):
+    def __init__(
+        self,
+        camera: str | None = "rgb",
+        camera_layer: str = "H",
+        render_mode: str | None = None,
+        randomize: dict[str, float] | None = None,
+        *,
+        scene=None,
+        camera_profile: str = "ers7",
+        camera_wb: str = "fl",
+        camera_gain: str = "mid",
+        camera_shutter: str = "mid",
+        image_only: bool = False,
+    ):
         if camera not in CAMERA_MODES:
             raise ValueError(f"camera must be one of {CAMERA_MODES}, not {camera!r}")
         if not isinstance(image_only, bool) or image_only and camera is None:
@@ -90,24 +102,40 @@ class AiboEnv(gym.Env):
             raise ValueError(f"unknown randomisations {sorted(unknown)}; known: {RANDOMIZATIONS}")
         for name, value in self.randomize.items():
             largest = {"lighting": 1.0, "ball_start": MAX_PLACEMENT}.get(name, math.inf)
-            if isinstance(value, bool) or not isinstance(value, numbers.Real) \
-                    or not (0 <= value <= largest and math.isfinite(value)):
-                raise ValueError(f"randomize[{name!r}] = {value!r}: must be a finite number >= 0"
-                                 + (f" and at most {largest:g}" if math.isfinite(largest) else ""))
+            if (
+                isinstance(value, bool)
+                or not isinstance(value, numbers.Real)
+                or not (0 <= value <= largest and math.isfinite(value))
+            ):
+                raise ValueError(
+                    f"randomize[{name!r}] = {value!r}: must be a finite number >= 0"
+                    + (f" and at most {largest:g}" if math.isfinite(largest) else "")
+                )
         if camera == "openr" and camera_layer != "H":
-            raise ValueError("camera='openr' serves layer H, as the wrapper's camera_get_image does; "
-                             "use camera='ycrcb' or 'rgb' for layers M and L")
-        self.camera, self.camera_layer, self.render_mode, self.image_only = camera, camera_layer, render_mode, image_only
+            raise ValueError(
+                "camera='openr' serves layer H, as the wrapper's camera_get_image does; "
+                "use camera='ycrcb' or 'rgb' for layers M and L"
+            )
+        self.camera, self.camera_layer, self.render_mode, self.image_only = (
+            camera,
+            camera_layer,
+            render_mode,
+            image_only,
+        )
         self.camera_message: openr_bridge.OFbkImageVectorData | None = None  # the last one encoded
-        self.sim = Simulation(scene, camera_profile=camera_profile,
-                              camera_settings=CameraSettings(camera_wb, camera_gain, camera_shutter))
+        self.sim = Simulation(
+            scene, camera_profile=camera_profile, camera_settings=CameraSettings(camera_wb, camera_gain, camera_shutter)
+        )
         self._openr = OpenRCamera(self.sim) if camera == "openr" else None
         model = self.sim.model
         self._actuated = np.array([JOINT_INDEX[name] for name in self.actuated_joints])
         self._target_low, target_high = model.actuator_ctrlrange[self._actuated].T
         self._target_span = target_high - self._target_low
-        self._nominal_lights = (model.light_diffuse.copy(), model.vis.headlight.diffuse.copy(),
-                                model.vis.headlight.ambient.copy())
+        self._nominal_lights = (
+            model.light_diffuse.copy(),
+            model.vis.headlight.diffuse.copy(),
+            model.vis.headlight.ambient.copy(),
+        )
         self.camera_robot = RobotColour()  # this episode's camera colour deviation
         self._renderer: Renderer | None = None
         self._reset_done = False
@@ -173,8 +201,10 @@ class AiboEnv(gym.Env):
         return self._renderer.render(self.sim.data, "tracking")
 
     def __reduce_ex__(self, protocol):
-        raise TypeError(f"{type(self).__name__} cannot be pickled or copied (it holds a MuJoCo simulation and OpenGL "
-                        "renderers): make a new environment with the same arguments and reset it with the same seed")
+        raise TypeError(
+            f"{type(self).__name__} cannot be pickled or copied (it holds a MuJoCo simulation and OpenGL "
+            "renderers): make a new environment with the same arguments and reset it with the same seed"
+        )
 
     def close(self):
         """Free the renderers; the environment is then spent: ``step``, ``reset`` and ``render``
@@ -281,5 +311,6 @@ class _ClosedSimulation:
     def __getattr__(self, name):
         if name.startswith("__") or name == "_env_name":  # copy, pickle and repr probe for these
             raise AttributeError(name)
-        raise gym.error.ClosedEnvironmentError(f"{self._env_name} is closed (its simulation's {name!r} was used after "
-                                               "close()): make a new environment")
+        raise gym.error.ClosedEnvironmentError(
+            f"{self._env_name} is closed (its simulation's {name!r} was used after close()): make a new environment"
+        )

@@ -48,8 +48,9 @@ class HeadTrackBallEnv(AiboEnv):
 
     def _before_frame(self) -> None:
         t = self.sim.data.time
-        (x, vx), (y, vy) = ((s + a * (math.sin(w * t + p) - math.sin(p)), a * w * math.cos(w * t + p))
-                            for s, a, w, p in self._paths)
+        (x, vx), (y, vy) = (
+            (s + a * (math.sin(w * t + p) - math.sin(p)), a * w * math.cos(w * t + p)) for s, a, w, p in self._paths
+        )
         if x < NEAREST_X:
             x, vx = NEAREST_X, 0.0
         self._ball_qpos[:] = (x, y, BALL_RADIUS, 1.0, 0.0, 0.0, 0.0)

@@ -53,8 +53,9 @@ def reset_arguments(num_envs: int, seed, options: dict | None) -> tuple[list, di
         options = dict(options)
         mask = options.pop("reset_mask")
         if not (isinstance(mask, np.ndarray) and mask.dtype == np.bool_ and mask.shape == (num_envs,) and mask.any()):
-            raise ValueError(f"options['reset_mask'] must be a bool array of shape ({num_envs},) "
-                             f"with a True value, not {mask!r}")
+            raise ValueError(
+                f"options['reset_mask'] must be a bool array of shape ({num_envs},) with a True value, not {mask!r}"
+            )
     return seed, options, mask
 
 
@@ -70,8 +71,10 @@ def values_per_env(name: str, values, num_envs: int) -> list:
 def check_actions(action_space, actions) -> None:
     """ValueError unless a batch of Box actions has one row for each environment."""
     if isinstance(action_space, Box) and np.shape(actions) != action_space.shape:
-        raise ValueError(f"actions of shape {np.shape(actions)}: want {action_space.shape}, "
-                         f"one row for each of the {action_space.shape[0]} environments")
+        raise ValueError(
+            f"actions of shape {np.shape(actions)}: want {action_space.shape}, "
+            f"one row for each of the {action_space.shape[0]} environments"
+        )
 
 
 class _EnvThread(threading.Thread):
@@ -116,12 +119,14 @@ class ThreadedVectorEnv(VectorEnv):
         self.num_envs, self.copy = num_envs, copy
         self._results: queue.SimpleQueue = queue.SimpleQueue()  # (call number, env index, result, exception)
         self._calls, self._interrupted = 0, False
-        self._threads = [_EnvThread(i, lambda: gymnasium.make(env_id, **env_kwargs), self._results)
-                         for i in range(num_envs)]
+        self._threads = [
+            _EnvThread(i, lambda: gymnasium.make(env_id, **env_kwargs), self._results) for i in range(num_envs)
+        ]
         try:
             self._collect(range(num_envs))
-            first = self.call_each(lambda env: (env.observation_space, env.action_space, env.metadata,
-                                                env.render_mode), [0])[0]
+            first = self.call_each(
+                lambda env: (env.observation_space, env.action_space, env.metadata, env.render_mode), [0]
+            )[0]
         except BaseException:
             self.close()
             raise
@@ -193,8 +198,10 @@ class ThreadedVectorEnv(VectorEnv):
 
     def step(self, actions):
         if self._interrupted:
-            raise gymnasium.error.ResetNeeded("a call of this ThreadedVectorEnv was interrupted while its environments "
-                                              "ran: reset() all of them before stepping again")
+            raise gymnasium.error.ResetNeeded(
+                "a call of this ThreadedVectorEnv was interrupted while its environments "
+                "ran: reset() all of them before stepping again"
+            )
         check_actions(self.action_space, actions)
         observations, autoreset = self._observations, self._autoreset
 
@@ -214,17 +221,24 @@ class ThreadedVectorEnv(VectorEnv):
             self._rewards[i], self._terminations[i], self._truncations[i] = reward, terminated, truncated
             infos = self._add_info(infos, info, i)
         self._autoreset = np.logical_or(self._terminations, self._truncations)
-        return ((copying.deepcopy(observations) if self.copy else observations), self._rewards.copy(),
-                self._terminations.copy(), self._truncations.copy(), infos)
+        return (
+            (copying.deepcopy(observations) if self.copy else observations),
+            self._rewards.copy(),
+            self._terminations.copy(),
+            self._truncations.copy(),
+            infos,
+        )
 
     def render(self):
         return tuple(self.call_each(lambda env: env.render()))
 
     def call(self, name: str, *args, **kwargs) -> tuple:
         """Each environment's method ``name`` called with the arguments (or its attribute)."""
+
         def call_one(env):
             value = env.get_wrapper_attr(name)
             return value(*args, **kwargs) if callable(value) else value
+
         return tuple(self.call_each(call_one))
 
     def get_attr(self, name: str) -> tuple:

@@ -43,8 +43,9 @@ def evaluate(env, policy, episodes: int) -> list[float]:
     return totals
 
 
-def plot_learning_curve(path: str, steps: np.ndarray, rewards: np.ndarray, random_level: float,
-                        trained_level: float, size=(800, 480)) -> None:
+def plot_learning_curve(
+    path: str, steps: np.ndarray, rewards: np.ndarray, random_level: float, trained_level: float, size=(800, 480)
+) -> None:
     """Episode reward against training steps (points and a running mean), with the random and
     the trained policy's evaluation levels as lines; written with OpenCV."""
     width, height = size
@@ -54,34 +55,54 @@ def plot_learning_curve(path: str, steps: np.ndarray, rewards: np.ndarray, rando
     last_step = max(1.0, float(np.max(steps, initial=1)))
 
     def to_pixel(step, reward):
-        return (int(left + (width - left - right) * step / last_step),
-                int(height - bottom - (height - top - bottom) * reward / top_reward))
+        return (
+            int(left + (width - left - right) * step / last_step),
+            int(height - bottom - (height - top - bottom) * reward / top_reward),
+        )
 
     black, grey = (0, 0, 0), (160, 160, 160)
     cv2.rectangle(image, (left, top), (width - right, height - bottom), black, 1)
     for fraction in np.linspace(0, 1, 5):
         x, _ = to_pixel(fraction * last_step, 0)
         _, y = to_pixel(0, fraction * top_reward)
-        cv2.putText(image, f"{fraction * last_step / 1000:.3g}k", (x - 12, height - bottom + 20), cv2.FONT_HERSHEY_SIMPLEX, 0.45, black)
+        cv2.putText(
+            image,
+            f"{fraction * last_step / 1000:.3g}k",
+            (x - 12, height - bottom + 20),
+            cv2.FONT_HERSHEY_SIMPLEX,
+            0.45,
+            black,
+        )
         cv2.putText(image, f"{fraction * top_reward:.0f}", (left - 45, y + 5), cv2.FONT_HERSHEY_SIMPLEX, 0.45, black)
     for step, reward in zip(steps, rewards):
         cv2.circle(image, to_pixel(step, reward), 2, grey, -1)
     if len(rewards) >= 2:
         window = max(1, len(rewards) // 20)
         mean = np.convolve(rewards, np.ones(window) / window, mode="valid")
-        points = np.array([to_pixel(s, r) for s, r in zip(steps[window - 1:], mean)], np.int32)
+        points = np.array([to_pixel(s, r) for s, r in zip(steps[window - 1 :], mean)], np.int32)
         cv2.polylines(image, [points], False, (200, 80, 0), 2)
-    for level, colour, label in ((random_level, (0, 0, 200), "random policy"), (trained_level, (0, 140, 0), "trained policy")):
+    for level, colour, label in (
+        (random_level, (0, 0, 200), "random policy"),
+        (trained_level, (0, 140, 0), "trained policy"),
+    ):
         _, y = to_pixel(0, level)
         cv2.line(image, (left, y), (width - right, y), colour, 1)
         cv2.putText(image, f"{label}: {level:.1f}", (left + 8, y - 6), cv2.FONT_HERSHEY_SIMPLEX, 0.5, colour)
-    cv2.putText(image, "HeadTrackBall-v0, PPO: episode reward (300 steps) vs training steps",
-                (left, top - 14), cv2.FONT_HERSHEY_SIMPLEX, 0.5, black)
+    cv2.putText(
+        image,
+        "HeadTrackBall-v0, PPO: episode reward (300 steps) vs training steps",
+        (left, top - 14),
+        cv2.FONT_HERSHEY_SIMPLEX,
+        0.5,
+        black,
+    )
     write_file_atomic(Path(path), png(np.ascontiguousarray(image[..., ::-1])))
 
 
 def main(argv: list[str] | None = None) -> None:
-    parser = argparse.ArgumentParser(description="Train PPO on aibo_sim/HeadTrackBall-v0 and compare it with a random policy.")
+    parser = argparse.ArgumentParser(
+        description="Train PPO on aibo_sim/HeadTrackBall-v0 and compare it with a random policy."
+    )
     parser.add_argument("--steps", type=int, default=150_000, help="environment steps to train for")
     parser.add_argument("--envs", type=int, default=2, help="environments stepped in parallel processes")
     parser.add_argument("--layer", default="L", choices=("H", "M", "L"), help="camera layer (L: 52x40)")
@@ -106,13 +127,21 @@ def main(argv: list[str] | None = None) -> None:
             self.curve: list[tuple[int, float]] = []
 
         def _on_step(self) -> bool:
-            self.curve += [(self.num_timesteps, info["episode"]["r"]) for info in self.locals["infos"] if "episode" in info]
+            self.curve += [
+                (self.num_timesteps, info["episode"]["r"]) for info in self.locals["infos"] if "episode" in info
+            ]
             return True
 
     options = {"camera_layer": args.layer}
     started = time.perf_counter()
-    envs = make_vec_env(ENV_ID, n_envs=args.envs, seed=args.seed, env_kwargs=options, vec_env_cls=SubprocVecEnv,
-                        vec_env_kwargs={"start_method": "spawn"})
+    envs = make_vec_env(
+        ENV_ID,
+        n_envs=args.envs,
+        seed=args.seed,
+        env_kwargs=options,
+        vec_env_cls=SubprocVecEnv,
+        vec_env_kwargs={"start_method": "spawn"},
+    )
     model = PPO("MultiInputPolicy", envs, n_steps=256, batch_size=128, gamma=0.95, seed=args.seed, verbose=0)
     episodes = EpisodeRewards()
     model.learn(total_timesteps=args.steps, callback=episodes)
@@ -124,12 +153,16 @@ def main(argv: list[str] | None = None) -> None:
     trained = evaluate(env, lambda obs: model.predict(obs, deterministic=True)[0], args.episodes)
     random = evaluate(env, lambda obs: env.action_space.sample(), args.episodes)
     env.close()
-    steps, rewards = (np.array(column, float) for column in zip(*episodes.curve)) if episodes.curve else (np.zeros(0), np.zeros(0))
+    steps, rewards = (
+        (np.array(column, float) for column in zip(*episodes.curve)) if episodes.curve else (np.zeros(0), np.zeros(0))
+    )
     plot_learning_curve(args.plot, steps, rewards, float(np.mean(random)), float(np.mean(trained)))
     print(f"trained {args.steps} steps in {train_s / 60:.1f} min; saved {args.save}, learning curve {args.plot}")
-    print(f"mean episode reward over {args.episodes} episodes (seeds {EVAL_SEED}..{EVAL_SEED + args.episodes - 1}, "
-          f"300 steps, at most 300): trained {np.mean(trained):.1f} +- {np.std(trained):.1f}, "
-          f"random {np.mean(random):.1f} +- {np.std(random):.1f}")
+    print(
+        f"mean episode reward over {args.episodes} episodes (seeds {EVAL_SEED}..{EVAL_SEED + args.episodes - 1}, "
+        f"300 steps, at most 300): trained {np.mean(trained):.1f} +- {np.std(trained):.1f}, "
+        f"random {np.mean(random):.1f} +- {np.std(random):.1f}"
+    )
 
 
 if __name__ == "__main__":

@@ -53,8 +53,7 @@ _yield_core = getattr(os, "sched_yield", lambda: time.sleep(0))  # sched_yield i
 def poll_until(connection: Connection | None, deadline: float) -> None:
     """Poll ``connection`` (a pipe's end; None or closed: return) until it has something to read
     or ``time.perf_counter()`` passes ``deadline``, yielding the core between polls."""
-    while connection is not None and not connection.closed and not connection.poll() \
-            and time.perf_counter() < deadline:
+    while connection is not None and not connection.closed and not connection.poll() and time.perf_counter() < deadline:
         _yield_core()
 
 
@@ -100,8 +99,11 @@ def _with_workers_infos(infos: dict, workers_infos: dict, num_envs: int) -> dict
         else:
             merged = infos.get(key)
             if merged is None:  # environment 0 did not have it: the workers' first sets the type
-                merged = (np.full(num_envs, None, object) if value.dtype == object
-                          else np.zeros((num_envs, *value.shape[1:]), value.dtype))
+                merged = (
+                    np.full(num_envs, None, object)
+                    if value.dtype == object
+                    else np.zeros((num_envs, *value.shape[1:]), value.dtype)
+                )
             merged[1:] = value
         mask = infos.get(f"_{key}", np.zeros(num_envs, np.bool_))
         mask[1:] = workers_infos[f"_{key}"]
@@ -132,9 +134,16 @@ class HybridVectorEnv(VectorEnv):
         self._workers = None
         try:
             if self.num_envs > 1:
-                self._workers = AsyncVectorEnv([lambda: gymnasium.make(spec, **env_kwargs)] * (self.num_envs - 1),
-                                               copy=False, context="spawn", worker=BusyWaitWorker(spin_s))
-            self.single_observation_space, self.single_action_space = self._env.observation_space, self._env.action_space
+                self._workers = AsyncVectorEnv(
+                    [lambda: gymnasium.make(spec, **env_kwargs)] * (self.num_envs - 1),
+                    copy=False,
+                    context="spawn",
+                    worker=BusyWaitWorker(spin_s),
+                )
+            self.single_observation_space, self.single_action_space = (
+                self._env.observation_space,
+                self._env.action_space,
+            )
             self.observation_space = batch_space(self.single_observation_space, self.num_envs)
             self.action_space = batch_space(self.single_action_space, self.num_envs)
             self._observations = create_empty_array(self.single_observation_space, self.num_envs)
@@ -155,11 +164,15 @@ class HybridVectorEnv(VectorEnv):
         if self._workers is not None and None in self._workers.parent_pipes:  # Gymnasium ends a worker that raised
             index = self._workers.parent_pipes.index(None) + 1
             raise gymnasium.error.ClosedEnvironmentError(
-                f"environment {index}'s worker process ended after the error it raised: make a new HybridVectorEnv")
+                f"environment {index}'s worker process ended after the error it raised: make a new HybridVectorEnv"
+            )
         if self._workers is not None and self._workers._state is not AsyncState.DEFAULT:
             self._wait_for_workers()
-            {AsyncState.WAITING_STEP: self._workers.step_wait, AsyncState.WAITING_RESET: self._workers.reset_wait,
-             AsyncState.WAITING_CALL: self._workers.call_wait}[self._workers._state]()
+            {
+                AsyncState.WAITING_STEP: self._workers.step_wait,
+                AsyncState.WAITING_RESET: self._workers.reset_wait,
+                AsyncState.WAITING_CALL: self._workers.call_wait,
+            }[self._workers._state]()
 
     def _wait_for_workers(self) -> None:
         """Poll the workers' pipes, yielding the core, for up to ``spin_s``: a process that sleeps
@@ -199,8 +212,9 @@ class HybridVectorEnv(VectorEnv):
     def step(self, actions):
         self._check_running()
         if self._interrupted:
-            raise gymnasium.error.ResetNeeded("a step of this HybridVectorEnv was interrupted: reset() all of its "
-                                              "environments before stepping again")
+            raise gymnasium.error.ResetNeeded(
+                "a step of this HybridVectorEnv was interrupted: reset() all of its environments before stepping again"
+            )
         check_actions(self.action_space, actions)
         try:
             return self._step(actions)
@@ -230,9 +244,13 @@ class HybridVectorEnv(VectorEnv):
         observations, infos = self._batched(infos, workers_obs, workers_info)
         if self._workers is None:
             workers_rewards = workers_terminations = workers_truncations = ()
-        return (observations, np.array([reward, *workers_rewards], np.float64),
-                np.array([terminated, *workers_terminations], np.bool_),
-                np.array([truncated, *workers_truncations], np.bool_), infos)
+        return (
+            observations,
+            np.array([reward, *workers_rewards], np.float64),
+            np.array([terminated, *workers_terminations], np.bool_),
+            np.array([truncated, *workers_truncations], np.bool_),
+            infos,
+        )
 
     def render(self):
         self._check_running()

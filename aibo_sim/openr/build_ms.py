@@ -73,7 +73,7 @@ def short_name(name: str) -> str:
     digit, '_' or '-' made '_', the stem cut to 8 and the extension to 3."""
     base = name.encode().rsplit(b"/", 1)[-1].upper().decode("latin-1")
     dot = base.rfind(".")
-    stem, extension = (base[:dot], base[dot + 1:]) if dot > 0 else (base, "")
+    stem, extension = (base[:dot], base[dot + 1 :]) if dot > 0 else (base, "")
     stem, extension = (re.sub(r"[^A-Z0-9_-]", "_", part)[:size] for part, size in ((stem, 8), (extension, 3)))
     return f"{stem}.{extension}" if extension else stem
 
@@ -112,15 +112,20 @@ def _motions(main: Path, sources) -> dict[tuple[str, ...], Path]:
     for name in motion_names(sources):
         path = find_file(name, motion_dirs(main))
         if not path.is_file():
-            raise BuildMsError(f"{where} opens {name!r}, which is neither in {main.parent} nor among the bundled "
-                               "motions (models/motions): put the file beside the controller")
+            raise BuildMsError(
+                f"{where} opens {name!r}, which is neither in {main.parent} nor among the bundled "
+                "motions (models/motions): put the file beside the controller"
+            )
         place = _stick_path(name)
         if not all(_is_83(part) for part in place):
-            raise BuildMsError(f"{where} opens {name!r}: /MS/... names must be 8.3 names (the stick's FAT has no "
-                               "longer ones)")
+            raise BuildMsError(
+                f"{where} opens {name!r}: /MS/... names must be 8.3 names (the stick's FAT has no longer ones)"
+            )
         if place in found and found[place].resolve() != path.resolve():
-            raise BuildMsError(f"{where} opens {name!r} and another motion that would both be "
-                               f"/MS/{'/'.join(place)} on the stick: rename one")
+            raise BuildMsError(
+                f"{where} opens {name!r} and another motion that would both be "
+                f"/MS/{'/'.join(place)} on the stick: rename one"
+            )
         found[place] = path
     return found
 
@@ -134,39 +139,69 @@ def device_table() -> str:
     Sony's gains), the robot model (the servos' ranges, as sim.Servos clips to them) and
     openr_bridge (the camera's layer H, field of view and settings)."""
     servos = Servos(load_model(ball=False))
-    joints = [f"    {{{_c_string(j.locator)}, {float(servos.low[i])!r}, {float(servos.high[i])!r}, {j.max_speed!r}, "
-              f"{j.gains[0]:#04x}, {j.gains[1]:#04x}, {j.gains[2]:#04x}}},"
-              for i, j in enumerate(ers7.JOINTS)]
-    sensors = [f"    {{{_c_string(s.locator)}, {_c_string(s.kind)}, "
-               f"{(s.threshold or 0.0) * TOUCH_AD_PER_NEWTON!r}}}," for s in ers7.SENSORS]
-    settings = [f"    {{{_c_string(function)}, {REQUEST_NAMES[request]}, {_c_string(REQUEST_NAMES[request])}, "
-                f"{_c_string(allowed_values(setting))}}},"
-                for function, (request, setting) in openr_bridge.CAMERA_SETTING_FUNCTIONS.items()]
+    joints = [
+        f"    {{{_c_string(j.locator)}, {float(servos.low[i])!r}, {float(servos.high[i])!r}, {j.max_speed!r}, "
+        f"{j.gains[0]:#04x}, {j.gains[1]:#04x}, {j.gains[2]:#04x}}},"
+        for i, j in enumerate(ers7.JOINTS)
+    ]
+    sensors = [
+        f"    {{{_c_string(s.locator)}, {_c_string(s.kind)}, {(s.threshold or 0.0) * TOUCH_AD_PER_NEWTON!r}}},"
+        for s in ers7.SENSORS
+    ]
+    settings = [
+        f"    {{{_c_string(function)}, {REQUEST_NAMES[request]}, {_c_string(REQUEST_NAMES[request])}, "
+        f"{_c_string(allowed_values(setting))}}},"
+        for function, (request, setting) in openr_bridge.CAMERA_SETTING_FUNCTIONS.items()
+    ]
     width, height = openr_bridge.LAYER_SIZE[openr_bridge.ofbkimageLAYER_H]
-    return "\n".join([
-        "/* Ers7Table.h: the ERS-7's devices for the wrapper, written by aibo-sim build-ms from",
-        " * aibo_sim/ers7.py, the robot model and openr_bridge; do not edit. */",
-        "#ifndef AIBO_WRAPPER_ERS7_TABLE_H", "#define AIBO_WRAPPER_ERS7_TABLE_H", "",
-        "#include <OPENR/OPrimitiveControl.h>", "", "namespace ers7 {", "",
-        "/* Joints in aibo_sim.ers7's order: locator, set-point range (rad), speed limit (rad/s),",
-        " * Sony's standard P, I, D. */",
-        "struct Joint { const char* locator; double low, high, maxSpeed; word p, i, d; };",
-        "const Joint JOINTS[] = {", *joints, "};",
-        f"const word PSHIFT = {STANDARD_SHIFTS[0]:#04x}, ISHIFT = {STANDARD_SHIFTS[1]:#04x}, "
-        f"DSHIFT = {STANDARD_SHIFTS[2]:#04x};",
-        f"const double KP_PER_SONY_P = {KP_PER_SONY_P!r};  /* N m/rad per unit of the P register */", "",
-        "/* Sensors: locator, kind, touch threshold (AD units, for the pressure sensors). */",
-        "struct Sensor { const char* locator; const char* kind; double touchThreshold; };",
-        "const Sensor SENSORS[] = {", *sensors, "};",
-        "const char* const ACCELEROMETER_ALIASES[] = {"
-        + ", ".join(map(_c_string, ers7.ACCELEROMETER_ALIASES)) + "};",
-        "const char* const LEDS[] = {", *(f"    {_c_string(led.locator)}," for led in ers7.LEDS), "};", "",
-        f"const double FIELD_OF_VIEW = {openr_bridge.FIELD_OF_VIEW!r};",
-        f"const int IMAGE_WIDTH = {width}, IMAGE_HEIGHT = {height};  /* layer H */", "",
-        "struct CameraSetting { const char* function; OPrimitiveRequest request; const char* requestName;",
-        "                       const char* allowed; };",
-        "const CameraSetting CAMERA_SETTINGS[] = {", *settings, "};", "",
-        "}  // namespace ers7", "", "#endif", ""])
+    return "\n".join(
+        [
+            "/* Ers7Table.h: the ERS-7's devices for the wrapper, written by aibo-sim build-ms from",
+            " * aibo_sim/ers7.py, the robot model and openr_bridge; do not edit. */",
+            "#ifndef AIBO_WRAPPER_ERS7_TABLE_H",
+            "#define AIBO_WRAPPER_ERS7_TABLE_H",
+            "",
+            "#include <OPENR/OPrimitiveControl.h>",
+            "",
+            "namespace ers7 {",
+            "",
+            "/* Joints in aibo_sim.ers7's order: locator, set-point range (rad), speed limit (rad/s),",
+            " * Sony's standard P, I, D. */",
+            "struct Joint { const char* locator; double low, high, maxSpeed; word p, i, d; };",
+            "const Joint JOINTS[] = {",
+            *joints,
+            "};",
+            f"const word PSHIFT = {STANDARD_SHIFTS[0]:#04x}, ISHIFT = {STANDARD_SHIFTS[1]:#04x}, "
+            f"DSHIFT = {STANDARD_SHIFTS[2]:#04x};",
+            f"const double KP_PER_SONY_P = {KP_PER_SONY_P!r};  /* N m/rad per unit of the P register */",
+            "",
+            "/* Sensors: locator, kind, touch threshold (AD units, for the pressure sensors). */",
+            "struct Sensor { const char* locator; const char* kind; double touchThreshold; };",
+            "const Sensor SENSORS[] = {",
+            *sensors,
+            "};",
+            "const char* const ACCELEROMETER_ALIASES[] = {"
+            + ", ".join(map(_c_string, ers7.ACCELEROMETER_ALIASES))
+            + "};",
+            "const char* const LEDS[] = {",
+            *(f"    {_c_string(led.locator)}," for led in ers7.LEDS),
+            "};",
+            "",
+            f"const double FIELD_OF_VIEW = {openr_bridge.FIELD_OF_VIEW!r};",
+            f"const int IMAGE_WIDTH = {width}, IMAGE_HEIGHT = {height};  /* layer H */",
+            "",
+            "struct CameraSetting { const char* function; OPrimitiveRequest request; const char* requestName;",
+            "                       const char* allowed; };",
+            "const CameraSetting CAMERA_SETTINGS[] = {",
+            *settings,
+            "};",
+            "",
+            "}  // namespace ers7",
+            "",
+            "#endif",
+            "",
+        ]
+    )
 
 
 def makefile(sources: list[Path]) -> str:
@@ -175,43 +210,60 @@ def makefile(sources: list[Path]) -> str:
     rules = []
     for source, obj in zip(sources, objects):
         compiler, flags = ("$(CC)", "$(CFLAGS)") if source.suffix == ".c" else ("$(CXX)", "$(CXXFLAGS)")
-        rules += [f"{obj}: controller/{source.name}",
-                  f"\t{compiler} {flags} -Dmain={MAIN[source.suffix]} -o $@ -c $<", ""]
-    return "\n".join([
-        "# The Webots OPEN-R wrapper object Controller linked with a controller, as aibo-sim build-ms",
-        "# wrote it. make install builds MS/OPEN-R/MW/OBJS/CONTROLL.BIN with the OPEN-R SDK at",
-        "# OPENRSDK_ROOT: Sony's for the robot, or $(aibo-sim openr sdk) for the simulator.", "",
-        "OPENRSDK_ROOT?=/usr/local/OPEN_R_SDK",
-        "INSTALLDIR?=../MS",
-        "CXX=$(OPENRSDK_ROOT)/bin/mipsel-linux-g++",
-        "CC=$(OPENRSDK_ROOT)/bin/mipsel-linux-gcc",
-        "STRIP=$(OPENRSDK_ROOT)/bin/mipsel-linux-strip",
-        "MKBIN=$(OPENRSDK_ROOT)/OPEN_R/bin/mkbin",
-        "STUBGEN=$(OPENRSDK_ROOT)/OPEN_R/bin/stubgen2",
-        "MKBINFLAGS=-p $(OPENRSDK_ROOT)",
-        "LIBS=-L$(OPENRSDK_ROOT)/OPEN_R/lib -lObjectComm -lOPENR -lm",
-        "INCLUDES=-I. -Iinclude -I$(OPENRSDK_ROOT)/OPEN_R/include/R4000 -I$(OPENRSDK_ROOT)/OPEN_R/include",
-        "CXXFLAGS=-O2 -Wall $(INCLUDES)",
-        "CFLAGS=-O2 -Wall -std=gnu99 $(INCLUDES)", "",
-        f"WRAPPER={' '.join(WRAPPER_OBJECTS)}",
-        f"CONTROLLER={' '.join(objects)}", "",
-        ".PHONY: all install clean", "",
-        "all: controller.bin", "",
-        "%.o: %.cc",
-        "\t$(CXX) $(CXXFLAGS) -o $@ -c $<", "",
-        "ControllerStub.cc: stub.cfg",
-        "\t$(STUBGEN) stub.cfg", "",
-        "# def.h and entry.h come from stubgen2",
-        "Controller.o WebotsApi.o: ControllerStub.cc", "",
-        *rules,
-        "controller.bin: $(WRAPPER) $(CONTROLLER) Controller.ocf",
-        "\t$(MKBIN) $(MKBINFLAGS) -o $@ $(WRAPPER) $(CONTROLLER) Controller.ocf $(LIBS)",
-        "\t$(STRIP) $@", "",
-        "install: controller.bin",
-        f"\tgzip -c controller.bin > $(INSTALLDIR)/OPEN-R/MW/OBJS/{OBJECT_FILE}", "",
-        "clean:",
-        "\trm -f *.o controller/*.o controller.bin ControllerStub.h ControllerStub.cc def.h entry.h",
-        f"\trm -f $(INSTALLDIR)/OPEN-R/MW/OBJS/{OBJECT_FILE}", ""])
+        rules += [
+            f"{obj}: controller/{source.name}",
+            f"\t{compiler} {flags} -Dmain={MAIN[source.suffix]} -o $@ -c $<",
+            "",
+        ]
+    return "\n".join(
+        [
+            "# The Webots OPEN-R wrapper object Controller linked with a controller, as aibo-sim build-ms",
+            "# wrote it. make install builds MS/OPEN-R/MW/OBJS/CONTROLL.BIN with the OPEN-R SDK at",
+            "# OPENRSDK_ROOT: Sony's for the robot, or $(aibo-sim openr sdk) for the simulator.",
+            "",
+            "OPENRSDK_ROOT?=/usr/local/OPEN_R_SDK",
+            "INSTALLDIR?=../MS",
+            "CXX=$(OPENRSDK_ROOT)/bin/mipsel-linux-g++",
+            "CC=$(OPENRSDK_ROOT)/bin/mipsel-linux-gcc",
+            "STRIP=$(OPENRSDK_ROOT)/bin/mipsel-linux-strip",
+            "MKBIN=$(OPENRSDK_ROOT)/OPEN_R/bin/mkbin",
+            "STUBGEN=$(OPENRSDK_ROOT)/OPEN_R/bin/stubgen2",
+            "MKBINFLAGS=-p $(OPENRSDK_ROOT)",
+            "LIBS=-L$(OPENRSDK_ROOT)/OPEN_R/lib -lObjectComm -lOPENR -lm",
+            "INCLUDES=-I. -Iinclude -I$(OPENRSDK_ROOT)/OPEN_R/include/R4000 -I$(OPENRSDK_ROOT)/OPEN_R/include",
+            "CXXFLAGS=-O2 -Wall $(INCLUDES)",
+            "CFLAGS=-O2 -Wall -std=gnu99 $(INCLUDES)",
+            "",
+            f"WRAPPER={' '.join(WRAPPER_OBJECTS)}",
+            f"CONTROLLER={' '.join(objects)}",
+            "",
+            ".PHONY: all install clean",
+            "",
+            "all: controller.bin",
+            "",
+            "%.o: %.cc",
+            "\t$(CXX) $(CXXFLAGS) -o $@ -c $<",
+            "",
+            "ControllerStub.cc: stub.cfg",
+            "\t$(STUBGEN) stub.cfg",
+            "",
+            "# def.h and entry.h come from stubgen2",
+            "Controller.o WebotsApi.o: ControllerStub.cc",
+            "",
+            *rules,
+            "controller.bin: $(WRAPPER) $(CONTROLLER) Controller.ocf",
+            "\t$(MKBIN) $(MKBINFLAGS) -o $@ $(WRAPPER) $(CONTROLLER) Controller.ocf $(LIBS)",
+            "\t$(STRIP) $@",
+            "",
+            "install: controller.bin",
+            f"\tgzip -c controller.bin > $(INSTALLDIR)/OPEN-R/MW/OBJS/{OBJECT_FILE}",
+            "",
+            "clean:",
+            "\trm -f *.o controller/*.o controller.bin ControllerStub.h ControllerStub.cc def.h entry.h",
+            f"\trm -f $(INSTALLDIR)/OPEN-R/MW/OBJS/{OBJECT_FILE}",
+            "",
+        ]
+    )
 
 
 TOP_MAKEFILE = """\
@@ -250,15 +302,22 @@ def build_ms(controller, out_dir) -> Path:
         raise BuildMsError(f"controller {path}: no such file or folder")
     if not is_c_controller(path):
         main_files = " or ".join(path.name + suffix for suffix in C_SUFFIXES)
-        raise BuildMsError(f"controller {path}: " + (f"a folder with no {main_files}" if path.is_dir() else
-                                                     "not a C or C++ file (.c, .cc or .cpp)"))
+        raise BuildMsError(
+            f"controller {path}: "
+            + (f"a folder with no {main_files}" if path.is_dir() else "not a C or C++ file (.c, .cc or .cpp)")
+        )
     main, sources = controller_sources(path)
-    files = sources + sorted(p for p in main.parent.iterdir() if p.suffix in HEADER_SUFFIXES and p.is_file()) \
-        if path.is_dir() else sources
+    files = (
+        sources + sorted(p for p in main.parent.iterdir() if p.suffix in HEADER_SUFFIXES and p.is_file())
+        if path.is_dir()
+        else sources
+    )
     for source in files:
         if not _SAFE_NAME.fullmatch(source.name):
-            raise BuildMsError(f"controller {path}: {source.name!r} is a name make cannot handle (use letters, "
-                               "digits, '_', '.', '+' and '-')")
+            raise BuildMsError(
+                f"controller {path}: {source.name!r} is a name make cannot handle (use letters, "
+                "digits, '_', '.', '+' and '-')"
+            )
     motions = _motions(main, sources)
     out = _check_out(out_dir)
     table = device_table()

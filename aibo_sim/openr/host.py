@@ -45,7 +45,7 @@ import numpy as np
 
 import openr_bridge
 from openr_bridge import host_protocol as protocol
-from openr_bridge.config import Connection, ConfigError, _cut
+from openr_bridge.config import ConfigError, Connection, _cut
 from openr_bridge.ers7_camera import CAMERA_SETTINGS, openr_frame_number
 from openr_bridge.memory_stick import MemoryStick, read_object
 
@@ -55,23 +55,38 @@ from ..sim import Simulation
 from .sdk import sdk_root
 
 SYSTEM_SERVICES = {
-    "OVirtualRobotComm": ("OVirtualRobotComm.Effector.OCommandVectorData.O",
-                          "OVirtualRobotComm.Sensor.OSensorFrameVectorData.S",
-                          "OVirtualRobotComm.FbkImageSensor.OFbkImageVectorData.S"),
-    "OVirtualRobotAudioComm": ("OVirtualRobotAudioComm.Speaker.OSoundVectorData.O",
-                               "OVirtualRobotAudioComm.Mic.OSoundVectorData.S"),
+    "OVirtualRobotComm": (
+        "OVirtualRobotComm.Effector.OCommandVectorData.O",
+        "OVirtualRobotComm.Sensor.OSensorFrameVectorData.S",
+        "OVirtualRobotComm.FbkImageSensor.OFbkImageVectorData.S",
+    ),
+    "OVirtualRobotAudioComm": (
+        "OVirtualRobotAudioComm.Speaker.OSoundVectorData.O",
+        "OVirtualRobotAudioComm.Mic.OSoundVectorData.S",
+    ),
 }
 SPIN_S = 0.005  # how long _reply polls before it blocks
 STANDARD_PSHIFT = 0x0E  # Sony's fixed PSHIFT (Model Information 2.2): the P register's scale
 TOUCH_AD_PER_NEWTON, TOUCH_AD_MAX = 100, 80  # UNCONFIRMED, see the module docstring
 # The battery at the start (UNCONFIRMED): status bits, capacity %, temperature (0.01 C),
 # full capacity mAh, voltage mV, current mA, time difference h, volume; 1 % less a minute.
-BATTERY = {"robotStatus": 0x00008040, "batteryStatus": 0x00C0, "remainingCapacity": 100, "temperature": 3000,
-           "fullyChargedCapacity": 2200, "voltage": 8000, "current": -1200, "timeDif": 9, "volume": 2}
+BATTERY = {
+    "robotStatus": 0x00008040,
+    "batteryStatus": 0x00C0,
+    "remainingCapacity": 100,
+    "temperature": 3000,
+    "fullyChargedCapacity": 2200,
+    "voltage": 8000,
+    "current": -1200,
+    "timeDif": 9,
+    "volume": 2,
+}
 CAPACITY_LOW = 15  # % at which orsbBATTERY_CAPACITY_LOW is set
 orsbMOTOR_POWER, orsbBATTERY_CAPACITY_LOW = 0x00000002, 0x00000200
-SETTING_BY_REQUEST = {request: (setting, {number: name for name, number in values.items()})
-                      for setting, (request, values) in CAMERA_SETTINGS.items()}
+SETTING_BY_REQUEST = {
+    request: (setting, {number: name for name, number in values.items()})
+    for setting, (request, values) in CAMERA_SETTINGS.items()
+}
 
 
 class OpenRObjectCrashed(RuntimeError):
@@ -80,8 +95,15 @@ class OpenRObjectCrashed(RuntimeError):
 
 def primitives() -> list[str]:
     """The ERS-7's primitive locators; an OPrimitiveID is the index here."""
-    return [*(j.locator for j in ers7.JOINTS), *(s.locator for s in ers7.SENSORS), *ers7.ACCELEROMETER_ALIASES,
-            *(led.locator for led in ers7.LEDS), ers7.WLAN_SWITCH_LOCATOR, ers7.SPEAKER_LOCATOR, ers7.MIC_LOCATOR]
+    return [
+        *(j.locator for j in ers7.JOINTS),
+        *(s.locator for s in ers7.SENSORS),
+        *ers7.ACCELEROMETER_ALIASES,
+        *(led.locator for led in ers7.LEDS),
+        ers7.WLAN_SWITCH_LOCATOR,
+        ers7.SPEAKER_LOCATOR,
+        ers7.MIC_LOCATOR,
+    ]
 
 
 class SensorFrame:
@@ -94,13 +116,19 @@ class SensorFrame:
         self.joints = [i for i, j in enumerate(ers7.JOINTS) if "-Joint2:" in j.locator]
         touches = list(ers7.TOUCH_SENSORS)
         self.switch = np.array([s.name.startswith(("touch_paw", "touch_chin")) for s in touches])
-        self.entries = ([(index[ers7.JOINTS[i].locator], kinds["JOINT"]) for i in self.joints]
-                        + [(index[s.locator], kinds["DISTANCE"]) for s in ers7.DISTANCE_SENSORS]
-                        + [(index[locator], kinds["ACCELERATION"]) for locator in
-                           (ers7.SENSOR_BY_NAME["accelerometer"].locator, *ers7.ACCELEROMETER_ALIASES)]
-                        + [(index[s.locator], kinds["SWITCH"] if switch else kinds["TOUCH"])
-                           for s, switch in zip(touches, self.switch)]
-                        + [(index[ers7.WLAN_SWITCH_LOCATOR], kinds["SWITCH"])])
+        self.entries = (
+            [(index[ers7.JOINTS[i].locator], kinds["JOINT"]) for i in self.joints]
+            + [(index[s.locator], kinds["DISTANCE"]) for s in ers7.DISTANCE_SENSORS]
+            + [
+                (index[locator], kinds["ACCELERATION"])
+                for locator in (ers7.SENSOR_BY_NAME["accelerometer"].locator, *ers7.ACCELEROMETER_ALIASES)
+            ]
+            + [
+                (index[s.locator], kinds["SWITCH"] if switch else kinds["TOUCH"])
+                for s, switch in zip(touches, self.switch)
+            ]
+            + [(index[ers7.WLAN_SWITCH_LOCATOR], kinds["SWITCH"])]
+        )
         distances = len(ers7.DISTANCE_SENSORS)
         self._qpos = np.array([sim.model.joint(ers7.JOINTS[i].name).qposadr[0] for i in self.joints])
         self._touch_adr = np.array([sim.model.sensor(s.name).adr[0] for s in touches])
@@ -118,13 +146,31 @@ class SensorFrame:
         from .sensor_values import fill  # compiled with numba on first use
 
         self._fill = fill
-        self._layout = (self._qpos, self._joints, self._max_force, self._touch_adr, self.switch, self._threshold,
-                        float(TOUCH_AD_PER_NEWTON), float(TOUCH_AD_MAX))
+        self._layout = (
+            self._qpos,
+            self._joints,
+            self._max_force,
+            self._touch_adr,
+            self.switch,
+            self._threshold,
+            float(TOUCH_AD_PER_NEWTON),
+            float(TOUCH_AD_MAX),
+        )
 
     def at(self, tick: int) -> bytes:
         sim, data = self.sim, self.sim.data
-        self._fill(data.qpos, data.actuator_force, sim.servos.command, np.array(sim.distances_mm()),
-                   self._silent[tick % 2], sim.acceleration(), data.sensordata, *self._layout, self._raw, self._values)
+        self._fill(
+            data.qpos,
+            data.actuator_force,
+            sim.servos.command,
+            np.array(sim.distances_mm()),
+            self._silent[tick % 2],
+            sim.acceleration(),
+            data.sensordata,
+            *self._layout,
+            self._raw,
+            self._values,
+        )
         return self._values.tobytes()
 
 
@@ -137,8 +183,15 @@ class MemoryStickRun:
     ``sound_path`` (a 16 kHz WAV file) when the objects played any.
     """
 
-    def __init__(self, sim: Simulation, stick: MemoryStick, workdir: Path, *, log_path: Path | None = None,
-                 sound_path: Path | None = None):
+    def __init__(
+        self,
+        sim: Simulation,
+        stick: MemoryStick,
+        workdir: Path,
+        *,
+        log_path: Path | None = None,
+        sound_path: Path | None = None,
+    ):
         self.sim, self.stick, self.workdir = sim, stick, Path(workdir)
         self.log_path, self.sound_path = log_path, sound_path
         self.frame_listeners, self.camera_listeners = [], []
@@ -185,13 +238,24 @@ class MemoryStickRun:
 
     def _serve(self, libraries, shared: Path) -> None:
         ours, theirs = socket.socketpair()
-        log = None if self.log_path is None else os.open(self.log_path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC
-                                                         | os.O_NOFOLLOW, 0o644)
-        environment = {**os.environ, "AIBO_OPENR_FD": str(theirs.fileno()), "AIBO_OPENR_SHM": str(shared),
-                       **({"AIBO_OPENR_LOG_FD": str(log)} if log is not None else {})}
-        child = Child([str(self._host)], name=f"memory stick {self.stick.root.name}", env=environment,
-                      pass_fds=(theirs.fileno(), *(() if log is None else (log,))),
-                      grace_note="its objects' Stop entries did not run")
+        log = (
+            None
+            if self.log_path is None
+            else os.open(self.log_path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC | os.O_NOFOLLOW, 0o644)
+        )
+        environment = {
+            **os.environ,
+            "AIBO_OPENR_FD": str(theirs.fileno()),
+            "AIBO_OPENR_SHM": str(shared),
+            **({"AIBO_OPENR_LOG_FD": str(log)} if log is not None else {}),
+        }
+        child = Child(
+            [str(self._host)],
+            name=f"memory stick {self.stick.root.name}",
+            env=environment,
+            pass_fds=(theirs.fileno(), *(() if log is None else (log,))),
+            grace_note="its objects' Stop entries did not run",
+        )
         try:
             with child, ours:
                 theirs.close()
@@ -213,26 +277,40 @@ class MemoryStickRun:
 
     def _start(self, libraries) -> None:
         locators = self._locators
-        setup = b"".join([
-            protocol.pack_string(openr_bridge.config.ROBOT_DESIGN), protocol.pack_string(str(self.stick.root.resolve())),
-            protocol.pack_string(str(self.workdir.resolve())),
-            struct.pack("<I", len(locators)), *map(protocol.pack_string, locators),
-            struct.pack("<I", len(self._sensors.entries)),
-            *(struct.pack("<2i", index, kind) for index, kind in self._sensors.entries),
-            struct.pack("<3i", locators.index(openr_bridge.CAMERA_LOCATOR), locators.index(ers7.SPEAKER_LOCATOR),
-                        locators.index(ers7.MIC_LOCATOR)),
-            self._sensors.at(self.sim.frame),
-            struct.pack("<I", len(self.stick.design_data)),
-            *(protocol.pack_string(k) + protocol.pack_string(v) for k, v in self.stick.design_data.items()),
-            self._power_fields(),
-            struct.pack("<I", len(libraries)),
-            *(protocol.pack_string(str(path)) + protocol.pack_string(o.ms_path) for path, o in libraries)])
+        setup = b"".join(
+            [
+                protocol.pack_string(openr_bridge.config.ROBOT_DESIGN),
+                protocol.pack_string(str(self.stick.root.resolve())),
+                protocol.pack_string(str(self.workdir.resolve())),
+                struct.pack("<I", len(locators)),
+                *map(protocol.pack_string, locators),
+                struct.pack("<I", len(self._sensors.entries)),
+                *(struct.pack("<2i", index, kind) for index, kind in self._sensors.entries),
+                struct.pack(
+                    "<3i",
+                    locators.index(openr_bridge.CAMERA_LOCATOR),
+                    locators.index(ers7.SPEAKER_LOCATOR),
+                    locators.index(ers7.MIC_LOCATOR),
+                ),
+                self._sensors.at(self.sim.frame),
+                struct.pack("<I", len(self.stick.design_data)),
+                *(protocol.pack_string(k) + protocol.pack_string(v) for k, v in self.stick.design_data.items()),
+                self._power_fields(),
+                struct.pack("<I", len(libraries)),
+                *(protocol.pack_string(str(path)) + protocol.pack_string(o.ms_path) for path, o in libraries),
+            ]
+        )
         self._send(protocol.MESSAGES["SETUP"], setup)
         services = self._services(self._reply(protocol.REPLIES["SERVICES"]))
         self._check(self.stick.connections, services)
-        self._send(protocol.MESSAGES["CONNECT"], struct.pack("<I", len(self.stick.connections)) + b"".join(
-            protocol.pack_string(str(c.subject)) + protocol.pack_string(str(c.observer))
-            for c in self.stick.connections))
+        self._send(
+            protocol.MESSAGES["CONNECT"],
+            struct.pack("<I", len(self.stick.connections))
+            + b"".join(
+                protocol.pack_string(str(c.subject)) + protocol.pack_string(str(c.observer))
+                for c in self.stick.connections
+            ),
+        )
         self._apply(self._reply(protocol.REPLIES["FRAME_DONE"]))
 
     def _services(self, payload: bytes) -> dict[str, str]:
@@ -255,11 +333,13 @@ class MemoryStickRun:
                 if str(name) in services:
                     continue
                 known = sorted(set(services.values()))
-                problem = (f"{name.object} has no service {_cut(name)} (it registers "
-                           f"{', '.join(s for s in sorted(services) if services[s] == name.object)})"
-                           if name.object in known else
-                           f"no object named {_cut(repr(name.object))} registers {_cut(name)} (the objects: "
-                           f"{', '.join(known)}; names are case-sensitive)")
+                problem = (
+                    f"{name.object} has no service {_cut(name)} (it registers "
+                    f"{', '.join(s for s in sorted(services) if services[s] == name.object)})"
+                    if name.object in known
+                    else f"no object named {_cut(repr(name.object))} registers {_cut(name)} (the objects: "
+                    f"{', '.join(known)}; names are case-sensitive)"
+                )
                 raise ConfigError(problem, connection.path, connection.line)
 
     def _frame(self) -> None:
@@ -271,7 +351,7 @@ class MemoryStickRun:
             frame = self.sim.camera.frame()
             if self._image_observed:  # else no object would see the message: it is not made
                 message = bytes(frame.message) if self._cdt is None else bytes(self._encode_with_cdt(frame))
-                self._memory[protocol.SHM_HEADER:protocol.SHM_HEADER + len(message)] = message
+                self._memory[protocol.SHM_HEADER : protocol.SHM_HEADER + len(message)] = message
                 flags |= protocol.FRAME_FLAGS["IMAGE"]
                 extra += struct.pack("<I", len(message))
             for listener in self.camera_listeners:
@@ -279,8 +359,12 @@ class MemoryStickRun:
         if self._update_power():
             flags |= protocol.FRAME_FLAGS["POWER"]
             extra += self._power_fields()
-        self._send(protocol.MESSAGES["FRAME"], struct.pack("<4I", tick & 0xFFFFFFFF, tick >> 32, openr_frame_number(tick),
-                                                           flags) + self._sensors.at(tick) + extra)
+        self._send(
+            protocol.MESSAGES["FRAME"],
+            struct.pack("<4I", tick & 0xFFFFFFFF, tick >> 32, openr_frame_number(tick), flags)
+            + self._sensors.at(tick)
+            + extra,
+        )
         self._apply(self._reply(protocol.REPLIES["FRAME_DONE"]))
         self.sim.step_frame()
         for listener in self.frame_listeners:
@@ -288,17 +372,21 @@ class MemoryStickRun:
 
     def _encode_with_cdt(self, frame):
         if self.sim.camera.sensor is not None:  # the ers7 sensor delivers Y, Cr, Cb
-            return openr_bridge.encode_ycrcb(frame.ycrcb, frame_number=frame.frame_number, field_counter=frame.index,
-                                             cdt=self._cdt)
-        return openr_bridge.encode_frame(frame.rgb, frame_number=frame.frame_number, field_counter=frame.index,
-                                         cdt=self._cdt)
+            return openr_bridge.encode_ycrcb(
+                frame.ycrcb, frame_number=frame.frame_number, field_counter=frame.index, cdt=self._cdt
+            )
+        return openr_bridge.encode_frame(
+            frame.rgb, frame_number=frame.frame_number, field_counter=frame.index, cdt=self._cdt
+        )
 
     def _update_power(self) -> bool:
         """The battery at this time; whether anything changed."""
         before = dict(self._power)
         capacity = max(0, BATTERY["remainingCapacity"] - self.time_ms // 60000)
         status = self._power["robotStatus"] & ~(orsbMOTOR_POWER | orsbBATTERY_CAPACITY_LOW)
-        status |= (orsbMOTOR_POWER if self._powered else 0) | (orsbBATTERY_CAPACITY_LOW if capacity <= CAPACITY_LOW else 0)
+        status |= (orsbMOTOR_POWER if self._powered else 0) | (
+            orsbBATTERY_CAPACITY_LOW if capacity <= CAPACITY_LOW else 0
+        )
         self._power.update(remainingCapacity=capacity, robotStatus=status)
         return self._power != before
 
@@ -365,7 +453,7 @@ class MemoryStickRun:
         end = max(start + len(samples) for start, samples in self._sound.items())
         track = np.zeros(end, "<i2")
         for start, samples in self._sound.items():
-            track[start:start + len(samples)] = samples
+            track[start : start + len(samples)] = samples
         with wave.open(str(self.sound_path), "wb") as out:
             out.setnchannels(1)
             out.setsampwidth(2)
@@ -383,15 +471,18 @@ class MemoryStickRun:
         while len(buffer) < 4 or len(buffer) < 4 + struct.unpack_from("<I", buffer)[0]:
             chunk = self._poll()
             if chunk is None:
-                chunk = self._channel.recv(1 << 20) if self._child.wait(self._channel, protocol.WAIT_NOTICE_S,
-                                                                         self._waiting) else b""
+                chunk = (
+                    self._channel.recv(1 << 20)
+                    if self._child.wait(self._channel, protocol.WAIT_NOTICE_S, self._waiting)
+                    else b""
+                )
             if not chunk:
                 self._gone()
             buffer += chunk
         size = struct.unpack_from("<I", buffer)[0]
         kind = struct.unpack_from("<I", buffer, 4)[0]
-        payload = bytes(buffer[8:4 + size])
-        del buffer[:4 + size]
+        payload = bytes(buffer[8 : 4 + size])
+        del buffer[: 4 + size]
         if kind == protocol.REPLIES["FAILED"]:
             text, _ = protocol.unpack_string(payload, 0)
             object_cfg = self.stick.object_cfg
@@ -433,6 +524,9 @@ class MemoryStickRun:
         if status[0]:
             names = ["OVirtualRobotComm", "OVirtualRobotAudioComm", *self.object_names]
             what = f"OPEN-R object {names[status[0] - 1] if status[0] <= len(names) else status[0]} (entry {status[1]})"
-        print(f"aibo-sim: waiting for {what}: no answer for {seconds:.1f} s of wall time "
-              f"(simulated time stays at t = {self.time_ms / 1000:.3f} s)", file=sys.stderr, flush=True)
-
+        print(
+            f"aibo-sim: waiting for {what}: no answer for {seconds:.1f} s of wall time "
+            f"(simulated time stays at t = {self.time_ms / 1000:.3f} s)",
+            file=sys.stderr,
+            flush=True,
+        )

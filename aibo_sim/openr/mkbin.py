@@ -26,7 +26,7 @@ def parse(argv: list[str]) -> tuple[str, Path | None, Path | None, list[str]]:
         argument = arguments.pop(0)
         for flag in ("-o", "-p", "-m"):
             if argument.startswith(flag) and argument != "--":
-                value = argument[len(flag):] or (arguments.pop(0) if arguments else None)
+                value = argument[len(flag) :] or (arguments.pop(0) if arguments else None)
                 if value is None:
                     raise ValueError(f"{flag} needs a value")
                 if flag == "-o":
@@ -68,6 +68,17 @@ def main(argv: list[str], cxx: str) -> int:
         print(f"mkbin: {error}\n{USAGE}", file=sys.stderr)
         return 2
     library = root / "OPEN_R" / "lib" if root is not None else Path(sys.argv[0]).resolve().parents[1] / "lib"
-    command = [cxx, "-shared", "-o", output, *rest, "-L", str(library), "-lObjectComm", "-lOPENR",
-               "-Wl,-Bsymbolic", "-Wl,--no-undefined"]
+    command = [
+        cxx,
+        "-shared",
+        "-o",
+        output,
+        *rest,
+        "-L",
+        str(library),
+        "-lObjectComm",
+        "-lOPENR",
+        "-Wl,-Bsymbolic",
+        "-Wl,--no-undefined",
+    ]
     return subprocess.run(command).returncode

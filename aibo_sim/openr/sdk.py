@@ -60,8 +60,10 @@ def _tool_scripts(root: Path, cxx: str, cc: str) -> dict[Path, str]:
         root / "bin" / "mipsel-linux-ar": '#!/bin/sh\nexec ar "$@"\n',
         root / "bin" / "mipsel-linux-ranlib": '#!/bin/sh\nexec ranlib "$@"\n',
         root / "OPEN_R" / "bin" / "gzcp": '#!/bin/sh\nexec gzip -c "$1" > "$2"\n',
-        root / "OPEN_R" / "bin" / "stubgen2": python + "from openr_bridge.stubgen import main\nsys.exit(main(sys.argv[1:]))\n",
-        root / "OPEN_R" / "bin" / "mkbin": python + f"from aibo_sim.openr.mkbin import main\nsys.exit(main(sys.argv[1:], {cxx!r}))\n",
+        root / "OPEN_R" / "bin" / "stubgen2": python
+        + "from openr_bridge.stubgen import main\nsys.exit(main(sys.argv[1:]))\n",
+        root / "OPEN_R" / "bin" / "mkbin": python
+        + f"from aibo_sim.openr.mkbin import main\nsys.exit(main(sys.argv[1:], {cxx!r}))\n",
     }
 
 
@@ -70,8 +72,15 @@ def _key(cxx: str, cc: str) -> str:
     for path in sorted(SOURCES.rglob("*")):
         if path.is_file():
             digest.update(str(path.relative_to(SOURCES)).encode() + b"\0" + path.read_bytes() + b"\0")
-    for part in (c_header(), *CXXFLAGS, *CFLAGS, sys.executable, str(SOURCES), Path(__file__).read_text(),
-                 (Path(__file__).parent / "mkbin.py").read_text()):
+    for part in (
+        c_header(),
+        *CXXFLAGS,
+        *CFLAGS,
+        sys.executable,
+        str(SOURCES),
+        Path(__file__).read_text(),
+        (Path(__file__).parent / "mkbin.py").read_text(),
+    ):
         digest.update(part.encode() + b"\0")
     for compiler in (cxx, cc):
         digest.update(compiler.encode() + _version(compiler) + b"\0")
@@ -121,11 +130,28 @@ def _build(build: Path, root: Path, cxx: str, cc: str) -> None:
     library = build / "OPEN_R" / "lib" / "libOPENR.so"
     _run([cxx, "-shared", "-Wl,-soname,libOPENR.so", "-o", str(library), *map(str, objects), "-ldl", "-lm"], library)
     (build / "OPEN_R" / "lib" / "libObjectComm.so").write_text(
-        "/* aibo-sim: ObjectComm (subjects, observers, RCRegion) is part of libOPENR. */\nINPUT(-lOPENR)\n")
+        "/* aibo-sim: ObjectComm (subjects, observers, RCRegion) is part of libOPENR. */\nINPUT(-lOPENR)\n"
+    )
     main = SOURCES / "src" / "main.cc"
     host = build / "OPEN_R" / "bin" / "openr-host"
-    _run([cxx, *CXXFLAGS, "-O2", "-Wall", *includes, str(main), "-o", str(host), "-L", str(library.parent), "-lOPENR",
-          "-Wl,-rpath,$ORIGIN/../lib", "-ldl"], main)
+    _run(
+        [
+            cxx,
+            *CXXFLAGS,
+            "-O2",
+            "-Wall",
+            *includes,
+            str(main),
+            "-o",
+            str(host),
+            "-L",
+            str(library.parent),
+            "-lOPENR",
+            "-Wl,-rpath,$ORIGIN/../lib",
+            "-ldl",
+        ],
+        main,
+    )
     shutil.rmtree(build / "obj")
 
 

@@ -12,8 +12,25 @@ import numpy as np
 
 
 @numba.njit(cache=True, nogil=True)
-def fill(qpos, actuator_force, command, distances_mm, silent, acceleration, sensordata, qpos_adr, joints, max_force,
-         touch_adr, switch, threshold, touch_ad_per_newton, touch_ad_max, raw, values):
+def fill(
+    qpos,
+    actuator_force,
+    command,
+    distances_mm,
+    silent,
+    acceleration,
+    sensordata,
+    qpos_adr,
+    joints,
+    max_force,
+    touch_adr,
+    switch,
+    threshold,
+    touch_ad_per_newton,
+    touch_ad_max,
+    raw,
+    values,
+):
     """Write a frame's values into ``raw`` (floats; a silent head distance sensor keeps its last
     value there) and, rounded half to even, into the int32 ``values``."""
     n = joints.shape[0]

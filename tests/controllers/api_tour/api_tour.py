@@ -53,13 +53,15 @@ def run(ms):
     image = camera_get_image(camera)
     w, h = camera_get_width(camera), camera_get_height(camera)
     a = [float(np.float32(v)) for v in accelerometer_get_values(accelerometer)]  # C: const float *
-    out.write(f"t {robot_get_time():.3f} ms {ms} pan {servo_get_position(pan):.9f} "
-              f"ir {distance_sensor_get_value(near_ir):.6f} paw {touch_sensor_get_value(paw):.1f} "
-              f"acc {accelerometer_value_x(a):.3f} {accelerometer_value_y(a):.3f} {accelerometer_value_z(a):.3f} "
-              f"image {w}x{h} fov {float(np.float32(camera_get_fov(camera))):.6f} sum {int(image.astype(int).sum())} "
-              f"rgb {camera_image_get_red(image, w, 10, 20)} {camera_image_get_green(image, w, 10, 20)} "
-              f"{camera_image_get_blue(image, w, 10, 20)} grey {camera_image_get_grey(image, w, 10, 20)} "
-              f"mtn {mtn_get_time(walk)} {int(mtn_is_over(walk))}\n")
+    out.write(
+        f"t {robot_get_time():.3f} ms {ms} pan {servo_get_position(pan):.9f} "
+        f"ir {distance_sensor_get_value(near_ir):.6f} paw {touch_sensor_get_value(paw):.1f} "
+        f"acc {accelerometer_value_x(a):.3f} {accelerometer_value_y(a):.3f} {accelerometer_value_z(a):.3f} "
+        f"image {w}x{h} fov {float(np.float32(camera_get_fov(camera))):.6f} sum {int(image.astype(int).sum())} "
+        f"rgb {camera_image_get_red(image, w, 10, 20)} {camera_image_get_green(image, w, 10, 20)} "
+        f"{camera_image_get_blue(image, w, 10, 20)} grey {camera_image_get_grey(image, w, 10, 20)} "
+        f"mtn {mtn_get_time(walk)} {int(mtn_is_over(walk))}\n"
+    )
     calls += 1
     robot_console_printf("step %d\n", calls)
     if calls == 3:
