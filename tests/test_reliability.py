@@ -455,10 +455,10 @@ def test_run_json_of_a_run_that_ended_says_done(tmp_path):
     assert list(run)[:3] == ["controller", "backend", "status"] and run["status"] == "done"
 
 
-def test_the_readmes_output_folders_are_ignored_by_git():
+def test_the_docs_output_folders_are_ignored_by_git():
     if not (shutil.which("git") and (ROOT / ".git").exists()):
         pytest.skip("needs git and the repository")
-    readme = (ROOT / "README.md").read_text()
+    readme = "".join(page.read_text() for page in [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))])
     folders = set(re.findall(r"--out ([a-z_]+)", readme)) | {"renders"}  # render's default --out
     tracked = subprocess.run(["git", "ls-files", "--", *folders], cwd=ROOT, capture_output=True, text=True).stdout
     folders -= {line.split("/")[0] for line in tracked.splitlines()}  # models/: written on purpose
