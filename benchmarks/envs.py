@@ -38,6 +38,7 @@ import gymnasium as gym
 import numpy as np
 
 import aibo_sim.envs  # noqa: F401  (registers the environments; aibo_sim sets MUJOCO_GL for Ant-v5 too)
+from aibo_sim.envs.threaded import ThreadedVectorEnv
 from aibo_sim.envs.vector import BusyWaitWorker, HybridVectorEnv
 
 from .common import row
@@ -72,7 +73,7 @@ def _make(env_id: str, vector_kwargs: dict | None):
     if vector_kwargs is None:
         return gym.make(env_id, **kwargs)
     if vector_kwargs == THREADS:
-        return gym.make_vec(env_id, 2, "sync" if env_id == ANT else "vector_entry_point", **kwargs)
+        return gym.make_vec(env_id, 2, "sync", **kwargs) if env_id == ANT else ThreadedVectorEnv(env_id, 2, **kwargs)
     if vector_kwargs == HYBRID:
         return HybridVectorEnv(env_id, 2, **kwargs)
     return gym.make_vec(env_id, 2, "async", vector_kwargs=vector_kwargs, **kwargs)

@@ -39,18 +39,18 @@ def assert_same(a, b):
 
 
 @pytest.mark.parametrize(
-    "make_envs",
+    ("make_envs", "kind"),
     [
-        lambda: gym.make_vec(HEAD_TRACK, 3, max_episode_steps=4),
-        lambda: HybridVectorEnv(HEAD_TRACK, 3, max_episode_steps=4),
+        (lambda: ThreadedVectorEnv(HEAD_TRACK, 3, max_episode_steps=4), ThreadedVectorEnv),
+        (lambda: gym.make_vec(HEAD_TRACK, 3, max_episode_steps=4), HybridVectorEnv),  # make_vec's default
     ],
     ids=["threads", "hybrid"],
 )
-def test_vector_envs_step_as_sync_bit_for_bit_through_autoreset_and_reset_mask(make_envs):
+def test_vector_envs_step_as_sync_bit_for_bit_through_autoreset_and_reset_mask(make_envs, kind):
     # 3 envs, episodes of 4 steps: each autoresets twice within the 12 steps.
     threaded = make_envs()
     sync = gym.make_vec(HEAD_TRACK, 3, "sync", max_episode_steps=4)
-    assert isinstance(threaded.unwrapped, (ThreadedVectorEnv, HybridVectorEnv))
+    assert type(threaded.unwrapped) is kind
     assert threaded.observation_space == sync.observation_space and threaded.action_space == sync.action_space
     threaded.action_space.seed(3)
     actions = [threaded.action_space.sample() for _ in range(12)]
@@ -70,7 +70,7 @@ def test_vector_envs_step_as_sync_bit_for_bit_through_autoreset_and_reset_mask(m
 
 
 def test_errors_reach_the_caller_and_a_closed_env_refuses():
-    envs = gym.make_vec(HEAD_TRACK, 2, vectorization_mode="vector_entry_point")
+    envs = ThreadedVectorEnv(HEAD_TRACK, 2)
     envs.reset(seed=0)
     with pytest.raises(ValueError, match="actions must be finite"):
         envs.step(np.full(envs.action_space.shape, np.nan, np.float32))
@@ -84,11 +84,11 @@ def test_errors_reach_the_caller_and_a_closed_env_refuses():
     with pytest.raises(gym.error.ClosedEnvironmentError, match="closed"):
         envs.step(envs.action_space.sample())
     with pytest.raises(TypeError):
-        gym.make_vec(HEAD_TRACK, 2, camera_bogus=1)  # the environment's own error, from its thread
+        ThreadedVectorEnv(HEAD_TRACK, 2, camera_bogus=1)  # the environment's own error, from its thread
 
 
 def test_an_interrupted_call_needs_a_reset_and_its_late_results_are_dropped():
-    threaded = gym.make_vec(HEAD_TRACK, np.int64(2))  # numpy's integers count, as for "sync"
+    threaded = ThreadedVectorEnv(HEAD_TRACK, np.int64(2))  # numpy's integers count, as for "sync"
     sync = gym.make_vec(HEAD_TRACK, 2, "sync")
     actions = [threaded.action_space.sample() for _ in range(3)]
 
@@ -114,3 +114,14 @@ def test_an_interrupted_call_needs_a_reset_and_its_late_results_are_dropped():
         signal.signal(signal.SIGALRM, previous)
         threaded.close()
         sync.close()
+
+
+def test_make_vec_makes_a_hybrid_env_for_every_id_by_default():
+    for env_id in aibo_sim.envs.ENV_SPECS:
+        for mode in (None, "vector_entry_point"):
+            envs = gym.make_vec(env_id, 1, mode, camera_layer="L")  # 1 env: no worker process
+            try:
+                assert type(envs) is HybridVectorEnv and envs.get_attr("camera_layer") == ("L",)
+                assert envs.get_attr("spec")[0].max_episode_steps == gym.spec(env_id).max_episode_steps
+            finally:
+                envs.close()

@@ -1,6 +1,8 @@
 """The training example's evaluation and learning-curve plot (training itself needs
 stable-baselines3 and minutes: the README has its measured result)."""
 
+import sys
+
 import cv2
 import gymnasium as gym
 import numpy as np
@@ -27,8 +29,15 @@ def test_learning_curve_is_a_png_with_the_policies_levels(tmp_path):
     plot_learning_curve(str(path), steps, np.linspace(40, 140, 50), random_level=43.7, trained_level=141.3)
     image = cv2.imread(str(path))
     assert image.shape == (480, 800, 3)
-    random_blue, trained_green, mean_orange = [200, 0, 0], [0, 140, 0], [0, 80, 200]  # as OpenCV reads them: BGR
-    for colour, least in ((random_blue, 500), (trained_green, 500), (mean_orange, 100)):
+    random_red, trained_green, mean_blue = [40, 39, 214], [44, 160, 44], [180, 119, 31]  # matplotlib's tab: in BGR
+    for colour, least in ((random_red, 500), (trained_green, 500), (mean_blue, 100)):
         assert (image == colour).all(axis=2).sum() > least, colour
     with pytest.raises(OSError, match="cannot write .*folder.png: No such file"):
         plot_learning_curve(str(tmp_path / "no" / "such" / "folder.png"), steps, steps, 0.0, 1.0)
+
+
+def test_learning_curve_without_matplotlib_says_what_to_install(tmp_path, monkeypatch):
+    for name in [name for name in sys.modules if name.split(".")[0] == "matplotlib"] + ["matplotlib"]:
+        monkeypatch.setitem(sys.modules, name, None)  # its imports then fail
+    with pytest.raises(ImportError, match=r"pip install 'aibo-sim\[plot\]'"):
+        plot_learning_curve(str(tmp_path / "curve.png"), np.zeros(0), np.zeros(0), 0.0, 1.0)

@@ -10,10 +10,12 @@ loading): ``gymnasium.make("aibo_sim.envs:aibo_sim/HeadTrackBall-v0")``.
 The classes live in ``aibo_sim.envs.head_track`` and ``aibo_sim.envs.reach_ball``; the options
 and observations are described in ``aibo_sim.envs.base``.
 ``aibo_sim.envs.vector.BusyWaitWorker`` is a worker for ``make_vec(..., "async")`` that keeps
-its process awake between steps; ``aibo_sim.envs.vector.HybridVectorEnv(id, N)`` steps the first
-environment in the calling process and the others in such workers. ``make_vec(id, num_envs)`` without a mode (or with
-``vectorization_mode="vector_entry_point"``) makes a ``ThreadedVectorEnv``
-(``aibo_sim.envs.threaded``): the environments in threads of this process.
+its process awake between steps. ``make_vec(id, num_envs)`` without a mode (or with
+``vectorization_mode="vector_entry_point"``) makes a ``HybridVectorEnv`` (``aibo_sim.envs.vector``,
+the fastest here): the first environment stepped in the calling process, the others in such
+workers (spawned: guard a script's top level with ``if __name__ == "__main__":``); ``"sync"`` and
+``"async"`` are Gymnasium's. ``aibo_sim.envs.threaded.ThreadedVectorEnv(id, num_envs, **kwargs)``
+steps them in threads of this process instead.
 """
 
 from functools import partial
@@ -26,10 +28,10 @@ ENV_SPECS = {
 }
 
 
-def _threaded_vector_env(env_id: str, num_envs: int, **kwargs):
-    from .threaded import ThreadedVectorEnv
+def _hybrid_vector_env(env_id: str, num_envs: int, **kwargs):
+    from .vector import HybridVectorEnv
 
-    return ThreadedVectorEnv(env_id, num_envs, **kwargs)
+    return HybridVectorEnv(env_id, num_envs, **kwargs)
 
 
 def register_envs() -> None:
@@ -40,7 +42,7 @@ def register_envs() -> None:
                 env_id,
                 entry_point=entry_point,
                 max_episode_steps=max_episode_steps,
-                vector_entry_point=partial(_threaded_vector_env, env_id),
+                vector_entry_point=partial(_hybrid_vector_env, env_id),
             )
 
 

@@ -1,7 +1,7 @@
 """A vector environment that steps its environments in threads of one process.
 
-``gymnasium.make_vec("aibo_sim/HeadTrackBall-v0", num_envs=N, vectorization_mode="vector_entry_point")``
-(the default mode for aibo-sim's ids) makes a ``ThreadedVectorEnv``: N environments, each
+``ThreadedVectorEnv("aibo_sim/HeadTrackBall-v0", N, **env_kwargs)`` (``make_vec``'s default for
+aibo-sim's ids is the faster ``HybridVectorEnv``, in processes) makes N environments, each
 made, stepped and closed in a thread of its own. What runs in parallel is what leaves
 Python's global interpreter lock: MuJoCo's physics step, its OpenGL rendering and OpenCV's
 passes of the sensor model; the environments' Python code runs one thread at a time. Each

@@ -1,6 +1,6 @@
 """Train PPO (Stable-Baselines3) on HeadTrackBall from the camera image and proprioception.
 
-    pip install 'aibo-sim[train]'
+    pip install 'aibo-sim[train,plot]'
     python -m aibo_sim.envs.train_example [--steps 150000] [--plot learning_curve.png]
 
 Trains on 2 environments in worker processes, saves the policy, then measures the trained
@@ -14,14 +14,14 @@ written as a PNG.
 from __future__ import annotations
 
 import argparse
+import io
 import time
 from pathlib import Path
 
-import cv2
 import gymnasium as gym
 import numpy as np
 
-from ..files import png, write_file_atomic
+from ..files import write_file_atomic
 
 ENV_ID = "aibo_sim.envs:aibo_sim/HeadTrackBall-v0"  # names the module, so workers register it too
 EVAL_SEED = 10_000  # evaluation episodes use seeds EVAL_SEED, EVAL_SEED + 1, ...
@@ -47,56 +47,36 @@ def plot_learning_curve(
     path: str, steps: np.ndarray, rewards: np.ndarray, random_level: float, trained_level: float, size=(800, 480)
 ) -> None:
     """Episode reward against training steps (points and a running mean), with the random and
-    the trained policy's evaluation levels as lines; written with OpenCV."""
-    width, height = size
-    left, right, top, bottom = 70, 20, 40, 50
-    image = np.full((height, width, 3), 255, np.uint8)
-    top_reward = max(1.0, float(np.max(rewards, initial=0)), trained_level, random_level) * 1.1
-    last_step = max(1.0, float(np.max(steps, initial=1)))
-
-    def to_pixel(step, reward):
-        return (
-            int(left + (width - left - right) * step / last_step),
-            int(height - bottom - (height - top - bottom) * reward / top_reward),
-        )
-
-    black, grey = (0, 0, 0), (160, 160, 160)
-    cv2.rectangle(image, (left, top), (width - right, height - bottom), black, 1)
-    for fraction in np.linspace(0, 1, 5):
-        x, _ = to_pixel(fraction * last_step, 0)
-        _, y = to_pixel(0, fraction * top_reward)
-        cv2.putText(
-            image,
-            f"{fraction * last_step / 1000:.3g}k",
-            (x - 12, height - bottom + 20),
-            cv2.FONT_HERSHEY_SIMPLEX,
-            0.45,
-            black,
-        )
-        cv2.putText(image, f"{fraction * top_reward:.0f}", (left - 45, y + 5), cv2.FONT_HERSHEY_SIMPLEX, 0.45, black)
-    for step, reward in zip(steps, rewards):
-        cv2.circle(image, to_pixel(step, reward), 2, grey, -1)
+    the trained policy's evaluation levels as lines: a PNG of ``size`` pixels drawn by
+    matplotlib (Agg, headless), an ImportError naming ``pip install 'aibo-sim[plot]'`` without it."""
+    try:
+        from matplotlib.backends.backend_agg import FigureCanvasAgg
+        from matplotlib.figure import Figure
+        from matplotlib.ticker import EngFormatter
+    except ImportError:
+        raise ImportError("plotting the learning curve needs matplotlib: pip install 'aibo-sim[plot]'") from None
+    figure = Figure(figsize=(size[0] / 100, size[1] / 100), dpi=100, layout="constrained")
+    FigureCanvasAgg(figure)
+    axes = figure.add_subplot()
+    axes.scatter(steps, rewards, s=6, color="tab:gray", label="episode")
     if len(rewards) >= 2:
         window = max(1, len(rewards) // 20)
         mean = np.convolve(rewards, np.ones(window) / window, mode="valid")
-        points = np.array([to_pixel(s, r) for s, r in zip(steps[window - 1 :], mean)], np.int32)
-        cv2.polylines(image, [points], False, (200, 80, 0), 2)
-    for level, colour, label in (
-        (random_level, (0, 0, 200), "random policy"),
-        (trained_level, (0, 140, 0), "trained policy"),
-    ):
-        _, y = to_pixel(0, level)
-        cv2.line(image, (left, y), (width - right, y), colour, 1)
-        cv2.putText(image, f"{label}: {level:.1f}", (left + 8, y - 6), cv2.FONT_HERSHEY_SIMPLEX, 0.5, colour)
-    cv2.putText(
-        image,
-        "HeadTrackBall-v0, PPO: episode reward (300 steps) vs training steps",
-        (left, top - 14),
-        cv2.FONT_HERSHEY_SIMPLEX,
-        0.5,
-        black,
+        axes.plot(steps[window - 1 :], mean, color="tab:blue", linewidth=2, label=f"running mean, {window} episodes")
+    axes.axhline(random_level, color="tab:red", label=f"random policy: {random_level:.1f}")
+    axes.axhline(trained_level, color="tab:green", label=f"trained policy: {trained_level:.1f}")
+    axes.set(
+        xlabel="training steps",
+        ylabel="episode reward (300 steps)",
+        title="HeadTrackBall-v0, PPO: episode reward while training",
+        ylim=(0, None),
     )
-    write_file_atomic(Path(path), png(np.ascontiguousarray(image[..., ::-1])))
+    axes.xaxis.set_major_formatter(EngFormatter())
+    axes.grid(alpha=0.3)
+    axes.legend(loc="lower right")
+    buffer = io.BytesIO()
+    figure.savefig(buffer, format="png")
+    write_file_atomic(Path(path), buffer.getvalue())
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -112,12 +92,15 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--plot", default="learning_curve.png", help="where to write the learning curve")
     args = parser.parse_args(argv)
     try:
+        import matplotlib  # noqa: F401  (checked before training: the plot comes last)
         from stable_baselines3 import PPO
         from stable_baselines3.common.callbacks import BaseCallback
         from stable_baselines3.common.env_util import make_vec_env
         from stable_baselines3.common.vec_env import SubprocVecEnv
     except ImportError:
-        raise SystemExit("this example needs stable-baselines3: pip install 'aibo-sim[train]'") from None
+        raise SystemExit(
+            "this example needs stable-baselines3 and matplotlib: pip install 'aibo-sim[train,plot]'"
+        ) from None
 
     class EpisodeRewards(BaseCallback):
         """(training step, episode reward) of each episode that ends (Monitor's ``episode`` info)."""

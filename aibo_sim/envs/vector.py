@@ -23,9 +23,10 @@ With ``AsyncVectorEnv`` the calling process sits idle while its workers step.
 ``HybridVectorEnv`` steps its first environment in the calling process, at the same time as
 the others in workers: N environments in N processes, all of them stepping. On the project's
 2-core machine 2 environments step 1.51-1.58x as fast as one, 2 ``AsyncVectorEnv`` workers
-1.37-1.43x (``python -m benchmarks.envs``, over several runs)::
+1.37-1.43x (``python -m benchmarks.envs``, over several runs). It is what ``make_vec`` makes
+for aibo-sim's ids without a mode::
 
-    envs = HybridVectorEnv("aibo_sim/HeadTrackBall-v0", 2)
+    envs = gymnasium.make_vec("aibo_sim/HeadTrackBall-v0", 2)  # or HybridVectorEnv(id, 2)
 """
 
 from __future__ import annotations
