@@ -102,7 +102,8 @@ def load_model(scene: str | Path | None = None, ball: bool = True, ball_type: st
                 geom = spec.geom("ball")
                 geom.size, geom.mass = [PINK_BALL_RADIUS, 0, 0], PINK_BALL_MASS
                 body.pos = [body.pos[0], body.pos[1], PINK_BALL_RADIUS]
-                spec.add_material(name="pink_ball", rgba=COLOURS["pink_ball"], specular=SPECULAR["pink_ball"])
+                if spec.material("pink_ball") is None:  # the generated field has it; other scenes may not
+                    spec.add_material(name="pink_ball", rgba=COLOURS["pink_ball"], specular=SPECULAR["pink_ball"])
                 geom.material = "pink_ball"
             model = spec.compile()
         scene_light(model)  # its custom numerics in range
