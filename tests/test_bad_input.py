@@ -355,6 +355,7 @@ def test_stub_cfg_of_20000_services_and_long_blank_runs_parse_in_linear_time():
     assert time.perf_counter() - start < 1
 
 
+@pytest.mark.slow
 def test_a_50_mb_line_is_quoted_briefly(tmp_path):
     huge = "A" * 50_000_000
     for text in (f"{huge} B.y.char.O", f"A.x.char.S B.y.char.O {huge}", f"A.x.{huge}.S B.y.char.O"):
@@ -463,6 +464,7 @@ def test_ctrl_c_in_a_controller_exits_130_after_its_robot_die_functions(tmp_path
     assert (run["status"], run["simulated_s"], run["camera"]["profile"]) == ("interrupted", 0.008, "ers7")
 
 
+@pytest.mark.slow
 def test_sigterm_ends_a_run_as_ctrl_c_does_with_143(tmp_path):
     import signal
     import subprocess

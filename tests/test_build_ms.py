@@ -35,6 +35,8 @@ from aibo_sim.robot import DeviceError, Robot
 from aibo_sim.sim import Servos, Simulation, load_model, models_dir
 from openr_bridge.memory_stick import load_memory_stick
 
+pytestmark = pytest.mark.slow  # heavy: run by CI and by python -m pytest -m slow
+
 ROOT = Path(__file__).resolve().parents[1]
 ANNEX = ROOT / "controllers" / "annex_capture_c" / "annex_capture_c.cpp"
 TRACKER = ROOT / "controllers" / "ball_tracker_c"

@@ -127,6 +127,7 @@ def test_each_c_call_returns_what_the_python_api_returned_in_the_same_run(tmp_pa
 MOTIONS = {"WALKFWD.MTN": models_dir() / "motions" / "WALKFWD.MTN", "Sony's WWFWD.MTN": SONY_WWFWD}
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("backend", ["sim", "openr"])
 @pytest.mark.parametrize("motion", MOTIONS)
 def test_annex_i_in_cpp_writes_the_python_ports_image_raw_byte_for_byte(tmp_path, backend, motion):
@@ -157,6 +158,7 @@ def test_annex_i_in_cpp_without_its_motion_file_says_so(tmp_path):
         run_controller(tmp_path / "annex_capture_c", duration=1)
 
 
+@pytest.mark.slow
 def test_a_second_run_compiles_nothing_and_a_changed_source_compiles_again(tmp_path):
     source = c_file(tmp_path, "ctl.c", "int main(void) { robot_live(0); robot_step(8); return 0; }\n")
     first = cbind.compile_controller(source)
@@ -200,6 +202,7 @@ def test_a_crash_is_exit_1_with_the_signal_and_time_and_keeps_run_json_and_frame
     assert sorted(p.name for p in (out / "frames").iterdir()) == ["000000.png", "000001.png", "000002.png"]
 
 
+@pytest.mark.slow
 def test_abort_exit_status_and_api_errors_end_the_run_as_in_python(tmp_path):
     cases = {
         "abort.c": ("int main(void) { robot_live(0); robot_step(8); abort(); }", r"crashed \(SIGABRT"),
@@ -234,6 +237,7 @@ def test_abort_exit_status_and_api_errors_end_the_run_as_in_python(tmp_path):
             assert failed.value.exit_status == 3
 
 
+@pytest.mark.slow
 def test_a_controller_that_computes_long_is_announced_as_such(tmp_path, monkeypatch, capsys):
     monkeypatch.setattr(cbind.serve, "WAIT_NOTICE_S", 0.2)
     source = c_file(
@@ -290,6 +294,7 @@ def test_dump_takes_a_c_controller_as_it_takes_its_python_twin(tmp_path, monkeyp
     assert all((tmp_path / "c" / "rgb" / f.name).read_bytes() == f.read_bytes() for f in frames)
 
 
+@pytest.mark.slow
 def test_ctrl_c_runs_the_c_robot_die_functions_then_exits_130(tmp_path):
     import signal
     import subprocess
@@ -319,6 +324,7 @@ def test_ctrl_c_runs_the_c_robot_die_functions_then_exits_130(tmp_path):
     assert (out / "die.txt").read_text() == "0\n"  # its robot_step past the end returned, as in Python
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("signal_name, status", [("SIGINT", 130), ("SIGTERM", 143)])
 def test_a_signal_right_after_a_call_is_read_loses_no_call(tmp_path, signal_name, status):
     """The signal comes just after a call was read, before it is answered: a KeyboardInterrupt

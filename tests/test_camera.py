@@ -353,6 +353,7 @@ def test_a_200_deg_per_s_pan_smears_as_the_formula_says(tmp_path, shutter, expec
     sim.close()
 
 
+@pytest.mark.slow
 def test_brightness_follows_gain_and_shutter(tmp_path):
     scene = target_scene(tmp_path, wall(0.25))
 
@@ -543,12 +544,14 @@ def field_edge_width(camera: CameraProfile | str = "ers7") -> float:
     return float(np.median(np.concatenate(widths)))
 
 
+@pytest.mark.slow
 def test_softness_widens_the_edges():
     widths = [field_edge_width(PROFILES["ers7"].with_options(softness_px=s)) for s in (0.0, 0.37, 0.5)]
     assert widths[0] < widths[1] < widths[2]
     assert 0.3 < widths[0] < 0.45  # the bilinear remap of the point-sampled render alone
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(not REAL_FRAMES.is_dir(), reason="real ERS-7 frames not present (../shared/data)")
 def test_edges_are_as_sharp_as_in_real_ers7_frames():
     real = np.concatenate(
@@ -561,6 +564,7 @@ def test_edges_are_as_sharp_as_in_real_ers7_frames():
     assert field_edge_width() == pytest.approx(np.median(real), abs=0.05)
 
 
+@pytest.mark.slow
 def test_dump_shows_the_frames_run_shows_and_resumes_byte_identically_without_mp4(tmp_path):
     from aibo_sim.dump import dump
     from aibo_sim.runner import run_controller
@@ -598,6 +602,7 @@ def test_motion_taps_average_along_the_motion(motion):
     assert centroid[major] == pytest.approx(motion[major] / 2, abs=1e-9)
 
 
+@pytest.mark.slow
 def test_render_side_by_side_shows_both_profiles_and_a_real_frame(tmp_path):
     from aibo_sim.cli import main
 
@@ -657,6 +662,7 @@ def _warp(
     return out
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", sorted(LENSES))
 @pytest.mark.parametrize("size", [(208, 160), (416, 320)])
 def test_pinhole_render_covers_the_image_with_its_margin_and_no_more(name, size):

@@ -251,6 +251,7 @@ def test_mtn_play_takes_the_world_and_camera_options(capsys):
     assert json.loads(capsys.readouterr().out)["start_pose"] == pytest.approx([0.0, 0.0, 0.0], abs=0.01)
 
 
+@pytest.mark.slow
 def test_render_takes_the_camera_and_world_options(tmp_path, capsys):
     pictures = {}
     for profile in ("ideal", "ers7"):

@@ -53,6 +53,7 @@ def _frames(out, name):
     return sorted(p.name for p in (out / name).iterdir())
 
 
+@pytest.mark.slow
 def test_every_format_holds_every_frame_at_its_size(full_dump):
     out, summary = full_dump
     assert summary.frames == summary.new_frames == 30
@@ -338,6 +339,7 @@ def test_full_disk_leaves_only_complete_frames_and_resumes(tmp_path, monkeypatch
     assert len(load_dump(out)) == 6
 
 
+@pytest.mark.slow
 def test_workers_write_shards_with_their_own_seeds(tmp_path):
     out = tmp_path / "sharded"
     summary = dump(out, controller=TRACKER, frames=5, workers=2, formats=("rgb", "openr"))

@@ -132,6 +132,7 @@ def _interrupt(folder: Path, keep: int) -> None:
     (folder / "coco.json").unlink()
 
 
+@pytest.mark.slow
 def test_sharded_coco_lists_every_shard_and_a_resume_gives_the_same_bytes(tmp_path):
     out = tmp_path / "sharded"
     dump(out, controller=TRACKER, frames=6, workers=2, formats=FORMATS)

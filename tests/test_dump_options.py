@@ -91,6 +91,7 @@ def test_controller_options_with_env_are_refused(tmp_path, capsys, option):
     assert not out.exists()
 
 
+@pytest.mark.slow
 def test_each_shard_runs_its_controller_in_its_own_folder(writer, tmp_path):
     out = tmp_path / "dump"
     dump(out, controller=writer, frames=2, formats=("rgb",), workers=2)

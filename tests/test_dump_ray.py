@@ -18,6 +18,8 @@ from aibo_sim.cli import main
 from aibo_sim.dump import DumpError, dump
 from aibo_sim.dump.writing import LOCK_NAME
 
+pytestmark = pytest.mark.slow  # heavy: run by CI and by python -m pytest -m slow
+
 ROOT = Path(__file__).resolve().parents[1]
 TRACKER = ROOT / "controllers" / "ball_tracker.py"
 FORMATS = ("rgb", "yuv420", "openr", "seg", "coco", "mp4")

@@ -94,6 +94,7 @@ def small_dump(tmp_path_factory):
 # ---------------------------------------------------------------- workers die with the dump
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
 @pytest.mark.parametrize("sig", [signal.SIGKILL, signal.SIGTERM], ids=["SIGKILL", "SIGTERM"])
 def test_a_killed_sharded_dump_takes_its_workers_along(tmp_path, capsys, sig):
@@ -136,6 +137,7 @@ def test_a_killed_sharded_dump_takes_its_workers_along(tmp_path, capsys, sig):
     assert 2 <= frames < 3000
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
 def test_a_worker_without_prctl_watches_its_parent(tmp_path):
     """The portable fallback alone (as on macOS): the worker ends once its parent is gone."""
@@ -194,6 +196,7 @@ def uninterrupted(tmp_path_factory):
     return out
 
 
+@pytest.mark.slow
 def test_resume_after_a_kill_is_byte_identical_whatever_the_formats(uninterrupted, tmp_path):
     out = tmp_path / "dump"
     process = subprocess.Popen(
@@ -407,6 +410,7 @@ def test_a_reused_run_folder_holds_one_run(tmp_path, capsys):
         assert _snapshot(folder) == before, case
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(not hasattr(resource, "RLIMIT_FSIZE"), reason="needs RLIMIT_FSIZE")
 def test_run_out_on_a_full_disk_is_exit_2_naming_the_file(tmp_path):
     """A write the system refuses (here the file-size limit: EFBIG, as ENOSPC on a full disk)."""
@@ -449,6 +453,7 @@ def test_resume_refuses_a_scene_whose_model_changed(tmp_path):
         dump(out, controller=TRACKER, frames=3, scene=scene, formats=("rgb",), resume=True)
 
 
+@pytest.mark.slow
 def test_a_shards_error_names_the_shard(tmp_path):
     from aibo_sim.runner import ControllerFailed
 
@@ -542,6 +547,7 @@ def test_an_env_dump_in_a_scene_whose_ball_cannot_be_placed_writes_nothing(tmp_p
     assert error.count("\n") == 1 and not out.exists()
 
 
+@pytest.mark.slow
 def test_a_sharded_controller_dump_in_a_scene_without_a_ball_runs_as_one_worker_does(tmp_path):
     scene = _scene(tmp_path, "")
     dump(tmp_path / "one", controller=TRACKER, frames=4, scene=scene, formats=("rgb",))
@@ -648,6 +654,7 @@ def test_load_dump_names_a_damaged_field_of_meta_json(small_dump, tmp_path, path
         load_dump(out)
 
 
+@pytest.mark.slow
 def test_a_shard_without_meta_json_is_named_as_damaged_with_the_way_out(tmp_path, capsys):
     out = tmp_path / "sharded"
     argv = ["dump", str(TRACKER), "--out", str(out), "--steps", "2", "--workers", "2", "--formats", "rgb"]

@@ -65,6 +65,7 @@ def test_both_tasks_are_registered_and_registering_again_is_silent():
         register_envs()
 
 
+@pytest.mark.slow
 def test_make_in_a_fresh_process_by_naming_the_module_in_the_id():
     code = (
         "import sys, gymnasium\n"
@@ -91,6 +92,7 @@ def test_make_in_a_fresh_process_by_naming_the_module_in_the_id():
         {"image_only": True, "camera_layer": "M"},
     ],
 )
+@pytest.mark.slow
 @pytest.mark.parametrize("env_id", AIBO_IDS)
 def test_check_env_passes_with_warnings_as_errors(env_id, options):
     env = gym.make(env_id, **options)
@@ -119,6 +121,7 @@ def test_image_only_observes_the_dict_s_image_and_takes_gymnasium_s_image_wrappe
         gym.make(HEAD_TRACK, image_only="yes")
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("mode", ["sync", "async"])
 def test_make_vec_batches_observations(mode):
     # This process has used OpenGL already: forked workers could deadlock in Mesa, spawn them.
@@ -210,6 +213,7 @@ def test_actions_map_onto_the_model_ctrlrange():
     env.close()
 
 
+@pytest.mark.slow
 def test_scripted_policy_scores_clearly_above_random():
     scripted = np.mean([mean_reward("scripted", seed, 45) for seed in range(3)])
     random = np.mean([mean_reward("random", seed, 45) for seed in range(3)])

@@ -88,6 +88,7 @@ def check_walk(results: list[dict], direction: int) -> None:
 SONY_WALKS = sorted(SONY_MTN.glob("WW*.MTN"))  # Sony's walks: WWFWD, and any other beside it
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(not SONY_WALKS, reason="Sony's walks (WW*.MTN) not present (../shared/data/mtn)")
 @pytest.mark.parametrize("path", SONY_WALKS, ids=lambda p: p.name)
 def test_sony_walk_goes_straight_over_the_physics_grid(tmp_path, path):
@@ -95,6 +96,7 @@ def test_sony_walk_goes_straight_over_the_physics_grid(tmp_path, path):
     check_walk(walk_grid(tmp_path, walk, 8), direction=1 if motions.kinematic_speed(walk) > 0 else -1)
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(not (SONY_MTN / "WWFWD.MTN").exists(), reason="Sony's WWFWD.MTN not present (../shared/data/mtn)")
 def test_sony_walk_at_the_default_timestep_is_the_converged_walk(tmp_path):
     """16 cycles of WWFWD, unperturbed: the default timestep walks as 1 ms does (4 ms turned
@@ -107,6 +109,7 @@ def test_sony_walk_at_the_default_timestep_is_the_converged_walk(tmp_path):
     assert abs(default["displacement_m"][0] - fine["displacement_m"][0]) < 0.05, (default, fine)
 
 
+@pytest.mark.slow
 def test_own_trot_converges_with_the_timestep(tmp_path):
     """aibo-sim's trot (two legs in stance, 0.14 m/s) over the same grid: it depends on the servo
     stiffness, as a fast gait does, and with Sony's standard gains or stiffer, not on the

@@ -6,6 +6,8 @@ import pytest
 
 from aibo_sim.sim import Simulation
 
+pytestmark = pytest.mark.slow  # heavy: run by CI and by python -m pytest -m slow
+
 
 def _ours_between(draw, interleave: bool) -> list:
     sim = Simulation() if interleave else None

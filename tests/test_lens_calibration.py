@@ -263,6 +263,7 @@ def assert_not_vacuous(result: dict) -> None:
     assert sony.max() * to_layer_h > 3.0
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("profile, full", [("ideal", True), ("ers7", True), ("ers7", False)])
 def test_opencv_calibration_recovers_the_recorded_lens(tmp_path, profile, full):
     """``ideal`` with the tekkotsu lens (no sensor effects), and the full ``ers7`` (noise,

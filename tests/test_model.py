@@ -374,7 +374,9 @@ def test_rgba_read_gives_mujocos_own_pixels_top_row_first(monkeypatch):
     head = Renderer(sim.model, 214, 165, groups=HEAD_CAMERA_GROUPS)
     head.render(sim.data, "camera")
     mujoco_rgb = np.empty((165, 214, 3), np.uint8)
+    head._enter()  # its context current: an earlier test's renderer may have left its own current
     mujoco.mjr_readPixels(mujoco_rgb, None, head._rect, head._context)
+    head._leave()
     expected = mujoco_rgb[::-1]
     assert not np.array_equal(expected, mujoco_rgb)  # the picture is not the same upside down
     for rows_down in (head._rows_down, False):

@@ -515,6 +515,7 @@ def test_an_empty_name_is_a_missing_file_not_the_current_folder():
         mtn_new("")
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("command", ["info", "play"])
 @pytest.mark.parametrize("special", ["fifo", "/dev/zero"])
 def test_the_cli_refuses_a_fifo_or_a_device_in_one_line(tmp_path, command, special):

@@ -14,6 +14,8 @@ from openr_support import build_programs, make_stick
 from aibo_sim.cli import main
 from aibo_sim.dump import load_dump
 
+pytestmark = pytest.mark.slow  # heavy: run by CI and by python -m pytest -m slow
+
 ROOT = Path(__file__).resolve().parents[1]
 SENSOR = "OVirtualRobotComm.Sensor.OSensorFrameVectorData.S"
 JOINT_PROBE = (

@@ -48,6 +48,7 @@ def test_all_2_24_inputs_match_the_compiled_report_function(report_c):
         assert np.array_equal(ycrcb_to_rgb(*chunk_inputs(y_first)), expected), f"Y from {y_first}"
 
 
+@pytest.mark.slow
 def test_all_2_24_inputs_match_a_float64_transcription():
     for y_first in range(0, 256, Y_PER_CHUNK):
         inputs = chunk_inputs(y_first)
@@ -107,6 +108,7 @@ def integer_forward_model(r, g, b):
     return y, cr, cb
 
 
+@pytest.mark.slow
 def test_forward_table_is_the_integer_model_on_all_2_24_colours():
     r, g = np.meshgrid(np.arange(256), np.arange(256), indexing="ij")
     for b_first in range(0, 256, 16):

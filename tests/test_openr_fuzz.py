@@ -68,6 +68,7 @@ def use_message(data: bytes) -> None:
     reconstruct_luma(message, ofbkimageLAYER_H)
 
 
+@pytest.mark.slow
 def test_mutated_messages_raise_only_openr_errors(valid_message):
     rng = random.Random(1)
     outcomes = {"ok": 0, "error": 0}

@@ -21,6 +21,8 @@ from openr_bridge.cdt import OCdtVectorData, orange_ball_cdt, pink_ball_cdt
 from openr_bridge.config import parse_stub_cfg
 from openr_bridge.stubgen import generate
 
+pytestmark = pytest.mark.slow  # heavy: run by CI and by python -m pytest -m slow
+
 PAN = ers7.JOINT_INDEX["head_pan"]
 EFFECTOR = "OVirtualRobotComm.Effector.OCommandVectorData.O"
 SENSOR = "OVirtualRobotComm.Sensor.OSensorFrameVectorData.S"

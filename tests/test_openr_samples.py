@@ -16,7 +16,10 @@ import openr_bridge
 from aibo_sim import ers7
 from aibo_sim.openr import host
 
-pytestmark = pytest.mark.skipif(not SAMPLES.is_dir(), reason="Sony's OPEN-R samples not present (../shared/data)")
+pytestmark = [
+    pytest.mark.skipif(not SAMPLES.is_dir(), reason="Sony's OPEN-R samples not present (../shared/data)"),
+    pytest.mark.slow,  # heavy: run by CI and by python -m pytest -m slow
+]
 PROGRAMS = (
     "common/HelloWorld",
     "common/ObjectComm",

@@ -38,6 +38,7 @@ def _import_aibo_sim(**env: str):
     return subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=environment, cwd=ROOT)
 
 
+@pytest.mark.slow
 def test_import_chooses_a_headless_backend_and_keeps_the_users_settings():
     chosen = _import_aibo_sim()
     assert chosen.returncode == 0, chosen.stderr

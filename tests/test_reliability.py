@@ -225,6 +225,7 @@ def _start_spinner(tmp_path) -> tuple[subprocess.Popen, Path, list[int]]:
     return run, out, pids
 
 
+@pytest.mark.slow
 @needs_cc
 @pytest.mark.parametrize("signal_name, status", [("SIGTERM", 143), ("SIGINT", 130)])
 def test_one_signal_ends_a_c_controller_that_computes_forever_and_its_group(tmp_path, signal_name, status):
@@ -246,6 +247,7 @@ def test_one_signal_ends_a_c_controller_that_computes_forever_and_its_group(tmp_
     _wait_for(lambda: not any(map(_alive, pids)), GONE_S, "the controller and its child to end")
 
 
+@pytest.mark.slow
 @needs_cc
 def test_a_c_controller_dies_with_aibo_sim_killed_by_sigkill(tmp_path):
     run, out, pids = _start_spinner(tmp_path)
@@ -255,6 +257,7 @@ def test_a_c_controller_dies_with_aibo_sim_killed_by_sigkill(tmp_path):
     os.kill(pids[1], signal.SIGKILL)  # the grandchild's parent was the controller: no one else stops it
 
 
+@pytest.mark.slow
 @needs_cc
 def test_a_child_that_keeps_the_socket_open_does_not_hold_the_run(tmp_path):
     """The controller forks a child that inherits the socket and sleeps, then returns: the run ends

@@ -149,6 +149,7 @@ def test_annex_yuv_bytes_for_known_pixels():
     assert list(annex_yuv(image.reshape(1, 6, 3)).reshape(-1)) == expected
 
 
+@pytest.mark.slow
 def test_annex_port_writes_image_raw_of_the_last_frame(tmp_path):
     summary = run_controller(ROOT / "controllers" / "annex_capture.py", duration=30.0, out=tmp_path)
     raw = (tmp_path / "image.raw").read_bytes()
@@ -160,6 +161,7 @@ def test_annex_port_writes_image_raw_of_the_last_frame(tmp_path):
     assert json.loads((tmp_path / "run.json").read_text())["backend"] == "sim"
 
 
+@pytest.mark.slow
 def test_walk_to_ball_reaches_the_ball(capsys):
     summary = run_controller(ROOT / "controllers" / "walk_to_ball.py", duration=20.0, ball=(1.2, 0.5))
     assert "reached the ball at t =" in capsys.readouterr().out

@@ -46,6 +46,7 @@ def assert_same(a, b):
     ],
     ids=["threads", "hybrid"],
 )
+@pytest.mark.slow
 def test_vector_envs_step_as_sync_bit_for_bit_through_autoreset_and_reset_mask(make_envs, kind):
     # 3 envs, episodes of 4 steps: each autoresets twice within the 12 steps.
     threaded = make_envs()

@@ -23,6 +23,7 @@ def test_evaluation_replays_the_same_episodes_for_every_policy():
     assert EVAL_SEED == 10_000
 
 
+@pytest.mark.slow
 def test_learning_curve_is_a_png_with_the_policies_levels(tmp_path):
     path = tmp_path / "curve.png"
     steps = np.arange(1, 51) * 300.0

@@ -70,6 +70,7 @@ def test_worker_rejects_a_bad_spin_time_naming_it(spin_s):
         BusyWaitWorker(spin_s)
 
 
+@pytest.mark.slow
 @pytest.mark.filterwarnings("ignore:.*ERROR:UserWarning")  # Gymnasium's report of the error below
 def test_async_envs_with_the_busy_wait_worker_step_as_sync_ones_bit_for_bit():
     # This process has used OpenGL already: forked workers could deadlock in Mesa, spawn them.
@@ -99,6 +100,7 @@ def test_async_envs_with_the_busy_wait_worker_step_as_sync_ones_bit_for_bit():
         sync.close()
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(not os.path.exists("/proc/self/stat"), reason="reads CPU times from Linux's /proc")
 def test_a_waiting_worker_polls_for_spin_s_only():
     # With spin_s=0 a worker with nothing to do sleeps in recv and its CPU time stays flat;
@@ -124,6 +126,7 @@ def _cpu_seconds(pid: int) -> float:
     return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")  # utime + stime
 
 
+@pytest.mark.slow
 @pytest.mark.filterwarnings("ignore:.*ERROR:UserWarning")  # Gymnasium's report of the worker's error
 def test_hybrid_env_reports_errors_from_either_side_and_refuses_once_a_worker_or_itself_ended():
     envs = HybridVectorEnv(HEAD_TRACK, 2, camera_layer="M")
@@ -168,6 +171,7 @@ def test_hybrid_env_of_one_runs_in_this_process_as_a_single_env():
         single.close()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("interrupted", ["first env's step", "wait for the worker"])
 def test_hybrid_env_after_ctrl_c_needs_a_reset_and_then_steps_as_sync(monkeypatch, interrupted):
     """Ctrl-C in the first environment's step, or while the worker's step is awaited (its result
@@ -204,6 +208,7 @@ def test_hybrid_env_after_ctrl_c_needs_a_reset_and_then_steps_as_sync(monkeypatc
         sync.close()
 
 
+@pytest.mark.slow
 def test_hybrid_env_infos_and_reset_options_are_sync_ones():
     from test_threaded import assert_same  # noqa: I001  (the threaded env's comparison, dtypes included)
 

@@ -16,6 +16,8 @@ from openr_support import build_programs, make_stick
 
 from aibo_sim import cli
 
+pytestmark = pytest.mark.slow  # heavy: run by CI and by python -m pytest -m slow
+
 ROOT = Path(__file__).resolve().parents[1]
 CONTROLLER = ROOT / "controllers" / "ball_tracker.py"
 
