@@ -8,7 +8,7 @@ passes of the sensor model; the environments' Python code runs one thread at a t
 thread has its own OpenGL context, current in that thread alone (EGL allows one thread per
 context). Observations are written by each thread straight into its row of one batch
 buffer. Same seeds, same observations, rewards and infos as Gymnasium's ``SyncVectorEnv``
-(next-step autoreset, ``reset_mask``), bit for bit; ``benchmarks/vector.py`` measures the
+(next-step autoreset, ``reset_mask``), bit for bit; ``benchmarks/envs.py`` measures the
 speed against one environment and Gymnasium's ``AsyncVectorEnv``.
 """
 
