@@ -21,21 +21,79 @@ from .options import (
     camera_options,
     cut_long_words,
     finite_float,
-    make_out_folder,
     path_text,
-    place,
     world_options,
 )
+from .placement import make_out_folder, place
 from .robot import BACKENDS
 
 EXIT_BAD_INPUT, EXIT_CONTROLLER, EXIT_DIVERGED, EXIT_INTERRUPTED, EXIT_BROKEN_PIPE = 2, 1, 3, 130, 141
 EXIT_TERMINATED = 128 + signal.SIGTERM  # 143, as a shell reports a process that SIGTERM ended
 
 
+def _match_robots(args):
+    """The robots of ``--robots FILE`` or the repeated ``--robot``, or None for one robot;
+    ValueError naming the option that cannot go with them."""
+    from .team import check_robots, load_robots, parse_robot
+
+    if args.robots is None and not args.robot:
+        if args.controller is None:
+            raise ValueError("run needs a CONTROLLER (or --robots FILE / --robot naming each robot's)")
+        return None
+    if args.robots is not None and args.robot:
+        raise ValueError("--robots and --robot: give the robots one way, not both")
+    for option, value in (
+        ("--pose", args.pose),
+        ("--backend", args.backend),
+        ("--mtn-mode", args.mtn_mode),
+        ("--memory-stick", args.memory_stick),
+    ):
+        if value is not None:
+            raise ValueError(
+                f"{option} applies to a run of one robot: with --robots, each robot's pose and controller "
+                "come from its entry"
+            )
+    if args.robots is not None:
+        return load_robots(args.robots)
+    return check_robots([parse_robot(text) for text in args.robot], "--robot")
+
+
+def _run_match(args, robots) -> int:
+    from .match import run_match
+    from .viewer import LiveViewer
+
+    viewer = LiveViewer() if args.view else None
+    options = world_options(args)
+    options.pop("pose")
+    try:
+        summary = run_match(
+            robots,
+            controller_path=args.controller,
+            duration=args.duration,
+            out=args.out,
+            frame_listeners=[viewer] if viewer else (),
+            **options,
+            **camera_options(args),
+        )
+    finally:
+        if viewer is not None:
+            viewer.close()
+    frames = sum(robot["camera_frames"] for robot in summary["robots"])
+    print(
+        f"ran a match of {len(summary['robots'])} robots: {summary['simulated_s']:.2f} s simulated in "
+        f"{summary['wall_s']:.2f} s (real-time factor {summary['real_time_factor']:.1f}), {frames} camera frames "
+        "written" + (f" to {args.out}/robot1..{len(summary['robots'])}" if args.out else "")
+    )
+    return 0
+
+
 def _run(args) -> int:
     from .runner import MEMORY_STICK, run_controller
     from .viewer import LiveViewer
 
+    robots = _match_robots(args)
+    if robots is not None:
+        return _run_match(args, robots)
     viewer = LiveViewer() if args.view else None
     try:
         summary = run_controller(
@@ -225,9 +283,24 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument(
         "controller",
         type=path_text,
+        nargs="?",
         help="controller (Webots-era Aibo API): a Python file, or a C or C++ file or folder (compiled with "
         "the system compiler); or a memory stick folder (OPEN-R/MW/CONF/OBJECT.CFG: its OPEN-R objects "
-        "run on the host runtime)",
+        "run on the host runtime). In a match, the controller of the robots that name none",
+    )
+    run.add_argument(
+        "--robots",
+        type=path_text,
+        metavar="FILE",
+        help="a match: a TOML file of [[robot]] tables (team red|blue, number 1-4, optional pose [x, y, yaw_deg] "
+        "and controller), up to 8 robots; each robot's frames go to --out/robotN",
+    )
+    run.add_argument(
+        "--robot",
+        action="append",
+        default=[],
+        metavar="TEAM:NUMBER[:X,Y,YAW_DEG][:CONTROLLER]",
+        help="a match robot (repeat for each; instead of --robots), e.g. red:4 or blue:1:2.4,0,180",
     )
     run.add_argument("--backend", choices=BACKENDS, help="the controller's robot side: sim (default) or openr")
     run.add_argument("--duration", type=finite_float, default=10.0, help="simulated seconds (default 10)")

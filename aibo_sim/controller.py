@@ -56,38 +56,58 @@ from .robot import (
     TouchSensor,
 )
 
-_robot: Robot | None = None
-_thread: threading.Thread | None = None  # the thread that runs the controller: the camera renders there
-_tags: list[Device] = []
-_reset_fn = None
-_die_fns: list = []
+
+class _Installed:
+    """What the API functions drive: the robot, the thread that runs its controller (the camera
+    renders there), the device tags handed out, the reset and exit functions registered."""
+
+    def __init__(self, robot: Robot | None):
+        self.robot, self.thread = robot, threading.current_thread()
+        self.tags: list[Device] = []
+        self.reset_fn = None
+        self.die_fns: list = []
+
+
+_installed = _Installed(None)  # the run's controller
+_match: dict[int, _Installed] = {}  # in a match, each robot's, by the thread running its controller
 last_call_s = 0.0  # time.monotonic() at the last API call (the runner's wait notices)
 
 
-def install(robot: Robot | None) -> None:
-    """Make ``robot`` the one the API functions drive, from this thread (the runner calls this)."""
-    global _robot, _reset_fn, _thread, last_call_s
-    _robot, _reset_fn, _thread, last_call_s = robot, None, threading.current_thread(), time.monotonic()
-    _tags.clear()
-    _die_fns.clear()
+def install(robot: Robot | None, match: bool = False) -> None:
+    """Make ``robot`` the one the API functions drive, from this thread (the runner calls this).
+    ``match=True``: one of several robots, each controller in its own thread; its API calls
+    must come from that thread (another gets the robot ``install`` gave it without ``match``)."""
+    global _installed, last_call_s
+    last_call_s = time.monotonic()
+    if not match:
+        _installed = _Installed(robot)
+    elif robot is not None:
+        _match[threading.get_ident()] = _Installed(robot)
+    else:
+        _match.pop(threading.get_ident(), None)
+
+
+def _state() -> _Installed:
+    return _match.get(threading.get_ident(), _installed) if _match else _installed
 
 
 def current_robot() -> Robot:
     global last_call_s
-    if _robot is None:
+    robot = _state().robot
+    if robot is None:
         raise RuntimeError("no robot: run the controller with `aibo-sim run CONTROLLER`")
     last_call_s = time.monotonic()
-    return _robot
+    return robot
 
 
 def _rendering(function: str) -> Robot:
     """The robot, for a call that may render the camera: DeviceError from any thread but the
     controller's (an OpenGL context is current in one thread; another's call would break it)."""
-    robot, thread = current_robot(), threading.current_thread()
-    if thread is not _thread:
+    robot, thread, own = current_robot(), threading.current_thread(), _state().thread
+    if thread is not own:
         raise DeviceError(
             f"{function} called from thread {thread.name!r}: the camera renders in the thread that "
-            f"runs the controller ({_thread.name!r}) only; call {function} there"
+            f"runs the controller ({own.name!r}) only; call {function} there"
         )
     return robot
 
@@ -95,9 +115,10 @@ def _rendering(function: str) -> Robot:
 def _device(tag, kind: type) -> Device:
     global last_call_s
     last_call_s = time.monotonic()
-    if not isinstance(tag, (int, np.integer)) or not 0 < tag <= len(_tags):
+    tags = _state().tags
+    if not isinstance(tag, (int, np.integer)) or not 0 < tag <= len(tags):
         raise DeviceError(f"invalid device tag {tag!r}: use the value robot_get_device returned")
-    device = _tags[tag - 1]
+    device = tags[tag - 1]
     if not isinstance(device, kind):
         raise DeviceError(f"device {device.locator} is a {device.kind}, not a {kind.kind}")
     return device
@@ -108,9 +129,8 @@ def _device(tag, kind: type) -> Device:
 
 def robot_live(reset_fn=None) -> None:
     """Register the reset (initialisation) function and call it once."""
-    global _reset_fn
     current_robot()
-    _reset_fn = reset_fn
+    _state().reset_fn = reset_fn
     if reset_fn is not None:
         reset_fn()
 
@@ -120,7 +140,7 @@ def robot_die(exit_fn) -> None:
     it called ``sys.exit`` or it was interrupted)."""
     if not callable(exit_fn):
         raise TypeError(f"robot_die({exit_fn!r}): the exit function must be callable")
-    _die_fns.append(exit_fn)
+    _state().die_fns.append(exit_fn)
 
 
 def call_die_functions() -> list[tuple[object, BaseException]]:
@@ -129,8 +149,9 @@ def call_die_functions() -> list[tuple[object, BaseException]]:
     controller's own exception rather than instead of it). ``SimulationEnd`` (an exit function
     that steps past the run's end) and ``sys.exit(0)`` are not errors; KeyboardInterrupt
     propagates."""
-    functions, failures = list(_die_fns), []
-    _die_fns.clear()
+    state = _state()
+    functions, failures = list(state.die_fns), []
+    state.die_fns.clear()
     for fn in functions:
         try:
             fn()
@@ -161,10 +182,10 @@ def robot_step(ms: int) -> int:
 
 
 def robot_get_device(name: str) -> int:
-    device = current_robot().get_device(name)
-    if device not in _tags:
-        _tags.append(device)
-    return _tags.index(device) + 1
+    device, tags = current_robot().get_device(name), _state().tags
+    if device not in tags:
+        tags.append(device)
+    return tags.index(device) + 1
 
 
 def robot_get_time() -> float:
@@ -258,20 +279,20 @@ CAMERA_SHUTTER_SLOW, CAMERA_SHUTTER_MID, CAMERA_SHUTTER_FAST = (
 
 
 def camera_set_white_balance(tag, value: int) -> None:
-    """CAMERA_WB_INDOOR (1, 2856 K), CAMERA_WB_OUTDOOR (2, 6500 K) or CAMERA_WB_FL (3, 5000 K,
-    the default), from the next camera frame."""
+    """CAMERA_WB_INDOOR (1), CAMERA_WB_OUTDOOR (2) or CAMERA_WB_FL (3, the default), from the next
+    camera frame; the presets' colour temperatures: ``aibo_sim.camera.sensor.WHITE_BALANCE_K``."""
     _device(tag, Camera).set_white_balance(value)
 
 
 def camera_set_gain(tag, value: int) -> None:
-    """CAMERA_GAIN_LOW (1, -6 dB), CAMERA_GAIN_MID (2, 0 dB, the default) or CAMERA_GAIN_HIGH
-    (3, +6 dB), from the next camera frame."""
+    """CAMERA_GAIN_LOW (1), CAMERA_GAIN_MID (2, the default) or CAMERA_GAIN_HIGH (3), from the
+    next camera frame; each step doubles the signal (``aibo_sim.camera.sensor.GAIN_STEPS``)."""
     _device(tag, Camera).set_gain(value)
 
 
 def camera_set_shutter_speed(tag, value: int) -> None:
-    """CAMERA_SHUTTER_SLOW (1, 1/50 s), CAMERA_SHUTTER_MID (2, 1/100 s, the default) or
-    CAMERA_SHUTTER_FAST (3, 1/200 s), from the next camera frame."""
+    """CAMERA_SHUTTER_SLOW (1), CAMERA_SHUTTER_MID (2, the default) or CAMERA_SHUTTER_FAST (3),
+    from the next camera frame; the exposures: ``aibo_sim.camera.sensor.SHUTTER_S``."""
     _device(tag, Camera).set_shutter_speed(value)
 
 

@@ -53,6 +53,9 @@ COLOURS = {
     "orange": (1.0, 0.45, 0.05, 1.0),
     "pink_ball": (1.0, 0.2, 0.85, 1.0),
 }
+# The league's team uniforms (red, dark blue), on the robots of a match: albedos chosen,
+# UNCONFIRMED (no measured frames of them).
+UNIFORM_COLOURS = {"red": (0.75, 0.06, 0.06, 1.0), "blue": (0.05, 0.1, 0.5, 1.0)}
 SPECULAR = {"orange": 0.1, "pink_ball": 0.1}  # the plastic balls; carpet and paint are matte (0)
 
 
@@ -95,5 +98,11 @@ def _beacons() -> tuple[Beacon, ...]:
 BEACONS = _beacons()
 GOALS = {"skyblue": FIELD_LENGTH / 2, "yellow": -FIELD_LENGTH / 2}  # goal line X of each goal
 
-# Segmentation classes for frame dumps: geoms are tagged by name prefix.
+# Segmentation classes for frame dumps: geoms are tagged by name prefix (every robot's are "robot").
 SEGMENTATION_CLASSES = ("background", "field", "line", "ball", "goal", "beacon", "robot", "wall")
+# A match's robots in the labels (team.TEAMS): the team ids of the per-pixel team labels (0: no
+# robot, or the lone robot without a team) and the COCO category of each team's robots, their ids
+# after the segmentation classes' (those keep theirs): COCO_CATEGORIES, coco.json's ids.
+LABEL_TEAMS = (None, "red", "blue")
+TEAM_CATEGORIES = {"red": "robot_red", "blue": "robot_blue"}
+COCO_CATEGORIES = (*SEGMENTATION_CLASSES, *TEAM_CATEGORIES.values())

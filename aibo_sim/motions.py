@@ -20,7 +20,7 @@ import numpy as np
 from .ers7 import JOINT_BY_LOCATOR, JOINT_INDEX, JOINTS, LEGS, joint_indices
 from .mjcf import HIP_OFFSET, KNEE_OFFSET, PAW_OFFSET, POSES
 from .mtn import Motion, MotionPlayer, MtnError, printable, read_mtn, write_mtn
-from .options import place, start_values
+from .placement import place, start_values
 from .sim import FRAME_MS, Simulation, models_dir
 
 KEYFRAME_MS = 16  # Sony's walks: pre-sampled 16 ms keyframes, numInterpolate 0
@@ -331,7 +331,7 @@ def play_motion(
     unknown = [loc for loc in motion.locators if loc not in JOINT_BY_LOCATOR]
     if unknown:
         raise MtnError(motion.source, None, f"no joint for locator(s) {', '.join(map(printable, unknown))}")
-    pose, ball = start_values("--pose", pose, 3), start_values("--ball", ball, 2)
+    pose, ball = start_values("pose", pose, 3), start_values("ball", ball, 2)
     if sim is not None:
         if scene is not None:
             raise ValueError("play_motion: give a scene or a simulation, not both")

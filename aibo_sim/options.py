@@ -14,15 +14,14 @@ from __future__ import annotations
 import argparse
 import math
 import re
-from pathlib import Path
 
 from openr_bridge import CAMERA_DEFAULTS, CAMERA_SETTINGS
 
 from .camera import PROFILES, CameraSettings
 from .field import BALL_TYPES
-from .sim import SEED_LIMIT, ModelError, Simulation
+from .placement import ParameterError
+from .sim import SEED_LIMIT
 
-PLACEMENT_OVERLAP_M = 0.005  # a placed robot or ball sunk deeper than this into something is an error
 MAX_MAGNITUDE = 1e6  # |value| beyond this is a typo, not a position (metres) or an angle (degrees)
 CAMERA_SETTING_OPTIONS = (("white_balance", "--camera-wb"), ("gain", "--camera-gain"), ("shutter", "--camera-shutter"))
 WORLD_DESTS = ("scene", "pose", "ball", "ball_type", "seed")
@@ -30,10 +29,18 @@ CAMERA_DESTS = ("camera_profile", "camera_wb", "camera_gain", "camera_shutter", 
 LONG_WORD = 120  # an error line's paths and arguments are cut after this many characters
 
 
+def option_name(parameter: str) -> str:
+    """The option that gives a library function's ``parameter``: ``ball_type`` -> ``--ball-type``."""
+    return "--" + parameter.replace("_", "-")
+
+
 def cut_long_words(message) -> str:
-    """An error line with each run of more than ``LONG_WORD`` characters without a space or a
-    quote (a path, an argument: a file's text given in place of its name) cut, saying how long
-    it was."""
+    """The error line of ``message`` (text or an exception), a ``ParameterError`` naming options
+    (``--pose``) where it names parameters, each run of more than ``LONG_WORD`` characters without
+    a space or a quote (a path, an argument: a file's text given in place of its name) cut,
+    saying how long it was."""
+    if isinstance(message, ParameterError):
+        message = message.named(option_name)
     return re.sub(
         rf"[^\s:,'\"`()\[\]]{{{LONG_WORD + 1},}}",
         lambda m: f"{m[0][:LONG_WORD]}... ({len(m[0])} characters)",
@@ -153,70 +160,3 @@ def camera_options(args: argparse.Namespace) -> dict:
         "camera_full": args.camera_full,
         "camera_settings": CameraSettings(args.camera_wb, args.camera_gain, args.camera_shutter),
     }
-
-
-def start_values(name: str, values, count: int) -> tuple[float, ...] | None:
-    """``values`` (a pose or ball position given to a function, not through argparse) as a tuple
-    of ``count`` finite floats, or None; a ValueError naming the option ``name`` otherwise."""
-    if values is None:
-        return None
-    try:
-        numbers = tuple(float(v) for v in values)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be {count} numbers, not {values!r}") from None
-    if len(numbers) != count or not all(math.isfinite(v) for v in numbers):
-        raise ValueError(f"{name} must be {count} finite numbers, not {' '.join(map(str, numbers))}")
-    return numbers
-
-
-def make_out_folder(path) -> Path:
-    """``--out``: the folder, made with its parents; NotADirectoryError naming it if it is a file."""
-    path = Path(path)
-    if path.exists() and not path.is_dir():
-        raise NotADirectoryError(f"--out {path}: not a folder")
-    path.mkdir(parents=True, exist_ok=True)
-    return path
-
-
-def check_place(
-    scene, pose: tuple[float, float, float] | None, ball: tuple[float, float] | None, ball_type: str = "robocup"
-) -> None:
-    """``place``'s errors for these placements in ``scene``, before a command writes anything."""
-    sim = Simulation(scene, camera_profile="ideal", ball_type=ball_type)
-    try:
-        place(sim, pose, ball)
-    finally:
-        sim.close()
-
-
-def place(sim, pose: tuple[float, float, float] | None = None, ball: tuple[float, float] | None = None) -> None:
-    """Put the robot at ``pose`` (x, y in metres, yaw in degrees) and the ball at ``ball`` (x, y),
-    each when given; the scene's start otherwise. ValueError naming the option when what it
-    placed would sink more than ``PLACEMENT_OVERLAP_M`` into something (a wall, a goal, the
-    robot or the ball), which the first step would fling apart; naming ``--scene`` when the
-    scene's own start does."""
-
-    def given(option: str, values) -> str:
-        return f"{option} {' '.join(f'{v:g}' for v in values)}"
-
-    if pose is not None:
-        x, y, yaw_deg = pose
-        sim.place_robot(x, y, math.radians(yaw_deg))
-    if ball is not None:
-        try:
-            sim.place_ball(*ball)
-        except ModelError as exc:
-            raise ModelError(f"{given('--ball', ball)}: {exc}") from None
-    placed = {"the robot": ("--pose", pose), "the ball": ("--ball", ball)}
-    for first, second, depth in sim.overlaps(PLACEMENT_OVERLAP_M):
-        pairs = ((first, second), (second, first))
-        for subject, other in pairs:
-            option, values = placed.get(subject, (None, None))
-            if values is not None:
-                raise ValueError(f"{given(option, values)}: {subject} would overlap {other} by {depth * 100:.1f} cm")
-        for subject, other in pairs:
-            if subject in placed and subject != other:
-                raise ValueError(
-                    f"--scene {sim.scene}: {subject} starts inside {other} ({depth * 100:.1f} cm deep); "
-                    f"move it in the scene, or place it with {placed[subject][0]}"
-                )

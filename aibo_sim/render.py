@@ -154,8 +154,11 @@ class Renderer:
     """Renders RGB (and optionally depth) images of one camera of a model, offscreen.
 
     Shows the geom groups in ``groups`` (default 0-2: scene and visual geoms; collision
-    geoms are group 3), no sites. The head camera leaves out group 1, the robot's visual
-    geoms behind its lens, which it cannot see anyway. ``render`` returns a new
+    geoms are group 3), no sites, never the geoms ``hidden`` (ids: the head camera leaves out its
+    own robot's group 1, the visual geoms behind its lens, which it cannot see anyway), and the
+    geoms ``subpixel`` only where their bounding sphere spans a pixel or more (the head camera's
+    other robots: their LEDs and screws, a pixel centre or none at a distance, cost a robot's
+    worth of triangles). ``render`` returns a new
     ``(height, width, 3)`` uint8 array, top row first. ``cull=False`` draws the geoms outside
     the view too (same pixels, slower); ``scene`` is the ``MjvScene`` last drawn.
     """
@@ -168,6 +171,8 @@ class Renderer:
         quality: str = "fast",
         groups: tuple[int, ...] = (0, 1, 2),
         cull: bool = True,
+        hidden=(),
+        subpixel=(),
     ):
         if quality not in ("fast", "high"):
             raise ValueError(f"quality must be 'fast' or 'high', not {quality!r}")
@@ -220,7 +225,13 @@ class Renderer:
         self._option.flags[mujoco.mjtVisFlag.mjVIS_RANGEFINDER] = 0
         self._cullable_key = self._frustum_key = None
         self._cull_inputs = model.geom_group, self._option.geomgroup, model.geom_rbound  # views, read each frame
-        self._hidden_group = next((g for g in range(mujoco.mjNGROUP) if g not in groups), None) if cull else None
+        self._hidden_group = next((g for g in range(mujoco.mjNGROUP) if g not in groups), None)
+        self._cull = cull
+        self._hidden = np.asarray(hidden, np.intp)
+        self._subpixel = np.zeros(model.ngeom, bool)
+        self._subpixel[np.asarray(subpixel, np.intp)] = True
+        if self._hidden.size and self._hidden_group is None:
+            raise ValueError("hidden geoms need a group that is not shown (groups shows them all)")
         self._multisampled = quality == "high" and saved[0] > 0
         self._rgba = np.empty((height, width, 4), np.uint8)
         self._rgba.flags.writeable = False  # handed out; only glReadPixels writes it
@@ -242,6 +253,8 @@ class Renderer:
         # eglMakeCurrent through PyOpenGL: ~5 us, ~20 us right after a physics step; the check ~0.4 us.
         self._enter()
         culled = self._outside_view(data, cam)
+        if self._hidden.size:
+            culled = np.concatenate((culled, self._hidden))
         group = self.model.geom_group
         saved = group[culled]
         if culled.size:
@@ -312,10 +325,11 @@ class Renderer:
         """Ids of the shown geoms whose bounding spheres lie outside the view frustum; none
         when culling is off, shadows or reflections are on (a geom out of view can still cast
         or mirror), every group is shown (no group left to hide them in) or the camera is
-        orthographic."""
+        orthographic. With them, the ``subpixel`` geoms smaller than a pixel."""
         flags = self._scene.flags
         if (
-            self._hidden_group is None
+            not self._cull
+            or self._hidden_group is None
             or flags[mujoco.mjtRndFlag.mjRND_SHADOW]
             or flags[mujoco.mjtRndFlag.mjRND_REFLECTION]
         ):
@@ -332,7 +346,13 @@ class Renderer:
         r = [f[1] * u[2] - f[2] * u[1], f[2] * u[0] - f[0] * u[2], f[0] * u[1] - f[1] * u[0]]
         world_normals = np.array([r, u, f]).T @ normals
         distance = (data.geom_xpos[shown] - eye.pos) @ world_normals + offsets
-        return shown[(distance < minus_radius).any(axis=1)]
+        outside = (distance < minus_radius).any(axis=1)
+        subpixel = self._subpixel[shown]
+        if subpixel.any():  # those smaller than a pixel too: 2 x radius x pixels per metre < depth
+            pixels_per_metre = self.height * eye.frustum_near / (eye.frustum_top - eye.frustum_bottom)
+            depth = distance[:, 4] + eye.frustum_near
+            outside |= subpixel & (-2 * minus_radius[:, 0] * pixels_per_metre < depth)
+        return shown[outside]
 
     def _frustum_planes(self, eye: mujoco.MjvGLCamera) -> tuple[np.ndarray, np.ndarray]:
         """Inward unit normals (columns, in the camera's right-up-forward axes) and offsets of

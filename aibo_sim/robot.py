@@ -103,6 +103,7 @@ class Servo(Device):
     def __init__(self, robot, locator, name):
         super().__init__(robot, locator, name)
         self.index = ers7.JOINT_INDEX[name]
+        self._actuator = robot.sim.servos.ctrl.start + self.index  # in the world's model: after the robots before
 
     def _number(self, value, what: str) -> float:
         number = float(value)
@@ -124,13 +125,13 @@ class Servo(Device):
 
     def set_motor_force(self, newton_metres: float) -> None:
         force = abs(self._number(newton_metres, "motor force"))
-        self.robot.sim.model.actuator_forcerange[self.index] = (-force, force)
+        self.robot.sim.model.actuator_forcerange[self._actuator] = (-force, force)
 
     def set_control_p(self, p: float) -> None:
         p = self._number(p, "control P")
         model = self.robot.sim.model
-        model.actuator_gainprm[self.index, 0] = p
-        model.actuator_biasprm[self.index, 1] = -p
+        model.actuator_gainprm[self._actuator, 0] = p
+        model.actuator_biasprm[self._actuator, 1] = -p
 
     def _sample(self) -> float:
         return float(self.robot.sim.joint_positions()[self.index])
@@ -195,15 +196,15 @@ class Camera(Device):
     # Settings (an extension of the Webots API): Sony's values 1..3, from the next camera frame.
 
     def set_white_balance(self, value: int) -> None:
-        """1 indoor (2856 K), 2 outdoor (6500 K), 3 fluorescent (5000 K, the default)."""
+        """1 indoor, 2 outdoor, 3 fluorescent (the default): ``camera.sensor.WHITE_BALANCE_K``'s presets."""
         self._set_setting("camera_set_white_balance", "white_balance", value)
 
     def set_gain(self, value: int) -> None:
-        """1 low (-6 dB), 2 mid (0 dB, the default), 3 high (+6 dB)."""
+        """1 low, 2 mid (the default), 3 high: ``camera.sensor.GAIN_STEPS``."""
         self._set_setting("camera_set_gain", "gain", value)
 
     def set_shutter_speed(self, value: int) -> None:
-        """1 slow (1/50 s), 2 mid (1/100 s, the default), 3 fast (1/200 s)."""
+        """1 slow, 2 mid (the default), 3 fast: ``camera.sensor.SHUTTER_S``."""
         self._set_setting("camera_set_shutter_speed", "shutter", value)
 
     @property

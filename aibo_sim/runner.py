@@ -33,7 +33,7 @@ from .cbind import (
 )
 from .files import FolderLock, SymlinkRefused, make_folder, png, read_file, write_file_atomic
 from .openr.host import MemoryStickRun, OpenRObjectCrashed
-from .options import make_out_folder, place, start_values
+from .placement import make_out_folder, place, start_values
 from .render import RenderingUnavailable
 from .robot import Robot, SimulationEnd
 from .sim import FRAME_MS, Simulation, SimulationDiverged, models_dir
@@ -261,15 +261,17 @@ class _ControllerThreads:
     end as failed, not printed as threading's hook would; later ones go to that hook. A thread
     that steps past the run's end (SimulationEnd) ends quietly."""
 
-    def __init__(self, robot: Robot):
-        self._robot, self.error = robot, None
+    def __init__(self, robot: Robot, inert: bool = False):
+        self._robot, self.error, self._inert = robot, None, inert
 
     def __enter__(self) -> _ControllerThreads:
-        self._previous, threading.excepthook = threading.excepthook, self._hook
+        if not self._inert:  # a match's controllers share threading's hook: it stays
+            self._previous, threading.excepthook = threading.excepthook, self._hook
         return self
 
     def __exit__(self, *exc_info) -> None:
-        threading.excepthook = self._previous
+        if not self._inert:
+            threading.excepthook = self._previous
 
     def _hook(self, args) -> None:
         if issubclass(args.exc_type, SimulationEnd):
@@ -526,7 +528,17 @@ def _run_memory_stick(path: Path, run: MemoryStickRun) -> None:
         raise ControllerFailed(f"memory stick {path.name}: {error}") from error
 
 
-def _run_controller_program(path: Path, executable: Path | None, robot: Robot, workdir: Path | None) -> None:
+def _run_as_main(path: Path) -> None:
+    """Run a Python file as ``__main__`` in a namespace of its own, leaving ``sys.modules`` and
+    ``sys.argv`` alone (``runpy`` swaps them for the run: the threads of a match would leave the
+    process with a controller as its ``__main__``)."""
+    code = compile(path.read_bytes(), str(path), "exec")
+    exec(code, {"__name__": "__main__", "__file__": str(path), "__builtins__": __builtins__})
+
+
+def _run_controller_program(
+    path: Path, executable: Path | None, robot: Robot, workdir: Path | None, match: bool = False
+) -> None:
     """Run a Python or C controller on ``robot`` until its end; ControllerFailed (or the
     simulator's SimulationDiverged, RenderingUnavailable) for a run that did not end well.
 
@@ -535,15 +547,25 @@ def _run_controller_program(path: Path, executable: Path | None, robot: Robot, w
     sys.exit with another status: ControllerFailed quoting its traceback or its status (never
     read as a divergence). The physics diverges: SimulationDiverged. Its robot_die functions
     run in every case (Ctrl-C too); one that raises is reported after the controller's own error.
+
+    ``match=True``: one of a match's controllers, in its robot's thread (``match.run_match``
+    installs the robot and sets the folders up once for all of them).
     """
-    controller.install(robot)
+    if not match:
+        controller.install(robot)
     try:
-        with _controller_context(path.parent, workdir), _ControllerThreads(robot) as threads:
+        with contextlib.ExitStack() as stack:
+            threads = stack.enter_context(_ControllerThreads(robot, match))
+            if not match:
+                stack.enter_context(_controller_context(path.parent, workdir))
             error: BaseException | None = None
             try:
                 if executable is None:
-                    with _WaitNotices(path.name, robot):
-                        runpy.run_path(str(path), run_name="__main__")
+                    if match:
+                        _run_as_main(path)
+                    else:
+                        with _WaitNotices(path.name, robot):
+                            runpy.run_path(str(path), run_name="__main__")
                 else:
                     run_c_controller(executable, path.name)
             except SimulationEnd:
@@ -583,4 +605,5 @@ def _run_controller_program(path: Path, executable: Path | None, robot: Robot, w
             if die_report:
                 raise ControllerFailed(f"controller {path.name} ended {where};{die_report}")
     finally:
-        controller.install(None)
+        if not match:
+            controller.install(None)

@@ -10,6 +10,7 @@ from __future__ import annotations
 import ctypes
 import math
 import numbers
+import threading
 from collections.abc import Callable
 from pathlib import Path
 
@@ -20,7 +21,7 @@ from openr_bridge import FRAME_RATE_HZ, FRAME_TICK_MS
 
 from .camera import CameraProfile, CameraSettings, HeadCamera, camera_size, scene_light
 from .ers7 import DISTANCE_SENSORS, HEAD_CAMERA, JOINTS, LED_BY_NAME, LED_OFF_RGBA, SENSORS, TOUCH_SENSORS
-from .field import BALL_TYPES, COLOURS, PINK_BALL_MASS, PINK_BALL_RADIUS, SPECULAR
+from .field import BALL_TYPES, COLOURS, PINK_BALL_MASS, PINK_BALL_RADIUS, SPECULAR, UNIFORM_COLOURS
 
 FRAME_MS = FRAME_TICK_MS  # OPEN-R joint frame, 8 ms
 GRAVITY = 9.80665
@@ -77,11 +78,16 @@ def models_dir() -> Path:
     raise ModelError(f"bundled models not found next to {here}")
 
 
-def load_model(scene: str | Path | None = None, ball: bool = True, ball_type: str = "robocup") -> mujoco.MjModel:
+def load_model(
+    scene: str | Path | None = None, ball: bool = True, ball_type: str = "robocup", robots=None
+) -> mujoco.MjModel:
     """Compile a scene file (default: the RoboCup field), with an error that names the file
     (also for its light's custom numerics out of range, ``SceneLight``, and a timestep that is
     not a positive divisor of the 8 ms joint frame); ``ball=False`` leaves out its body named
-    ``ball``, ``ball_type="pink"`` makes it Sony's pink ball (``field.PINK_BALL_RADIUS``)."""
+    ``ball``, ``ball_type="pink"`` makes it Sony's pink ball (``field.PINK_BALL_RADIUS``);
+    ``robots`` (``team.RobotSpec``s, the first the scene's own robot) adds the others and the
+    uniforms (``add_robots``)."""
+    match = robots is not None and (len(robots) > 1 or any(robot.team is not None for robot in robots))
     if ball_type not in BALL_TYPES:
         raise ValueError(f"--ball-type must be one of {', '.join(BALL_TYPES)}, not {ball_type!r}")
     path = Path(scene) if scene is not None else models_dir() / "scene.xml"
@@ -91,20 +97,22 @@ def load_model(scene: str | Path | None = None, ball: bool = True, ball_type: st
     except OSError as exc:  # a name too long, a folder without permission
         raise ModelError(f"{path}: cannot read: {exc.strerror or exc}") from None
     try:
-        if ball and ball_type == "robocup":
+        if ball and ball_type == "robocup" and not match:
             model = mujoco.MjModel.from_xml_path(str(path))
         else:
             spec = mujoco.MjSpec.from_file(str(path))
             body = spec.body("ball")
             if body is not None and not ball:
                 spec.delete(body)
-            elif body is not None and spec.geom("ball") is not None:
+            elif body is not None and ball_type == "pink" and spec.geom("ball") is not None:
                 geom = spec.geom("ball")
                 geom.size, geom.mass = [PINK_BALL_RADIUS, 0, 0], PINK_BALL_MASS
                 body.pos = [body.pos[0], body.pos[1], PINK_BALL_RADIUS]
                 if spec.material("pink_ball") is None:  # the generated field has it; other scenes may not
                     spec.add_material(name="pink_ball", rgba=COLOURS["pink_ball"], specular=SPECULAR["pink_ball"])
                 geom.material = "pink_ball"
+            if match:
+                add_robots(spec, robots)
             model = spec.compile()
         scene_light(model)  # its custom numerics in range
         timestep = model.opt.timestep
@@ -182,11 +190,15 @@ class Servos:
     limit is set, with bounded acceleration; targets are clipped to the joint range.
     """
 
-    def __init__(self, model: mujoco.MjModel):
-        ids = [model.actuator(j.name).id for j in JOINTS]
-        if ids != list(range(len(JOINTS))):
+    def __init__(self, model: mujoco.MjModel, prefix: str = ""):
+        ids = [model.actuator(prefix + j.name).id for j in JOINTS]
+        if ids != list(range(ids[0], ids[0] + len(JOINTS))):
             raise ModelError("actuators must follow the order of ers7.JOINTS")
-        self.low, self.high = model.actuator_ctrlrange[:, 0].copy(), model.actuator_ctrlrange[:, 1].copy()
+        self.ctrl = slice(ids[0], ids[0] + len(JOINTS))  # the robot's actuators in MjData.ctrl
+        self.low, self.high = (
+            model.actuator_ctrlrange[self.ctrl, 0].copy(),
+            model.actuator_ctrlrange[self.ctrl, 1].copy(),
+        )
         self.max_velocity = np.array([j.max_speed for j in JOINTS])
         self.velocity = self.max_velocity.copy()
         self.acceleration = np.full(len(JOINTS), np.inf)
@@ -247,10 +259,169 @@ class Servos:
         return commands
 
 
+def robot_prefix(index: int) -> str:
+    """Prefix of the names of a world's robot ``index`` (from 0): none for the first (the scene's
+    own ERS-7), ``robot2/``, ``robot3/``, ... for the robots a match adds."""
+    return f"robot{index + 1}/" if index else ""
+
+
+def add_robots(spec: mujoco.MjSpec, robots) -> None:
+    """Add to a scene's ``spec`` the robots after its own (``robots[1:]``, each a copy of
+    ``models/ers7.xml`` named with ``robot_prefix``) and each team's uniform on every robot
+    that has a team: patches on the flanks in the team's colour (``field.UNIFORM_COLOURS``), visual only
+    (no mass, no contact: the physics stays that of the bare robot). The robots collide with
+    each other, never with themselves."""
+    for index, robot in enumerate(robots):
+        prefix = robot_prefix(index)
+        if index:
+            copy = mujoco.MjSpec.from_file(str(models_dir() / "ers7.xml"))
+            for key in list(copy.keys):  # the robot's poses are set per robot at reset
+                copy.delete(key)
+            spec.worldbody.add_frame().attach_body(copy.body("body"), prefix, "")
+        # Robots touch each other as they touch the field: robot k's collision geoms have
+        # contype bit k + 1 and affinity with the field's bit 0 and every other robot's bit.
+        own_bit, all_bits = 2 << index, sum(2 << k for k in range(len(robots)))
+        for geom in spec.body(prefix + "body").find_all(mujoco.mjtObj.mjOBJ_GEOM):
+            if geom.contype or geom.conaffinity:
+                geom.contype, geom.conaffinity = own_bit, 1 | (all_bits & ~own_bit)
+        if robot.team is not None:
+            body = spec.body(prefix + "body")
+            for side in (1, -1):
+                body.add_geom(
+                    name=f"{prefix}uniform_{'left' if side > 0 else 'right'}",
+                    type=mujoco.mjtGeom.mjGEOM_BOX,
+                    size=UNIFORM_PATCH,
+                    pos=[0, side * UNIFORM_FLANK_Y, 0.012],
+                    rgba=UNIFORM_COLOURS[robot.team],
+                    group=2,
+                    contype=0,
+                    conaffinity=0,
+                    density=0,
+                )
+
+
+UNIFORM_PATCH = (0.05, 0.002, 0.028)  # half sizes: a 10 x 5.6 cm patch on each flank (the league's uniforms)
+UNIFORM_FLANK_Y = 0.051  # just outside the body shell's 5 cm half width
+
+
+class World:
+    """A scene and its robots, advanced together in 8 ms frames (see ``Simulation``, each robot's
+    view of it). Made by ``Simulation``; ``robots`` lists the views, the first being robot 1."""
+
+    def __init__(self, first: Simulation, scene, robots, *, seed, keyframe, camera, ball, ball_type, latency):
+        if not isinstance(latency, int) or latency < 0:
+            raise ValueError(f"command_latency_frames must be a whole number >= 0, not {latency!r}")
+        self.command_latency_frames = latency
+        self.scene = scene  # as given: None for the RoboCup field
+        self.robot_specs = tuple(robots)
+        self.model = load_model(scene, ball, ball_type, self.robot_specs)
+        check_robot(self.model, scene if scene is not None else models_dir() / "scene.xml", keyframe)
+        self.data = mujoco.MjData(self.model)
+        self.keyframe = keyframe
+        self.steps_per_frame = round(FRAME_MS / 1000 / self.model.opt.timestep)
+        # Views of the divergence counters, read after every frame (bad positions and velocities:
+        # MuJoCo resets the state silently and counts them here).
+        self._divergence_warnings = [
+            self.data.warning[w]
+            for w in (
+                mujoco.mjtWarning.mjWARN_BADQACC,
+                mujoco.mjtWarning.mjWARN_BADCTRL,
+                mujoco.mjtWarning.mjWARN_BADQPOS,
+                mujoco.mjtWarning.mjWARN_BADQVEL,
+            )
+        ]
+        self.ball_body = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_BODY, "ball")  # -1: no ball
+        self.frame = 0
+        self.lockstep = None  # a Lockstep while robots' controllers step the world together
+        self.render_lock = threading.Lock()  # renders change the model for their time (HeadCamera)
+        self.robots: list[Simulation] = []
+        for index, spec in enumerate(self.robot_specs):
+            robot = first if index == 0 else Simulation.__new__(Simulation)
+            robot._attach(self, index, spec, camera)
+            self.robots.append(robot)
+        self.reset(seed)
+
+    def reset(self, seed: int | None = None, keyframe: str | None = None) -> None:
+        """Every robot back to the keyframe (robot 1 where the keyframe has it, the others beside it
+        in the same posture at their own poses); a new ``seed`` restarts the noise streams."""
+        if seed is not None:
+            if not is_seed(seed):
+                raise ValueError(f"seed must be a whole number from 0 to 2**64 - 1, not {seed!r}")
+            self.seed = int(seed)
+        key = self.model.key(keyframe or self.keyframe).id
+        mujoco.mj_resetDataKeyframe(self.model, self.data, key)
+        first = self.robots[0]
+        for robot in self.robots:
+            robot._take_posture(first)
+        mujoco.mj_forward(self.model, self.data)
+        self.frame = 0  # 8 ms frames since reset
+        for robot in self.robots:
+            robot._reset(seed is not None)
+
+    @property
+    def cameras(self) -> list[HeadCamera]:
+        return [robot.camera for robot in self.robots]
+
+    def step_frames(self, frames: int, before_frame: Callable[[], None] | None = None, sensors: bool = True) -> None:
+        """``Simulation.step_frames`` for every robot at once."""
+        if not isinstance(frames, int) or frames < 1:
+            raise ValueError(f"frames must be a whole number >= 1, not {frames!r}")
+        plans = [(robot.servos.ctrl, robot._planned(frames)) for robot in self.robots]
+        model, data, options, cameras = self.model, self.data, self.model.opt, self.cameras
+        steps = [self.steps_per_frame] * frames
+        steps[-1] -= sensors  # the last step, with sensors, after the loop
+        # Camera ticks within these frames: after frame k (counted from 1) when the index moves.
+        ticks = [
+            k
+            for k in range(1, frames + 1)
+            if self.camera_frame_index(self.frame + k) != self.camera_frame_index(self.frame + k - 1)
+        ]
+        flags = options.disableflags
+        options.disableflags = flags | mujoco.mjtDisableBit.mjDSBL_SENSOR
+        try:
+            for k, nstep in enumerate(steps, start=1):
+                for camera in cameras:
+                    if camera.live:
+                        camera.freeze()
+                if before_frame is not None:
+                    before_frame()
+                for actuators, commands in plans:
+                    data.ctrl[actuators] = commands[k - 1]
+                if nstep:
+                    mujoco.mj_step(model, data, nstep=nstep)
+                self.frame += 1
+                if k < frames and k in ticks:
+                    for camera in cameras:
+                        camera.tick()
+        finally:
+            options.disableflags = flags
+        if sensors:
+            mujoco.mj_step(model, data)
+        if frames in ticks:
+            for camera in cameras:
+                camera.tick()
+        if any(w.number for w in self._divergence_warnings) or not np.isfinite(data.qpos).all():
+            raise SimulationDiverged(f"physics diverged at t = {data.time:.3f} s (by frame {self.frame})")
+
+    def camera_frame_index(self, frame: int | None = None) -> int:
+        """Index of the newest 30 fps camera frame (frame k at k/30 s) now, or after the 8 ms
+        joint frame ``frame``."""
+        return (self.frame if frame is None else frame) * FRAME_MS * FRAME_RATE_HZ // 1000
+
+    def close(self) -> None:
+        for camera in self.cameras:
+            camera.close()
+
+
 class Simulation:
-    """One ERS-7 in a scene, advanced in 8 ms frames, with its head camera (``camera``, see
+    """An ERS-7 in a scene, advanced in 8 ms frames, with its head camera (``camera``, see
     ``aibo_sim.camera``: profile ``ers7`` or ``ideal``, settings by name); ``ball=False``
     leaves the scene's ball out, ``ball_type`` chooses it (``field.BALL_TYPES``).
+
+    ``robots`` (``team.RobotSpec``s; default one robot, the scene's own) puts several robots on
+    the field: this object is robot 1, ``world.robots`` lists them all, each a ``Simulation``
+    of its own robot (servos, sensors, LEDs, camera and noise streams) sharing the world (model,
+    data, time, ball): stepping any of them steps the world.
 
     ``command_latency_frames``: 8 ms frames between a set-point and the servo acting on it. On
     the robot, OPEN-R plays joint commands from a queue of 4-frame command vectors, so a
@@ -269,20 +440,31 @@ class Simulation:
         ball: bool = True,
         ball_type: str = "robocup",
         command_latency_frames: int = 0,
+        robots=None,
     ):
-        if not isinstance(command_latency_frames, int) or command_latency_frames < 0:
-            raise ValueError(f"command_latency_frames must be a whole number >= 0, not {command_latency_frames!r}")
-        self.command_latency_frames = command_latency_frames
-        self.scene = scene  # as given: None for the RoboCup field
-        self.model = load_model(scene, ball, ball_type)
-        check_robot(self.model, scene if scene is not None else models_dir() / "scene.xml", keyframe)
-        self.data = mujoco.MjData(self.model)
-        self.keyframe = keyframe
-        self.steps_per_frame = round(FRAME_MS / 1000 / self.model.opt.timestep)
-        self.servos = Servos(self.model)
+        from .team import DEFAULT_ROBOTS
+
+        World(
+            self,
+            scene,
+            DEFAULT_ROBOTS if robots is None else robots,
+            seed=seed,
+            keyframe=keyframe,
+            camera=(camera_size(camera_full), camera_profile, camera_settings),
+            ball=ball,
+            ball_type=ball_type,
+            latency=command_latency_frames,
+        )
+
+    def _attach(self, world: World, index: int, spec, camera) -> None:
+        """Become robot ``index`` (``spec``) of ``world``."""
+        model, prefix = world.model, robot_prefix(index)
+        self.world, self.index, self.spec, self.prefix = world, index, spec, prefix
+        self.servos = Servos(model, prefix)
         self._sensor_slices = {
             s.name: slice(
-                self.model.sensor(s.name).adr[0], self.model.sensor(s.name).adr[0] + self.model.sensor(s.name).dim[0]
+                model.sensor(prefix + s.name).adr[0],
+                model.sensor(prefix + s.name).adr[0] + model.sensor(prefix + s.name).dim[0],
             )
             for s in SENSORS
             if s.kind != "camera"
@@ -292,55 +474,91 @@ class Simulation:
         self._distance_ranges_mm = [s.range_mm for s in DISTANCE_SENSORS]
         self._touch_adr = np.array([self._sensor_slices[s.name].start for s in TOUCH_SENSORS])
         self._touch_threshold = np.array([s.threshold for s in TOUCH_SENSORS])
-        self._joint_qpos = np.array([self.model.joint(j.name).qposadr[0] for j in JOINTS])
-        # Views of the divergence counters, read after every frame (bad positions and velocities:
-        # MuJoCo resets the state silently and counts them here).
-        self._divergence_warnings = [
-            self.data.warning[w]
-            for w in (
-                mujoco.mjtWarning.mjWARN_BADQACC,
-                mujoco.mjtWarning.mjWARN_BADCTRL,
-                mujoco.mjtWarning.mjWARN_BADQPOS,
-                mujoco.mjtWarning.mjWARN_BADQVEL,
-            )
-        ]
-        self._ball_body = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_BODY, "ball")  # -1: no ball
-        self.camera = HeadCamera(self, camera_size(camera_full), camera_profile, camera_settings)
-        self.reset(seed)
+        self._joint_qpos = np.array([model.joint(prefix + j.name).qposadr[0] for j in JOINTS])
+        self._body = model.body(prefix + "body").id
+        self._root_qpos = model.jnt_qposadr[model.body_jntadr[self._body]]
+        self.camera = HeadCamera(self, *camera, camera_name=prefix + HEAD_CAMERA)
+
+    # ---------------------------------------------------------------- the world, shared
+
+    model = property(lambda self: self.world.model)
+    data = property(lambda self: self.world.data)
+    frame = property(lambda self: self.world.frame)
+    scene = property(lambda self: self.world.scene)
+    keyframe = property(lambda self: self.world.keyframe)
+    steps_per_frame = property(lambda self: self.world.steps_per_frame)
+    command_latency_frames = property(lambda self: self.world.command_latency_frames)
+
+    @property
+    def seed(self) -> int:
+        """The world's seed; this robot's noise streams are drawn from it (``robot_seed``)."""
+        return self.world.seed
 
     # ---------------------------------------------------------------- time and state
 
     def reset(self, seed: int | None = None, keyframe: str | None = None) -> None:
-        if seed is not None:
-            if not is_seed(seed):
-                raise ValueError(f"seed must be a whole number from 0 to 2**64 - 1, not {seed!r}")
-            seed = int(seed)
-            self.rng = np.random.default_rng(seed)  # IR noise; the camera's noise has its own stream
-            self.seed = seed
-        key = self.model.key(keyframe or self.keyframe).id
-        mujoco.mj_resetDataKeyframe(self.model, self.data, key)
-        mujoco.mj_forward(self.model, self.data)
+        """The world back to ``keyframe`` (default the start keyframe), every robot with it."""
+        self.world.reset(seed, keyframe)
+
+    def _take_posture(self, first: Simulation) -> None:
+        """After a keyframe reset: robot 1's posture at this robot's pose (``spec.pose``: x, y
+        metres, yaw degrees; robot 1 without one stays where the keyframe has it)."""
+        qpos, root = self.data.qpos, self._root_qpos
+        if self is not first:
+            qpos[self._joint_qpos] = qpos[first._joint_qpos]
+            qpos[root : root + 7] = qpos[first._root_qpos : first._root_qpos + 7]
+        if self.spec.pose is not None:
+            x, y, yaw = self.spec.pose
+            pitch_quat = qpos[root + 3 : root + 7].copy()
+            qpos[root : root + 2] = x, y
+            yaw_quat = np.array([math.cos(math.radians(yaw) / 2), 0, 0, math.sin(math.radians(yaw) / 2)])
+            mujoco.mju_mulQuat(qpos[root + 3 : root + 7], yaw_quat, pitch_quat)
+
+    def _reset(self, reseed: bool) -> None:
+        """After the world's reset: servos at the posture, noise streams restarted on a new seed."""
+        if reseed or not hasattr(self, "rng"):
+            self.rng = np.random.default_rng(self.robot_seed)  # IR noise; the camera's noise has its own stream
         self.servos.reset(self.joint_positions())
         self._queued = np.tile(self.servos.command, (self.command_latency_frames, 1))  # set-points on their way
-        self.frame = 0  # 8 ms frames since reset
-        self.camera.reset(self.seed)
+        self.camera.reset(self.robot_seed)
+
+    @property
+    def robot_seed(self) -> int:
+        """The seed of this robot's noise streams (IR, camera): the world's for robot 1, one drawn
+        from the world's seed and the robot's number for each other robot."""
+        if self.index == 0:
+            return self.seed
+        return int(np.random.SeedSequence([self.seed, self.index]).generate_state(1, np.uint64)[0])
+
+    def _planned(self, frames: int) -> np.ndarray:
+        """The set-points the servos act on in the next ``frames`` frames, one row each."""
+        commands = self.servos.advance_frames(frames, FRAME_MS / 1000)
+        if self.command_latency_frames:
+            queue = np.concatenate((self._queued, commands))
+            commands, self._queued = queue[:frames], queue[frames:]
+        return commands
 
     def place_robot(self, x: float, y: float, yaw: float) -> None:
         """Put the robot at (x, y) on the field heading ``yaw`` (rad), keeping its height and pitch.
         Each must be a finite number of magnitude at most ``MAX_PLACEMENT`` (else ValueError
         naming it, nothing moved): MuJoCo would otherwise silently reset the whole state."""
         x, y, yaw = _placement("place_robot", x=x, y=y, yaw=yaw)
+        root = self._root_qpos
         qpos = self.data.qpos
-        pitch_quat = qpos[3:7].copy()
+        pitch_quat = qpos[root + 3 : root + 7].copy()
         yaw_quat = np.array([math.cos(yaw / 2), 0, 0, math.sin(yaw / 2)])
-        qpos[0:2] = x, y
-        mujoco.mju_mulQuat(qpos[3:7], yaw_quat, pitch_quat)
+        qpos[root : root + 2] = x, y
+        mujoco.mju_mulQuat(qpos[root + 3 : root + 7], yaw_quat, pitch_quat)
         mujoco.mj_forward(self.model, self.data)
-        self.camera.moved()
+        self._moved()
+
+    def _moved(self) -> None:
+        for camera in self.world.cameras:
+            camera.moved()
 
     @property
     def has_ball(self) -> bool:
-        return self._ball_body >= 0
+        return self.world.ball_body >= 0
 
     def place_ball(self, x: float, y: float) -> None:
         """Put the ball at rest on the carpet at (x, y); finite numbers of magnitude at most
@@ -350,7 +568,7 @@ class Simulation:
         position[:] = (x, y, self.model.geom("ball").size[0], 1, 0, 0, 0)
         velocity[:] = 0
         mujoco.mj_forward(self.model, self.data)
-        self.camera.moved()
+        self._moved()
 
     def ball_state(self) -> tuple[np.ndarray, np.ndarray]:
         """Views into ``data`` of the ball's free joint: position and quaternion (7), velocity
@@ -361,20 +579,22 @@ class Simulation:
 
     def ball_position(self) -> np.ndarray | None:
         """The ball's centre, or None in a scene without a ball."""
-        return self.data.xpos[self._ball_body].copy() if self.has_ball else None
+        return self.data.xpos[self.world.ball_body].copy() if self.has_ball else None
 
     def overlaps(self, depth: float) -> list[tuple[str, str, float]]:
         """Pairs that penetrate each other deeper than ``depth`` metres in the current state
-        (MuJoCo's contacts), deepest first: (first, second, metres), each "the robot", "the
-        ball" or the other geom's name (its body's, or its number, when it has none)."""
-        model, contacts = self.model, self.data.contact
-        robot = model.body_rootid[model.body("body").id]
+        (MuJoCo's contacts), deepest first: (first, second, metres), each "the robot" (with
+        several robots, each by its name: "red 2"), "the ball" or the other geom's name (its
+        body's, or its number, when it has none)."""
+        model, contacts, world = self.model, self.data.contact, self.world
+        robots = {model.body_rootid[robot._body]: robot for robot in world.robots}
 
         def name(geom: int) -> str:
             body = model.geom_bodyid[geom]
-            if model.body_rootid[body] == robot:
-                return "the robot"
-            if body == self._ball_body:
+            robot = robots.get(model.body_rootid[body])
+            if robot is not None:
+                return "the robot" if len(robots) == 1 else robot.spec.name
+            if body == world.ball_body:
                 return "the ball"
             return model.geom(geom).name or model.body(body).name or f"geom {geom}"
 
@@ -397,7 +617,8 @@ class Simulation:
     def step_frames(self, frames: int, before_frame: Callable[[], None] | None = None, sensors: bool = True) -> None:
         """Advance ``frames`` 8 ms joint frames, calling ``before_frame()`` (which must leave
         the servos alone: their set-points are planned for all the frames at once) before
-        each; raises SimulationDiverged if the physics went NaN or unbounded.
+        each; raises SimulationDiverged if the physics went NaN or unbounded. In a world whose
+        robots' controllers step together (``world.lockstep``), each frame waits for them all.
 
         Sensors are read after the frames, so MuJoCo computes them only in the last step,
         and in none with ``sensors=False`` (for a caller that reads no sensor now): they do
@@ -405,48 +626,15 @@ class Simulation:
         plain stepping, and each step without them saves the ~9 us (of ~30 us) that the IR
         rays, touch sensors and accelerometer cost.
         """
-        if not isinstance(frames, int) or frames < 1:
-            raise ValueError(f"frames must be a whole number >= 1, not {frames!r}")
-        commands = self.servos.advance_frames(frames, FRAME_MS / 1000)
-        if self.command_latency_frames:
-            queue = np.concatenate((self._queued, commands))
-            commands, self._queued = queue[:frames], queue[frames:]
-        model, data, options, camera = self.model, self.data, self.model.opt, self.camera
-        steps = [self.steps_per_frame] * frames
-        steps[-1] -= sensors  # the last step, with sensors, after the loop
-        # Camera ticks within these frames: after frame k (counted from 1) when the index moves.
-        ticks = [
-            k
-            for k in range(1, frames + 1)
-            if self.camera_frame_index(self.frame + k) != self.camera_frame_index(self.frame + k - 1)
-        ]
-        flags = options.disableflags
-        options.disableflags = flags | mujoco.mjtDisableBit.mjDSBL_SENSOR
-        try:
-            for k, (command, nstep) in enumerate(zip(commands, steps), start=1):
-                if camera.live:
-                    camera.freeze()
-                if before_frame is not None:
-                    before_frame()
-                data.ctrl[:] = command
-                if nstep:
-                    mujoco.mj_step(model, data, nstep=nstep)
-                self.frame += 1
-                if k < frames and k in ticks:
-                    camera.tick()
-        finally:
-            options.disableflags = flags
-        if sensors:
-            mujoco.mj_step(model, data)
-        if frames in ticks:
-            camera.tick()
-        if any(w.number for w in self._divergence_warnings) or not np.isfinite(data.qpos).all():
-            raise SimulationDiverged(f"physics diverged at t = {data.time:.3f} s (by frame {self.frame})")
+        if self.world.lockstep is not None:
+            self.world.lockstep.step(self, frames, before_frame)
+        else:
+            self.world.step_frames(frames, before_frame, sensors)
 
     def camera_frame_index(self, frame: int | None = None) -> int:
         """Index of the newest 30 fps camera frame (frame k at k/30 s) now, or after the 8 ms
         joint frame ``frame``."""
-        return (self.frame if frame is None else frame) * FRAME_MS * FRAME_RATE_HZ // 1000
+        return self.world.camera_frame_index(frame)
 
     def frames_to_camera_frame(self) -> int:
         """8 ms joint frames until the camera's next frame is due (4 or 5 at 30 fps)."""
@@ -496,10 +684,10 @@ class Simulation:
 
     def body_pose(self) -> tuple[np.ndarray, float, float]:
         """Body position, yaw (rad) and the angle between the body's up axis and vertical."""
-        xmat = self.data.xmat[self.model.body("body").id].reshape(3, 3)
+        xmat = self.data.xmat[self._body].reshape(3, 3)
         yaw = math.atan2(xmat[1, 0], xmat[0, 0])
         tilt = math.acos(max(-1.0, min(1.0, xmat[2, 2])))
-        return self.data.xpos[self.model.body("body").id].copy(), yaw, tilt
+        return self.data.xpos[self._body].copy(), yaw, tilt
 
     def fallen(self) -> bool:
         return self.body_pose()[2] > math.radians(60)
@@ -509,7 +697,8 @@ class Simulation:
     def set_led(self, name: str, level: float) -> None:
         """Light an LED geom at ``level`` in 0..1 of its colour (0: the unlit material)."""
         off, lit = np.array(LED_OFF_RGBA), np.array([*LED_BY_NAME[name].colour, 1.0])
-        self.model.geom_rgba[self.model.geom(name).id] = off + level * (lit - off)
+        self.model.geom_rgba[self.model.geom(self.prefix + name).id] = off + level * (lit - off)
 
     def close(self) -> None:
-        self.camera.close()
+        """Free the world's renderers (every robot's camera)."""
+        self.world.close()

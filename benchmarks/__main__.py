@@ -14,7 +14,7 @@ import platform
 import sys
 from pathlib import Path
 
-MODULES = ("pipeline", "decode", "envs", "controllers", "openr")
+MODULES = ("pipeline", "decode", "envs", "controllers", "openr", "match")
 
 
 def machine() -> str:

@@ -30,7 +30,7 @@ from aibo_sim.mtn import Motion, MtnError, mtn_new, serialize_mtn
 from aibo_sim.openr.build_ms import WRAPPER, BuildMsError, build_ms, short_name
 from aibo_sim.openr.host import MemoryStickRun
 from aibo_sim.openr.sdk import sdk_root
-from aibo_sim.options import place
+from aibo_sim.placement import place
 from aibo_sim.robot import DeviceError, Robot
 from aibo_sim.sim import Servos, Simulation, load_model, models_dir
 from openr_bridge.memory_stick import load_memory_stick

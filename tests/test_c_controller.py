@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from aibo_sim import cbind, controller
-from aibo_sim.cbind import protocol, serve
+from aibo_sim.cbind import headers, protocol, serve
 from aibo_sim.cli import main
 from aibo_sim.mtn import read_mtn
 from aibo_sim.runner import ControllerFailed, run_controller
@@ -258,6 +258,15 @@ def test_the_headers_settings_are_the_python_apis():
     defined = {name: int(value) for name, value in re.findall(r"#define (CAMERA_\w+) (\d+)", header)}
     assert defined == {name: getattr(controller, name) for name in dir(controller) if name.startswith("CAMERA_")}
     assert defined["CAMERA_WB_FL"] == ers7_camera.ocamparamWB_FL_MODE
+
+
+def test_the_headers_setting_constants_are_generated():
+    """camera.h's CAMERA_* lines are those ``headers`` makes from Sony's values and the camera
+    model's tables (2856 K: ``WHITE_BALANCE_K``), not written by hand."""
+    text = headers.CAMERA_H.read_text()
+    assert text == headers.camera_header(text), "camera.h is stale: run python -m aibo_sim.cbind.headers"
+    assert "#define CAMERA_WB_INDOOR 1     /* 2856 K */\n" in headers.camera_constants()
+    assert "#define CAMERA_GAIN_MID 2      /* 0 dB, the default */\n" in headers.camera_constants()
 
 
 def test_a_folder_without_its_main_file_is_refused(tmp_path, capsys):

@@ -2,6 +2,7 @@
 --pose, --ball, --seed) and the head camera (--camera-profile, --camera-wb, --camera-gain,
 --camera-shutter, --camera-full), with the same defaults, meanings and errors."""
 
+import ast
 import json
 import math
 from pathlib import Path
@@ -10,10 +11,14 @@ import cv2
 import numpy as np
 import pytest
 
+from aibo_sim import motions
 from aibo_sim.cli import build_parser, main
+from aibo_sim.dump.shards import _in_shard
 from aibo_sim.field import BALL_RADIUS
-from aibo_sim.options import CAMERA_DESTS, WORLD_DESTS
+from aibo_sim.options import CAMERA_DESTS, WORLD_DESTS, cut_long_words
+from aibo_sim.placement import ParameterError, make_out_folder, place
 from aibo_sim.runner import run_controller
+from aibo_sim.sim import Simulation
 
 ROOT = Path(__file__).resolve().parents[1]
 SCRIPTED = Path(__file__).parent / "controllers" / "scripted_head.py"
@@ -176,6 +181,50 @@ def test_run_controller_refuses_non_finite_pose_and_ball():
         run_controller(SCRIPTED, duration=0.2, ball=(math.inf, 0.0))
     with pytest.raises(ValueError, match="--pose"):
         run_controller(SCRIPTED, duration=0.2, pose=(1.0, 2.0))
+
+
+def test_the_library_names_parameters_and_the_command_line_its_options(tmp_path):
+    sim = Simulation(camera_profile="ideal")
+    try:
+        with pytest.raises(ParameterError, match="^pose 0.62 -0.06 0: the robot would overlap the ball by ") as caught:
+            place(sim, pose=(0.62, -0.06, 0.0))
+    finally:
+        sim.close()
+    assert cut_long_words(caught.value).startswith("--pose 0.62 -0.06 0: the robot would overlap the ball by ")
+    taken = tmp_path / "taken"
+    taken.write_text("")
+    with pytest.raises(ParameterError) as caught:
+        make_out_folder(taken)
+    assert (str(caught.value), cut_long_words(caught.value)) == (
+        f"out {taken}: not a folder",
+        f"--out {taken}: not a folder",
+    )
+    error = ParameterError.at("scene", "pose.xml", "the robot starts inside a wall; place it with", fix="pose")
+    assert cut_long_words(_in_shard(error, tmp_path / "shard_1")) == (
+        "shard_1: --scene pose.xml: the robot starts inside a wall; place it with --pose"
+    )
+    with pytest.raises(ValueError, match="^ball must be 2 finite numbers, not nan 0.0$"):
+        motions.play_motion(motions.motions()["STAND.MTN"], ball=(math.nan, 0.0))
+
+
+def _imports(path: Path) -> set[str]:
+    """The modules ``path`` imports, and each name a ``from`` import takes, as dotted names."""
+    names = set()
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.Import):
+            names.update(alias.name for alias in node.names)
+        elif isinstance(node, ast.ImportFrom):
+            module = "." * node.level + (node.module or "")
+            names.update({module, *(f"{module}.{alias.name}" for alias in node.names)})
+    return names
+
+
+def test_the_library_does_not_import_the_command_line_and_shards_do_not_import_running():
+    package = ROOT / "aibo_sim"
+    library = [package / "runner.py", package / "motions.py", package / "placement.py"]
+    for path in library + [p for p in (package / "dump").glob("*.py") if p.name not in ("__init__.py", "command.py")]:
+        assert not any("options" in name.split(".") for name in _imports(path)), path
+    assert not any("running" in name.split(".") for name in _imports(package / "dump" / "shards.py"))
 
 
 def _run(tmp_path, name, *options):

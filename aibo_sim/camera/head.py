@@ -27,6 +27,7 @@ from .lens import LENSES, Lens
 from .sensor import CameraProfile, CameraSettings, RobotColour, SceneLight, Sensor, camera_profile
 
 HEAD_CAMERA_GROUPS = (0, 2)  # group 1 holds the robot's geoms behind the head camera
+BEHIND_CAMERA_GROUP = 1
 # MuJoCo camera axes (x right, y up, z backwards) to OpenCV's (x right, y down, z forward).
 _MUJOCO_TO_OPENCV = np.diag([1.0, -1.0, -1.0])
 
@@ -143,11 +144,12 @@ class HeadCamera:
         profile: str | CameraProfile = "ers7",
         settings: CameraSettings | None = None,
         light: SceneLight | None = None,
+        camera_name: str = HEAD_CAMERA,
     ):
         self.sim, self.model = sim, sim.model
         self.width, self.height = size
         self.profile = camera_profile(profile)
-        self.camera_id = self.model.camera(HEAD_CAMERA).id
+        self.camera_id = self.model.camera(camera_name).id
         self.light = light or scene_light(self.model)
         self.lens: Lens = LENSES[self.profile.lens].scaled(self.width, self.height)
         self._settings = settings or CameraSettings()
@@ -281,15 +283,28 @@ class HeadCamera:
 
     def _render(self, data: mujoco.MjData, kind: str) -> np.ndarray:
         if self._renderer is None:
-            self._renderer = Renderer(self.model, *self.render_size, groups=HEAD_CAMERA_GROUPS)
+            self._renderer = Renderer(
+                self.model,
+                *self.render_size,
+                groups=(*HEAD_CAMERA_GROUPS, BEHIND_CAMERA_GROUP),
+                hidden=self.own_geoms(),
+                subpixel=self.other_robots_geoms(),
+            )
         render = {
             "rgb": self._renderer.render,
             "rgba": self._renderer.render_rgba,
             "depth": self._renderer.render_depth,
             "segmentation": self._renderer.render_segmentation,
         }[kind]
-        if self._pinhole is None:
-            return render(data, self.camera_id)
+        # The renderer hides geoms by changing their groups in the model, and the lens by
+        # changing the camera's intrinsics: the robots of a match share the model, one at a time.
+        with self.sim.world.render_lock:
+            if self._pinhole is None:
+                return render(data, self.camera_id)
+            return self._render_pinhole(render, data)
+
+    def _render_pinhole(self, render, data: mujoco.MjData) -> np.ndarray:
+        """``render`` through the pinhole camera the lens's picture is resampled from."""
         model, cam, pinhole = self.model, self.camera_id, self._pinhole
         saved = model.cam_intrinsic[cam].copy(), model.cam_sensorsize[cam].copy(), model.cam_resolution[cam].copy()
         pitch = 1e-5  # metres per render pixel: any value, as long as the three agree
@@ -303,6 +318,21 @@ class HeadCamera:
             return render(data, cam)
         finally:
             model.cam_intrinsic[cam], model.cam_sensorsize[cam], model.cam_resolution[cam] = saved
+
+    def _other_robots(self) -> np.ndarray:
+        """Whether each geom belongs to another robot of the world."""
+        model = self.model
+        others = [robot._body for robot in self.sim.world.robots if robot is not self.sim]
+        return np.isin(model.body_rootid[model.geom_bodyid], model.body_rootid[others])
+
+    def own_geoms(self) -> np.ndarray:
+        """Ids of the geoms this camera never draws: those of group ``BEHIND_CAMERA_GROUP`` but the
+        other robots' (in a match, each camera sees the other robots whole)."""
+        return np.flatnonzero((self.model.geom_group == BEHIND_CAMERA_GROUP) & ~self._other_robots())
+
+    def other_robots_geoms(self) -> np.ndarray:
+        """Ids of the other robots' geoms: drawn only where they span a pixel (``Renderer``)."""
+        return np.flatnonzero(self._other_robots())
 
     # ---------------------------------------------------------------- labels
 

@@ -60,6 +60,7 @@ from .lens import Warp
 
 GAIN_STEPS = {"low": -1, "mid": 0, "high": 1}  # -6, 0, +6 dB: each step doubles the signal
 SHUTTER_S = {"slow": 1 / 50, "mid": 1 / 100, "fast": 1 / 200}
+# Each white balance preset's colour temperature, the one table of them (camera.h's comments are made from it).
 WHITE_BALANCE_K = {"indoor": 2856.0, "fl": 5000.0, "outdoor": 6500.0}
 REFERENCE_WHITE_K = 6504.0  # the render's neutral light: sRGB's D65 white
 # Section 3: rUNSWift 2005's vignetting, raw value at radius r for a centre value, per channel.

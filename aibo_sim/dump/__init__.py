@@ -110,8 +110,8 @@ from .formats import (
     yuv444_bytes,
 )
 from .reading import Dump, DumpFrame, load_dump
-from .running import POLICIES, DumpSummary, dump
-from .writing import DumpWriter, write_atomic
+from .running import POLICIES, dump
+from .writing import DumpSummary, DumpWriter, write_atomic
 
 __all__ = [
     "DEFAULT_FORMATS",

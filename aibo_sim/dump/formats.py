@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import io
 import os
+from collections.abc import Sequence
 
 import mujoco
 import numpy as np
@@ -12,10 +13,12 @@ import openr_bridge
 from openr_bridge.image import BAND_RUNS, IMAGE_INFO_SIZE, VECTOR_INFO_SIZE
 
 from ..camera import HEAD_CAMERA_GROUPS
+from ..camera.head import BEHIND_CAMERA_GROUP
 from ..ers7 import JOINTS
-from ..field import SEGMENTATION_CLASSES
+from ..field import LABEL_TEAMS, SEGMENTATION_CLASSES
 from ..files import open_file
-from ..sim import Simulation
+from ..sim import Simulation, robot_prefix
+from ..team import MAX_ROBOTS, RobotSpec
 
 FORMATS = ("rgb", "yuv444", "yuv420", "annex", "openr", "bands", "luma", "depth", "seg", "mp4", "coco")
 DEFAULT_FORMATS = ("rgb", "yuv420", "openr", "mp4")
@@ -35,8 +38,9 @@ PATHS = {
     "seg": "seg/{index:06d}.png",
     "mp4": "video.mp4",
     "coco": "coco.json",
+    "robots": "robots/{index:06d}.png",  # a match's robot instances: not in FORMATS until the writer writes it
 }
-# Geoms by name prefix (first match wins); unnamed geoms of the robot's bodies are "robot".
+# Geoms by name prefix (first match wins); the other geoms of every robot's bodies are "robot".
 CLASS_PREFIXES = (
     ("field_line", "line"),
     ("field", "field"),
@@ -96,17 +100,86 @@ def npy(array: np.ndarray) -> bytes:
     return buffer.getvalue()
 
 
+def robot_roots(model: mujoco.MjModel) -> dict[int, int]:
+    """Each robot's root body id in ``model`` and its instance id: its place in the world from 1
+    (robot 1 the scene's own ERS-7, root body ``body``; robot k's root ``robot{k}/body``, ``sim.robot_prefix``)."""
+    roots = {}
+    for index in range(MAX_ROBOTS):
+        body = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, robot_prefix(index) + "body")
+        if body >= 0:
+            roots[int(model.body_rootid[body])] = index + 1
+    return roots
+
+
+def geom_robots(model: mujoco.MjModel) -> np.ndarray:
+    """Robot instance id (``robot_roots``; 0: no robot's) per geom id, uint8, plus a last entry
+    (0, background) that id -1 selects."""
+    instances = np.zeros(model.ngeom + 1, np.uint8)
+    roots = model.body_rootid[model.geom_bodyid]
+    for root, instance in robot_roots(model).items():
+        instances[:-1][roots == root] = instance
+    return instances
+
+
 def geom_classes(model: mujoco.MjModel) -> np.ndarray:
-    """Segmentation class id per geom id, plus a last entry (background) that id -1 selects."""
-    robot_root = model.body_rootid[model.body("body").id]
+    """Segmentation class id per geom id, plus a last entry (background) that id -1 selects:
+    by name (``CLASS_PREFIXES``), else "robot" for every robot's geoms (``robot_roots``)."""
+    robot = geom_robots(model)[:-1] > 0
     classes = np.zeros(model.ngeom + 1, np.uint8)
     for geom in range(model.ngeom):
         name = model.geom(geom).name
         label = next((label for prefix, label in CLASS_PREFIXES if name.startswith(prefix)), None)
-        if label is None and model.body_rootid[model.geom_bodyid[geom]] == robot_root:
+        if label is None and robot[geom]:
             label = "robot"
         classes[geom] = SEGMENTATION_CLASSES.index(label or "background")
     return classes
+
+
+def robots_meta(robots: Sequence[RobotSpec], observer: int) -> dict:
+    """meta.json's ``"robots"`` of a dump of the camera of robot ``observer`` (its instance id, from
+    1) of a world of ``robots`` (``sim.world.robot_specs``), written for a match only (``is_match``:
+    a lone robot's meta.json stays as it was): ``observer``; ``instances``, each robot by
+    instance id (``robot_roots``) with its team (None: no uniform), player number and name;
+    ``teams``, the team ids of ``robot_labels`` (``field.LABEL_TEAMS``: 0 none)."""
+    return {
+        "observer": observer,
+        "instances": [
+            {"id": index + 1, "team": robot.team, "number": robot.number, "name": robot.name}
+            for index, robot in enumerate(robots)
+        ],
+        "teams": list(LABEL_TEAMS),
+    }
+
+
+def is_match(robots: Sequence[RobotSpec]) -> bool:
+    """Whether a world of ``robots`` is a match (several robots, or one in a uniform): its dumps
+    record ``robots_meta`` and may hold ``robot_labels``."""
+    return len(robots) > 1 or any(robot.team is not None for robot in robots)
+
+
+def instance_teams(robots: dict) -> np.ndarray:
+    """The team id (``field.LABEL_TEAMS``) of each robot instance id, uint8, from ``robots_meta``
+    (index 0: no robot): ``instance_teams(meta["robots"])[instances]`` is a dump's team image."""
+    teams = np.zeros(MAX_ROBOTS + 1, np.uint8)
+    for robot in robots["instances"]:
+        teams[robot["id"]] = LABEL_TEAMS.index(robot["team"])
+    return teams
+
+
+def robot_labels(sim: Simulation, ids: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Per-pixel robot instance and team of ``sim``'s camera frame: two (h, w) uint8 images, the
+    instance id (``robot_roots``: the robot's place in the world from 1, ``robots_meta``; 0 no
+    robot) and the team id (``field.LABEL_TEAMS``: 1 red, 2 blue; 0 no robot or none). ``ids``: the
+    frame's ``camera.segmentation()`` (geom ids), rendered when not given. The pixels are those of
+    the segmentation's class "robot": every robot the camera draws, the observing robot's own
+    body only where the camera can see it (its paws; never the geoms it leaves out, ``own_geoms``)."""
+    if ids is None:
+        ids = sim.camera.segmentation()
+    instances = geom_robots(sim.model)[ids]
+    teams = np.zeros(MAX_ROBOTS + 1, np.uint8)
+    for index, robot in enumerate(sim.world.robots):
+        teams[index + 1] = LABEL_TEAMS.index(robot.spec.team)
+    return instances, teams[instances]
 
 
 # ---------------------------------------------------------------- layouts
@@ -145,6 +218,10 @@ def file_layouts(formats, width: int, height: int) -> dict:
             len(npy(np.zeros((height, width), np.float32))),
         ),
         "seg": (f"PNG, 8-bit class ids (segmentation_classes), {size}", None),
+        "robots": (
+            f'PNG, 8-bit robot instance ids (meta.json "robots": 0 none, k the world\'s robot k), {size}',
+            None,
+        ),
         "mp4": (f"MP4 (mp4v), 30 fps, {size}", None),
         "coco": (
             "COCO detection annotations (ball, goal, beacon, robot boxes and masks with visibility) "
@@ -176,7 +253,8 @@ def ball_in_image(sim: Simulation) -> dict | None:
     behind the camera), visibility, distance; None in a scene without a ball.
 
     Visible: in front of the camera, projected inside the image, and the line of sight to
-    the centre hits the ball first (the head camera's geom groups).
+    the centre hits the ball first (the geoms the head camera draws: its geom groups, and in a
+    match the other robots whole, ``camera.own_geoms``).
     """
     camera, model, data = sim.camera, sim.model, sim.data
     frame, ball = camera.frame(), sim.ball_position()
@@ -188,9 +266,20 @@ def ball_in_image(sim: Simulation) -> dict | None:
     if not depth > 0:
         return {"pixel": None, "visible": False, "distance_m": distance}
     inside = -0.5 <= u <= camera.width - 0.5 and -0.5 <= v <= camera.height - 0.5
-    groups = np.array([g in HEAD_CAMERA_GROUPS for g in range(6)], np.uint8)
     hit = np.array([-1], np.int32)
-    mujoco.mj_ray(model, data, frame.position, offset, groups, 1, -1, hit)
+    if len(sim.world.robots) == 1:
+        groups = np.array([g in HEAD_CAMERA_GROUPS for g in range(6)], np.uint8)
+        mujoco.mj_ray(model, data, frame.position, offset, groups, 1, -1, hit)
+    else:  # the other robots' group-1 geoms (heads, tails) hide the ball too; this robot's never drawn
+        shown = (*HEAD_CAMERA_GROUPS, BEHIND_CAMERA_GROUP)
+        hidden = next(g for g in range(mujoco.mjNGROUP) if g not in shown)
+        groups = np.array([g in shown for g in range(6)], np.uint8)
+        own, saved = camera.own_geoms(), model.geom_group.copy()
+        model.geom_group[own] = hidden
+        try:
+            mujoco.mj_ray(model, data, frame.position, offset, groups, 1, -1, hit)
+        finally:
+            model.geom_group[:] = saved
     return {
         "pixel": [float(u), float(v)],
         "visible": bool(inside and hit[0] == model.geom("ball").id),

@@ -6,7 +6,6 @@ from __future__ import annotations
 import contextlib
 import hashlib
 import time
-from dataclasses import dataclass
 from pathlib import Path
 
 import gymnasium
@@ -23,13 +22,14 @@ from ..camera import camera_profile as resolve_profile  # dump's argument of tha
 from ..cbind import compile_controller, controller_sources, is_c_controller
 from ..files import make_folder
 from ..mtn import MODES as MTN_MODES
-from ..options import check_place, start_values
+from ..placement import check_place, start_values
 from ..render import Renderer
 from ..robot import BACKENDS, SimulationEnd, check_memory_stick
 from ..runner import MEMORY_STICK, Progress, check_python_controller, run_controller
 from ..sim import ModelError, ball_joint, is_seed, load_model
 from .formats import DEFAULT_FORMATS, FORMATS, DumpError
-from .writing import CONTROLLER_FILES, DumpWriter
+from .shards import dump_sharded, ray_session
+from .writing import CONTROLLER_FILES, DumpSummary, DumpWriter
 
 POLICIES = ("random", "scripted", "zero")
 # A local worker's memory, with a margin: ~135 MB of its own measured (a controller dump, 208x160,
@@ -38,20 +38,6 @@ WORKER_MEMORY_MB = 200
 ENGINES = ("local", "ray")
 RAY_INSTALL = "pip install 'aibo-sim[ray]'"
 SCRIPTED_SWEEP_HZ = 0.25
-
-
-@dataclass
-class DumpSummary:
-    out: str
-    frames: int  # complete frames in the dump
-    new_frames: int  # written by this run
-    bytes_written: int
-    wall_s: float
-    repaired_frames: int = 0  # complete frames whose missing or wrong-sized files this run rewrote
-
-    @property
-    def frames_per_s(self) -> float:
-        return self.new_frames / max(self.wall_s, 1e-9)
 
 
 class _CameraFrames:
@@ -376,7 +362,7 @@ def dump(
         if env is not None:  # the environments place the ball at each reset
             raise ModelError(f"--scene {scene}: environment {env} places the ball, but {exc}") from None
         placeable_ball = False
-    pose, ball = start_values("--pose", pose, 3), start_values("--ball", ball, 2)
+    pose, ball = start_values("pose", pose, 3), start_values("ball", ball, 2)
     if controller is not None:
         check_place(
             scene, pose, ball, ball_type
@@ -413,9 +399,7 @@ def dump(
     parameters["model_sha256"] = model_sha256(model)
     if workers == 1:
         return dump_one(parameters, out, resume)
-    from .shards import dump_sharded, ray_session
-
     if engine == "local":
-        return dump_sharded(parameters, out, resume, workers, engine, placeable_ball)
+        return dump_sharded(dump_one, parameters, out, resume, workers, engine, placeable_ball)
     with ray_session(ray_address):  # before the folder is touched: a Ray that cannot start changes nothing
-        return dump_sharded(parameters, out, resume, workers, engine, placeable_ball)
+        return dump_sharded(dump_one, parameters, out, resume, workers, engine, placeable_ball)

@@ -1,5 +1,6 @@
 """A dump in shards: worker processes that die with their parent (``engine="local"``) or Ray
-tasks (``engine="ray"``), each shard a dump of its own folder, merged at the end."""
+tasks (``engine="ray"``), each shard a dump of its own folder, merged at the end. A shard is
+dumped by the function ``dump_sharded`` is given (``running.dump_one``)."""
 
 from __future__ import annotations
 
@@ -9,6 +10,7 @@ import signal
 import socket
 import threading
 import time
+from collections.abc import Callable
 from multiprocessing import connection, get_context
 from pathlib import Path
 
@@ -22,8 +24,9 @@ from ..runner import Progress
 from .coco import coco_bytes
 from .formats import DUMP_FORMAT, PATHS, DumpError
 from .reading import LINES
-from .running import DumpSummary, dump_one
-from .writing import COCO, check_destination, prepare_folder, remove_temporary_files, write_atomic
+from .writing import COCO, DumpSummary, check_destination, prepare_folder, remove_temporary_files, write_atomic
+
+DumpShard = Callable[..., DumpSummary]  # (parameters, folder, resume, lock_wait_s=, command=): one shard
 
 RAY_MAX_RETRIES = 3  # a shard whose Ray worker is lost runs again (resuming its folder)
 RAY_CONNECT_S = 5.0  # an --ray-address that does not answer in this is refused (ray.init would wait minutes)
@@ -53,12 +56,14 @@ def die_with_parent(parent_pid: int) -> None:
     threading.Thread(target=watch, name="aibo-sim parent watchdog", daemon=True).start()
 
 
-def _shard_worker(results, parent_pid: int, parameters: dict, out: Path, resume: bool, command: str) -> None:
+def _shard_worker(
+    results, parent_pid: int, dump_shard: DumpShard, parameters: dict, out: Path, resume: bool, command: str
+) -> None:
     """A worker process's body: one shard, its summary or exception sent back on ``results``."""
     die_with_parent(parent_pid)
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C reaches the whole group: the parent stops us
     try:
-        result = ("ok", dump_one(parameters, out, resume, lock_wait_s=SHARD_LOCK_WAIT_S, command=command))
+        result = ("ok", dump_shard(parameters, out, resume, lock_wait_s=SHARD_LOCK_WAIT_S, command=command))
     except BaseException as exc:  # noqa: BLE001 - the parent reports it
         result = ("error", exc)
     try:
@@ -105,7 +110,9 @@ def _remove_temporary_files(shards: list[tuple[dict, Path]]) -> None:
         remove_temporary_files(folder, {f: {"path": PATHS[f]} for f in parameters["formats"]})
 
 
-def _run_shards(shards: list[tuple[dict, Path]], resume: bool, progress: _ShardProgress) -> list[DumpSummary]:
+def _run_shards(
+    dump_shard: DumpShard, shards: list[tuple[dict, Path]], resume: bool, progress: _ShardProgress
+) -> list[DumpSummary]:
     """Each shard in its own spawned process; the first failure stops the others and is raised.
     However this returns (an exception, a signal turned into one), no worker outlives it."""
     context, parent, command = get_context("spawn"), os.getpid(), command_line()
@@ -117,7 +124,15 @@ def _run_shards(shards: list[tuple[dict, Path]], resume: bool, progress: _ShardP
                 target=_shard_worker,
                 name=f"aibo-sim dump {folder.name}",
                 daemon=True,
-                args=(send, parent, parameters, folder, resume, f"{command} (worker of pid {parent}: {folder.name})"),
+                args=(
+                    send,
+                    parent,
+                    dump_shard,
+                    parameters,
+                    folder,
+                    resume,
+                    f"{command} (worker of pid {parent}: {folder.name})",
+                ),
             )
             process.start()
             send.close()
@@ -159,9 +174,9 @@ def _in_shard(error: BaseException, folder: Path) -> BaseException:
     return named.with_traceback(error.__traceback__)
 
 
-def _ray_shard(parameters: dict, folder: Path, command: str) -> DumpSummary:
+def _ray_shard(dump_shard: DumpShard, parameters: dict, folder: Path, command: str) -> DumpSummary:
     """A Ray task's body: one shard, resumed (a retried task finds its lost attempt's frames)."""
-    return dump_one(parameters, folder, True, lock_wait_s=SHARD_LOCK_WAIT_S, command=command)
+    return dump_shard(parameters, folder, True, lock_wait_s=SHARD_LOCK_WAIT_S, command=command)
 
 
 @contextlib.contextmanager
@@ -190,7 +205,9 @@ def ray_session(address: str | None):
             ray.shutdown()
 
 
-def _run_ray_shards(shards: list[tuple[dict, Path]], progress: _ShardProgress) -> list[DumpSummary]:
+def _run_ray_shards(
+    dump_shard: DumpShard, shards: list[tuple[dict, Path]], progress: _ShardProgress
+) -> list[DumpSummary]:
     """Each shard as a Ray task (retried when its worker is lost); the first failure cancels
     the others and is raised."""
     import ray
@@ -198,7 +215,7 @@ def _run_ray_shards(shards: list[tuple[dict, Path]], progress: _ShardProgress) -
     task = ray.remote(num_cpus=1, max_retries=RAY_MAX_RETRIES)(_ray_shard)
     command = command_line()
     pending = {
-        task.remote(parameters, folder, f"{command} (Ray task: {folder.name})"): k
+        task.remote(dump_shard, parameters, folder, f"{command} (Ray task: {folder.name})"): k
         for k, (parameters, folder) in enumerate(shards)
     }
     results = [None] * len(shards)
@@ -229,10 +246,10 @@ def _run_ray_shards(shards: list[tuple[dict, Path]], progress: _ShardProgress) -
 
 
 def dump_sharded(
-    parameters: dict, out: Path, resume: bool, workers: int, engine: str, placeable_ball: bool
+    dump_shard: DumpShard, parameters: dict, out: Path, resume: bool, workers: int, engine: str, placeable_ball: bool
 ) -> DumpSummary:
-    """The dump as ``workers`` shards; in a controller dump without a ball position, each
-    shard's ball is drawn from its seed where the scene's ball can be placed."""
+    """The dump as ``workers`` shards, each dumped by ``dump_shard``; in a controller dump without
+    a ball position, each shard's ball is drawn from its seed where the scene's ball can be placed."""
     start = time.perf_counter()
     meta = {
         "format": DUMP_FORMAT,
@@ -254,7 +271,11 @@ def dump_sharded(
             check_destination(out / f"shard_{k}", shard_of=out)
         progress = _ShardProgress([folder for _, folder in shards], parameters["frames"])
         try:
-            results = _run_ray_shards(shards, progress) if engine == "ray" else _run_shards(shards, resume, progress)
+            results = (
+                _run_ray_shards(dump_shard, shards, progress)
+                if engine == "ray"
+                else _run_shards(dump_shard, shards, resume, progress)
+            )
         finally:
             progress.close()
         coco = coco_bytes(out, [folder for _, folder in shards]) if "coco" in parameters["formats"] else b""

@@ -7,6 +7,7 @@ import errno
 import json
 import os
 import re
+from dataclasses import dataclass
 from pathlib import Path
 
 import cv2
@@ -241,6 +242,22 @@ def prepare_folder(
 
 
 # ---------------------------------------------------------------- the writer
+
+
+@dataclass
+class DumpSummary:
+    """What ``dump`` returns: the dump's folder, its frames and what this run wrote."""
+
+    out: str
+    frames: int  # complete frames in the dump
+    new_frames: int  # written by this run
+    bytes_written: int
+    wall_s: float
+    repaired_frames: int = 0  # complete frames whose missing or wrong-sized files this run rewrote
+
+    @property
+    def frames_per_s(self) -> float:
+        return self.new_frames / max(self.wall_s, 1e-9)
 
 
 class DumpWriter:

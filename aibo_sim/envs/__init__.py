@@ -9,6 +9,9 @@ Without importing anything first, name the module in the id (Gymnasium 1.x has n
 loading): ``gymnasium.make("aibo_sim.envs:aibo_sim/HeadTrackBall-v0")``.
 The classes live in ``aibo_sim.envs.head_track`` and ``aibo_sim.envs.reach_ball``; the options
 and observations are described in ``aibo_sim.envs.base``.
+A match (several robots, red against blue): ``aibo_sim.envs.match.MatchEnv``, a PettingZoo
+``ParallelEnv`` (every robot an agent), and ``aibo_sim/MatchVsScripted-v0``
+(``ScriptedOpponentsEnv``: one learning robot, the others scripted ball chasers).
 ``aibo_sim.envs.vector.BusyWaitWorker`` is a worker for ``make_vec(..., "async")`` that keeps
 its process awake between steps. ``make_vec(id, num_envs)`` without a mode (or with
 ``vectorization_mode="vector_entry_point"``) makes a ``HybridVectorEnv`` (``aibo_sim.envs.vector``,
@@ -25,6 +28,7 @@ import gymnasium
 ENV_SPECS = {
     "aibo_sim/HeadTrackBall-v0": ("aibo_sim.envs.head_track:HeadTrackBallEnv", 300),
     "aibo_sim/ReachBall-v0": ("aibo_sim.envs.reach_ball:ReachBallEnv", 450),
+    "aibo_sim/MatchVsScripted-v0": ("aibo_sim.envs.match:ScriptedOpponentsEnv", 900),
 }
 
 

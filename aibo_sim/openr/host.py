@@ -130,11 +130,11 @@ class SensorFrame:
             + [(index[ers7.WLAN_SWITCH_LOCATOR], kinds["SWITCH"])]
         )
         distances = len(ers7.DISTANCE_SENSORS)
-        self._qpos = np.array([sim.model.joint(ers7.JOINTS[i].name).qposadr[0] for i in self.joints])
-        self._touch_adr = np.array([sim.model.sensor(s.name).adr[0] for s in touches])
+        self._qpos = np.array([sim.model.joint(sim.prefix + ers7.JOINTS[i].name).qposadr[0] for i in self.joints])
+        self._touch_adr = np.array([sim.model.sensor(sim.prefix + s.name).adr[0] for s in touches])
         self._threshold = np.array([s.threshold for s in touches])
         self._joints = np.array(self.joints)
-        self._max_force = sim.model.actuator_forcerange[self._joints, 1]
+        self._max_force = sim.model.actuator_forcerange[sim.servos.ctrl][self._joints, 1]
         head = [i for i, s in enumerate(ers7.DISTANCE_SENSORS) if s.name in ("ir_near", "ir_far")]
         # The head's two sensors take turns, one a frame: on the other's frame a sensor keeps
         # its last value and gives no signal. _silent[tick % 2] marks the one that rests.
@@ -161,7 +161,7 @@ class SensorFrame:
         sim, data = self.sim, self.sim.data
         self._fill(
             data.qpos,
-            data.actuator_force,
+            data.actuator_force[sim.servos.ctrl],
             sim.servos.command,
             np.array(sim.distances_mm()),
             self._silent[tick % 2],
@@ -204,7 +204,7 @@ class MemoryStickRun:
         self._led_of = {self._locators.index(led.locator): led.name for led in ers7.LEDS}
         self._ears = [i for i, j in enumerate(ers7.JOINTS) if "-Joint4:" in j.locator]
         self._kp = np.zeros(len(ers7.JOINTS))  # each joint's stiffness when powered (0: gain off)
-        self._standard_kp = sim.model.actuator_gainprm[:, 0].copy()
+        self._standard_kp = sim.model.actuator_gainprm[sim.servos.ctrl, 0].copy()
         self._kp[self._ears] = self._standard_kp[self._ears]
         self._powered = False
         self._power = dict(BATTERY)
@@ -439,13 +439,14 @@ class MemoryStickRun:
         stiffness comes on holds its position."""
         model, servos = self.sim.model, self.sim.servos
         kp = self._kp if self._powered else np.zeros_like(self._kp)
-        waking = (kp > 0) & (model.actuator_gainprm[:, 0] == 0)
+        gains, biases = model.actuator_gainprm[servos.ctrl], model.actuator_biasprm[servos.ctrl]  # this robot's
+        waking = (kp > 0) & (gains[:, 0] == 0)
         if waking.any():
             positions = self.sim.joint_positions()
             servos.set_target(np.flatnonzero(waking), positions[waking])
             servos.command[waking] = servos.target[waking]
-        model.actuator_gainprm[:, 0] = kp
-        model.actuator_biasprm[:, 1] = -kp
+        gains[:, 0] = kp
+        biases[:, 1] = -kp
 
     def _write_sound(self) -> None:
         if not self._sound or self.sound_path is None:

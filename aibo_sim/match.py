@@ -1,0 +1,344 @@
+"""A match: several robots on one field, each run by its own controller in its own thread.
+
+Every robot's controller (a Python file, a C/C++ controller, an OPEN-R memory stick) drives
+its own robot (``Simulation`` view of the shared ``World``) as in a run of one robot; the
+world advances one 8 ms frame when every robot still running has asked for it (``Lockstep``),
+so the controllers run in step whatever their speeds, and the same seed gives the same match.
+Each robot's camera frames, console and ``run.json`` go to ``out/robotN/`` (N its place in the
+robots' list, from 1), the match's ``run.json`` to ``out``.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import sys
+import threading
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+from . import controller
+from .camera import CameraSettings
+from .cbind import compile_controller, controller_sources, is_c_controller
+from .files import make_folder, write_file_atomic
+from .openr.host import MemoryStickRun
+from .placement import PLACEMENT_OVERLAP_M, make_out_folder
+from .robot import Robot, SimulationEnd
+from .runner import (
+    CONSOLE_FILE,
+    MEMORY_STICK,
+    RUN_FILE,
+    SOUND_FILE,
+    ControllerFailed,
+    FrameWriter,
+    Progress,
+    _memory_stick,
+    _run_controller_program,
+    _run_memory_stick,
+    check_python_controller,
+    motion_dirs,
+)
+from .sim import Simulation, SimulationDiverged
+from .team import check_robots
+
+
+def robot_folder(index: int) -> str:
+    """The folder of robot ``index`` (from 0) in a match's ``--out``: ``robot1``, ``robot2``, ..."""
+    return f"robot{index + 1}"
+
+
+class Lockstep:
+    """Robots' controllers, each in its own thread, stepping one world together: the world
+    advances a frame when every robot still running has asked for it (``step``); a robot whose
+    controller ended ``leave``s; ``stop`` ends every robot's next step with SimulationEnd."""
+
+    def __init__(self, world):
+        self.world = world
+        self._running = {robot.index for robot in world.robots}
+        self._waiting: set[int] = set()
+        self._generation = 0
+        self._failure: BaseException | None = None
+        self._stopped = False
+        self._condition = threading.Condition()
+
+    def step(self, robot: Simulation, frames: int, before_frame=None) -> None:
+        """Advance ``frames`` frames with the other robots (``Simulation.step_frames``)."""
+        if not isinstance(frames, int) or frames < 1:
+            raise ValueError(f"frames must be a whole number >= 1, not {frames!r}")
+        for _ in range(frames):
+            if before_frame is not None:
+                before_frame()  # the world cannot move before this robot asks for the frame
+            with self._condition:
+                if self._stopped or self._failure is not None:
+                    raise SimulationEnd()
+                self._waiting.add(robot.index)
+                generation = self._generation
+                self._advance_when_all_wait()
+                while self._generation == generation and not self._stopped and self._failure is None:
+                    self._condition.wait()
+                if self._generation == generation:
+                    raise SimulationEnd()
+
+    def _advance_when_all_wait(self) -> None:
+        if not self._running or not self._waiting >= self._running:
+            return
+        try:
+            self.world.step_frames(1)
+        except BaseException as error:  # the physics diverged: every robot stops
+            self._failure = error
+            self._condition.notify_all()
+            raise
+        self._waiting.clear()
+        self._generation += 1
+        self._condition.notify_all()
+
+    def leave(self, robot: Simulation) -> None:
+        """``robot``'s controller has ended: the world no longer waits for it."""
+        with self._condition:
+            self._running.discard(robot.index)
+            self._waiting.discard(robot.index)
+            if self._waiting:
+                try:
+                    self._advance_when_all_wait()
+                except BaseException:  # kept in _failure: the robots that wait report it
+                    pass
+
+    def stop(self) -> None:
+        with self._condition:
+            self._stopped = True
+            self._condition.notify_all()
+
+    @property
+    def failure(self) -> BaseException | None:
+        return self._failure
+
+
+@dataclass
+class _Player:
+    """One robot of a match: its spec, controller and what runs it."""
+
+    robot: Simulation
+    path: Path
+    kind: str  # "python", "c" or MEMORY_STICK
+    executable: Path | None = None
+    stick: object = None
+    program: object = None
+    writer: FrameWriter | None = None
+    error: BaseException | None = None
+
+
+def _player(robot: Simulation, controller_path, compiled: dict) -> _Player:
+    """The robot's controller, checked (and compiled, once per controller) before the match starts."""
+    path = Path(controller_path).resolve()
+    stick = _memory_stick(path, None, None, None)
+    if stick is not None:
+        return _Player(robot, stick.root, MEMORY_STICK, stick=stick)
+    if is_c_controller(path):
+        if path not in compiled:
+            compiled[path] = compile_controller(path)
+        return _Player(robot, controller_sources(path)[0], "c", executable=compiled[path])
+    check_python_controller(path)
+    return _Player(robot, path, "python")
+
+
+def run_match(
+    robots,
+    *,
+    controller_path=None,
+    duration: float = 10.0,
+    scene=None,
+    seed: int = 0,
+    out=None,
+    camera_full: bool = False,
+    camera_profile: str = "ers7",
+    camera_settings: CameraSettings | None = None,
+    ball: tuple[float, float] | None = None,
+    ball_type: str = "robocup",
+    frame_listeners=(),
+    robot_listeners=None,
+    progress: bool = True,
+) -> dict:
+    """Run a match of ``robots`` (``team.RobotSpec``s, up to ``team.MAX_ROBOTS``) for ``duration``
+    simulated seconds; each robot runs its spec's controller, or ``controller_path`` when it
+    names none. Returns the match's summary (what ``out/run.json`` holds).
+
+    ``frame_listeners`` are called after every 8 ms frame with robot 1's program (its ``Robot``
+    or ``MemoryStickRun``); ``robot_listeners(robot)``, when given, returns for each robot (its
+    ``Simulation``) the listeners called so with its own program, in its controller's thread.
+
+    Raises:
+        TeamError, ValueError: bad robots (one line naming them), or a robot without controller.
+        ControllerFailed: one or more controllers failed (the others ran to the end).
+        SimulationDiverged: the physics diverged (every robot stopped there).
+    """
+    robots = check_robots(robots, "--robots")
+    if not (isinstance(duration, (int, float)) and math.isfinite(duration) and duration > 0):
+        raise ValueError(f"--duration must be a positive number of seconds, not {duration!r}")
+    missing = [robot.name for robot in robots if robot.controller is None and controller_path is None]
+    if missing:
+        raise ValueError(
+            f"--robots: {', '.join(missing)} has no controller: name one in the robots file or run's CONTROLLER"
+        )
+    sim = Simulation(
+        scene,
+        seed=seed,
+        camera_full=camera_full,
+        camera_profile=camera_profile,
+        camera_settings=camera_settings,
+        ball_type=ball_type,
+        robots=robots,
+    )
+    world, compiled, out = sim.world, {}, out and make_out_folder(out)
+    players: list[_Player] = []
+    try:
+        if ball is not None:
+            sim.place_ball(*ball)
+        for first, second, depth in sim.overlaps(PLACEMENT_OVERLAP_M):
+            if first != second:
+                raise ValueError(f"--robots: {first} starts inside {second} ({depth * 100:.1f} cm deep)")
+        for robot in world.robots:
+            players.append(_player(robot, robot.spec.controller or controller_path, compiled))
+        for player in players:
+            folder = out / robot_folder(player.robot.index) if out else None
+            if player.kind == MEMORY_STICK:
+                player.program = MemoryStickRun(
+                    player.robot,
+                    player.stick,
+                    folder or Path.cwd(),
+                    log_path=folder and folder / CONSOLE_FILE,
+                    sound_path=folder and folder / SOUND_FILE,
+                )
+                listeners = player.program.camera_listeners
+            else:
+                player.program = Robot(player.robot, search_dirs=motion_dirs(player.path))
+                listeners = player.program.camera_source.listeners
+            if folder is not None:
+                make_folder(folder)
+                player.writer = FrameWriter(folder, controller=player.path, backend=player.kind)
+                listeners.append(player.writer)
+            player.program.end_ms = int(round(duration * 1000))
+    except BaseException:
+        for player in players:
+            if player.writer is not None:
+                player.writer.lock.release()
+        sim.close()
+        raise
+    players[0].program.frame_listeners.extend(frame_listeners)
+    if robot_listeners is not None:
+        for player in players:
+            player.program.frame_listeners.extend(robot_listeners(player.robot))
+    progress_bar = Progress(duration, enabled=progress)
+    players[0].program.frame_listeners.append(progress_bar)
+    world.lockstep = Lockstep(world)
+    start = time.perf_counter()
+    threads = [
+        threading.Thread(target=_play, args=(player, world.lockstep), name=f"robot {player.robot.spec.name}")
+        for player in players
+    ]
+    added = [str(p.path.parent) for p in players if str(p.path.parent) not in sys.path]
+    added = list(dict.fromkeys(added))
+    sys.path[:0] = added  # modules beside each controller import
+    previous = Path.cwd()
+    interrupted = False
+    try:
+        if out is not None:
+            os.chdir(out)  # the controllers' own files land in --out
+        for thread in threads:
+            thread.start()
+        for thread in threads:
+            while thread.is_alive():
+                thread.join(0.1)  # wakes for Ctrl-C and SIGTERM
+    except BaseException:  # Ctrl-C, SIGTERM: every robot stops at its next step
+        interrupted = True
+        world.lockstep.stop()
+        for thread in threads:
+            thread.join()
+        raise
+    finally:
+        os.chdir(previous)
+        for path in added:
+            sys.path.remove(path)
+        progress_bar.close()
+        summary = _summary(sim, players, seed, scene, ball, ball_type, time.perf_counter() - start, interrupted)
+        if out is not None:
+            _write_summaries(out, players, summary)
+        for player in players:
+            if player.writer is not None:
+                player.writer.lock.release()
+        sim.close()
+    if world.lockstep.failure is not None:
+        raise world.lockstep.failure
+    failed = [p for p in players if p.error is not None]
+    if failed:
+        raise ControllerFailed("; ".join(f"{p.robot.spec.name}: {p.error}" for p in failed))
+    return summary
+
+
+def _play(player: _Player, lockstep: Lockstep) -> None:
+    """A robot's thread: its controller from start to end, its error kept."""
+    try:
+        if player.kind == MEMORY_STICK:
+            _run_memory_stick(player.path, player.program)
+        else:
+            controller.install(player.program, match=True)
+            try:
+                _run_controller_program(player.path, player.executable, player.program, None, match=True)
+            finally:
+                controller.install(None, match=True)
+    except SimulationDiverged:
+        pass  # the lockstep keeps it: the match reports it once
+    except BaseException as error:
+        player.error = error
+    finally:
+        lockstep.leave(player.robot)
+        player.robot.camera.close()  # its OpenGL context is current in this thread only
+
+
+def _summary(sim, players, seed, scene, ball, ball_type, wall: float, interrupted: bool) -> dict:
+    """The match's run.json: how it ended, the world's settings and each robot's entry."""
+    simulated = sim.time_ms / 1000
+    entries = []
+    for player in players:
+        position, yaw, _ = player.robot.body_pose()
+        entries.append(
+            {
+                **player.robot.spec.as_dict(),
+                "folder": robot_folder(player.robot.index),
+                "controller": str(player.path),
+                "backend": player.kind,
+                "status": "failed" if player.error is not None else "done",
+                **({"error": str(player.error)} if player.error is not None else {}),
+                "camera_frames": player.writer.count if player.writer else 0,
+                "robot_pose": [float(position[0]), float(position[1]), math.degrees(yaw)],
+                "camera": player.robot.camera.describe(),
+            }
+        )
+    ball_end = sim.ball_position()
+    return {
+        "status": "interrupted"
+        if interrupted
+        else "failed"
+        if any(p.error is not None for p in players) or sim.world.lockstep.failure
+        else "done",
+        "simulated_s": simulated,
+        "wall_s": wall,
+        "real_time_factor": simulated / max(wall, 1e-9),
+        "seed": seed,
+        "scene": None if scene is None else str(Path(scene).resolve()),
+        "ball": list(ball) if ball is not None else None,
+        "ball_type": ball_type,
+        "ball_xy": None if ball_end is None else [float(ball_end[0]), float(ball_end[1])],
+        "robots": entries,
+    }
+
+
+def _write_summaries(out: Path, players, summary: dict) -> None:
+    """``out/run.json`` (the match) and each robot's ``run.json`` (its entry)."""
+    for player, entry in zip(players, summary.get("robots", [])):
+        if player.writer is not None:
+            player.writer.write_run_json(
+                entry if summary["status"] != "interrupted" else {**entry, "status": "interrupted"}
+            )
+    write_file_atomic(out / RUN_FILE, (json.dumps({"match": True, **summary}, indent=2) + "\n").encode())

@@ -1,0 +1,109 @@
+"""Where a run starts and writes, checked before it begins: the robot's pose and the ball's
+position (``start_values``, ``place``, ``check_place``) and the output folder
+(``make_out_folder``).
+
+An argument that cannot be used is a ``ParameterError`` naming the parameter (``pose``,
+``ball``, ``scene``, ``out``); the command line names its option instead (``--pose``).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from pathlib import Path
+
+from .sim import ModelError, Simulation
+
+PLACEMENT_OVERLAP_M = 0.005  # a placed robot or ball sunk deeper than this into something is an error
+
+
+class ParameterError(ValueError):
+    """An argument that cannot be used, made by ``at``: the message leads with the parameter and
+    its value (``pose 0.62 -0.06 0: the robot would overlap the ball by 1.2 cm``) and may end
+    with ``fix``, another parameter that would set it right."""
+
+    parameter: str
+    fix: str | None
+
+    @classmethod
+    def at(cls, parameter: str, value, reason: str, fix: str | None = None) -> ParameterError:
+        error = cls(f"{parameter} {value}: {reason}" + (f" {fix}" if fix else ""))
+        error.parameter, error.fix = parameter, fix
+        return error
+
+    def named(self, name: Callable[[str], str]) -> str:
+        """The message with ``name(parameter)`` for each parameter it names (the CLI's option);
+        text put before it (a dump shard's folder) stays."""
+        text = str(self).replace(f"{self.parameter} ", f"{name(self.parameter)} ", 1)
+        if self.fix:
+            text = text.removesuffix(f" {self.fix}") + f" {name(self.fix)}"
+        return text
+
+
+def start_values(name: str, values, count: int) -> tuple[float, ...] | None:
+    """``values`` (a pose or ball position given to a function, not through argparse) as a tuple
+    of ``count`` finite floats, or None; a ValueError naming the parameter ``name`` otherwise."""
+    if values is None:
+        return None
+    try:
+        numbers = tuple(float(v) for v in values)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be {count} numbers, not {values!r}") from None
+    if len(numbers) != count or not all(math.isfinite(v) for v in numbers):
+        raise ValueError(f"{name} must be {count} finite numbers, not {' '.join(map(str, numbers))}")
+    return numbers
+
+
+def make_out_folder(path) -> Path:
+    """The output folder ``out``, made with its parents; a ``ParameterError`` naming it if it is a file."""
+    path = Path(path)
+    if path.exists() and not path.is_dir():
+        raise ParameterError.at("out", path, "not a folder")
+    path.mkdir(parents=True, exist_ok=True)
+    return path
+
+
+def check_place(
+    scene, pose: tuple[float, float, float] | None, ball: tuple[float, float] | None, ball_type: str = "robocup"
+) -> None:
+    """``place``'s errors for these placements in ``scene``, before a command writes anything."""
+    sim = Simulation(scene, camera_profile="ideal", ball_type=ball_type)
+    try:
+        place(sim, pose, ball)
+    finally:
+        sim.close()
+
+
+def place(sim, pose: tuple[float, float, float] | None = None, ball: tuple[float, float] | None = None) -> None:
+    """Put the robot at ``pose`` (x, y in metres, yaw in degrees) and the ball at ``ball`` (x, y),
+    each when given; the scene's start otherwise. ``ParameterError`` naming ``ball`` when the
+    scene's ball cannot be placed, and naming the parameter when what it placed would sink more
+    than ``PLACEMENT_OVERLAP_M`` into something (a wall, a goal, the robot or the ball), which the
+    first step would fling apart; naming ``scene`` when the scene's own start does."""
+
+    def given(values) -> str:
+        return " ".join(f"{v:g}" for v in values)
+
+    if pose is not None:
+        x, y, yaw_deg = pose
+        sim.place_robot(x, y, math.radians(yaw_deg))
+    if ball is not None:
+        try:
+            sim.place_ball(*ball)
+        except ModelError as exc:
+            raise ParameterError.at("ball", given(ball), str(exc)) from None
+    placed = {"the robot": ("pose", pose), "the ball": ("ball", ball)}
+    for first, second, depth in sim.overlaps(PLACEMENT_OVERLAP_M):
+        pairs = ((first, second), (second, first))
+        for subject, other in pairs:
+            parameter, values = placed.get(subject, (None, None))
+            if values is not None:
+                raise ParameterError.at(
+                    parameter, given(values), f"{subject} would overlap {other} by {depth * 100:.1f} cm"
+                )
+        for subject, other in pairs:
+            if subject in placed and subject != other:
+                reason = f"{subject} starts inside {other} ({depth * 100:.1f} cm deep)"
+                raise ParameterError.at(
+                    "scene", sim.scene, f"{reason}; move it in the scene, or place it with", fix=placed[subject][0]
+                )

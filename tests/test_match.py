@@ -1,0 +1,210 @@
+"""Several robots on one field (issue 41): the world, the uniforms, contacts, the cameras, and
+``aibo-sim run --robots`` with each robot's own controller."""
+
+import json
+import math
+from pathlib import Path
+
+import cv2
+import mujoco
+import numpy as np
+import pytest
+
+from aibo_sim.cli import main
+from aibo_sim.field import UNIFORM_COLOURS
+from aibo_sim.match import Lockstep, run_match
+from aibo_sim.runner import ControllerFailed
+from aibo_sim.sim import Simulation, load_model, robot_prefix
+from aibo_sim.team import RobotSpec, check_robots, kickoff_pose
+
+ROOT = Path(__file__).resolve().parents[1]
+TRACKER = ROOT / "controllers" / "ball_tracker.py"
+FOUR_A_SIDE = check_robots([RobotSpec(team, number) for team in ("red", "blue") for number in (1, 2, 3, 4)], "test")
+
+
+def facing(red_x=-0.5, blue_x=0.2):
+    """A red and a blue robot facing each other across the centre line."""
+    return (RobotSpec("red", 4, (red_x, 0.0, 0.0)), RobotSpec("blue", 4, (blue_x, 0.0, 180.0)))
+
+
+def test_one_robot_by_default_keeps_the_scene_as_it_was():
+    model, default = load_model(), Simulation(camera_profile="ideal")
+    try:
+        assert default.world.robots == [default] and default.prefix == ""
+        assert default.model.ngeom == model.ngeom and default.model.nu == model.nu == 20
+        assert mujoco.mj_name2id(default.model, mujoco.mjtObj.mjOBJ_GEOM, "uniform_left") < 0
+    finally:
+        default.close()
+
+
+def test_eight_robots_each_with_its_own_joints_sensors_camera_and_uniform():
+    sim = Simulation(camera_profile="ideal", robots=FOUR_A_SIDE, seed=5)
+    try:
+        robots, model = sim.world.robots, sim.model
+        assert len(robots) == 8 and robots[0] is sim and model.nu == 8 * 20
+        assert [r.servos.ctrl.start for r in robots] == [20 * k for k in range(8)]
+        assert len({r.camera.camera_id for r in robots}) == 8
+        for robot in robots:
+            x, y, yaw = robot.spec.pose
+            position, heading, tilt = robot.body_pose()
+            assert position[:2] == pytest.approx((x, y), abs=1e-9) and tilt < 0.1
+            assert math.degrees(heading) == pytest.approx(yaw if yaw <= 180 else yaw - 360, abs=1e-6)
+            geom = model.geom(robot_prefix(robot.index) + "uniform_left")
+            assert tuple(model.geom_rgba[geom.id]) == pytest.approx(UNIFORM_COLOURS[robot.spec.team])
+            assert geom.contype == 0 and geom.conaffinity == 0  # the uniform does not touch anything
+        # each robot starts in the first robot's posture
+        assert np.array_equal(robots[5].joint_positions(), sim.joint_positions())
+        # noise streams: robot 1's is the world's seed, the others' differ from it and each other
+        seeds = [r.robot_seed for r in robots]
+        assert seeds[0] == 5 and len(set(seeds)) == 8
+        sim.step_frames(25)
+        assert not any(r.fallen() for r in robots)
+    finally:
+        sim.close()
+
+
+def test_a_robot_running_into_another_pushes_it_and_does_not_pass_through():
+    robots = (RobotSpec("red", 4, (-0.4, 0.0, 0.0)), RobotSpec("blue", 4, (0.0, 0.0, 0.0)))
+    sim = Simulation(camera_profile="ideal", robots=robots, ball=False)
+    try:
+        red, blue = sim.world.robots
+        assert not sim.overlaps(0.0005)
+        start = blue.body_pose()[0][0]
+        sim.data.qvel[sim.model.jnt_dofadr[sim.model.body_jntadr[red._body]]] = 1.0  # red runs into blue's back
+        deepest = 0.0
+        for _ in range(40):
+            sim.step_frames(1)
+            deepest = max([deepest] + [d for a, b, d in sim.overlaps(0.0) if {a, b} == {"red 4", "blue 4"}])
+        assert blue.body_pose()[0][0] > start + 0.001  # pushed
+        assert red.body_pose()[0][0] < -0.25 and 0 < deepest < 0.01  # they touched, and red stopped behind blue
+    finally:
+        sim.close()
+
+
+def test_each_camera_sees_the_other_robot_and_its_uniform_not_its_own():
+    sim = Simulation(camera_profile="ideal", robots=facing(-0.5, 0.2), ball=False)
+    try:
+        sim.step_frames(10)
+        red, blue = sim.world.robots
+
+        def uniform_pixels(robot, team):
+            rgb = robot.camera.frame().rgb.astype(int)
+            colour = np.array(UNIFORM_COLOURS[team][:3]) * 255
+            hue = rgb / np.maximum(rgb.sum(axis=2, keepdims=True), 1)
+            return int((np.abs(hue - colour / colour.sum()).sum(axis=2) < 0.12).sum())
+
+        assert uniform_pixels(red, "blue") > 20 and uniform_pixels(blue, "red") > 20
+        assert uniform_pixels(red, "red") == 0 and uniform_pixels(blue, "blue") == 0
+        own = red.camera.own_geoms()
+        bodies = sim.model.body_rootid[sim.model.geom_bodyid[own]]
+        assert set(bodies) == {sim.model.body_rootid[red._body]}
+    finally:
+        sim.close()
+
+
+def test_lockstep_waits_for_every_robot_and_lets_a_finished_one_go():
+    sim = Simulation(camera_profile="ideal", robots=facing(), ball=False)
+    try:
+        world = sim.world
+        world.lockstep = lockstep = Lockstep(world)
+        red, blue = world.robots
+        lockstep.leave(blue)  # blue's controller ended: red steps alone
+        red.step_frames(3)
+        assert world.frame == 3
+    finally:
+        sim.close()
+
+
+def _tracker_robots():
+    return [RobotSpec("red", 4, None, str(TRACKER)), RobotSpec("blue", 4, (0.6, 0.2, 180.0), str(TRACKER))]
+
+
+def test_a_match_writes_each_robots_frames_and_is_deterministic(tmp_path):
+    for name in ("a", "b"):
+        summary = run_match(
+            _tracker_robots(), duration=0.5, out=tmp_path / name, seed=4, ball=(0.1, 0.1), progress=False
+        )
+        assert summary["status"] == "done" and summary["simulated_s"] == pytest.approx(0.5, abs=0.008)
+    match = json.loads((tmp_path / "a" / "run.json").read_text())
+    assert [
+        RobotSpec.from_dict({k: r[k] for k in ("team", "number", "pose", "controller")}) for r in match["robots"]
+    ] == list(check_robots(_tracker_robots(), "test"))
+    for index in (1, 2):
+        folder = tmp_path / "a" / f"robot{index}"
+        names = sorted(p.name for p in (folder / "frames").iterdir())
+        assert len(names) == 15
+        robot_json = json.loads((folder / "run.json").read_text())
+        assert robot_json["status"] == "done" and robot_json["team"] == ("red" if index == 1 else "blue")
+        for name in names:
+            assert (folder / "frames" / name).read_bytes() == (
+                tmp_path / "b" / f"robot{index}" / "frames" / name
+            ).read_bytes()
+    red = cv2.imread(str(tmp_path / "a" / "robot1" / "frames" / "000014.png"))
+    blue = cv2.imread(str(tmp_path / "a" / "robot2" / "frames" / "000014.png"))
+    assert not np.array_equal(red, blue)  # each its own camera
+
+
+def test_a_failing_controller_fails_the_match_and_the_others_run_to_the_end(tmp_path):
+    crash = tmp_path / "crash.py"
+    crash.write_text("from aibo_sim.controller import *\nrobot_step(64)\nraise RuntimeError('boom')\n")
+    steps = tmp_path / "steps.py"
+    steps.write_text("from aibo_sim.controller import *\nwhile True:\n    robot_step(40)\n")
+    robots = [RobotSpec("red", 4, None, str(crash)), RobotSpec("blue", 4, None, str(steps))]
+    with pytest.raises(ControllerFailed, match="(?s)red 4: .*boom"):
+        run_match(robots, duration=0.4, out=tmp_path / "out", camera_profile="ideal", progress=False)
+    match = json.loads((tmp_path / "out" / "run.json").read_text())
+    assert match["status"] == "failed" and match["simulated_s"] == pytest.approx(0.4, abs=0.008)
+    assert [r["status"] for r in match["robots"]] == ["failed", "done"]
+
+
+def test_run_robots_file_on_the_command_line(tmp_path, capsys):
+    robots = tmp_path / "robots.toml"
+    robots.write_text(
+        '[[robot]]\nteam = "red"\nnumber = 2\n\n[[robot]]\nteam = "blue"\nnumber = 3\npose = [1, 0, 180]\n'
+    )
+    out = tmp_path / "out"
+    status = main(
+        [
+            "run",
+            str(TRACKER),
+            "--robots",
+            str(robots),
+            "--duration",
+            "0.2",
+            "--out",
+            str(out),
+            "--camera-profile",
+            "ideal",
+        ]
+    )
+    assert status == 0 and "a match of 2 robots" in capsys.readouterr().out
+    assert len(list((out / "robot2" / "frames").iterdir())) == 6
+    assert json.loads((out / "robot2" / "run.json").read_text())["pose"] == [1.0, 0.0, 180.0]
+
+
+@pytest.mark.parametrize(
+    "arguments, message",
+    [
+        (["--robot", "green:1"], "--robot green:1: unknown team 'green'"),
+        (["--robot", "red:1", "--robot", "red:1"], "red 1 is also robot 1"),
+        ([f"--robot=red:{n % 4 + 1}:{n * 0.3 - 2},1,0" for n in range(5)], "red"),
+        ([f"--robot={t}:{n}" for t in ("red", "blue") for n in (1, 2, 3, 4)] + ["--robot", "red:1:0,1,0"], "8"),
+        (["--robot", "red:1:0,0,0", "--robot", "blue:1:0.25,0,0"], "--robots: blue 1 starts inside red 1"),
+        (["--robot", "red:1", "--pose", "0", "0", "0"], "--pose applies to a run of one robot"),
+    ],
+)
+def test_bad_robots_exit_2_with_one_line(arguments, message, capsys):
+    assert main(["run", str(TRACKER), "--duration", "0.1", *arguments]) == 2
+    error = capsys.readouterr().err
+    assert message in error and error.count("\n") == 1
+
+
+def test_kickoff_poses_of_a_full_match_do_not_overlap():
+    sim = Simulation(camera_profile="ideal", robots=FOUR_A_SIDE)
+    try:
+        assert not [pair for pair in sim.overlaps(0.001) if "the ball" not in pair[:2]]
+        assert {r.spec.pose for r in sim.world.robots} == {
+            kickoff_pose(t, n) for t in ("red", "blue") for n in range(1, 5)
+        }
+    finally:
+        sim.close()
