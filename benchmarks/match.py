@@ -68,8 +68,7 @@ def measure() -> list[dict]:
             )
         )  # with 8 robots, at most 1.2x one robot's cost
     single = max(
-        run_controller(TRACKER, duration=MATCH_SECONDS, ball=BALL, progress=False).real_time_factor
-        for _ in range(2)
+        run_controller(TRACKER, duration=MATCH_SECONDS, ball=BALL, progress=False).real_time_factor for _ in range(2)
     )
     robots = [RobotSpec(r.team, r.number, r.pose, str(TRACKER)) for r in KICKOFF]
     match = max(
