@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import dataclasses
 import json
 import os
 import select
@@ -18,11 +19,11 @@ from .mtn import MODES as MTN_MODES
 from .options import (
     ArgumentParser,
     add_world_options,
-    camera_options,
-    cut_long_words,
+    camera_config,
+    error_line,
     finite_float,
     path_text,
-    world_options,
+    world_config,
 )
 from .placement import make_out_folder, place
 from .robot import BACKENDS
@@ -63,17 +64,15 @@ def _run_match(args, robots) -> int:
     from .viewer import LiveViewer
 
     viewer = LiveViewer() if args.view else None
-    options = world_options(args)
-    options.pop("pose")
     try:
         summary = run_match(
             robots,
             controller_path=args.controller,
             duration=args.duration,
+            world=world_config(args),
+            camera=camera_config(args),
             out=args.out,
             frame_listeners=[viewer] if viewer else (),
-            **options,
-            **camera_options(args),
         )
     finally:
         if viewer is not None:
@@ -104,8 +103,8 @@ def _run(args) -> int:
             mtn_mode=args.mtn_mode,
             memory_stick=args.memory_stick,
             frame_listeners=[viewer] if viewer else (),
-            **world_options(args),
-            **camera_options(args),
+            world=world_config(args),
+            camera=camera_config(args),
         )
     finally:
         if viewer is not None:
@@ -162,19 +161,19 @@ def _settled_simulation(args, profile: str):
     """The render command's simulation: its world, camera options (with ``profile``), settled."""
     from .sim import FRAME_MS, Simulation
 
-    world = world_options(args)
+    world = world_config(args)
     try:
         sim = Simulation(
-            world["scene"],
-            seed=world["seed"],
+            world.scene,
+            seed=world.seed,
             keyframe=args.keyframe,
-            ball_type=world["ball_type"],
-            **{**camera_options(args), "camera_profile": profile},
+            ball_type=world.ball_type,
+            camera=dataclasses.replace(camera_config(args), profile=profile),
         )
     except KeyError as exc:  # MuJoCo's: no keyframe of that name; the message lists the valid ones
         raise ValueError(f"--keyframe {args.keyframe!r}: {exc.args[0] if exc.args else exc}") from None
     try:
-        place(sim, world["pose"], world["ball"])
+        place(sim, world.pose, world.ball)
         frames = round(args.settle * 1000 / FRAME_MS)
         if frames:
             sim.step_frames(frames)
@@ -252,7 +251,11 @@ def _mtn_play(args) -> int:
     if args.no_ball and args.ball is not None:
         raise ValueError("--ball and --no-ball exclude each other")
     result = play_motion(
-        _motion_file(args.file), repeat=args.repeat, mode=args.mode, **world_options(args), **camera_options(args)
+        _motion_file(args.file),
+        repeat=args.repeat,
+        mode=args.mode,
+        world=world_config(args),
+        camera=camera_config(args),
     )
     if args.json:
         print(json.dumps(result, indent=2))
@@ -450,7 +453,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"aibo-sim: {exc}", file=sys.stderr)
         return EXIT_CONTROLLER
     except SimulationDiverged as exc:
-        print(f"aibo-sim: error: {cut_long_words(exc)}", file=sys.stderr)
+        print(f"aibo-sim: error: {error_line(exc)}", file=sys.stderr)
         return EXIT_DIVERGED
     except BrokenPipeError as exc:
         if _reader_gone(sys.stdout):  # stop quietly, as a process that SIGPIPE ends
@@ -471,7 +474,7 @@ def main(argv: list[str] | None = None) -> int:
     ) as exc:
         if isinstance(exc, OSError) and exc.filename is not None:
             exc = f"{exc.filename}: {exc.strerror or exc}"
-        print(f"aibo-sim: error: {cut_long_words(exc)}", file=sys.stderr)
+        print(f"aibo-sim: error: {error_line(exc)}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except KeyboardInterrupt as exc:  # Ctrl-C: 130, as a shell reports a process ended by SIGINT (128 + 2)
         hint = " (the dump can continue with --resume)" if args.command == "dump" else ""

@@ -20,8 +20,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from . import controller
-from .camera import CameraSettings
 from .cbind import compile_controller, controller_sources, is_c_controller
+from .config import CameraConfig, ParameterError, WorldConfig
 from .files import make_folder, write_file_atomic
 from .openr.host import MemoryStickRun
 from .placement import PLACEMENT_OVERLAP_M, make_out_folder
@@ -148,21 +148,18 @@ def run_match(
     *,
     controller_path=None,
     duration: float = 10.0,
-    scene=None,
-    seed: int = 0,
+    world: WorldConfig | None = None,
+    camera: CameraConfig | None = None,
     out=None,
-    camera_full: bool = False,
-    camera_profile: str = "ers7",
-    camera_settings: CameraSettings | None = None,
-    ball: tuple[float, float] | None = None,
-    ball_type: str = "robocup",
     frame_listeners=(),
     robot_listeners=None,
     progress: bool = True,
 ) -> dict:
     """Run a match of ``robots`` (``team.RobotSpec``s, up to ``team.MAX_ROBOTS``) for ``duration``
-    simulated seconds; each robot runs its spec's controller, or ``controller_path`` when it
-    names none. Returns the match's summary (what ``out/run.json`` holds).
+    simulated seconds, in ``world`` (its scene, seed and ball; each robot's pose is its spec's),
+    each robot's head camera set up as ``camera``; each robot runs its spec's controller, or
+    ``controller_path`` when it names none. Returns the match's summary (what ``out/run.json``
+    holds).
 
     ``frame_listeners`` are called after every 8 ms frame with robot 1's program (its ``Robot``
     or ``MemoryStickRun``); ``robot_listeners(robot)``, when given, returns for each robot (its
@@ -174,6 +171,12 @@ def run_match(
         SimulationDiverged: the physics diverged (every robot stopped there).
     """
     robots = check_robots(robots, "--robots")
+    world, camera = world or WorldConfig(), camera or CameraConfig()
+    if world.pose is not None:
+        raise ParameterError.at(
+            "pose", " ".join(map(str, world.pose)), "applies to a run of one robot: each robot's pose is its spec's"
+        )
+    scene, seed, ball, ball_type = world.scene, world.seed, world.ball, world.ball_type
     if not (isinstance(duration, (int, float)) and math.isfinite(duration) and duration > 0):
         raise ValueError(f"--duration must be a positive number of seconds, not {duration!r}")
     missing = [robot.name for robot in robots if robot.controller is None and controller_path is None]
@@ -181,15 +184,7 @@ def run_match(
         raise ValueError(
             f"--robots: {', '.join(missing)} has no controller: name one in the robots file or run's CONTROLLER"
         )
-    sim = Simulation(
-        scene,
-        seed=seed,
-        camera_full=camera_full,
-        camera_profile=camera_profile,
-        camera_settings=camera_settings,
-        ball_type=ball_type,
-        robots=robots,
-    )
+    sim = Simulation(scene, seed=seed, camera=camera, ball_type=ball_type, robots=robots)
     world, compiled, out = sim.world, {}, out and make_out_folder(out)
     players: list[_Player] = []
     try:

@@ -17,10 +17,11 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
+from .config import CameraConfig, WorldConfig
 from .ers7 import JOINT_BY_LOCATOR, JOINT_INDEX, JOINTS, LEGS, joint_indices
 from .mjcf import HIP_OFFSET, KNEE_OFFSET, PAW_OFFSET, POSES
 from .mtn import Motion, MotionPlayer, MtnError, printable, read_mtn, write_mtn
-from .placement import place, start_values
+from .placement import place
 from .sim import FRAME_MS, Simulation, models_dir
 
 KEYFRAME_MS = 16  # Sony's walks: pre-sampled 16 ms keyframes, numInterpolate 0
@@ -300,19 +301,13 @@ def play_motion(
     mode: str = "openr",
     step_ms: int = 16,
     *,
-    scene=None,
-    seed: int = 0,
-    pose: tuple[float, float, float] | None = None,
-    ball: tuple[float, float] | None = None,
-    ball_type: str = "robocup",
-    camera_profile: str = "ers7",
-    camera_full: bool = False,
-    camera_settings=None,
+    world: WorldConfig | None = None,
+    camera: CameraConfig | None = None,
 ) -> dict:
     """Play a motion (or MTN file) ``repeat`` times on ``sim`` (default: a new robot standing in
-    ``scene``, the RoboCup field by default, made with ``seed`` and the camera options, which
-    ``mtn play`` takes like every ``aibo-sim`` command) and say where it went. ``pose`` (x, y
-    in metres, yaw in degrees) places the robot first; ``ball`` (x, y) places the ball, and
+    ``world``'s scene, the RoboCup field by default, with its seed and ``camera``, which ``mtn
+    play`` takes like every ``aibo-sim`` command) and say where it went. ``world.pose`` (x, y in
+    metres, yaw in degrees) places the robot first; ``world.ball`` (x, y) places the ball, and
     without it a new robot's scene has no ball (a walk measured into a ball measures the ball).
 
     The set-points first blend from their current values to the motion's first keyframe over
@@ -331,23 +326,17 @@ def play_motion(
     unknown = [loc for loc in motion.locators if loc not in JOINT_BY_LOCATOR]
     if unknown:
         raise MtnError(motion.source, None, f"no joint for locator(s) {', '.join(map(printable, unknown))}")
-    pose, ball = start_values("pose", pose, 3), start_values("ball", ball, 2)
+    world = world or WorldConfig()
     if sim is not None:
-        if scene is not None:
+        if world.scene is not None:
             raise ValueError("play_motion: give a scene or a simulation, not both")
-        place(sim, pose, ball)
+        place(sim, world.pose, world.ball)
         return _play(sim, motion, player, repeat, mode, step_ms)
     sim = Simulation(
-        scene,
-        seed=seed,
-        camera_full=camera_full,
-        camera_profile=camera_profile,
-        camera_settings=camera_settings,
-        ball=ball is not None,
-        ball_type=ball_type,
+        world.scene, seed=world.seed, camera=camera, ball=world.ball is not None, ball_type=world.ball_type
     )
     try:
-        place(sim, pose, ball)
+        place(sim, world.pose, world.ball)
         return _play(sim, motion, player, repeat, mode, step_ms)
     finally:
         sim.close()

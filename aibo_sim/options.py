@@ -18,9 +18,8 @@ import re
 from openr_bridge import CAMERA_DEFAULTS, CAMERA_SETTINGS
 
 from .camera import PROFILES, CameraSettings
+from .config import SEED_LIMIT, CameraConfig, ParameterError, WorldConfig
 from .field import BALL_TYPES
-from .placement import ParameterError
-from .sim import SEED_LIMIT
 
 MAX_MAGNITUDE = 1e6  # |value| beyond this is a typo, not a position (metres) or an angle (degrees)
 CAMERA_SETTING_OPTIONS = (("white_balance", "--camera-wb"), ("gain", "--camera-gain"), ("shutter", "--camera-shutter"))
@@ -34,7 +33,7 @@ def option_name(parameter: str) -> str:
     return "--" + parameter.replace("_", "-")
 
 
-def cut_long_words(message) -> str:
+def error_line(message) -> str:
     """The error line of ``message`` (text or an exception), a ``ParameterError`` naming options
     (``--pose``) where it names parameters, each run of more than ``LONG_WORD`` characters without
     a space or a quote (a path, an argument: a file's text given in place of its name) cut,
@@ -53,7 +52,7 @@ class ArgumentParser(argparse.ArgumentParser):
     ``aibo-sim run: error: argument --ball: 'nan' is not a finite number (see aibo-sim run --help)``."""
 
     def error(self, message: str):
-        self.exit(2, f"{self.prog}: error: {cut_long_words(message)} (see {self.prog} --help)\n")
+        self.exit(2, f"{self.prog}: error: {error_line(message)} (see {self.prog} --help)\n")
 
 
 def finite_float(text: str) -> float:
@@ -141,22 +140,15 @@ def add_world_options(parser: argparse.ArgumentParser, camera: bool = True) -> N
     parser.add_argument("--camera-full", action="store_true", help="render 416x320 (else the 208x160 layer)")
 
 
-def world_options(args: argparse.Namespace) -> dict:
-    """Keyword arguments ``scene``, ``seed``, ``pose`` (x, y, yaw in degrees, or None), ``ball``
-    (x, y, or None) and ``ball_type`` from the world options."""
-    return {
-        "scene": args.scene,
-        "seed": args.seed,
-        "pose": None if args.pose is None else tuple(args.pose),
-        "ball": None if args.ball is None else tuple(args.ball),
-        "ball_type": args.ball_type,
-    }
+def world_config(args: argparse.Namespace) -> WorldConfig:
+    """The world the options ``--scene``, ``--seed``, ``--pose``, ``--ball``, ``--ball-type`` describe."""
+    return WorldConfig(
+        args.scene, args.seed, args.pose and tuple(args.pose), args.ball and tuple(args.ball), args.ball_type
+    )
 
 
-def camera_options(args: argparse.Namespace) -> dict:
-    """Keyword arguments for ``Simulation`` (and ``run_controller``) from the camera options."""
-    return {
-        "camera_profile": args.camera_profile,
-        "camera_full": args.camera_full,
-        "camera_settings": CameraSettings(args.camera_wb, args.camera_gain, args.camera_shutter),
-    }
+def camera_config(args: argparse.Namespace) -> CameraConfig:
+    """The camera the camera options describe."""
+    return CameraConfig(
+        args.camera_profile, args.camera_full, CameraSettings(args.camera_wb, args.camera_gain, args.camera_shutter)
+    )

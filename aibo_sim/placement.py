@@ -9,49 +9,12 @@ An argument that cannot be used is a ``ParameterError`` naming the parameter (``
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 from pathlib import Path
 
+from .config import CameraConfig, ParameterError
 from .sim import ModelError, Simulation
 
 PLACEMENT_OVERLAP_M = 0.005  # a placed robot or ball sunk deeper than this into something is an error
-
-
-class ParameterError(ValueError):
-    """An argument that cannot be used, made by ``at``: the message leads with the parameter and
-    its value (``pose 0.62 -0.06 0: the robot would overlap the ball by 1.2 cm``) and may end
-    with ``fix``, another parameter that would set it right."""
-
-    parameter: str
-    fix: str | None
-
-    @classmethod
-    def at(cls, parameter: str, value, reason: str, fix: str | None = None) -> ParameterError:
-        error = cls(f"{parameter} {value}: {reason}" + (f" {fix}" if fix else ""))
-        error.parameter, error.fix = parameter, fix
-        return error
-
-    def named(self, name: Callable[[str], str]) -> str:
-        """The message with ``name(parameter)`` for each parameter it names (the CLI's option);
-        text put before it (a dump shard's folder) stays."""
-        text = str(self).replace(f"{self.parameter} ", f"{name(self.parameter)} ", 1)
-        if self.fix:
-            text = text.removesuffix(f" {self.fix}") + f" {name(self.fix)}"
-        return text
-
-
-def start_values(name: str, values, count: int) -> tuple[float, ...] | None:
-    """``values`` (a pose or ball position given to a function, not through argparse) as a tuple
-    of ``count`` finite floats, or None; a ValueError naming the parameter ``name`` otherwise."""
-    if values is None:
-        return None
-    try:
-        numbers = tuple(float(v) for v in values)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be {count} numbers, not {values!r}") from None
-    if len(numbers) != count or not all(math.isfinite(v) for v in numbers):
-        raise ValueError(f"{name} must be {count} finite numbers, not {' '.join(map(str, numbers))}")
-    return numbers
 
 
 def make_out_folder(path) -> Path:
@@ -67,7 +30,7 @@ def check_place(
     scene, pose: tuple[float, float, float] | None, ball: tuple[float, float] | None, ball_type: str = "robocup"
 ) -> None:
     """``place``'s errors for these placements in ``scene``, before a command writes anything."""
-    sim = Simulation(scene, camera_profile="ideal", ball_type=ball_type)
+    sim = Simulation(scene, camera=CameraConfig("ideal"), ball_type=ball_type)
     try:
         place(sim, pose, ball)
     finally:

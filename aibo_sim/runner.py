@@ -21,7 +21,6 @@ import openr_bridge
 from openr_bridge.memory_stick import MemoryStick, load_memory_stick, memory_stick_folder
 
 from . import controller
-from .camera import CameraSettings
 from .cbind import (
     C_SUFFIXES,
     CControllerError,
@@ -31,9 +30,10 @@ from .cbind import (
     run_c_controller,
     serve,
 )
+from .config import CameraConfig, WorldConfig
 from .files import FolderLock, SymlinkRefused, make_folder, png, read_file, write_file_atomic
 from .openr.host import MemoryStickRun, OpenRObjectCrashed
-from .placement import make_out_folder, place, start_values
+from .placement import make_out_folder, place
 from .render import RenderingUnavailable
 from .robot import Robot, SimulationEnd
 from .sim import FRAME_MS, Simulation, SimulationDiverged, models_dir
@@ -350,19 +350,13 @@ class Progress:
 def run_controller(
     path: str | Path,
     *,
+    world: WorldConfig | None = None,
+    camera: CameraConfig | None = None,
     backend: str | None = None,
     duration: float = 10.0,
-    scene=None,
-    seed: int = 0,
     out: str | Path | None = None,
     mtn_mode: str | None = None,
     memory_stick=None,
-    camera_full: bool = False,
-    camera_profile: str = "ers7",
-    camera_settings: CameraSettings | None = None,
-    pose: tuple[float, float, float] | None = None,
-    ball: tuple[float, float] | None = None,
-    ball_type: str = "robocup",
     frame_listeners=(),
     progress: bool = True,
     workdir: str | Path | None = None,
@@ -375,9 +369,10 @@ def run_controller(
     Webots API's, do not apply; its console goes to ``out/console.log``, its sound to
     ``out/speaker.wav``).
 
-    The robot starts at ``pose`` (x, y in metres, yaw in degrees; default the scene's start),
-    the ball (``ball_type``) at ``ball``; the head camera is ``camera_profile`` (``ers7`` or
-    ``ideal``) with ``camera_settings`` at the start. ``frame_listeners`` are called with the
+    The run starts in ``world`` (``WorldConfig``: scene, seed, the robot's pose, the ball; default
+    the RoboCup field as the scene has it) with the head camera ``camera`` (``CameraConfig``;
+    default the ``ers7`` profile); run.json records both (``WorldConfig.from_dict`` and
+    ``CameraConfig.from_dict`` read them back). ``frame_listeners`` are called with the
     robot (or the memory stick's run) after every 8 ms frame; ``progress=False`` silences the
     progress bar (worker processes). The controller runs in ``workdir`` (default ``out``; with
     neither, the current folder): its files land there.
@@ -400,18 +395,12 @@ def run_controller(
         raise ValueError(f"--duration must be positive and finite, not {duration}")
     if round(duration * 1000) < FRAME_MS:
         raise ValueError(f"--duration {duration} s is shorter than one {FRAME_MS} ms joint frame: nothing would run")
-    pose, ball = start_values("--pose", pose, 3), start_values("--ball", ball, 2)
-    sim = Simulation(
-        scene,
-        seed=seed,
-        camera_full=camera_full,
-        camera_profile=camera_profile,
-        camera_settings=camera_settings,
-        ball_type=ball_type,
-    )
+    world, camera = world or WorldConfig(), camera or CameraConfig()
+    scene = world.scene
+    sim = Simulation(scene, seed=world.seed, camera=camera, ball_type=world.ball_type)
     writer = None
     try:
-        place(sim, pose, ball)
+        place(sim, world.pose, world.ball)
         out = out and Path(out).resolve()
         folder = Path(workdir).resolve() if workdir is not None else out
         if stick is None:
@@ -419,7 +408,9 @@ def run_controller(
                 sim, backend=backend, mtn_mode=mtn_mode, memory_stick=memory_stick, search_dirs=motion_dirs(path)
             )
             camera_listeners = program.camera_source.listeners
-            camera = sim.camera.describe((program.camera_source.width, program.camera_source.height))  # what it serves
+            # what it serves (the openr backend: layer H), and whether the sensor's full frame was asked for
+            size = (program.camera_source.width, program.camera_source.height)
+            described = {**sim.camera.describe(size), "full": camera.full}
         else:
             program = MemoryStickRun(
                 sim,
@@ -428,7 +419,7 @@ def run_controller(
                 log_path=out and out / CONSOLE_FILE,
                 sound_path=out and out / SOUND_FILE,
             )
-            camera_listeners, camera = program.camera_listeners, sim.camera.describe()
+            camera_listeners, described = program.camera_listeners, {**sim.camera.describe(), "full": camera.full}
         if out is not None:
             writer = FrameWriter(out, controller=path, backend=backend)
     except BaseException:
@@ -454,7 +445,7 @@ def run_controller(
                 **({"error": str(error)} if status == "failed" else {}),
                 "simulated_s": program.time_ms / 1000,
                 "camera_frames": writer.count,
-                "camera": camera,
+                "camera": described,
             }
         )
 
@@ -482,11 +473,11 @@ def run_controller(
             (float(position[0]), float(position[1]), math.degrees(yaw)),
             None if ball_end is None else (float(ball_end[0]), float(ball_end[1])),
             scene=None if scene is None else str(Path(scene).resolve()),
-            seed=seed,
-            pose=pose,
-            ball=ball,
-            ball_type=ball_type,
-            camera=camera,
+            seed=world.seed,
+            pose=world.pose,
+            ball=world.ball,
+            ball_type=world.ball_type,
+            camera=described,
         )
         if writer is not None:
             done = asdict(summary)

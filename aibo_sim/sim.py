@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import ctypes
 import math
-import numbers
 import threading
 from collections.abc import Callable
 from pathlib import Path
@@ -19,14 +18,14 @@ import numpy as np
 
 from openr_bridge import FRAME_RATE_HZ, FRAME_TICK_MS
 
-from .camera import CameraProfile, CameraSettings, HeadCamera, camera_size, scene_light
+from .camera import HeadCamera, scene_light
+from .config import CameraConfig, is_seed
 from .ers7 import DISTANCE_SENSORS, HEAD_CAMERA, JOINTS, LED_BY_NAME, LED_OFF_RGBA, SENSORS, TOUCH_SENSORS
 from .field import BALL_TYPES, COLOURS, PINK_BALL_MASS, PINK_BALL_RADIUS, SPECULAR, UNIFORM_COLOURS
 
 FRAME_MS = FRAME_TICK_MS  # OPEN-R joint frame, 8 ms
 GRAVITY = 9.80665
 ACCEL_RANGE = 2 * GRAVITY  # Sony: +-19 613 300 um/s^2
-SEED_LIMIT = 2**64  # seeds are whole numbers below this (the camera's noise mixes 64 bits of them)
 IR_NOISE = 0.1  # Webots lookup tables: 10 % noise at mid-range, none at the ends
 
 
@@ -62,11 +61,6 @@ def ball_joint(model: mujoco.MjModel) -> int:
 
 class SimulationDiverged(RuntimeError):
     """The physics produced NaN or unbounded accelerations."""
-
-
-def is_seed(value, count: int = 1) -> bool:
-    """Whether ``value`` and the ``count - 1`` whole numbers after it are all seeds."""
-    return not isinstance(value, bool) and isinstance(value, numbers.Integral) and 0 <= value <= SEED_LIMIT - count
 
 
 def models_dir() -> Path:
@@ -333,7 +327,9 @@ class World:
         self.ball_body = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_BODY, "ball")  # -1: no ball
         self.frame = 0
         self.lockstep = None  # a Lockstep while robots' controllers step the world together
-        self.render_lock = threading.Lock()  # renders change the model for their time (HeadCamera)
+        # Renders and labels change the model for their time (geom groups, the lens's intrinsics):
+        # the robots of a match render one at a time (HeadCamera; a dump's labels hold it too).
+        self.render_lock = threading.RLock()
         self.robots: list[Simulation] = []
         for index, spec in enumerate(self.robot_specs):
             robot = first if index == 0 else Simulation.__new__(Simulation)
@@ -414,8 +410,8 @@ class World:
 
 
 class Simulation:
-    """An ERS-7 in a scene, advanced in 8 ms frames, with its head camera (``camera``, see
-    ``aibo_sim.camera``: profile ``ers7`` or ``ideal``, settings by name); ``ball=False``
+    """An ERS-7 in a scene, advanced in 8 ms frames, with its head camera (``camera``, set up
+    as ``camera``, a ``config.CameraConfig``, says: default the ``ers7`` profile); ``ball=False``
     leaves the scene's ball out, ``ball_type`` chooses it (``field.BALL_TYPES``).
 
     ``robots`` (``team.RobotSpec``s; default one robot, the scene's own) puts several robots on
@@ -434,9 +430,7 @@ class Simulation:
         *,
         seed: int = 0,
         keyframe: str = "stand",
-        camera_full: bool = False,
-        camera_profile: str | CameraProfile = "ers7",
-        camera_settings: CameraSettings | None = None,
+        camera: CameraConfig | None = None,
         ball: bool = True,
         ball_type: str = "robocup",
         command_latency_frames: int = 0,
@@ -450,13 +444,13 @@ class Simulation:
             DEFAULT_ROBOTS if robots is None else robots,
             seed=seed,
             keyframe=keyframe,
-            camera=(camera_size(camera_full), camera_profile, camera_settings),
+            camera=camera or CameraConfig(),
             ball=ball,
             ball_type=ball_type,
             latency=command_latency_frames,
         )
 
-    def _attach(self, world: World, index: int, spec, camera) -> None:
+    def _attach(self, world: World, index: int, spec, camera: CameraConfig) -> None:
         """Become robot ``index`` (``spec``) of ``world``."""
         model, prefix = world.model, robot_prefix(index)
         self.world, self.index, self.spec, self.prefix = world, index, spec, prefix
@@ -477,7 +471,7 @@ class Simulation:
         self._joint_qpos = np.array([model.joint(prefix + j.name).qposadr[0] for j in JOINTS])
         self._body = model.body(prefix + "body").id
         self._root_qpos = model.jnt_qposadr[model.body_jntadr[self._body]]
-        self.camera = HeadCamera(self, *camera, camera_name=prefix + HEAD_CAMERA)
+        self.camera = HeadCamera(self, camera.size, camera.profile, camera.settings, camera_name=prefix + HEAD_CAMERA)
 
     # ---------------------------------------------------------------- the world, shared
 

@@ -16,6 +16,7 @@ from __future__ import annotations
 import time
 from pathlib import Path
 
+from aibo_sim.config import WorldConfig
 from aibo_sim.match import run_match
 from aibo_sim.runner import run_controller
 from aibo_sim.sim import Simulation
@@ -68,11 +69,13 @@ def measure() -> list[dict]:
             )
         )  # with 8 robots, at most 1.2x one robot's cost
     single = max(
-        run_controller(TRACKER, duration=MATCH_SECONDS, ball=BALL, progress=False).real_time_factor for _ in range(2)
+        run_controller(TRACKER, duration=MATCH_SECONDS, progress=False, world=WorldConfig(ball=BALL)).real_time_factor
+        for _ in range(2)
     )
     robots = [RobotSpec(r.team, r.number, r.pose, str(TRACKER)) for r in KICKOFF]
     match = max(
-        run_match(robots, duration=MATCH_SECONDS, ball=BALL, progress=False)["real_time_factor"] for _ in range(2)
+        run_match(robots, duration=MATCH_SECONDS, progress=False, world=WorldConfig(ball=BALL))["real_time_factor"]
+        for _ in range(2)
     )
     reference = "real-time factor, ball_tracker.py on one robot"
     rows.append(row(reference, single, "x"))

@@ -21,6 +21,7 @@ import subprocess
 import tempfile
 from pathlib import Path
 
+from aibo_sim.config import WorldConfig
 from aibo_sim.openr.sdk import sdk_root
 from aibo_sim.runner import run_controller
 
@@ -90,7 +91,7 @@ def measure() -> list[dict]:
                 copy = samples / program
                 (copy / "MS" / "OPEN-R" / "MW" / "OBJS").mkdir(parents=True, exist_ok=True)
                 build(copy)
-                options = {"ball_type": "pink"} if name == "BallTrackingHead7" else {}
+                options = {"world": WorldConfig(ball_type="pink")} if name == "BallTrackingHead7" else {}
                 value = real_time_factor(copy, ROUNDS, **options)
                 rows.append(row(f"real-time factor, Sony's {name} (memory stick)", value, "x"))
     return rows

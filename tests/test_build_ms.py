@@ -26,6 +26,7 @@ import numpy as np
 import pytest
 
 from aibo_sim import ers7, runner
+from aibo_sim.config import WorldConfig
 from aibo_sim.mtn import Motion, MtnError, mtn_new, serialize_mtn
 from aibo_sim.openr.build_ms import WRAPPER, BuildMsError, build_ms, short_name
 from aibo_sim.openr.host import MemoryStickRun
@@ -197,10 +198,10 @@ def run_reference(monkeypatch, controller: Path, frames: int, out: Path, ball=No
         backend="openr",
         duration=frames * 8 / 1000,
         out=out,
-        ball=ball,
         progress=False,
         workdir=workdir,
         frame_listeners=[lambda robot: record(robot.sim)],
+        world=WorldConfig(ball=ball),
     )
     monkeypatch.undo()
     return record
@@ -263,9 +264,9 @@ def test_ball_tracker_c_tracks_as_ball_tracker_py(tmp_path):
         runner.run_controller(
             controller,
             duration=2.0,
-            ball=BALL,
             progress=False,
             frame_listeners=[lambda robot, record=record: record(robot.sim)],
+            world=WorldConfig(ball=BALL),
         )
         records.append(np.array(record.ctrl))
     assert np.abs(records[0] - records[1]).max() < 1e-8 and np.ptp(records[1][:, 1]) > 0.1  # 1.4e-10 here

@@ -13,6 +13,7 @@ import pytest
 from aibo_sim import cbind, controller
 from aibo_sim.cbind import headers, protocol, serve
 from aibo_sim.cli import main
+from aibo_sim.config import CameraConfig
 from aibo_sim.mtn import read_mtn
 from aibo_sim.runner import ControllerFailed, run_controller
 from aibo_sim.sim import models_dir
@@ -47,7 +48,7 @@ def test_every_api_function_gives_in_c_what_it_gives_in_python(tmp_path):
     line, and their trajectories and camera frames are identical."""
     runs = {}
     for name, path in (("c", TOUR), ("python", TOUR / "api_tour.py")):
-        runs[name] = run_controller(path, duration=0.5, out=tmp_path / name, camera_profile="ideal")
+        runs[name] = run_controller(path, duration=0.5, out=tmp_path / name, camera=CameraConfig("ideal"))
     tour = (tmp_path / "c" / "tour.txt").read_text()
     assert tour == (tmp_path / "python" / "tour.txt").read_text()
     assert "missing 1 error File not found: no_such_motion.mtn" in tour and "walk a_walk#walk_fwd length 320" in tour

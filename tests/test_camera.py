@@ -18,6 +18,7 @@ from aibo_sim.camera.sensor import (
     vignetting_fit,
     vignetting_maps,
 )
+from aibo_sim.config import CameraConfig, WorldConfig
 from aibo_sim.render import Renderer
 from aibo_sim.sim import ModelError, Simulation, models_dir
 
@@ -73,7 +74,7 @@ def corners(image: np.ndarray, size: int = 3) -> np.ndarray:
 
 
 def test_ideal_profile_is_the_render_bit_for_bit():
-    sim = Simulation(camera_profile="ideal")
+    sim = Simulation(camera=CameraConfig("ideal"))
     renderer = Renderer(sim.model, 208, 160, groups=HEAD_CAMERA_GROUPS)
     try:
         for _ in range(3):
@@ -85,7 +86,7 @@ def test_ideal_profile_is_the_render_bit_for_bit():
 
 
 def test_vignetting_on_a_uniform_grey_wall(tmp_path):
-    sim = Simulation(target_scene(tmp_path, wall(0.57)), camera_profile=QUIET)
+    sim = Simulation(target_scene(tmp_path, wall(0.57)), camera=CameraConfig(QUIET))
     ycrcb = sim.camera.frame().ycrcb.astype(float)
     middle = centre(ycrcb)
     assert 145 <= middle[0] <= 155 and abs(middle[1] - 128) <= 2 and abs(middle[2] - 128) <= 2  # neutral at 5000 K, FL
@@ -129,7 +130,7 @@ def test_saturated_colours_keep_30_to_60_percent_of_their_chroma_in_the_corners(
     0.35, magenta 0.59 (3 x 3: 0.34, 0.52, 0.41, 0.30, 0.56). A line per radius through
     rUNSWift's table (instead of its quadratic) kept blue 0.64 and yellow 0.28."""
     body = emissive("box", (0.5, 0, 0.2), (0.01, 2, 2), colour)
-    sim = Simulation(target_scene(tmp_path, body), camera_profile=QUIET)
+    sim = Simulation(target_scene(tmp_path, body), camera=CameraConfig(QUIET))
     ycrcb = sim.camera.frame().ycrcb.astype(float)
     kept = np.hypot(*(corners(ycrcb, 10)[1:] - 128)) / np.hypot(*(centre(ycrcb)[1:] - 128))
     assert 0.3 <= kept <= 0.6
@@ -138,7 +139,9 @@ def test_saturated_colours_keep_30_to_60_percent_of_their_chroma_in_the_corners(
 def test_noise_per_channel_in_the_measured_bands_and_rising_with_gain(tmp_path):
     sigmas = {}
     for gain in ("low", "mid", "high"):
-        sim = Simulation(target_scene(tmp_path, wall(0.5)), camera_settings=CameraSettings(gain=gain, shutter="fast"))
+        sim = Simulation(
+            target_scene(tmp_path, wall(0.5)), camera=CameraConfig(settings=CameraSettings(gain=gain, shutter="fast"))
+        )
         stack = []
         for _ in range(20):
             stack.append(sim.camera.frame().ycrcb[60:100, 84:124].astype(float))
@@ -169,7 +172,7 @@ def test_a_flickering_light_changes_fast_frames_only(tmp_path):
     def centre_y(scene, shutter: str, frames: int = 6) -> np.ndarray:
         """Y at the image centre in consecutive frames (30 fps on the 8 ms grid: the ripple's
         phase moves from frame to frame)."""
-        sim = Simulation(scene, camera_profile=QUIET, camera_settings=CameraSettings(gain="high", shutter=shutter))
+        sim = Simulation(scene, camera=CameraConfig(QUIET, settings=CameraSettings(gain="high", shutter=shutter)))
         values = []
         for _ in range(frames):
             values.append(centre(sim.camera.frame().ycrcb.astype(float))[0])
@@ -239,7 +242,7 @@ def dot_grid(spacing=0.05, columns=11, rows=9) -> tuple[str, np.ndarray]:
 def test_dots_appear_where_the_calibrated_lens_projects_them(tmp_path, lens):
     geoms, points = dot_grid()
     profile = QUIET.with_options(lens=lens, vignetting=False)
-    sim = Simulation(target_scene(tmp_path, geoms), camera_profile=profile)
+    sim = Simulation(target_scene(tmp_path, geoms), camera=CameraConfig(profile))
     sim.step_frame()  # settle nothing: the robot stands; the frame is the one at this tick
     y = sim.camera.frame().ycrcb[..., 0]
     count, _, stats, centroids = cv2.connectedComponentsWithStats((y > 60).astype(np.uint8))
@@ -337,7 +340,7 @@ def test_a_200_deg_per_s_pan_smears_as_the_formula_says(tmp_path, shutter, expec
         "box", (0.5, 1, 0.2), (0.01, 1, 2), (0.9, 0.9, 0.9)
     )
     sim = Simulation(
-        target_scene(tmp_path, body), camera_profile=QUIET, camera_settings=CameraSettings(shutter=shutter, gain="low")
+        target_scene(tmp_path, body), camera=CameraConfig(QUIET, settings=CameraSettings(shutter=shutter, gain="low"))
     )
     still = sim.camera.frame().ycrcb[..., 0]
     pan = sim.model.joint("head_pan")
@@ -358,7 +361,7 @@ def test_brightness_follows_gain_and_shutter(tmp_path):
     scene = target_scene(tmp_path, wall(0.25))
 
     def luma(gain, shutter):
-        sim = Simulation(scene, camera_profile=QUIET, camera_settings=CameraSettings(gain=gain, shutter=shutter))
+        sim = Simulation(scene, camera=CameraConfig(QUIET, settings=CameraSettings(gain=gain, shutter=shutter)))
         value = centre(sim.camera.frame().ycrcb.astype(float))[0]
         sim.close()
         return value
@@ -375,8 +378,7 @@ def test_white_balance_against_the_scene_light(tmp_path, kelvin, preset, cr, cb)
     """Spec section 6: directions are facts, magnitudes indicative (within half, or 6 levels)."""
     sim = Simulation(
         target_scene(tmp_path, wall(0.45), kelvin),
-        camera_profile=QUIET.with_options(vignetting=False),
-        camera_settings=CameraSettings(white_balance=preset),
+        camera=CameraConfig(QUIET.with_options(vignetting=False), settings=CameraSettings(white_balance=preset)),
     )
     _, got_cr, got_cb = centre(sim.camera.frame().ycrcb.astype(float)) - (0, 128, 128)
     for got, want in ((got_cr, cr), (got_cb, cb)):
@@ -396,7 +398,7 @@ def test_settings_and_profiles_reject_bad_values():
     with pytest.raises(ValueError, match="gain must be one of low, mid, high"):
         CameraSettings(gain="max")
     with pytest.raises(ValueError, match="profile must be one of"):
-        Simulation(camera_profile="fisheye")
+        Simulation(camera=CameraConfig("fisheye"))
     with pytest.raises(ValueError, match="not finite"):
         CameraProfile("x", sensitivity=float("nan"))
     with pytest.raises(ValueError, match="finite"):
@@ -405,8 +407,8 @@ def test_settings_and_profiles_reject_bad_values():
 
 def test_a_robot_colour_shifts_the_picture_linearly(tmp_path):
     scene = target_scene(tmp_path, wall(0.5))
-    plain = Simulation(scene, camera_profile=QUIET)
-    shifted = Simulation(scene, camera_profile=QUIET)
+    plain = Simulation(scene, camera=CameraConfig(QUIET))
+    shifted = Simulation(scene, camera=CameraConfig(QUIET))
     shifted.camera.set_robot(RobotColour(gain=(1.1, 1.0, 1.0), offset=(0.0, 4.0, -3.0)))
     a, b = (centre(s.camera.frame().ycrcb.astype(float)) for s in (plain, shifted))
     assert b[0] == pytest.approx(1.1 * a[0], abs=1) and b[1] - a[1] == pytest.approx(4, abs=1)
@@ -535,7 +537,7 @@ def field_edge_width(camera: CameraProfile | str = "ers7") -> float:
     """The median edge width in Y of the head camera's frames of ``FIELD_VIEWS``."""
     widths = []
     for x, y, yaw in FIELD_VIEWS:
-        sim = Simulation(seed=3, camera_profile=camera)
+        sim = Simulation(seed=3, camera=CameraConfig(camera))
         sim.place_robot(x, y, yaw)
         sim.place_ball(x + 0.4 * math.cos(yaw), y + 0.4 * math.sin(yaw))
         sim.step_frames(5)
@@ -570,20 +572,25 @@ def test_dump_shows_the_frames_run_shows_and_resumes_byte_identically_without_mp
     from aibo_sim.runner import run_controller
 
     tracker = ROOT / "controllers" / "ball_tracker.py"
-    run_controller(tracker, duration=0.5, seed=4, out=tmp_path / "run")
-    dump(tmp_path / "dump", controller=tracker, frames=15, seed=4, formats=("rgb", "openr"))
+    run_controller(tracker, duration=0.5, out=tmp_path / "run", world=WorldConfig(seed=4))
+    dump(tmp_path / "dump", controller=tracker, frames=15, formats=("rgb", "openr"), world=WorldConfig(seed=4))
     shown = sorted((tmp_path / "run" / "frames").iterdir())
     assert len(shown) >= 5
     for path in shown:
         assert np.array_equal(cv2.imread(str(path)), cv2.imread(str(tmp_path / "dump" / "rgb" / path.name)))
     # Resume after losing the last frames: the same bytes as the uninterrupted dump.
     resumed = tmp_path / "resumed"
-    dump(resumed, controller=tracker, frames=15, seed=4, formats=("rgb", "openr"))
+    dump(resumed, controller=tracker, frames=15, formats=("rgb", "openr"), world=WorldConfig(seed=4))
     lines = (resumed / "frames.jsonl").read_bytes().splitlines(keepends=True)
     (resumed / "frames.jsonl").write_bytes(b"".join(lines[:10]))
     for index in range(10, 15):
         (resumed / "rgb" / f"{index:06d}.png").unlink()
-    assert dump(resumed, controller=tracker, frames=15, seed=4, formats=("rgb", "openr"), resume=True).new_frames == 5
+    assert (
+        dump(
+            resumed, controller=tracker, frames=15, formats=("rgb", "openr"), resume=True, world=WorldConfig(seed=4)
+        ).new_frames
+        == 5
+    )
     for name in ("rgb", "openr"):
         for path in sorted((tmp_path / "dump" / name).iterdir()):
             assert path.read_bytes() == (resumed / name / path.name).read_bytes()

@@ -14,6 +14,7 @@ import pytest
 
 from aibo_sim.camera import CameraSettings, scene_light
 from aibo_sim.camera.sensor import ROBOT_GAIN_SIGMA, ROBOT_OFFSET_SIGMA, ROBOT_PIVOT
+from aibo_sim.config import CameraConfig
 from aibo_sim.sim import Simulation
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -61,7 +62,7 @@ def look_at(sim: Simulation, point: np.ndarray, neck_deg: float) -> None:
 @pytest.fixture(scope="module")
 def measured() -> dict[str, np.ndarray]:
     """Per view: the mean Y, Cr, Cb of the 11 x 11 centre patch over frames of four noise seeds."""
-    sim = Simulation(camera_profile="ers7", camera_settings=CameraSettings("fl", "high", "fast"))
+    sim = Simulation(camera=CameraConfig("ers7", settings=CameraSettings("fl", "high", "fast")))
     try:
         means = {}
         for view, (_, pose, (geom, offset), neck, shown) in VIEWS.items():
@@ -142,7 +143,7 @@ def test_field_colours_in_the_order_any_real_field_has(measured):
 
 
 def test_the_default_field_is_lit_warm():
-    sim = Simulation(camera_profile="ideal")
+    sim = Simulation(camera=CameraConfig("ideal"))
     try:
         assert 2800 <= scene_light(sim.model).temperature_k <= 3600  # tungsten-halogen
     finally:

@@ -9,6 +9,7 @@ import pytest
 import openr_bridge
 from aibo_sim import controller as api
 from aibo_sim.camera import CameraSettings
+from aibo_sim.config import CameraConfig
 from aibo_sim.robot import DeviceError, Robot
 from aibo_sim.runner import run_controller
 from aibo_sim.sim import Simulation
@@ -36,7 +37,7 @@ SWITCH_MS = 304  # the controller below switches gain LOW -> HIGH at its first c
 
 @pytest.fixture(params=BACKENDS)
 def robot(request):
-    robot = Robot(Simulation(camera_profile="ers7"), backend=request.param)
+    robot = Robot(Simulation(camera=CameraConfig("ers7")), backend=request.param)
     api.install(robot)
     yield robot
     api.install(None)
@@ -136,7 +137,7 @@ def test_wrapper_camera_functions_call_control_primitive():
 
 
 def test_control_primitive_385_3_sets_the_simulated_camera_gain_high():
-    robot = Robot(Simulation(camera_profile="ers7"), backend="openr")
+    robot = Robot(Simulation(camera=CameraConfig("ers7")), backend="openr")
     try:
         system, camera = robot.camera_source.system, robot.sim.camera
         fbk = open_camera(system)
@@ -153,7 +154,7 @@ def test_control_primitive_385_3_sets_the_simulated_camera_gain_high():
 
 
 def test_the_openr_camera_primitive_starts_at_the_simulated_cameras_settings():
-    sim = Simulation(camera_settings=CameraSettings(white_balance="indoor", gain="high", shutter="fast"))
+    sim = Simulation(camera=CameraConfig(settings=CameraSettings(white_balance="indoor", gain="high", shutter="fast")))
     robot = Robot(sim, backend="openr")
     try:
         assert robot.camera_source.system.camera.settings == {
@@ -271,7 +272,10 @@ def test_gain_low_to_high_brightens_from_the_next_frame_not_the_current_one(tmp_
 
 
 def test_a_frames_picture_keeps_the_settings_of_its_tick():
-    changed, reference = Simulation(camera_profile="ers7", seed=5), Simulation(camera_profile="ers7", seed=5)
+    changed, reference = (
+        Simulation(seed=5, camera=CameraConfig("ers7")),
+        Simulation(seed=5, camera=CameraConfig("ers7")),
+    )
     try:
         for sim in (changed, reference):
             sim.step_frames(sim.frames_to_camera_frame())  # to a tick: frame 1 exposed, its picture not yet made

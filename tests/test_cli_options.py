@@ -12,11 +12,13 @@ import numpy as np
 import pytest
 
 from aibo_sim import motions
+from aibo_sim.camera import CameraSettings
 from aibo_sim.cli import build_parser, main
+from aibo_sim.config import CameraConfig, ParameterError, WorldConfig
 from aibo_sim.dump.shards import _in_shard
 from aibo_sim.field import BALL_RADIUS
-from aibo_sim.options import CAMERA_DESTS, WORLD_DESTS, cut_long_words
-from aibo_sim.placement import ParameterError, make_out_folder, place
+from aibo_sim.options import CAMERA_DESTS, WORLD_DESTS, error_line
+from aibo_sim.placement import make_out_folder, place
 from aibo_sim.runner import run_controller
 from aibo_sim.sim import Simulation
 
@@ -174,37 +176,55 @@ def test_runtime_bad_input_exits_2_with_one_line(tmp_path, capsys):
     assert "--settle" in capsys.readouterr().err
 
 
-def test_run_controller_refuses_non_finite_pose_and_ball():
-    with pytest.raises(ValueError, match="--pose"):
-        run_controller(SCRIPTED, duration=0.2, pose=(0.0, math.nan, 0.0))
-    with pytest.raises(ValueError, match="--ball"):
-        run_controller(SCRIPTED, duration=0.2, ball=(math.inf, 0.0))
-    with pytest.raises(ValueError, match="--pose"):
-        run_controller(SCRIPTED, duration=0.2, pose=(1.0, 2.0))
+def test_the_world_config_refuses_non_finite_pose_and_ball_naming_them():
+    with pytest.raises(ValueError, match="^pose must be 3 finite numbers, not 0.0 nan 0.0$"):
+        WorldConfig(pose=(0.0, math.nan, 0.0))
+    with pytest.raises(ValueError, match="^ball must be 2 finite numbers, not inf 0.0$"):
+        WorldConfig(ball=(math.inf, 0.0))
+    with pytest.raises(ValueError, match="^pose must be 3 finite numbers, not 1.0 2.0$"):
+        WorldConfig(pose=(1.0, 2.0))
+    with pytest.raises(ParameterError, match="^seed -1: must be a whole number") as caught:
+        WorldConfig(seed=-1)
+    assert error_line(caught.value).startswith("--seed -1: ")
+    with pytest.raises(ParameterError, match="^ball_type blue:") as caught:
+        WorldConfig(ball_type="blue")
+    assert error_line(caught.value).startswith("--ball-type blue: ")
+
+
+def test_configs_are_recorded_whole_and_read_back(tmp_path):
+    world = WorldConfig(seed=7, pose=(0.1, -0.2, 30.0), ball=(0.6, 0.25), ball_type="pink")
+    camera = CameraConfig("ideal", True, CameraSettings("indoor", "high", "slow"))
+    assert WorldConfig.from_dict(world.as_dict()) == world and CameraConfig.from_dict(camera.as_dict()) == camera
+    run_controller(SCRIPTED, duration=0.1, out=tmp_path / "sim", world=world, camera=camera)
+    recorded = json.loads((tmp_path / "sim" / "run.json").read_text())
+    assert WorldConfig.from_dict(recorded) == world and CameraConfig.from_dict(recorded["camera"]) == camera
+    served = run_controller(SCRIPTED, duration=0.1, backend="openr", out=tmp_path / "openr", world=world, camera=camera)
+    served = served.camera
+    assert served["width"] == 208 and CameraConfig.from_dict(served) == camera  # layer H served, full asked
 
 
 def test_the_library_names_parameters_and_the_command_line_its_options(tmp_path):
-    sim = Simulation(camera_profile="ideal")
+    sim = Simulation(camera=CameraConfig("ideal"))
     try:
         with pytest.raises(ParameterError, match="^pose 0.62 -0.06 0: the robot would overlap the ball by ") as caught:
             place(sim, pose=(0.62, -0.06, 0.0))
     finally:
         sim.close()
-    assert cut_long_words(caught.value).startswith("--pose 0.62 -0.06 0: the robot would overlap the ball by ")
+    assert error_line(caught.value).startswith("--pose 0.62 -0.06 0: the robot would overlap the ball by ")
     taken = tmp_path / "taken"
     taken.write_text("")
     with pytest.raises(ParameterError) as caught:
         make_out_folder(taken)
-    assert (str(caught.value), cut_long_words(caught.value)) == (
+    assert (str(caught.value), error_line(caught.value)) == (
         f"out {taken}: not a folder",
         f"--out {taken}: not a folder",
     )
     error = ParameterError.at("scene", "pose.xml", "the robot starts inside a wall; place it with", fix="pose")
-    assert cut_long_words(_in_shard(error, tmp_path / "shard_1")) == (
+    assert error_line(_in_shard(error, tmp_path / "shard_1")) == (
         "shard_1: --scene pose.xml: the robot starts inside a wall; place it with --pose"
     )
     with pytest.raises(ValueError, match="^ball must be 2 finite numbers, not nan 0.0$"):
-        motions.play_motion(motions.motions()["STAND.MTN"], ball=(math.nan, 0.0))
+        motions.play_motion(motions.motions()["STAND.MTN"], world=WorldConfig(ball=(math.nan, 0.0)))
 
 
 def _imports(path: Path) -> set[str]:

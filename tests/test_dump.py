@@ -15,6 +15,7 @@ import pytest
 
 import openr_bridge
 from aibo_sim.camera import HEAD_CAMERA_GROUPS
+from aibo_sim.config import CameraConfig, WorldConfig
 from aibo_sim.dump import (
     FORMATS,
     DumpError,
@@ -45,7 +46,7 @@ def full_dump(tmp_path_factory):
     out = tmp_path_factory.mktemp("dump") / "full"
     # The ideal picture: the checks below find the ball by colour and use a pinhole (the ers7
     # lens and sensor in dumps are checked in test_camera).
-    summary = dump(out, controller=TRACKER, frames=30, formats=FORMATS, camera_profile="ideal")
+    summary = dump(out, controller=TRACKER, frames=30, formats=FORMATS, camera=CameraConfig("ideal"))
     return out, summary
 
 
@@ -249,7 +250,7 @@ def test_segmentation_depth_and_ball_pixel_agree_with_the_picture(full_dump):
 
 @pytest.mark.parametrize("profile", ["ideal", "ers7"])
 def test_ball_behind_a_beacon_is_not_visible(profile):
-    sim = Simulation(camera_profile=profile)
+    sim = Simulation(camera=CameraConfig(profile))
     heading = math.atan2(1.95, 1.35)  # towards the sky-blue left beacon
     sim.place_robot(0, 0, heading)
     try:
@@ -291,7 +292,7 @@ def test_resume_after_an_interruption_is_byte_identical(full_dump, tmp_path):
     (resumed / "video.mp4").unlink()
     (resumed / "rgb" / ".tmp.000026.png").write_bytes(b"partial")
     assert len(load_dump(resumed)) == 25
-    summary = dump(resumed, controller=TRACKER, frames=30, formats=FORMATS, resume=True, camera_profile="ideal")
+    summary = dump(resumed, controller=TRACKER, frames=30, formats=FORMATS, resume=True, camera=CameraConfig("ideal"))
     assert (summary.frames, summary.new_frames) == (30, 5)
     assert sorted(p.relative_to(resumed) for p in resumed.rglob("*")) == sorted(
         p.relative_to(out) for p in out.rglob("*")
@@ -304,9 +305,17 @@ def test_resume_after_an_interruption_is_byte_identical(full_dump, tmp_path):
 def test_an_existing_dump_is_kept_unless_resumed_with_the_same_parameters(full_dump):
     out, _ = full_dump
     with pytest.raises(DumpError, match="already holds a dump: pass --resume"):
-        dump(out, controller=TRACKER, frames=30, formats=FORMATS, camera_profile="ideal")
+        dump(out, controller=TRACKER, frames=30, formats=FORMATS, camera=CameraConfig("ideal"))
     with pytest.raises(DumpError, match=r"other parameters \(seed\)"):
-        dump(out, controller=TRACKER, frames=30, formats=FORMATS, seed=1, resume=True, camera_profile="ideal")
+        dump(
+            out,
+            controller=TRACKER,
+            frames=30,
+            formats=FORMATS,
+            resume=True,
+            world=WorldConfig(seed=1),
+            camera=CameraConfig("ideal"),
+        )
 
 
 def test_unwritable_destination_is_one_clear_error(tmp_path):
@@ -392,7 +401,7 @@ def test_a_scene_without_a_ball_dumps_every_format_with_no_ball_record(tmp_path)
   <include file="{models_dir() / "ers7.xml"}"/>
   <worldbody><geom name="floor" type="plane" size="2 2 0.1" rgba="0.3 0.5 0.3 1"/></worldbody>
 </mujoco>""")
-    summary = dump(tmp_path / "out", controller=TRACKER, frames=3, formats=FORMATS, scene=scene)
+    summary = dump(tmp_path / "out", controller=TRACKER, frames=3, formats=FORMATS, world=WorldConfig(scene=scene))
     assert summary.frames == 3
     assert [frame.meta["ball"] for frame in load_dump(tmp_path / "out")] == [None] * 3
 

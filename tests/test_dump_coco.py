@@ -11,6 +11,7 @@ import pytest
 from pycocotools.coco import COCO
 
 from aibo_sim.cli import main
+from aibo_sim.config import CameraConfig
 from aibo_sim.dump import dump, load_dump
 from aibo_sim.dump.coco import Objects, coco_bytes, mask_rle
 from aibo_sim.field import SEGMENTATION_CLASSES
@@ -104,7 +105,7 @@ def test_mask_rle_counts_runs_down_the_columns_from_zeros(mask, counts):
 
 @pytest.mark.parametrize("profile", ["ideal", "ers7"])
 def test_a_ball_behind_a_beacon_loses_visibility_then_its_box(profile):
-    sim = Simulation(camera_profile=profile)
+    sim = Simulation(camera=CameraConfig(profile))
     objects = Objects(sim.model)
     heading = math.atan2(1.95, 1.35)  # towards the sky-blue left beacon
     sim.place_robot(0, 0, heading)

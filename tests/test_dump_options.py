@@ -11,6 +11,7 @@ import pytest
 
 import openr_bridge
 from aibo_sim.cli import main
+from aibo_sim.config import CameraConfig
 from aibo_sim.dump import DumpError, dump
 from aibo_sim.dump.writing import CONTROLLER_FILES
 
@@ -120,11 +121,11 @@ def test_a_camera_profile_changed_in_code_is_recorded_and_dumped_as_run_shows_it
     options = {"lens": "sony", "readout_ms": 6.0, "robot": {"gain": [1.02, 0.97, 1.0], "offset": [1.0, -2.0, 0.5]}}
     assert camera_profile("ers7", options) == profile and hash(camera_profile("ers7", options).robot) == hash(robot)
     out = tmp_path / "dump"
-    dump(out, controller=TRACKER, frames=3, camera_profile=profile, formats=("rgb",))
+    dump(out, controller=TRACKER, frames=3, formats=("rgb",), camera=CameraConfig(profile))
     meta = json.loads((out / "meta.json").read_text())
     assert meta["parameters"]["camera_profile_options"] == options
     assert meta["camera"]["profile_options"] == options and meta["camera"]["lens"] == "sony"
-    run = run_controller(TRACKER, duration=0.1, camera_profile=profile, out=tmp_path / "run")
+    run = run_controller(TRACKER, duration=0.1, out=tmp_path / "run", camera=CameraConfig(profile))
     preset = run_controller(TRACKER, duration=0.1, out=tmp_path / "preset")
     assert run.camera["profile_options"] == meta["camera"]["profile_options"] and preset.camera["profile_options"] == {}
     for name in ("000000.png", "000002.png"):
@@ -132,4 +133,4 @@ def test_a_camera_profile_changed_in_code_is_recorded_and_dumped_as_run_shows_it
         assert (dumped == ran).all() and not (ran == cv2.imread(str(tmp_path / "preset" / "frames" / name))).all()
     with pytest.raises(DumpError, match=r"other parameters \(camera_profile_options\)"):
         dump(out, controller=TRACKER, frames=3, formats=("rgb",), resume=True)
-    dump(out, controller=TRACKER, frames=3, camera_profile=profile, formats=("rgb",), resume=True)
+    dump(out, controller=TRACKER, frames=3, formats=("rgb",), resume=True, camera=CameraConfig(profile))

@@ -19,6 +19,7 @@ from pathlib import Path
 import pytest
 
 from aibo_sim.cli import main
+from aibo_sim.config import WorldConfig
 from aibo_sim.dump import FORMATS, DumpError, dump, load_dump
 from aibo_sim.dump.writing import LOCK_NAME, FolderLock
 from aibo_sim.runner import run_controller
@@ -192,7 +193,7 @@ def test_a_locked_folder_is_refused_naming_the_holder_and_nothing_changes(small_
 def uninterrupted(tmp_path_factory):
     """The reference: every format but the video (a resume renders only the frames it writes), ers7 camera."""
     out = tmp_path_factory.mktemp("reference") / "dump"
-    dump(out, controller=TRACKER, frames=30, seed=2, formats=NO_VIDEO)
+    dump(out, controller=TRACKER, frames=30, formats=NO_VIDEO, world=WorldConfig(seed=2))
     return out
 
 
@@ -213,7 +214,7 @@ def test_resume_after_a_kill_is_byte_identical_whatever_the_formats(uninterrupte
     complete = len(load_dump(out))
     assert 6 <= complete < 30
     (out / "seg" / "000003.png").unlink()  # a listed frame's file lost: rewritten, its line kept
-    summary = dump(out, controller=TRACKER, frames=30, seed=2, formats=NO_VIDEO, resume=True)
+    summary = dump(out, controller=TRACKER, frames=30, formats=NO_VIDEO, resume=True, world=WorldConfig(seed=2))
     assert (summary.frames, summary.new_frames, summary.repaired_frames) == (30, 30 - complete, 1)
     reference = _snapshot(uninterrupted)
     resumed = _snapshot(out)
@@ -443,14 +444,16 @@ def test_resume_refuses_a_scene_whose_model_changed(tmp_path):
     shutil.copytree(ROOT / "models", models)
     scene = models / "scene.xml"
     out = tmp_path / "dump"
-    dump(out, controller=TRACKER, frames=3, scene=scene, formats=("rgb",))
-    dump(out, controller=TRACKER, frames=3, scene=scene, formats=("rgb",), resume=True)  # unchanged: fine
+    dump(out, controller=TRACKER, frames=3, formats=("rgb",), world=WorldConfig(scene=scene))
+    dump(
+        out, controller=TRACKER, frames=3, formats=("rgb",), resume=True, world=WorldConfig(scene=scene)
+    )  # unchanged: fine
     robot = models / "ers7.xml"
     text = robot.read_text()
     assert 'timestep="0.002"' in text
     robot.write_text(text.replace('timestep="0.002"', 'timestep="0.001"'))
     with pytest.raises(DumpError, match=r"cannot resume, the dump was made with other parameters \(model_sha256\)"):
-        dump(out, controller=TRACKER, frames=3, scene=scene, formats=("rgb",), resume=True)
+        dump(out, controller=TRACKER, frames=3, formats=("rgb",), resume=True, world=WorldConfig(scene=scene))
 
 
 @pytest.mark.slow
@@ -550,8 +553,8 @@ def test_an_env_dump_in_a_scene_whose_ball_cannot_be_placed_writes_nothing(tmp_p
 @pytest.mark.slow
 def test_a_sharded_controller_dump_in_a_scene_without_a_ball_runs_as_one_worker_does(tmp_path):
     scene = _scene(tmp_path, "")
-    dump(tmp_path / "one", controller=TRACKER, frames=4, scene=scene, formats=("rgb",))
-    dump(tmp_path / "two", controller=TRACKER, frames=4, scene=scene, formats=("rgb",), workers=2)
+    dump(tmp_path / "one", controller=TRACKER, frames=4, formats=("rgb",), world=WorldConfig(scene=scene))
+    dump(tmp_path / "two", controller=TRACKER, frames=4, formats=("rgb",), workers=2, world=WorldConfig(scene=scene))
     shard = json.loads((tmp_path / "two" / "shard_0" / "meta.json").read_text())["parameters"]
     assert (shard["ball"], shard["seed"], len(load_dump(tmp_path / "two"))) == (None, 0, 4)
     for index in range(2):  # shard 0 is the one-worker dump's start

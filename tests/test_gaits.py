@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 from aibo_sim import cli, motions
+from aibo_sim.config import CameraConfig, WorldConfig
 from aibo_sim.ers7 import JOINTS, LEGS
 from aibo_sim.mjcf import TIMESTEP
 from aibo_sim.mtn import read_mtn
@@ -37,7 +38,7 @@ def play_perturbed(motion, repeat: int, scene: Path, stiffness: float, seed: int
     """``motion`` on a robot whose servo gains are scaled by ``stiffness``, started a little off
     the stand: up to 1 cm and 3 degrees on the field, 1 degree in every leg joint."""
     rng = np.random.default_rng(seed)
-    sim = Simulation(scene, seed=seed, camera_profile="ideal", ball=False)
+    sim = Simulation(scene, seed=seed, ball=False, camera=CameraConfig("ideal"))
     try:
         sim.model.actuator_gainprm[:, 0] *= stiffness
         sim.model.actuator_biasprm[:, 1] *= stiffness
@@ -102,8 +103,8 @@ def test_sony_walk_at_the_default_timestep_is_the_converged_walk(tmp_path):
     """16 cycles of WWFWD, unperturbed: the default timestep walks as 1 ms does (4 ms turned
     17 deg where 1 ms turns 0.1: a time-step error that grows with every cycle)."""
     walk = read_mtn(SONY_MTN / "WWFWD.MTN")
-    default = motions.play_motion(walk, repeat=16, ball=None)
-    fine = motions.play_motion(walk, repeat=16, scene=scene_with_timestep(tmp_path, 0.001), ball=None)
+    default = motions.play_motion(walk, repeat=16)
+    fine = motions.play_motion(walk, repeat=16, world=WorldConfig(scene=scene_with_timestep(tmp_path, 0.001)))
     assert abs(fine["heading_change_deg"]) < 1 and fine["displacement_m"][0] > 1.2, fine
     assert abs(default["heading_change_deg"] - fine["heading_change_deg"]) < 5, (default, fine)
     assert abs(default["displacement_m"][0] - fine["displacement_m"][0]) < 0.05, (default, fine)
@@ -157,7 +158,7 @@ def test_command_latency_delays_set_points_by_whole_frames(latency):
 
     def commanded(frames_per_call: int) -> list[float]:
         """The pan servo's set-point acting in each of 8 frames after a 0.2 rad command."""
-        sim = Simulation(camera_profile="ideal", ball=False, command_latency_frames=latency)
+        sim = Simulation(ball=False, command_latency_frames=latency, camera=CameraConfig("ideal"))
         sim.servos.target[pan] = sim.servos.command[pan] = sim.servos.command[pan] + 0.2  # an OPEN-R joint frame
         acting = []
         for _ in range(8 // frames_per_call):

@@ -4,6 +4,7 @@ current as they found it, so Gymnasium's MuJoCo renderer and mujoco.Renderer kee
 import numpy as np
 import pytest
 
+from aibo_sim.config import CameraConfig
 from aibo_sim.sim import Simulation
 
 pytestmark = pytest.mark.slow  # heavy: run by CI and by python -m pytest -m slow
@@ -69,7 +70,7 @@ def test_mujoco_renderer_and_ours_draw_the_same_beside_each_other():
     renderer = mujoco.Renderer(model, 48, 64)
     ours = []
     for neighbour in (False, True):
-        sim = Simulation(camera_profile="ideal")
+        sim = Simulation(camera=CameraConfig("ideal"))
         pictures = []
         for _ in range(3):
             sim.step_frames(sim.frames_to_camera_frame())

@@ -41,6 +41,7 @@ import pytest
 from test_camera import emissive, target_scene
 
 from aibo_sim.camera import LENSES, PROFILES, Lens
+from aibo_sim.config import CameraConfig
 from aibo_sim.sim import Simulation
 
 COLUMNS, ROWS, SQUARE = 9, 7, 0.02  # inner corners, metres
@@ -270,7 +271,7 @@ def test_opencv_calibration_recovers_the_recorded_lens(tmp_path, profile, full):
     vignetting, softness; each shot a new exposure), at 416 x 320 and at layer H's 208 x 160."""
     started = time.perf_counter()
     camera = PROFILES["ideal"].with_options(lens="tekkotsu") if profile == "ideal" else PROFILES["ers7"]
-    sim = Simulation(board_scene(tmp_path), camera_profile=camera, camera_full=full)
+    sim = Simulation(board_scene(tmp_path), camera=CameraConfig(camera, full=full))
     try:
         result = shoot_and_calibrate(sim, new_frame_each_shot=profile == "ers7")
     finally:

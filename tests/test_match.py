@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 from aibo_sim.cli import main
+from aibo_sim.config import CameraConfig, WorldConfig
 from aibo_sim.field import UNIFORM_COLOURS
 from aibo_sim.match import Lockstep, run_match
 from aibo_sim.runner import ControllerFailed
@@ -28,7 +29,7 @@ def facing(red_x=-0.5, blue_x=0.2):
 
 
 def test_one_robot_by_default_keeps_the_scene_as_it_was():
-    model, default = load_model(), Simulation(camera_profile="ideal")
+    model, default = load_model(), Simulation(camera=CameraConfig("ideal"))
     try:
         assert default.world.robots == [default] and default.prefix == ""
         assert default.model.ngeom == model.ngeom and default.model.nu == model.nu == 20
@@ -38,7 +39,7 @@ def test_one_robot_by_default_keeps_the_scene_as_it_was():
 
 
 def test_eight_robots_each_with_its_own_joints_sensors_camera_and_uniform():
-    sim = Simulation(camera_profile="ideal", robots=FOUR_A_SIDE, seed=5)
+    sim = Simulation(robots=FOUR_A_SIDE, seed=5, camera=CameraConfig("ideal"))
     try:
         robots, model = sim.world.robots, sim.model
         assert len(robots) == 8 and robots[0] is sim and model.nu == 8 * 20
@@ -65,7 +66,7 @@ def test_eight_robots_each_with_its_own_joints_sensors_camera_and_uniform():
 
 def test_a_robot_running_into_another_pushes_it_and_does_not_pass_through():
     robots = (RobotSpec("red", 4, (-0.4, 0.0, 0.0)), RobotSpec("blue", 4, (0.0, 0.0, 0.0)))
-    sim = Simulation(camera_profile="ideal", robots=robots, ball=False)
+    sim = Simulation(robots=robots, ball=False, camera=CameraConfig("ideal"))
     try:
         red, blue = sim.world.robots
         assert not sim.overlaps(0.0005)
@@ -82,7 +83,7 @@ def test_a_robot_running_into_another_pushes_it_and_does_not_pass_through():
 
 
 def test_each_camera_sees_the_other_robot_and_its_uniform_not_its_own():
-    sim = Simulation(camera_profile="ideal", robots=facing(-0.5, 0.2), ball=False)
+    sim = Simulation(robots=facing(-0.5, 0.2), ball=False, camera=CameraConfig("ideal"))
     try:
         sim.step_frames(10)
         red, blue = sim.world.robots
@@ -103,7 +104,7 @@ def test_each_camera_sees_the_other_robot_and_its_uniform_not_its_own():
 
 
 def test_lockstep_waits_for_every_robot_and_lets_a_finished_one_go():
-    sim = Simulation(camera_profile="ideal", robots=facing(), ball=False)
+    sim = Simulation(robots=facing(), ball=False, camera=CameraConfig("ideal"))
     try:
         world = sim.world
         world.lockstep = lockstep = Lockstep(world)
@@ -122,7 +123,11 @@ def _tracker_robots():
 def test_a_match_writes_each_robots_frames_and_is_deterministic(tmp_path):
     for name in ("a", "b"):
         summary = run_match(
-            _tracker_robots(), duration=0.5, out=tmp_path / name, seed=4, ball=(0.1, 0.1), progress=False
+            _tracker_robots(),
+            duration=0.5,
+            out=tmp_path / name,
+            progress=False,
+            world=WorldConfig(seed=4, ball=(0.1, 0.1)),
         )
         assert summary["status"] == "done" and summary["simulated_s"] == pytest.approx(0.5, abs=0.008)
     match = json.loads((tmp_path / "a" / "run.json").read_text())
@@ -151,7 +156,7 @@ def test_a_failing_controller_fails_the_match_and_the_others_run_to_the_end(tmp_
     steps.write_text("from aibo_sim.controller import *\nwhile True:\n    robot_step(40)\n")
     robots = [RobotSpec("red", 4, None, str(crash)), RobotSpec("blue", 4, None, str(steps))]
     with pytest.raises(ControllerFailed, match="(?s)red 4: .*boom"):
-        run_match(robots, duration=0.4, out=tmp_path / "out", camera_profile="ideal", progress=False)
+        run_match(robots, duration=0.4, out=tmp_path / "out", progress=False, camera=CameraConfig("ideal"))
     match = json.loads((tmp_path / "out" / "run.json").read_text())
     assert match["status"] == "failed" and match["simulated_s"] == pytest.approx(0.4, abs=0.008)
     assert [r["status"] for r in match["robots"]] == ["failed", "done"]
@@ -200,7 +205,7 @@ def test_bad_robots_exit_2_with_one_line(arguments, message, capsys):
 
 
 def test_kickoff_poses_of_a_full_match_do_not_overlap():
-    sim = Simulation(camera_profile="ideal", robots=FOUR_A_SIDE)
+    sim = Simulation(robots=FOUR_A_SIDE, camera=CameraConfig("ideal"))
     try:
         assert not [pair for pair in sim.overlaps(0.001) if "the ball" not in pair[:2]]
         assert {r.spec.pose for r in sim.world.robots} == {
@@ -208,3 +213,28 @@ def test_kickoff_poses_of_a_full_match_do_not_overlap():
         }
     finally:
         sim.close()
+
+
+@pytest.mark.slow
+def test_every_kind_of_controller_plays_in_one_match(tmp_path):
+    """A memory stick (ball_tracker_c built with build-ms and Sony's Makefile form), the same C
+    controller compiled for the host, and the Python tracker, each on its own robot."""
+    import subprocess
+
+    from aibo_sim.openr.build_ms import build_ms
+    from aibo_sim.openr.sdk import sdk_root
+
+    stick = tmp_path / "tracker_ms"
+    build_ms(ROOT / "controllers" / "ball_tracker_c", stick)
+    made = subprocess.run(["make", f"OPENRSDK_ROOT={sdk_root()}", "install"], cwd=stick, capture_output=True, text=True)
+    assert made.returncode == 0, made.stdout + made.stderr
+    robots = [
+        RobotSpec("red", 4, (-0.5, 0.0, 0.0), str(stick)),
+        RobotSpec("blue", 4, (0.5, 0.0, 180.0), str(ROOT / "controllers" / "ball_tracker_c")),
+        RobotSpec("red", 2, None, str(TRACKER)),
+    ]
+    summary = run_match(robots, duration=1.0, out=tmp_path / "out", progress=False, world=WorldConfig(ball=(0.0, 0.1)))
+    assert [r["backend"] for r in summary["robots"]] == ["memory stick", "c", "python"]
+    assert [r["status"] for r in summary["robots"]] == ["done"] * 3
+    assert [r["camera_frames"] for r in summary["robots"]] == [30, 30, 30]
+    assert (tmp_path / "out" / "robot1" / "console.log").is_file()

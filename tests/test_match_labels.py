@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 from pycocotools.coco import COCO
 
+from aibo_sim.config import CameraConfig
 from aibo_sim.dump.coco import Objects, coco_dataset
 from aibo_sim.dump.formats import (
     DUMP_FORMAT,
@@ -256,7 +257,7 @@ LONE_CLASSES_SHA256 = "812e71b5c6af9ff0154ec51aeb111fdf9a7d724c937ba5e0603cfe40e
 
 
 def test_a_lone_robots_labels_are_those_before_matches():
-    sim = Simulation(camera_profile="ers7")
+    sim = Simulation(camera=CameraConfig("ers7"))
     try:
         assert hashlib.sha256(geom_classes(sim.model).tobytes()).hexdigest() == LONE_CLASSES_SHA256
         assert robot_roots(sim.model) == {sim._body: 1} and not is_match(sim.world.robot_specs)

@@ -18,6 +18,7 @@ import pytest
 
 from aibo_sim.cbind import serve
 from aibo_sim.cli import main
+from aibo_sim.config import CameraConfig
 from aibo_sim.dump import DumpError, dump, load_dump
 from aibo_sim.dump.writing import FolderLock
 from aibo_sim.runner import ControllerFailed, FrameWriter, run_controller
@@ -168,7 +169,7 @@ def test_a_frame_that_is_a_link_is_not_complete_on_resume_nor_read(tmp_path):
     frame.symlink_to(copy)
     with pytest.raises(DumpError, match=f"^{re.escape(str(frame))} is a symbolic link: refusing to follow it"):
         _ = load_dump(out)[1].rgb
-    summary = dump(out, controller=SCRIPTED, frames=3, formats=("rgb",), camera_profile="ideal", resume=True)
+    summary = dump(out, controller=SCRIPTED, frames=3, formats=("rgb",), resume=True, camera=CameraConfig("ideal"))
     assert (summary.new_frames, summary.repaired_frames) == (0, 1)
     assert not frame.is_symlink() and frame.read_bytes() == original == copy.read_bytes()
 

@@ -10,6 +10,7 @@ import pytest
 
 import openr_bridge
 from aibo_sim.cli import main
+from aibo_sim.config import CameraConfig, WorldConfig
 from aibo_sim.dump import annex_yuv
 from aibo_sim.runner import ControllerFailed, run_controller
 
@@ -37,7 +38,9 @@ def test_one_controller_on_both_backends(tmp_path, profile, bound):
     runs = {}
     for backend in ("sim", "openr"):
         out = tmp_path / backend
-        summary = run_controller(SCRIPTED, backend=backend, duration=1.0, seed=3, out=out, camera_profile=profile)
+        summary = run_controller(
+            SCRIPTED, backend=backend, duration=1.0, out=out, world=WorldConfig(seed=3), camera=CameraConfig(profile)
+        )
         assert summary.camera_frames == 30 and summary.simulated_s == pytest.approx(1.0)
         runs[backend] = out
     logs = {
@@ -125,7 +128,10 @@ def test_cli_bad_input_exits_2_with_a_clear_message(tmp_path, capsys):
     robot_only = str(ROOT / "models" / "ers7.xml")
     assert main(["run", str(SCRIPTED), "--scene", robot_only, "--duration", "0.1", "--ball", "1", "0"]) == 2
     assert "no body named 'ball'" in capsys.readouterr().err
-    assert run_controller(SCRIPTED, scene=robot_only, duration=0.1, out=tmp_path / "robot_only").ball_xy is None
+    assert (
+        run_controller(SCRIPTED, duration=0.1, out=tmp_path / "robot_only", world=WorldConfig(scene=robot_only)).ball_xy
+        is None
+    )
 
 
 def test_physics_divergence_is_a_clear_error(tmp_path, capsys):
@@ -163,7 +169,9 @@ def test_annex_port_writes_image_raw_of_the_last_frame(tmp_path):
 
 @pytest.mark.slow
 def test_walk_to_ball_reaches_the_ball(capsys):
-    summary = run_controller(ROOT / "controllers" / "walk_to_ball.py", duration=20.0, ball=(1.2, 0.5))
+    summary = run_controller(
+        ROOT / "controllers" / "walk_to_ball.py", duration=20.0, world=WorldConfig(ball=(1.2, 0.5))
+    )
     assert "reached the ball at t =" in capsys.readouterr().out
     x, y, _ = summary.robot_pose
     assert np.hypot(summary.ball_xy[0] - x, summary.ball_xy[1] - y) < 0.5  # body centre to ball
@@ -172,7 +180,11 @@ def test_walk_to_ball_reaches_the_ball(capsys):
 
 def test_ball_tracker_centres_the_ball_on_the_openr_backend(tmp_path):
     summary = run_controller(
-        ROOT / "controllers" / "ball_tracker.py", backend="openr", duration=2.0, ball=(0.6, 0.25), out=tmp_path
+        ROOT / "controllers" / "ball_tracker.py",
+        backend="openr",
+        duration=2.0,
+        out=tmp_path,
+        world=WorldConfig(ball=(0.6, 0.25)),
     )
     assert np.hypot(*summary.robot_pose[:2]) < 0.02  # it stood still
     frames = sorted((tmp_path / "frames").iterdir())
@@ -210,8 +222,10 @@ def test_cli_mtn_info_and_play(capsys, tmp_path):
 def test_run_json_describes_the_pictures_the_backend_serves(tmp_path):
     """On openr, --camera-full renders 416x320 but the wrapper serves layer H: run.json's lens is
     that of the 208x160 frames written."""
-    full = run_controller(SCRIPTED, duration=0.1, camera_full=True, out=tmp_path / "sim").camera
-    served = run_controller(SCRIPTED, backend="openr", camera_full=True, duration=0.1, out=tmp_path / "openr").camera
+    full = run_controller(SCRIPTED, duration=0.1, out=tmp_path / "sim", camera=CameraConfig(full=True)).camera
+    served = run_controller(
+        SCRIPTED, backend="openr", duration=0.1, out=tmp_path / "openr", camera=CameraConfig(full=True)
+    ).camera
     frame = cv2.imread(str(next((tmp_path / "openr" / "frames").glob("*.png"))))
     assert (full["width"], full["height"], served["width"], served["height"]) == (416, 320, 208, 160)
     assert frame.shape == (160, 208, 3) and served["fx"] == pytest.approx(full["fx"] / 2, abs=1e-3)

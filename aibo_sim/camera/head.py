@@ -282,23 +282,23 @@ class HeadCamera:
         return (self.width, self.height) if self._pinhole is None else (self._pinhole.width, self._pinhole.height)
 
     def _render(self, data: mujoco.MjData, kind: str) -> np.ndarray:
-        if self._renderer is None:
-            self._renderer = Renderer(
-                self.model,
-                *self.render_size,
-                groups=(*HEAD_CAMERA_GROUPS, BEHIND_CAMERA_GROUP),
-                hidden=self.own_geoms(),
-                subpixel=self.other_robots_geoms(),
-            )
-        render = {
-            "rgb": self._renderer.render,
-            "rgba": self._renderer.render_rgba,
-            "depth": self._renderer.render_depth,
-            "segmentation": self._renderer.render_segmentation,
-        }[kind]
         # The renderer hides geoms by changing their groups in the model, and the lens by
         # changing the camera's intrinsics: the robots of a match share the model, one at a time.
         with self.sim.world.render_lock:
+            if self._renderer is None:  # its geoms read from the groups: not while another changes them
+                self._renderer = Renderer(
+                    self.model,
+                    *self.render_size,
+                    groups=(*HEAD_CAMERA_GROUPS, BEHIND_CAMERA_GROUP),
+                    hidden=self.own_geoms(),
+                    subpixel=self.other_robots_geoms(),
+                )
+            render = {
+                "rgb": self._renderer.render,
+                "rgba": self._renderer.render_rgba,
+                "depth": self._renderer.render_depth,
+                "segmentation": self._renderer.render_segmentation,
+            }[kind]
             if self._pinhole is None:
                 return render(data, self.camera_id)
             return self._render_pinhole(render, data)

@@ -3,10 +3,11 @@
 Usage::
 
     aibo-sim dump (CONTROLLER | --env ENV_ID [--policy random|scripted|zero]) --out DIR
+    aibo-sim dump [CONTROLLER] (--robots FILE | --robot TEAM:NUMBER[:X,Y,YAW_DEG][:CONTROLLER] ...) --out DIR
                   [--duration S | --steps N] [--backend sim|openr] [--mtn-mode openr|webots]
                   [--memory-stick DIR] [--scene FILE] [--pose X Y YAW_DEG] [--ball X Y] [--seed N]
                   [--camera-profile ers7|ideal] [--camera-wb W] [--camera-gain G] [--camera-shutter S]
-                  [--formats rgb,yuv444,yuv420,annex,openr,bands,luma,depth,seg,mp4,coco | all]
+                  [--formats rgb,yuv444,yuv420,annex,openr,bands,luma,depth,seg,robots,mp4,coco | all]
                   [--camera-full] [--resume] [--workers N] [--engine local|ray] [--ray-address ADDR]
 
 A controller dump holds camera frames 0 .. 30 S - 1 (``--steps N``: frames 0 .. N - 1); an
@@ -33,6 +34,8 @@ controller is the camera frame index, k / 30 s)::
     luma/000123.png      the 416x320 luma reconstructed from layer H (reconstruct_luma)
     depth/000123.npy     float32 metres along the optical axis, through the same lens
     seg/000123.png       uint8 class ids, names in meta.json (field.SEGMENTATION_CLASSES), same lens
+    robots/000123.png    uint8 robot instance ids, same lens: 0 no robot, k the world's robot k (a
+                         match's meta.json "robots" names each; a lone robot's own paws are 1)
     video.mp4            30 fps, codec mp4v (MPEG-4 part 2: OpenCV's wheels lack H.264), its index
                          (moov) ahead of the frames, as ffmpeg's +faststart leaves it
     coco.json            COCO detection annotations of the rgb files (needs rgb): a box and a
@@ -86,12 +89,24 @@ system), or on a local Ray started for the dump. The files are the local engine'
 byte; locking, ``--resume`` and the errors are the same. A task whose worker is lost runs
 again (resuming its shard), up to 3 retries.
 
+A match (``--robots FILE`` or ``--robot ...``, as ``aibo-sim run`` takes them; CONTROLLER runs
+the robots whose entry names none) is dumped one robot a shard: ``DIR/robot1/``, ``DIR/robot2/``,
+... (in the robots' order), each the layout above for that robot's camera, its meta.json
+recording its spec (``"parameters"."robot"``) and the match (``"robots"``: each robot's instance
+id, team, number and name, ``"observer"`` the robot itself); ``load_dump`` reads robot 1's frames,
+then robot 2's, ...; ``DIR/coco.json`` lists them all, the robots in their teams' categories
+(``robot_red``, ``robot_blue``), no robot detecting itself. The controllers share
+``DIR/controller_files/``. ``--resume`` runs the match again and writes what is missing;
+``--workers``, ``--env`` and the one robot's options (``--pose``, ``--backend``, ``--mtn-mode``,
+``--memory-stick``) are refused (``match.py``).
+
 On a terminal a dump shows its progress (frames, simulated time, real-time factor, time
 left); elsewhere it is quiet.
 
 Modules: ``formats`` (what each format writes), ``writing`` (atomic files, the lock, resume),
 ``running`` (one run into a writer; ``dump``), ``shards`` (worker processes and Ray tasks),
-``coco`` (detection labels), ``reading`` (``load_dump``), ``command`` (the CLI).
+``coco`` (detection labels), ``reading`` (``load_dump``), ``match`` (a match's dump), ``command``
+(the CLI).
 """
 
 from .command import add_dump_parser

@@ -8,7 +8,7 @@ import sys
 from openr_bridge import FRAME_RATE_HZ
 
 from ..mtn import MODES as MTN_MODES
-from ..options import add_world_options, camera_options, finite_float, path_text
+from ..options import add_world_options, camera_config, finite_float, path_text, world_config
 from ..robot import BACKENDS
 from .formats import DEFAULT_FORMATS, FORMATS
 from .running import ENGINES, POLICIES, dump
@@ -29,6 +29,11 @@ def _dump_command(args) -> int:
             f"--duration {args.duration:g} s holds no camera frame: give at least "
             f"{0.5 / FRAME_RATE_HZ:.3f} s (frames are 1/{FRAME_RATE_HZ} s apart)"
         )
+    robots = None
+    if args.robots is not None or args.robot:  # a match: one dump per robot
+        from ..cli import _match_robots  # run's reading of --robots and --robot (cli imports this module)
+
+        robots = _match_robots(args)
     # Ctrl-C and SIGTERM (``cli.sigterm_stops_cleanly``) stop it cleanly: writers abort, workers stop.
     summary = dump(
         args.out,
@@ -37,11 +42,8 @@ def _dump_command(args) -> int:
         policy=args.policy,
         frames=frames,
         backend=args.backend,
-        scene=args.scene,
-        seed=args.seed,
-        pose=args.pose and tuple(args.pose),
-        ball=args.ball and tuple(args.ball),
-        ball_type=args.ball_type,
+        world=world_config(args),
+        camera=camera_config(args),
         formats=formats,
         resume=args.resume,
         workers=args.workers,
@@ -49,10 +51,12 @@ def _dump_command(args) -> int:
         ray_address=args.ray_address,
         mtn_mode=args.mtn_mode,
         memory_stick=args.memory_stick,
-        **camera_options(args),
+        robots=robots,
     )
     repaired = f", {summary.repaired_frames} with missing or damaged files rewritten" if summary.repaired_frames else ""
     frames = f"{summary.frames} frame{'s' * (summary.frames != 1)}"
+    if robots is not None:
+        frames += f" of {len(robots)} robot{'s' * (len(robots) != 1)}"
     print(
         f"dumped {frames} to {summary.out} ({summary.new_frames} written now{repaired}) in "
         f"{summary.wall_s:.1f} s: {summary.frames_per_s:.1f} frames/s, "
@@ -69,7 +73,26 @@ def add_dump_parser(subcommands) -> argparse.ArgumentParser:
         description=sys.modules[__package__].__doc__,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    parser.add_argument("controller", nargs="?", type=path_text, help="controller file (or use --env)")
+    parser.add_argument(
+        "controller",
+        nargs="?",
+        type=path_text,
+        help="controller file (or use --env); in a match, the controller of the robots that name none",
+    )
+    parser.add_argument(
+        "--robots",
+        type=path_text,
+        metavar="FILE",
+        help="a match: a TOML file of [[robot]] tables (team red|blue, number 1-4, optional pose [x, y, yaw_deg] "
+        "and controller), up to 8 robots; each robot's frames go to --out/robotN",
+    )
+    parser.add_argument(
+        "--robot",
+        action="append",
+        default=[],
+        metavar="TEAM:NUMBER[:X,Y,YAW_DEG][:CONTROLLER]",
+        help="a match robot (repeat for each; instead of --robots), e.g. red:4 or blue:1:2.4,0,180",
+    )
     parser.add_argument("--env", help="gymnasium environment id, e.g. aibo_sim/HeadTrackBall-v0")
     parser.add_argument("--policy", choices=POLICIES, help="environment dumps: the policy (default random)")
     parser.add_argument("--out", type=path_text, required=True, help="dump folder: new, empty, or a dump to --resume")

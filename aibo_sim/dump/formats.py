@@ -20,7 +20,7 @@ from ..files import open_file
 from ..sim import Simulation, robot_prefix
 from ..team import MAX_ROBOTS, RobotSpec
 
-FORMATS = ("rgb", "yuv444", "yuv420", "annex", "openr", "bands", "luma", "depth", "seg", "mp4", "coco")
+FORMATS = ("rgb", "yuv444", "yuv420", "annex", "openr", "bands", "luma", "depth", "seg", "robots", "mp4", "coco")
 DEFAULT_FORMATS = ("rgb", "yuv420", "openr", "mp4")
 DUMP_FORMAT = "aibo-sim dump 1"  # meta.json's "format"
 
@@ -38,7 +38,7 @@ PATHS = {
     "seg": "seg/{index:06d}.png",
     "mp4": "video.mp4",
     "coco": "coco.json",
-    "robots": "robots/{index:06d}.png",  # a match's robot instances: not in FORMATS until the writer writes it
+    "robots": "robots/{index:06d}.png",  # robot instance ids (robot_labels)
 }
 # Geoms by name prefix (first match wins); the other geoms of every robot's bodies are "robot".
 CLASS_PREFIXES = (
@@ -219,7 +219,8 @@ def file_layouts(formats, width: int, height: int) -> dict:
         ),
         "seg": (f"PNG, 8-bit class ids (segmentation_classes), {size}", None),
         "robots": (
-            f'PNG, 8-bit robot instance ids (meta.json "robots": 0 none, k the world\'s robot k), {size}',
+            f"PNG, 8-bit robot instance ids, {size}: 0 no robot, k the world's robot k (in a match, "
+            "meta.json's \"robots\"; 1 a lone robot's own body)",
             None,
         ),
         "mp4": (f"MP4 (mp4v), 30 fps, {size}", None),

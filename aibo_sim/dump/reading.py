@@ -247,6 +247,12 @@ class DumpFrame:
         """Class ids (h, w) uint8; names in ``Dump.segmentation_classes``."""
         return self._png("seg", cv2.IMREAD_GRAYSCALE)
 
+    @property
+    def robots(self) -> np.ndarray:
+        """Robot instance ids (h, w) uint8: 0 no robot, k the world's robot k (a match's dump:
+        meta.json's ``"robots"``; ``formats.instance_teams`` gives their teams)."""
+        return self._png("robots", cv2.IMREAD_GRAYSCALE)
+
 
 class Dump:
     """A dump's complete frames (a sharded dump's shards one after the other; a shard that

@@ -20,9 +20,10 @@ from openr_bridge.memory_stick import load_memory_stick, memory_stick_folder, re
 from ..camera import CameraProfile, CameraSettings, camera_size, describe_camera, scene_light
 from ..camera import camera_profile as resolve_profile  # dump's argument of that name shadows it
 from ..cbind import compile_controller, controller_sources, is_c_controller
+from ..config import CameraConfig, WorldConfig, start_values
 from ..files import make_folder
 from ..mtn import MODES as MTN_MODES
-from ..placement import check_place, start_values
+from ..placement import check_place
 from ..render import Renderer
 from ..robot import BACKENDS, SimulationEnd, check_memory_stick
 from ..runner import MEMORY_STICK, Progress, check_python_controller, run_controller
@@ -96,16 +97,16 @@ def _dump_controller(parameters: dict, out: Path, resume: bool, **lock) -> DumpW
                 parameters["controller"],
                 backend=parameters["backend"],
                 duration=frames / FRAME_RATE_HZ,
-                scene=parameters["scene"],
-                seed=parameters["seed"],
-                pose=parameters["pose"],
-                ball=parameters["ball"],
-                ball_type=parameters.get("ball_type", "robocup"),
+                world=WorldConfig(
+                    parameters["scene"],
+                    parameters["seed"],
+                    parameters["pose"],
+                    parameters["ball"],
+                    parameters.get("ball_type", "robocup"),
+                ),
+                camera=CameraConfig(profile, camera_full, settings),
                 mtn_mode=parameters["mtn_mode"],
                 memory_stick=parameters["memory_stick"],
-                camera_full=camera_full,
-                camera_profile=profile,
-                camera_settings=settings,
                 frame_listeners=[listener],
                 progress=False,
                 workdir=workdir,
@@ -257,6 +258,15 @@ def controller_sha256(path: Path) -> str:
     return hashlib.sha256("".join(f"{s.name}\0{file_sha256(s)}\0" for s in sources).encode()).hexdigest()
 
 
+def check_formats(formats) -> None:
+    """ValueError for no formats, an unknown one, or coco without the rgb files it annotates."""
+    unknown = sorted(set(formats) - set(FORMATS))
+    if unknown or not formats:
+        raise ValueError(f"--formats: unknown formats {unknown or '(none given)'}; known: {', '.join(FORMATS)}")
+    if "coco" in formats and "rgb" not in formats:
+        raise ValueError("--formats: coco annotates the rgb files; add rgb")
+
+
 def dump(
     out,
     *,
@@ -265,35 +275,56 @@ def dump(
     policy: str | None = None,
     frames: int = 300,
     backend: str | None = None,
-    scene: str | Path | None = None,
-    seed: int = 0,
-    pose: tuple[float, float, float] | None = None,
-    ball: tuple[float, float] | None = None,
-    ball_type: str = "robocup",
+    world: WorldConfig | None = None,
+    camera: CameraConfig | None = None,
     formats=DEFAULT_FORMATS,
-    camera_full: bool = False,
-    camera_profile: str | CameraProfile = "ers7",
-    camera_settings: CameraSettings | None = None,
     resume: bool = False,
     workers: int = 1,
     engine: str = "local",
     ray_address: str | None = None,
     mtn_mode: str | None = None,
     memory_stick: str | Path | None = None,
+    robots=None,
 ) -> DumpSummary:
     """Dump a controller run (``frames`` camera frames) or an env run (``frames`` steps of
-    ``policy``, default random) to ``out``;
-    ``pose`` (x, y, yaw in degrees), ``ball``, ``mtn_mode`` (default openr) and ``memory_stick``
+    ``policy``, default random) to ``out``, in ``world`` (scene, seed: shard k of ``workers``
+    takes seed + k, the robot's pose, the ball) with the head camera ``camera``;
+    ``world.pose`` (x, y, yaw in degrees), ``world.ball``, ``mtn_mode`` (default openr) and ``memory_stick``
     apply to controller dumps, as to ``run_controller`` (a memory stick takes none of ``backend``,
     ``mtn_mode`` and ``memory_stick``); the controller runs in
     ``out/controller_files`` (a shard's own). ``engine="ray"``
     runs the ``workers`` shards as Ray tasks: on the Ray cluster at ``ray_address``, or on a
-    local Ray started for the dump; the files are the same, byte for byte."""
+    local Ray started for the dump; the files are the same, byte for byte.
+
+    ``robots`` (``team.RobotSpec``s): a match, each robot running its spec's controller or
+    ``controller``, dumped one robot a shard (``out/robot1``, ...: ``match.dump_match``)."""
+    world, camera = world or WorldConfig(), camera or CameraConfig()
+    if robots is not None:
+        from .match import dump_match  # it imports this module
+
+        return dump_match(
+            out,
+            robots,
+            controller=controller,
+            frames=frames,
+            world=world,
+            camera=camera,
+            formats=formats,
+            resume=resume,
+            env=env,
+            workers=workers,
+            backend=backend,
+            mtn_mode=mtn_mode,
+            memory_stick=memory_stick,
+            policy=policy,
+            engine=engine,
+            ray_address=ray_address,
+        )
+    scene, seed, pose, ball, ball_type = world.scene, world.seed, world.pose, world.ball, world.ball_type
+    camera_full, camera_profile, camera_settings = camera.full, camera.profile, camera.settings
     if (controller is None) == (env is None):
         raise ValueError("dump a controller file or an environment (--env), not both or neither")
-    unknown = sorted(set(formats) - set(FORMATS))
-    if unknown or not formats:
-        raise ValueError(f"--formats: unknown formats {unknown or '(none given)'}; known: {', '.join(FORMATS)}")
+    check_formats(formats)
     if controller is not None and memory_stick_folder(controller) is not None:
         for option, value in (("--backend", backend), ("--mtn-mode", mtn_mode), ("--memory-stick", memory_stick)):
             if value is not None:
@@ -312,8 +343,6 @@ def dump(
         raise ValueError(f"policy must be one of {POLICIES}, not {policy!r}")
     if frames < 1:
         raise ValueError(f"the number of frames (or steps) must be positive, not {frames}")
-    if "coco" in formats and "rgb" not in formats:
-        raise ValueError("--formats: coco annotates the rgb files; add rgb")
     if not 1 <= workers <= frames:
         raise ValueError(f"--workers must be between 1 and the number of frames ({frames}), not {workers}")
     available = available_memory_mb() if engine == "local" and workers > 1 else None

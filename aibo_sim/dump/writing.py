@@ -32,6 +32,7 @@ from .formats import (
     frame_files,
     frame_metadata,
     geom_classes,
+    geom_robots,
     mp4_faststart,
     npy,
     yuv420_bytes,
@@ -275,7 +276,10 @@ class DumpWriter:
         model: mujoco.MjModel,
         lock_wait_s: float = 0.0,
         command: str | None = None,
+        robots: dict | None = None,
     ):
+        """``robots``: meta.json's "robots" (``formats.robots_meta``) in a match's dump; None for a lone
+        robot, whose meta.json has none."""
         self.out, self.formats = out, tuple(formats)
         width, height = camera["width"], camera["height"]
         self.layouts = file_layouts(self.formats, width, height)
@@ -285,6 +289,7 @@ class DumpWriter:
             "camera": camera,
             "files": self.layouts,
             "segmentation_classes": list(SEGMENTATION_CLASSES),
+            **({"robots": robots} if robots is not None else {}),
         }
         prepared = prepare_folder(out, meta, resume, lock_wait_s=lock_wait_s, command=command)
         self._lock, self.complete, self.missing = prepared.lock, prepared.complete, prepared.missing
@@ -292,6 +297,7 @@ class DumpWriter:
         self._lines = self._video = self._video_path = None
         try:
             self._classes = geom_classes(model) if "seg" in self.formats else None
+            self._instances = geom_robots(model) if "robots" in self.formats else None  # formats.robot_labels
             self._objects = Objects(model) if "coco" in self.formats else None
             for name in self.formats:
                 path = out / self.layouts[name]["path"]
@@ -375,8 +381,12 @@ class DumpWriter:
                 yield path("luma"), png(openr_bridge.reconstruct_luma(message))
         if "depth" in wants:
             yield path("depth"), npy(sim.camera.depth())
-        if "seg" in wants:
-            yield path("seg"), png(self._classes[sim.camera.segmentation()])
+        if wants & {"seg", "robots"}:
+            ids = sim.camera.segmentation()
+            if "seg" in wants:
+                yield path("seg"), png(self._classes[ids])
+            if "robots" in wants:
+                yield path("robots"), png(self._instances[ids])
 
     def __enter__(self) -> DumpWriter:
         return self

@@ -1,42 +1,12 @@
-"""The shared base of the ERS-7 environments: simulation, observations, actions, rendering.
+"""The shared base of the ERS-7 environments (``AiboEnv``): simulation, observations, actions, rendering.
 
 One environment step is one frame of the head camera at the robot's 30 fps: the 8 ms joint
 frames run until the camera's next frame is due (4 or 5 of them), then one image is taken.
-
-Observations (a ``Dict``):
-
-- ``image`` (unless ``camera=None``): the head camera, ``(height, width, 3)`` uint8, of layer
-  ``camera_layer`` (H 208x160, M 104x80, L 52x40). ``camera="rgb"``: the rendered RGB, layers
-  M and L as 2x2 / 4x4 block means (the Haar low band the robot computes); ``"ycrcb"``: the
-  Y, Cr, Cb bands of that layer of the OPEN-R message (``openr_bridge.encode_frame``);
-  ``"openr"`` (layer H only): the RGB that the wrapper ``Controller``'s ``camera_get_image``
-  serves once the message has gone through CONNECT.CFG's wiring. Both are bytes as the robot
-  has them, OPEN-R's tag in the first 12 Y bytes of the last row included; the last message
-  is ``env.camera_message``.
-- ``joint_positions`` (rad, the order of ``ers7.JOINTS``), ``acceleration`` (m/s^2, body
-  frame), ``distance_mm`` (IR near, far, chest), ``touch`` (0/1, the order of ``ers7.SENSORS``).
-
-``image_only=True``: the observation is the image alone, a ``Box``, as Gymnasium's image
-wrappers (``ResizeObservation``, ``GrayscaleObservation``, ``FrameStackObservation``) and CNN
-policies take it.
-
-Actions: one number in [-1, 1] per actuated joint, mapped affinely onto the actuator's
-control range, and given to the servos as targets.
-
-The head camera (``aibo_sim.camera``): ``camera_profile`` ``"ers7"`` (the calibrated sensor,
-default) or ``"ideal"``; ``camera_wb``, ``camera_gain``, ``camera_shutter`` its settings by
-name, as on the command line; ``scene`` an MJCF scene file.
-
-Domain randomisation, drawn at each reset from the environment's RNG:
-``randomize={"lighting": m, "ball_start": r, "camera_robot": s}`` (any subset, each a finite
-number >= 0; m at most 1) scales each light's intensity by a factor in [1-m, 1+m], moves the
-ball's start by up to r metres in each horizontal direction, and draws the camera's per-robot
-colour deviation (per-channel gain and offset of Y, Cr, Cb) from s times the spread measured
-over real robots.
-
-``render_mode="rgb_array"``: the ``tracking`` camera at 480x360 with shadows and reflections
-(``quality="high"``): about 68 ms a frame in Mesa's software OpenGL on one thread (54 ms with
-``LP_NUM_THREADS=2`` on 2 cores), against 5 ms without.
+``AiboEnv``'s docstring holds the tables: the observation (a ``Dict`` of the head camera's
+image and the robot's sensors, or the image alone), the action (one number in [-1, 1] per
+actuated joint) and the constructor's arguments (camera mode and layer, the camera's profile
+and settings, domain randomisation, rendering). The tasks are its subclasses:
+``head_track.HeadTrackBallEnv`` and ``reach_ball.ReachBallEnv``.
 """
 
 from __future__ import annotations
@@ -53,6 +23,7 @@ import openr_bridge
 
 from ..camera import CameraSettings, RobotColour
 from ..camera.backends import OpenRCamera
+from ..config import CameraConfig
 from ..ers7 import DISTANCE_SENSORS, JOINT_INDEX, JOINTS, LEGS, TOUCH_SENSORS
 from ..render import Renderer
 from ..sim import ACCEL_RANGE, MAX_PLACEMENT, Simulation, release_freed_memory
@@ -67,7 +38,106 @@ LEG_JOINTS = tuple(j.name for j in JOINTS if j.name.split("_")[0] in LEGS)
 
 
 class AiboEnv(gym.Env):
-    """An ERS-7 in the RoboCup scene; subclasses set ``actuated_joints`` and the task."""
+    """An ERS-7 in the RoboCup scene, seen through its head camera: the base of the single-robot environments.
+
+    ## Description
+
+    The robot starts standing on the field; a subclass names the joints its actions drive
+    (``actuated_joints``) and sets the task: its start (``_reset_task``), what moves between
+    joint frames (``_before_frame``), its reward and termination (``_evaluate``) and ``info``
+    (``_info``). ``head_track.HeadTrackBallEnv`` and ``reach_ball.ReachBallEnv`` are the two
+    here; their docstrings hold their actions' tables, rewards and episode ends. One step is one
+    frame of the head camera at 30 fps: the 8 ms joint frames run until the camera's next frame
+    is due (4 or 5 of them), then one image is taken.
+
+    ## Action Space
+
+    ``Box(-1, 1, (len(actuated_joints),), float32)``: one number per actuated joint, in the order
+    of ``actuated_joints``, clipped to [-1, 1] and mapped affinely onto the joint's control range
+    (its hardware range in ``ers7.JOINTS``, rad: -1 the lower limit, 1 the upper), then given to
+    the servos as their target. A NaN or infinite number raises ValueError. The joints not
+    actuated hold the keyframe's targets. ``action_to_targets`` and ``targets_to_action``
+    convert between actions and targets (rad).
+
+    ## Observation Space
+
+    A ``Dict``:
+
+    | Key                 | Shape         | Dtype   | Range               | Observation                             |
+    |---------------------|---------------|---------|---------------------|-----------------------------------------|
+    | ``image``           | (160, 208, 3) | uint8   | 0 .. 255            | the head camera (below); layer H        |
+    | ``joint_positions`` | (20,)         | float32 | -pi .. pi           | rad, every joint, ``ers7.JOINTS`` order |
+    | ``acceleration``    | (3,)          | float32 | -19.61 .. 19.61     | m/s^2, body frame, clipped to +-2 g     |
+    | ``distance_mm``     | (3,)          | float32 | 0 .. 500, 1500, 900 | mm: IR head near, head far, chest       |
+    | ``touch``           | (9,)          | int8    | 0 or 1              | pressed, ``ers7.TOUCH_SENSORS`` order   |
+
+    - ``image``: (80, 104, 3) at layer M, (40, 52, 3) at layer L; absent with ``camera=None``.
+    - ``joint_positions``: all 20 joints, not only the actuated ones: ``neck_tilt``, ``head_pan``,
+      ``head_tilt``, ``mouth``, ``ear_l``, ``ear_r``, ``lf_j1`` .. ``rh_j3`` (legs lf, lh, rf,
+      rh), ``tail_tilt``, ``tail_pan``.
+    - ``acceleration``: the body's proper acceleration, x forward, y left, z up.
+    - ``distance_mm``: each sensor's maximum (500, 1500, 900 mm) when nothing is in its range;
+      noise of up to 10 % mid-range, none at the ends of the range.
+    - ``touch``: a ``MultiBinary(9)``: head, chin, paws lf, lh, rf, rh, back rear, middle, front.
+
+    The image (``camera_layer``: H 208x160, M 104x80, L 52x40 pixels), by ``camera``:
+
+    | ``camera``  | Channels  | Image                                                                       |
+    |-------------|-----------|-----------------------------------------------------------------------------|
+    | ``"rgb"``   | R, G, B   | the camera model's rendered RGB; M and L as 2x2 / 4x4 block means           |
+    | ``"ycrcb"`` | Y, Cr, Cb | the bands of that layer of the OPEN-R message                               |
+    | ``"openr"`` | R, G, B   | layer H only: what the wrapper ``Controller``'s ``camera_get_image`` serves |
+    | ``None``    | -         | no ``image`` key                                                            |
+
+    The block means of ``"rgb"`` are the Haar low band the robot computes. ``"ycrcb"`` is
+    ``openr_bridge.encode_frame``'s message; ``"openr"`` that message once it has gone through
+    CONNECT.CFG's wiring. Both are bytes as the robot has them, OPEN-R's tag in the first 12 Y
+    bytes of the last row included; the last message is ``camera_message``.
+    ``image_only=True``: the observation is the image alone, ``Box(0, 255, (height, width, 3),
+    uint8)``, as Gymnasium's image wrappers (``ResizeObservation``, ``GrayscaleObservation``,
+    ``FrameStackObservation``) and CNN policies take it.
+
+    ## Starting State
+
+    ``reset`` puts the world back to the scene's keyframe ``stand``: in the default scene the
+    robot stands on the centre spot facing +X (body 0.147 m high; neck tilt -30 deg, head tilt
+    15 deg), its servo targets the keyframe's. Then the randomisations are drawn and the task
+    places the ball. A seed reproduces an episode bit for bit (the sensors' and the camera's
+    noise included).
+
+    ## Rewards and Episode End
+
+    The task's (the subclasses'). ``step`` itself never truncates: ``gymnasium.make`` adds a
+    ``TimeLimit`` of the id's ``max_episode_steps`` (``aibo_sim.envs.ENV_SPECS``).
+
+    ## Arguments
+
+    | Argument           | Default    | Meaning                                                       |
+    |--------------------|------------|---------------------------------------------------------------|
+    | ``camera``         | ``"rgb"``  | ``"rgb"``, ``"ycrcb"``, ``"openr"`` or ``None`` (no image)    |
+    | ``camera_layer``   | ``"H"``    | ``"H"``, ``"M"`` or ``"L"`` (``"openr"``: H only)             |
+    | ``render_mode``    | ``None``   | ``None`` or ``"rgb_array"`` (below)                           |
+    | ``randomize``      | ``None``   | domain randomisation at each reset (below)                    |
+    | ``scene``          | ``None``   | an MJCF scene file; ``None``: ``models/scene.xml``, the field |
+    | ``camera_profile`` | ``"ers7"`` | ``"ers7"`` (the calibrated sensor) or ``"ideal"``             |
+    | ``camera_wb``      | ``"fl"``   | white balance: ``"indoor"``, ``"outdoor"`` or ``"fl"``        |
+    | ``camera_gain``    | ``"mid"``  | ``"low"``, ``"mid"`` or ``"high"``                            |
+    | ``camera_shutter`` | ``"mid"``  | ``"slow"``, ``"mid"`` or ``"fast"``                           |
+    | ``image_only``     | ``False``  | the observation is the image alone (not with ``camera=None``) |
+
+    The arguments from ``scene`` on are keyword-only; the camera's settings are named as on the
+    command line (``aibo_sim.camera``).
+    ``randomize={"lighting": m, "ball_start": r, "camera_robot": s}`` (any subset, each a finite
+    number >= 0, m at most 1), drawn at each reset from the environment's RNG, scales each
+    light's intensity by a factor in [1-m, 1+m], moves the ball's start by up to r metres in
+    each horizontal direction, and draws the camera's per-robot colour deviation (per-channel
+    gain and offset of Y, Cr, Cb: ``camera_robot``) from s times the spread measured over real
+    robots. ``render_mode="rgb_array"``: ``render`` returns the ``tracking`` camera's view,
+    480x360 RGB, with shadows and reflections (``quality="high"``): about 68 ms a frame in Mesa's
+    software OpenGL on one thread (54 ms with ``LP_NUM_THREADS=2`` on 2 cores), against 5 ms
+    without. A bad argument raises ValueError naming it. An environment cannot be pickled or
+    copied (TypeError): make another with the same arguments and reset it with the same seed.
+    """
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": openr_bridge.FRAME_RATE_HZ}
     actuated_joints: tuple[str, ...] = ()
@@ -123,9 +193,10 @@ class AiboEnv(gym.Env):
             image_only,
         )
         self.camera_message: openr_bridge.OFbkImageVectorData | None = None  # the last one encoded
-        self.sim = Simulation(
-            scene, camera_profile=camera_profile, camera_settings=CameraSettings(camera_wb, camera_gain, camera_shutter)
+        self.camera_config = CameraConfig(
+            camera_profile, settings=CameraSettings(camera_wb, camera_gain, camera_shutter)
         )
+        self.sim = Simulation(scene, camera=self.camera_config)
         self._openr = OpenRCamera(self.sim) if camera == "openr" else None
         model = self.sim.model
         self._actuated = np.array([JOINT_INDEX[name] for name in self.actuated_joints])
@@ -173,6 +244,14 @@ class AiboEnv(gym.Env):
     # ---------------------------------------------------------------- gymnasium API
 
     def reset(self, *, seed: int | None = None, options: dict | None = None):
+        """Start an episode: the keyframe ``stand``, the randomisations drawn, the task's start.
+
+        :param seed: seeds the environment's RNG, from which the simulation's noise streams, the
+            randomisations and the task's draws come; ``None`` goes on with the current RNG.
+        :param options: not used by these tasks.
+        :returns: ``(observation, info)``.
+        :raises gymnasium.error.ClosedEnvironmentError: after ``close``.
+        """
         super().reset(seed=seed)
         self.sim.reset(seed=int(self.np_random.integers(2**63)))
         self._randomize_scene()
@@ -182,6 +261,15 @@ class AiboEnv(gym.Env):
         return self._observation(), self._info()
 
     def step(self, action):
+        """Give ``action`` to the servos as targets and run the joint frames up to the camera's
+        next frame (4 or 5 of 8 ms).
+
+        :returns: ``(observation, reward, terminated, truncated, info)``; ``truncated`` is always
+            False (``gymnasium.make``'s ``TimeLimit`` truncates).
+        :raises ValueError: an action of the wrong shape, or not finite.
+        :raises gymnasium.error.ResetNeeded: before the first ``reset``.
+        :raises gymnasium.error.ClosedEnvironmentError: after ``close``.
+        """
         if getattr(self, "_closed", False):
             raise gym.error.ClosedEnvironmentError(f"{type(self).__name__}.step after close(): make a new environment")
         if not self._reset_done:
@@ -194,6 +282,8 @@ class AiboEnv(gym.Env):
         return observation, reward, terminated, False, self._info()
 
     def render(self):
+        """The ``tracking`` camera's view of the robot, a (360, 480, 3) uint8 RGB array, with
+        ``render_mode="rgb_array"``; ``None`` otherwise."""
         if self.render_mode != "rgb_array":
             return None
         if self._renderer is None:

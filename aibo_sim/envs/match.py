@@ -38,6 +38,7 @@ import openr_bridge
 
 from ..camera import CameraSettings, RobotColour
 from ..camera.backends import OpenRCamera
+from ..config import CameraConfig
 from ..ers7 import DISTANCE_SENSORS, JOINT_INDEX, JOINTS, TOUCH_SENSORS, joint_indices
 from ..motions import BLEND_MS
 from ..mtn import MotionPlayer, read_mtn
@@ -154,44 +155,58 @@ class _Agent:
 class MatchEnv(pettingzoo.ParallelEnv):
     """``aibo_sim_match_v0``: red against blue on the RoboCup 2005 field, every robot an agent.
 
+    ## Description
+
+    A PettingZoo ``ParallelEnv``: all agents act at once, each step. Each robot observes
+    through its own head camera and sensors and acts on its own 15 joints as ``ReachBall``'s
+    robot does; the world (physics, ball, time) is shared, and the cameras see the other robots
+    whole, with their team's uniform patches. A team is rewarded for moving the ball towards the
+    goal it attacks. One step is one frame of the head cameras at 30 fps (4 or 5 joint frames of
+    8 ms). ``pettingzoo.test.parallel_api_test`` passes.
+
     ## Agents
 
     One per robot that ``scripted`` does not drive, named ``{team}_{number}`` in the order of
     ``robots``: by default ``red_1`` .. ``red_4``, ``blue_1`` .. ``blue_4`` (1 the goalkeeper),
     at the kickoff poses (``team.kickoff_pose``): red in the -X half attacking +X (the sky-blue
-    goal), blue the mirror image. ``robots``: a sequence of ``team.RobotSpec`` (a pose of None is
-    the kickoff pose) or a robots file (``team.load_robots``); every robot needs a team.
+    goal), blue the mirror image. ``possible_agents`` lists them; ``agents`` those still playing.
 
     ## Action Space
 
-    Per agent a ``Box(-1, 1, (15,), float32)``, as ``ReachBall``'s: each number mapped affinely
-    onto the joint's control range and given to that robot's servos as its target.
+    Per agent (``action_space(agent)``) a ``Box(-1, 1, (15,), float32)``, as ``ReachBall``'s:
+    each number mapped affinely onto the joint's range (-1 the lower limit, 1 the upper) and
+    given to that robot's servos as its target. ``j1`` swings a leg forwards and backwards,
+    ``j2`` lifts it sideways, ``j3`` is the knee.
 
-    | Num   | Action: target of                  | Min | Max |
-    |-------|------------------------------------|-----|-----|
-    | 0-2   | left front leg ``lf_j1`` .. ``lf_j3`` | -1  | 1   |
-    | 3-5   | left hind leg ``lh_j1`` .. ``lh_j3``  | -1  | 1   |
-    | 6-8   | right front leg ``rf_j1`` .. ``rf_j3`` | -1 | 1   |
-    | 9-11  | right hind leg ``rh_j1`` .. ``rh_j3``  | -1 | 1   |
-    | 12-14 | ``neck_tilt``, ``head_pan``, ``head_tilt`` | -1 | 1 |
+    | Num   | Joints                                          | Min | Max | Target ranges, deg                 |
+    |-------|-------------------------------------------------|-----|-----|------------------------------------|
+    | 0-2   | left front leg ``lf_j1``, ``lf_j2``, ``lf_j3``  | -1  | 1   | -120 .. 135, -15 .. 93, -30 .. 127 |
+    | 3-5   | left hind leg ``lh_j1``, ``lh_j2``, ``lh_j3``   | -1  | 1   | -135 .. 120, -15 .. 93, -30 .. 127 |
+    | 6-8   | right front leg ``rf_j1``, ``rf_j2``, ``rf_j3`` | -1  | 1   | -120 .. 135, -15 .. 93, -30 .. 127 |
+    | 9-11  | right hind leg ``rh_j1``, ``rh_j2``, ``rh_j3``  | -1  | 1   | -135 .. 120, -15 .. 93, -30 .. 127 |
+    | 12-14 | ``neck_tilt``, ``head_pan``, ``head_tilt``      | -1  | 1   | -80 .. 3, -93 .. 93, -20 .. 50     |
 
-    A live agent left out of ``actions`` holds its targets; NaN or infinity raises ValueError.
+    The targets go to the servos in rad (``ReachBallEnv``'s table lists them in rad). A live
+    agent left out of ``actions`` holds its targets; NaN or infinity raises ValueError.
 
     ## Observation Space
 
-    Per agent a ``Dict``, that of the single-robot environments, from the agent's own robot:
+    Per agent (``observation_space(agent)``) a ``Dict``, that of the single-robot environments
+    (``AiboEnv``: the image by camera mode, the keys' details), from the agent's own robot:
 
-    | Key                 | Shape         | Dtype   | Observation                                   |
-    |---------------------|---------------|---------|-----------------------------------------------|
-    | ``image``           | (160, 208, 3) | uint8   | its head camera, layer H (M: 104x80, L: 52x40) |
-    | ``joint_positions`` | (20,)         | float32 | rad, the order of ``ers7.JOINTS``              |
-    | ``acceleration``    | (3,)          | float32 | m/s^2, body frame, within +-2 g                |
-    | ``distance_mm``     | (3,)          | float32 | IR near, far, chest                            |
-    | ``touch``           | (9,)          | int8    | 0/1, the order of ``ers7.TOUCH_SENSORS``        |
+    | Key                 | Shape         | Dtype   | Range               | Observation                             |
+    |---------------------|---------------|---------|---------------------|-----------------------------------------|
+    | ``image``           | (160, 208, 3) | uint8   | 0 .. 255            | its head camera at layer H (below)      |
+    | ``joint_positions`` | (20,)         | float32 | -pi .. pi           | rad, every joint, ``ers7.JOINTS`` order |
+    | ``acceleration``    | (3,)          | float32 | -19.61 .. 19.61     | m/s^2, body frame, clipped to +-2 g     |
+    | ``distance_mm``     | (3,)          | float32 | 0 .. 500, 1500, 900 | mm: IR head near, head far, chest       |
+    | ``touch``           | (9,)          | int8    | 0 or 1              | pressed, ``ers7.TOUCH_SENSORS`` order   |
 
-    ``camera`` and ``camera_layer`` choose the image as in ``AiboEnv``; ``camera=None`` leaves it
-    out, ``image_only=True`` makes the observation the image alone. The cameras see the other
-    robots whole, with their team's uniform patches.
+    ``image`` is (80, 104, 3) at ``camera_layer="M"``, (40, 52, 3) at ``"L"``; absent with
+    ``camera=None``; ``image_only=True`` makes it the whole observation. ``state()`` (for
+    centralised critics, ``state_space``: ``Box(-inf, inf, (6 + 5 * robots,), float32)``): the
+    ball's position (m) and velocity (m/s), then each robot's body x, y, z (m), yaw and tilt
+    (rad), in the order of ``robots``; zeros for the ball in a scene without one.
 
     ## Rewards
 
@@ -200,14 +215,23 @@ class MatchEnv(pettingzoo.ParallelEnv):
     (red: +X, blue: -X; the two teams' rewards are opposite), minus ``FALL_PENALTY`` (1) on
     the step it falls.
 
+    ## Starting State
+
+    ``reset`` puts every robot in the keyframe ``stand``'s posture at its pose (``robots``'
+    poses; the kickoff poses by default), its servo targets the keyframe's, and the ball at
+    rest on the centre spot (``KICKOFF_BALL``), moved by up to r m in each horizontal
+    direction with ``randomize={"ball_start": r}``; ``reset(options={"ball": (x, y)})`` puts it
+    at (x, y) instead. The same seed gives the same match, bit for bit.
+
     ## Episode End
 
-    | Condition  | Agents | When                                                                  |
-    |------------|--------|-----------------------------------------------------------------------|
-    | terminated | one    | its robot fell (body over 60 degrees from upright); its robot then holds its targets |
-    | truncated  | all    | ``max_cycles`` steps (default ``MAX_CYCLES``, 900: 30 s)               |
+    | Condition  | Agents | When                                                     |
+    |------------|--------|----------------------------------------------------------|
+    | terminated | one    | its robot fell (body over 60 degrees from upright)       |
+    | truncated  | all    | ``max_cycles`` steps (default ``MAX_CYCLES``, 900: 30 s) |
 
-    A terminated or truncated agent leaves ``agents``.
+    A terminated or truncated agent leaves ``agents``; a fallen robot then holds its targets.
+    ``step`` with no agent left raises ``ResetNeeded``.
 
     ## Info
 
@@ -216,16 +240,33 @@ class MatchEnv(pettingzoo.ParallelEnv):
 
     ## Arguments
 
-    ``camera``, ``camera_layer``, ``render_mode`` (``"rgb_array"``: the whole field from the side,
-    480x360), ``randomize`` (``lighting``, ``ball_start`` around the centre spot, ``camera_robot``:
-    one colour deviation drawn per robot), ``scene``, ``camera_profile`` and ``camera_wb`` /
-    ``camera_gain`` / ``camera_shutter``, ``image_only``: as ``AiboEnv``'s. ``max_cycles``.
-    ``scripted``: robot name -> a factory called with that robot's ``Simulation`` view that
-    returns a scripted policy (``BallChaser`` for one): those robots are no agents; before
-    each step ``policy.plan(frames)`` gives their joint targets for each 8 ms frame of it.
-    The robots' ``controller`` entries (of a robots file) are not run: agents and scripts drive
-    the robots. ``reset(seed, options)``: ``options={"ball": (x, y)}`` puts the ball there
-    instead of on the centre spot (at rest). ``state()``: the ball and every robot's pose, for centralised critics.
+    | Argument           | Default    | Meaning                                                               |
+    |--------------------|------------|-----------------------------------------------------------------------|
+    | ``robots``         | ``None``   | the robots: ``None`` for 4 against 4, a robots file or ``RobotSpec``s |
+    | ``camera``         | ``"rgb"``  | as ``AiboEnv``'s: ``"rgb"``, ``"ycrcb"``, ``"openr"`` or ``None``     |
+    | ``camera_layer``   | ``"H"``    | as ``AiboEnv``'s: ``"H"``, ``"M"`` or ``"L"``                         |
+    | ``render_mode``    | ``None``   | ``"rgb_array"``: the whole field from above a side line, 480x360      |
+    | ``randomize``      | ``None``   | as ``AiboEnv``'s (below)                                              |
+    | ``max_cycles``     | ``900``    | keyword-only: steps until every agent is truncated                    |
+    | ``scene``          | ``None``   | keyword-only, as ``AiboEnv``'s                                        |
+    | ``camera_profile`` | ``"ers7"`` | keyword-only, as ``AiboEnv``'s                                        |
+    | ``camera_wb``      | ``"fl"``   | keyword-only, as ``AiboEnv``'s                                        |
+    | ``camera_gain``    | ``"mid"``  | keyword-only, as ``AiboEnv``'s                                        |
+    | ``camera_shutter`` | ``"mid"``  | keyword-only, as ``AiboEnv``'s                                        |
+    | ``image_only``     | ``False``  | keyword-only, as ``AiboEnv``'s                                        |
+    | ``scripted``       | ``None``   | keyword-only: robot name to a factory of a scripted policy (below)    |
+
+    ``robots``: a sequence of ``team.RobotSpec`` (a pose of None is the kickoff pose) or a
+    robots file (``team.load_robots``); every robot needs a team. The robots' ``controller``
+    entries (of a robots file) are not run: agents and scripts drive the robots.
+    ``randomize``: ``lighting``, ``ball_start`` (around the centre spot) and ``camera_robot``
+    (one colour deviation drawn per robot). ``scripted``: robot name -> a factory called with
+    that robot's ``Simulation`` view that returns a scripted policy (``BallChaser`` for one;
+    ``scripted_team`` makes a whole set): those robots are no agents; before each step
+    ``policy.plan(frames)`` gives their joint targets for each 8 ms frame of it (and
+    ``policy.reset()`` starts it again at each ``reset``); a scripted robot that falls holds its
+    targets from then on. A bad argument raises ValueError (or ``team.TeamError``, a ValueError,
+    for bad robots) naming it.
     """
 
     metadata = {
@@ -270,8 +311,7 @@ class MatchEnv(pettingzoo.ParallelEnv):
         self.sim = Simulation(
             scene,
             robots=specs,
-            camera_profile=camera_profile,
-            camera_settings=CameraSettings(camera_wb, camera_gain, camera_shutter),
+            camera=CameraConfig(camera_profile, settings=CameraSettings(camera_wb, camera_gain, camera_shutter)),
         )
         self._closed = False
         self.robots: dict[str, Simulation] = dict(zip(names, self.sim.world.robots))  # every robot, by name
@@ -300,9 +340,11 @@ class MatchEnv(pettingzoo.ParallelEnv):
     # ---------------------------------------------------------------- PettingZoo API
 
     def observation_space(self, agent: str) -> gym.Space:
+        """``agent``'s observation space (the class docstring's table); ValueError for no agent."""
         return self._space(self.observation_spaces, agent)
 
     def action_space(self, agent: str) -> gym.Space:
+        """``agent``'s action space, ``Box(-1, 1, (15,), float32)``; ValueError for no agent."""
         return self._space(self.action_spaces, agent)
 
     def _space(self, spaces: dict, agent: str) -> gym.Space:
@@ -312,6 +354,16 @@ class MatchEnv(pettingzoo.ParallelEnv):
             raise ValueError(f"no agent {agent!r} (agents: {', '.join(self.possible_agents)})") from None
 
     def reset(self, seed: int | None = None, options: dict | None = None):
+        """Start a match: every robot at its pose in the keyframe's posture, the ball placed, the
+        randomisations drawn, every possible agent playing again.
+
+        :param seed: seeds the match's RNG (the noise streams, the randomisations); ``None`` goes
+            on with the current one (seeded from the OS the first time).
+        :param options: ``{"ball": (x, y)}`` puts the ball there (m, at rest) instead of on the
+            centre spot.
+        :returns: ``(observations, infos)``, dicts by agent.
+        :raises gymnasium.error.ClosedEnvironmentError: after ``close``.
+        """
         self._check_open("reset")
         if seed is not None or self.np_random is None:
             self.np_random, self.np_random_seed = seeding.np_random(seed)
@@ -333,6 +385,16 @@ class MatchEnv(pettingzoo.ParallelEnv):
         )
 
     def step(self, actions: Mapping[str, object]):
+        """Give each agent's action to its robot's servos (an agent left out holds its targets),
+        run the scripts and the joint frames up to the cameras' next frame.
+
+        :param actions: agent name to action, for live agents only.
+        :returns: ``(observations, rewards, terminations, truncations, infos)``, dicts by the
+            agents live before the step; the ones terminated or truncated then leave ``agents``.
+        :raises ValueError: an action for a robot that is no live agent, or a bad action.
+        :raises gymnasium.error.ResetNeeded: no agent left (before ``reset``, or all done).
+        :raises gymnasium.error.ClosedEnvironmentError: after ``close``.
+        """
         self._check_open("step")
         if not self.agents:
             raise gym.error.ResetNeeded(
@@ -378,6 +440,8 @@ class MatchEnv(pettingzoo.ParallelEnv):
         return np.array(values, np.float32)
 
     def render(self):
+        """The whole field from above its -Y side line, a (360, 480, 3) uint8 RGB array, with
+        ``render_mode="rgb_array"``; ``None`` otherwise."""
         if self.render_mode != "rgb_array":
             return None
         self._check_open("render")
@@ -524,6 +588,7 @@ class BallChaser:
         self.reset()
 
     def reset(self) -> None:
+        """Start again from standing: the next ``plan`` blends the legs into a gait."""
         self.motion: str | None = None  # the gait now playing (None: standing in its stance)
         self._path = np.empty((0, len(self._legs)))  # leg targets of the frames to come
         self._at = 0
@@ -598,13 +663,77 @@ def scripted_team(robots, learner: str) -> dict[str, Callable[[Simulation], Ball
 
 class ScriptedOpponentsEnv(gym.Env):
     """``aibo_sim/MatchVsScripted-v0``: one robot of a match learns, every other robot is a
-    scripted ``BallChaser`` (teammates and opponents; the goalkeepers turn without walking).
+    scripted ``BallChaser``.
 
-    ``learner`` (default ``"red_4"``, red's striker at the kickoff) names the robot; ``robots``
-    the match (``MatchEnv``'s, default 4 against 4); the other arguments are ``MatchEnv``'s. The
-    observation and action spaces, the reward (the learner's team's ball progress, minus the
-    fall penalty), termination (the learner fell), truncation (``max_cycles``) and info are
-    the learner's in ``MatchEnv`` (``self.match``). Only the learner's camera is rendered.
+    ## Description
+
+    The Gymnasium view of one robot, the ``learner``, of a ``MatchEnv`` (``self.match``): the
+    other robots, teammates and opponents, are scripted ``BallChaser``s (``scripted_team``):
+    they track the ball with the head and walk at it, the goalkeepers (number 1) turning on the
+    spot without walking. Only the learner's camera is rendered. ``check_env`` passes.
+
+    ## Action Space
+
+    ``Box(-1, 1, (15,), float32)``: targets for the learner's 12 leg joints, then the 3 head
+    joints, as ``ReachBallEnv``'s (whose table gives each joint's range):
+
+    | Num   | Joints                                         | Min | Max | Unit of the target |
+    |-------|------------------------------------------------|-----|-----|--------------------|
+    | 0-11  | ``lf_j1`` .. ``lf_j3``, ``lh_j1`` .. ``rh_j3`` | -1  | 1   | rad                |
+    | 12-14 | ``neck_tilt``, ``head_pan``, ``head_tilt``     | -1  | 1   | rad                |
+
+    ## Observation Space
+
+    The learner's in ``MatchEnv``: ``AiboEnv``'s ``Dict``:
+
+    | Key                 | Shape         | Dtype   | Range               | Observation                             |
+    |---------------------|---------------|---------|---------------------|-----------------------------------------|
+    | ``image``           | (160, 208, 3) | uint8   | 0 .. 255            | its head camera at layer H (below)      |
+    | ``joint_positions`` | (20,)         | float32 | -pi .. pi           | rad, every joint, ``ers7.JOINTS`` order |
+    | ``acceleration``    | (3,)          | float32 | -19.61 .. 19.61     | m/s^2, body frame, clipped to +-2 g     |
+    | ``distance_mm``     | (3,)          | float32 | 0 .. 500, 1500, 900 | mm: IR head near, head far, chest       |
+    | ``touch``           | (9,)          | int8    | 0 or 1              | pressed, ``ers7.TOUCH_SENSORS`` order   |
+
+    ``image`` is (80, 104, 3) at ``camera_layer="M"``, (40, 52, 3) at ``"L"``; absent with
+    ``camera=None``; ``image_only=True`` makes it the whole observation.
+
+    ## Rewards
+
+    ``MatchEnv``'s for the learner: ``BALL_PROGRESS_REWARD`` (10) times the ball's progress (m
+    along X since the previous step) towards the goal the learner's team attacks (red: +X,
+    blue: -X), minus ``FALL_PENALTY`` (1) on the step the learner falls.
+
+    ## Starting State
+
+    ``MatchEnv``'s: every robot at its pose (the kickoff poses by default; the learner
+    ``red_4`` just outside the centre circle, facing +X) in the keyframe ``stand``'s posture,
+    the ball at rest on the centre spot (``randomize={"ball_start": r}`` moves it by up to r m
+    in each horizontal direction; ``reset(options={"ball": (x, y)})`` puts it at (x, y)).
+
+    ## Episode End
+
+    - Termination: the learner fell (its body over 60 degrees from upright).
+    - Truncation: after ``max_cycles`` steps (900, 30 s), and after 900 steps by the
+      ``TimeLimit`` of ``gymnasium.make`` (``max_episode_steps`` of ``aibo_sim.envs.ENV_SPECS``):
+      give ``gymnasium.make`` ``max_episode_steps`` too for longer episodes.
+
+    ## Info
+
+    ``MatchEnv``'s for the learner: ``team``, ``number``, ``position`` (body centre, m),
+    ``yaw`` (rad), ``tilt`` (rad from upright), ``fallen``, ``ball_position`` (m).
+
+    ## Arguments
+
+    | Argument        | Default     | Meaning                                                             |
+    |-----------------|-------------|---------------------------------------------------------------------|
+    | ``learner``     | ``"red_4"`` | the learning robot, ``{team}_{number}`` (default red's striker)     |
+    | ``robots``      | ``None``    | the match, as ``MatchEnv``'s (default 4 against 4 at kickoff poses) |
+    | ``render_mode`` | ``None``    | ``"rgb_array"``: ``MatchEnv``'s view of the whole field             |
+    | ``**options``   |             | ``MatchEnv``'s other keyword arguments but ``scripted``             |
+
+    ``options``: ``camera``, ``camera_layer``, ``randomize``, ``max_cycles``, ``scene``,
+    ``camera_profile``, ``camera_wb``, ``camera_gain``, ``camera_shutter``, ``image_only``. A
+    ``learner`` that is no robot of the match raises ValueError.
     """
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": openr_bridge.FRAME_RATE_HZ}
@@ -630,19 +759,31 @@ class ScriptedOpponentsEnv(gym.Env):
         return self.match.camera_layer
 
     def reset(self, *, seed: int | None = None, options: dict | None = None):
+        """Start a match (``MatchEnv.reset``; ``options={"ball": (x, y)}`` places the ball).
+
+        :returns: the learner's ``(observation, info)``.
+        """
         super().reset(seed=seed)
         observations, infos = self.match.reset(seed=int(self.np_random.integers(2**63)), options=options)
         return observations[self.learner], infos[self.learner]
 
     def step(self, action):
+        """Step the match with the learner's ``action``, the scripted robots playing too.
+
+        :returns: the learner's ``(observation, reward, terminated, truncated, info)``.
+        :raises ValueError: a bad action.
+        :raises gymnasium.error.ResetNeeded: before ``reset``, or after the episode ended.
+        """
         observations, rewards, terminations, truncations, infos = self.match.step({self.learner: action})
         name = self.learner
         return observations[name], rewards[name], terminations[name], truncations[name], infos[name]
 
     def render(self):
+        """``MatchEnv.render``: the whole field, with ``render_mode="rgb_array"``."""
         return self.match.render()
 
     def close(self):
+        """Close the match (``MatchEnv.close``)."""
         self.match.close()
 
     __reduce_ex__ = AiboEnv.__reduce_ex__

@@ -176,6 +176,13 @@ class ThreadedVectorEnv(VectorEnv):
     # ------------------------------------------------------------------ the vector API
 
     def reset(self, *, seed: int | list[int | None] | None = None, options: dict | None = None):
+        """Reset the environments (those of ``options["reset_mask"]``, when given) as
+        ``SyncVectorEnv`` does: an int ``seed`` seeds them ``seed + i``, a list one each.
+
+        :returns: ``(observations, infos)``, batched.
+        :raises ValueError: a wrong number of seeds or a bad ``reset_mask``.
+        :raises gymnasium.error.ClosedEnvironmentError: after ``close``.
+        """
         seed, options, mask = reset_arguments(self.num_envs, seed, options)
         if mask is None:
             mask = np.ones(self.num_envs, np.bool_)
@@ -197,6 +204,14 @@ class ThreadedVectorEnv(VectorEnv):
         return (copying.deepcopy(observations) if self.copy else observations), infos
 
     def step(self, actions):
+        """Step every environment with its row of ``actions``, each in its thread (next-step
+        autoreset: an environment whose episode ended is reset instead, with reward 0).
+
+        :returns: ``(observations, rewards, terminations, truncations, infos)``, batched.
+        :raises ValueError: actions without one row per environment.
+        :raises gymnasium.error.ResetNeeded: after a call interrupted by Ctrl-C, until ``reset``.
+        :raises gymnasium.error.ClosedEnvironmentError: after ``close``.
+        """
         if self._interrupted:
             raise gymnasium.error.ResetNeeded(
                 "a call of this ThreadedVectorEnv was interrupted while its environments "
@@ -230,6 +245,7 @@ class ThreadedVectorEnv(VectorEnv):
         )
 
     def render(self):
+        """Each environment's ``render()``, in a tuple."""
         return tuple(self.call_each(lambda env: env.render()))
 
     def call(self, name: str, *args, **kwargs) -> tuple:
@@ -242,9 +258,12 @@ class ThreadedVectorEnv(VectorEnv):
         return tuple(self.call_each(call_one))
 
     def get_attr(self, name: str) -> tuple:
+        """Each environment's attribute ``name`` (looked up through its wrappers), in a tuple."""
         return tuple(self.call_each(lambda env: env.get_wrapper_attr(name)))
 
     def set_attr(self, name: str, values) -> None:
+        """Set attribute ``name`` of each environment: ``values`` one per environment (a list or
+        tuple), or one value for all of them; ValueError for a wrong count."""
         values = values_per_env(name, values, self.num_envs)
         self.call_each(lambda env, value: env.set_wrapper_attr(name, value), None, [(v,) for v in values])
 

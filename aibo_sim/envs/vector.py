@@ -65,6 +65,7 @@ class BusyWaitConnection:
         self._connection, self._spin_s = connection, spin_s
 
     def recv(self):
+        """The next object sent, polled for up to ``spin_s`` seconds, then waited for as usual."""
         poll_until(self._connection, time.perf_counter() + self._spin_s)
         return self._connection.recv()
 
@@ -191,6 +192,13 @@ class HybridVectorEnv(VectorEnv):
         return (copying.deepcopy(self._observations) if self.copy else self._observations), infos
 
     def reset(self, *, seed: int | list[int | None] | None = None, options: dict | None = None):
+        """Reset the environments (those of ``options["reset_mask"]``, when given) as
+        ``SyncVectorEnv`` does: an int ``seed`` seeds them ``seed + i``, a list one each.
+
+        :returns: ``(observations, infos)``, batched.
+        :raises ValueError: a wrong number of seeds or a bad ``reset_mask``.
+        :raises gymnasium.error.ClosedEnvironmentError: closed, or a worker has ended.
+        """
         self._check_running()
         seed, options, mask = reset_arguments(self.num_envs, seed, options)
         workers_busy = self._workers is not None and (mask is None or bool(mask[1:].any()))
@@ -211,6 +219,14 @@ class HybridVectorEnv(VectorEnv):
         return self._batched(infos, *workers_result)
 
     def step(self, actions):
+        """Step every environment with its row of ``actions`` (next-step autoreset: an
+        environment whose episode ended is reset instead, with reward 0).
+
+        :returns: ``(observations, rewards, terminations, truncations, infos)``, batched.
+        :raises ValueError: actions without one row per environment.
+        :raises gymnasium.error.ResetNeeded: after a step interrupted by Ctrl-C, until ``reset``.
+        :raises gymnasium.error.ClosedEnvironmentError: closed, or a worker has ended.
+        """
         self._check_running()
         if self._interrupted:
             raise gymnasium.error.ResetNeeded(
@@ -254,6 +270,7 @@ class HybridVectorEnv(VectorEnv):
         )
 
     def render(self):
+        """Each environment's ``render()``, in a tuple."""
         self._check_running()
         return (self._env.render(), *(self._workers.render() if self._workers is not None else ()))
 
@@ -265,10 +282,13 @@ class HybridVectorEnv(VectorEnv):
         return (first, *(self._workers.call(name, *args, **kwargs) if self._workers is not None else ()))
 
     def get_attr(self, name: str) -> tuple:
+        """Each environment's attribute ``name`` (looked up through its wrappers), in a tuple."""
         self._check_running()
         return (self._env.get_wrapper_attr(name), *(self._workers.get_attr(name) if self._workers is not None else ()))
 
     def set_attr(self, name: str, values) -> None:
+        """Set attribute ``name`` of each environment: ``values`` one per environment (a list or
+        tuple), or one value for all of them; ValueError for a wrong count."""
         self._check_running()
         values = values_per_env(name, values, self.num_envs)
         self._env.set_wrapper_attr(name, values[0])

@@ -1,0 +1,263 @@
+"""A match's dump, sharded by robot: ``dump(out, robots=...)`` (``aibo-sim dump CONTROLLER --robots
+FILE``, or ``--robot ...``) runs the match (``aibo_sim.match.run_match``: every robot's controller in its
+own thread, the world stepped in lockstep) and writes each robot's camera frames, as a dump of one
+robot writes them, to ``out/robotN/`` (N: the robot's place in the robots' list, from 1). Those are
+the dump's shards (``out/meta.json``'s ``"shards"``, as ``--workers`` writes them): ``load_dump(out)``
+reads robot 1's frames, then robot 2's, ...; ``out/coco.json`` lists every robot's.
+
+Each robot's meta.json records its spec (``"parameters"."robot"``: team, number, pose, controller) and
+the match (``"robots"``: ``formats.robots_meta``, the observer that robot); the robots' controllers
+run in ``out/controller_files/`` (``run --out`` of a match is theirs, so it is here: one folder).
+``--resume`` runs the match again from the start (deterministic for a seed) and writes what is missing.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import time
+from dataclasses import replace
+from pathlib import Path
+
+from openr_bridge import FRAME_RATE_HZ
+from openr_bridge.memory_stick import memory_stick_folder
+
+from ..camera import CameraSettings, camera_size, describe_camera, scene_light
+from ..camera import camera_profile as resolve_profile
+from ..config import CameraConfig, WorldConfig, is_seed, start_values
+from ..files import make_folder
+from ..match import robot_folder, run_match
+from ..placement import PLACEMENT_OVERLAP_M, place
+from ..render import Renderer
+from ..robot import SimulationEnd
+from ..runner import MEMORY_STICK, Progress
+from ..sim import Simulation, load_model
+from ..team import check_robots
+from .coco import coco_bytes
+from .formats import DUMP_FORMAT, FORMATS, robots_meta
+from .running import _CameraFrames, check_formats, controller_sha256, model_sha256
+from .writing import COCO, CONTROLLER_FILES, DumpSummary, DumpWriter, check_destination, prepare_folder, write_atomic
+
+
+class _RobotFrames(_CameraFrames):
+    """A match robot's frame listener, in its controller's thread: its camera frames to its writer,
+    holding the world's render lock while it writes (the labels' renders change the model's geom
+    groups, which every robot's renders read). A failure stops every robot."""
+
+    def __call__(self, program) -> None:
+        try:
+            with program.sim.world.render_lock:
+                super().__call__(program)
+        except SimulationEnd:
+            if self.error is not None and program.sim.world.lockstep is not None:
+                program.sim.world.lockstep.stop()  # the other robots end at their next step
+            raise
+
+
+def _refuse(env, workers, pose, backend, mtn_mode, memory_stick, policy, engine, ray_address) -> None:
+    """ValueError for an option that a match's dump does not take, saying why."""
+    if env is not None:
+        raise ValueError(
+            "--robots and --robot dump a match of controllers, --env an environment (whose robots it makes "
+            "itself): give one of them"
+        )
+    if workers != 1:
+        raise ValueError(
+            f"--workers {workers} applies to a dump of one robot: a match's robots share one world, stepped "
+            "together in one process; its dump is sharded by robot instead (robot1/, robot2/, ...)"
+        )
+    if engine != "local" or ray_address is not None:
+        raise ValueError("--engine and --ray-address apply to --workers shards: a match's dump runs in one process")
+    for option, value in (
+        ("--pose", pose),
+        ("--backend", backend),
+        ("--mtn-mode", mtn_mode),
+        ("--memory-stick", memory_stick),
+    ):
+        if value is not None:
+            raise ValueError(
+                f"{option} applies to a dump of one robot: with --robots, each robot's pose and controller "
+                "come from its entry"
+            )
+    if policy is not None:
+        raise ValueError("--policy applies to --env dumps: a controller chooses its own actions")
+
+
+def _controllers(robots, controller) -> tuple:
+    """``robots`` with each one's controller resolved (the dump's ``controller`` where it names none)."""
+    missing = [robot.name for robot in robots if robot.controller is None and controller is None]
+    if missing:
+        raise ValueError(
+            f"--robots: {', '.join(missing)} has no controller: name one in the robots file or dump's CONTROLLER"
+        )
+    return tuple(replace(r, controller=str(Path(r.controller or controller).resolve())) for r in robots)
+
+
+def _check_places(scene, robots, ball, ball_type: str) -> None:
+    """The ball where it can go and the robots apart, before any folder is made (``run_match``
+    checks them again, as it does for a run)."""
+    sim = Simulation(scene, camera=CameraConfig("ideal"), ball_type=ball_type, robots=robots)
+    try:
+        place(sim, None, ball)  # a ParameterError naming the ball
+        for first, second, depth in sim.overlaps(PLACEMENT_OVERLAP_M):
+            if first != second:
+                raise ValueError(f"--robots: {first} starts inside {second} ({depth * 100:.1f} cm deep)")
+    finally:
+        sim.close()
+
+
+def dump_match(
+    out,
+    robots,
+    *,
+    controller=None,
+    frames: int = 300,
+    world: WorldConfig | None = None,
+    camera: CameraConfig | None = None,
+    formats=(),
+    resume: bool = False,
+    env=None,
+    workers: int = 1,
+    backend=None,
+    mtn_mode=None,
+    memory_stick=None,
+    policy=None,
+    engine: str = "local",
+    ray_address=None,
+) -> DumpSummary:
+    """``dump(out, robots=...)``: the match of ``robots`` (``team.RobotSpec``s; each runs its own
+    controller, or ``controller``) for ``frames`` camera frames, one dump per robot in
+    ``out/robotN``. Everything is checked before a folder is made: the options a match does not take
+    (ValueError saying why), the robots (TeamError), the controllers (compiled), the places."""
+    world, camera = world or WorldConfig(), camera or CameraConfig()
+    scene, seed, ball, ball_type = world.scene, world.seed, world.ball, world.ball_type
+    camera_full, camera_profile, camera_settings = camera.full, camera.profile, camera.settings
+    _refuse(env, workers, world.pose, backend, mtn_mode, memory_stick, policy, engine, ray_address)
+    robots = check_robots(robots, "--robots")
+    robots = _controllers(robots, controller)
+    check_formats(formats)
+    if frames < 1:
+        raise ValueError(f"the number of frames must be positive, not {frames}")
+    if not is_seed(seed):
+        raise ValueError(f"--seed must be a whole number from 0 to 2**64 - 1, not {seed!r}")
+    profile, settings = resolve_profile(camera_profile), camera_settings or CameraSettings()
+    model = load_model(scene, ball_type=ball_type, robots=robots)
+    Renderer(model, 1, 1).close()  # no OpenGL context: refused here
+    ball = start_values("ball", ball, 2)
+    _check_places(scene, robots, ball, ball_type)
+    hashes = {path: controller_sha256(Path(path)) for path in dict.fromkeys(r.controller for r in robots)}
+    out = Path(out).resolve()
+    recorded = {
+        "frames": frames,
+        "scene": scene and str(Path(scene).resolve()),
+        "seed": seed,
+        "ball": ball and list(ball),
+        "formats": [f for f in FORMATS if f in formats],
+        "camera_full": camera_full,
+        "camera_profile": profile.name,
+        "camera_settings": settings.as_dict(),
+    }
+    if ball_type != "robocup":
+        recorded["ball_type"] = ball_type
+    if profile.options():
+        recorded["camera_profile_options"] = profile.options()
+    recorded["model_sha256"] = model_sha256(model)
+    match = {"controller": controller and str(Path(controller).resolve()), "robots": [r.as_dict() for r in robots]}
+    shards = [robot_folder(k) for k in range(len(robots))]
+    meta = {"format": DUMP_FORMAT, "parameters": {**match, **recorded}, "shards": shards}
+    described = describe_camera(profile, settings, camera_size(camera_full), scene_light(model))
+    start = time.perf_counter()
+    prepared = prepare_folder(out, meta, resume)
+    writers: list[DumpWriter] = []
+    try:
+        for shard in shards:
+            check_destination(out / shard, shard_of=out)
+        for k, robot in enumerate(robots):
+            stick = memory_stick_folder(robot.controller) is not None
+            parameters = {
+                "controller": robot.controller,
+                "env": None,
+                "policy": None,
+                "backend": MEMORY_STICK if stick else "sim",
+                "pose": list(robot.pose),
+                "mtn_mode": None if stick else "openr",
+                "memory_stick": None,
+                "robot": robot.as_dict(),
+                **recorded,
+                "controller_sha256": hashes[robot.controller],
+            }
+            writers.append(
+                DumpWriter(
+                    out / shards[k],
+                    parameters["formats"],
+                    parameters,
+                    resume=resume,
+                    camera=described,
+                    model=model,
+                    robots=robots_meta(robots, k + 1),
+                )
+            )
+        _run(out, robots, writers, frames, recorded, profile, settings, camera_full)
+        coco = coco_bytes(out, [out / shard for shard in shards]) if "coco" in recorded["formats"] else b""
+        if coco:
+            write_atomic(out / COCO, coco)
+    except BaseException:
+        for writer in writers:
+            with contextlib.suppress(Exception):
+                writer.abort()  # complete frames stay, temporary files go
+        raise
+    finally:
+        prepared.lock.release()
+    return DumpSummary(
+        str(out),
+        sum(len(w.complete) for w in writers),
+        sum(w.new_frames for w in writers),
+        sum(w.bytes_written for w in writers) + len(coco),
+        time.perf_counter() - start,
+        sum(w.repaired_frames for w in writers),
+    )
+
+
+def _run(out: Path, robots, writers, frames: int, world: dict, profile, settings, camera_full: bool) -> None:
+    """The match, each robot's frames into its writer, then the writers finished (their videos and
+    coco.json). The controllers run in ``out/controller_files``."""
+    workdir = out / CONTROLLER_FILES
+    try:
+        make_folder(workdir)
+    except NotADirectoryError:
+        raise ValueError(f"{workdir}: not a folder (the controllers run in it): move it away, then --resume") from None
+    progress = Progress(frames / FRAME_RATE_HZ)
+    listeners: list[_RobotFrames] = []
+
+    def robot_listeners(robot: Simulation) -> list:
+        shown = progress if robot.index == 0 else Progress(frames / FRAME_RATE_HZ, enabled=False)
+        listeners.append(_RobotFrames(writers[robot.index], frames, shown))
+        return [listeners[-1]]
+
+    previous = Path.cwd()
+    os.chdir(workdir)  # the controllers' own files land there
+    try:
+        try:
+            run_match(
+                robots,
+                duration=frames / FRAME_RATE_HZ,
+                world=WorldConfig(
+                    world["scene"], world["seed"], ball=world["ball"], ball_type=world.get("ball_type", "robocup")
+                ),
+                camera=CameraConfig(profile, camera_full, settings),
+                robot_listeners=robot_listeners,
+                progress=False,
+            )
+        except BaseException:
+            failed = next((listener.error for listener in listeners if listener.error is not None), None)
+            if failed is not None:  # a write failed: that is why the match stopped
+                raise failed from None
+            raise
+        failed = next((listener.error for listener in listeners if listener.error is not None), None)
+        if failed is not None:
+            raise failed
+    finally:
+        os.chdir(previous)
+        progress.close()
+    for writer in writers:
+        writer.finish()
