@@ -15,6 +15,8 @@ from pathlib import Path
 
 import numpy as np
 
+from openr_bridge import FULL_HEIGHT, FULL_WIDTH, LAYER_SIZE
+
 from .mtn import MODES as MTN_MODES
 from .options import (
     ArgumentParser,
@@ -194,7 +196,7 @@ def _side_by_side(args) -> np.ndarray:
         if not Path(args.side_by_side).is_file():
             raise FileNotFoundError(f"--side-by-side {args.side_by_side}: no such file")
         real = cv2.imread(args.side_by_side, cv2.IMREAD_COLOR)
-        if real is None or real.shape != (160, 208, 3):
+        if real is None or real.shape != (*LAYER_SIZE[0][::-1], 3):
             raise ValueError(f"--side-by-side {args.side_by_side}: not a 208x160 EasyTrain PNG (R, G, B = Y, Cb, Cr)")
         cr, cb, y = cv2.split(real)
         pictures.append(openr_bridge.ycrcb_to_rgb(y, cr, cb))  # as the wrapper's camera_get_image shows it
@@ -204,7 +206,7 @@ def _side_by_side(args) -> np.ndarray:
             pictures.append(sim.camera.frame().rgb)
         finally:
             sim.close()
-    return np.hstack([cv2.resize(p, (416, 320), interpolation=cv2.INTER_NEAREST) for p in pictures])
+    return np.hstack([cv2.resize(p, (FULL_WIDTH, FULL_HEIGHT), interpolation=cv2.INTER_NEAREST) for p in pictures])
 
 
 def _build_ms(args) -> int:

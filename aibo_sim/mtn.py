@@ -51,6 +51,7 @@ from pathlib import Path
 
 import numpy as np
 
+from openr_bridge import FRAME_TICK_MS
 from openr_bridge.config import read_regular_file
 from openr_bridge.errors import NotRegularFile
 
@@ -62,7 +63,7 @@ READ_VERSIONS = ((1, 0), (1, 1), (1, 2))
 NUM_SECTIONS = 4
 SECTION0_SIZE = 24
 DEFAULT_FRAME_TIME_MS = 16
-SUBFRAME_MS = 8  # OPEN-R command vectors carry one joint value per 8 ms
+SUBFRAME_MS = FRAME_TICK_MS  # OPEN-R command vectors carry one joint value per 8 ms frame
 MODES = ("openr", "webots")  # MotionPlayer's playback modes
 _S32_MIN, _S32_MAX = -(2**31), 2**31 - 1
 MAX_LENGTH_MS = 10 * 60 * 1000

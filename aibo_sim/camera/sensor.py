@@ -54,7 +54,7 @@ from functools import cache
 import cv2
 import numpy as np
 
-from openr_bridge import CAMERA_DEFAULTS, CAMERA_SETTINGS
+from openr_bridge import CAMERA_DEFAULTS, CAMERA_SETTINGS, LAYER_SIZE
 
 from .lens import Warp
 
@@ -341,7 +341,7 @@ def _along_radius(values: np.ndarray, r: np.ndarray) -> np.ndarray:
 
 def vignetting_maps(width: int, height: int) -> np.ndarray:
     """Per-pixel quadratic coefficients (v^2, v, 1), (3, h, w, 3) float64, of an image of this size."""
-    scale = 208 / width  # radii and ring centres are in layer-H pixels
+    scale = LAYER_SIZE[0][0] / width  # radii and ring centres are in layer-H pixels
     v, u = np.mgrid[0:height, 0:width].astype(np.float64)
     fit = vignetting_fit()
     maps = np.empty((3, height, width, 3))
@@ -394,7 +394,7 @@ class Sensor:
         self._kernels = kernels
         self.warp = Warp.from_maps(*maps, render_size[0], kernels.SLACK)
         # The softness's 3-tap Gaussian (OpenCV's, as GaussianBlur uses), in render pixels.
-        sigma = profile.softness_px * self.width / 208 * render_scale[0]
+        sigma = profile.softness_px * self.width / LAYER_SIZE[0][0] * render_scale[0]
         outer, centre, _ = cv2.getGaussianKernel(3, sigma).ravel() if sigma >= 0.05 else (0.0, 1.0, 0.0)
         self._taps = np.float32(outer), np.float32(centre)
         vignetting = (

@@ -10,6 +10,8 @@ no results gets no answer: the controller goes on at once, and an error it cause
 when the simulator reads it, before any simulated time passes.
 """
 
+from openr_bridge import FULL_HEIGHT, FULL_WIDTH
+
 OPS = (
     ("robot_step", "i", "i"),
     ("robot_get_device", "s", "i"),
@@ -73,7 +75,7 @@ PREFETCHED = (
     "mtn_get_time",
 )
 STATUS = {"ok": 0, "end": 1}  # end: the run is over (the controller runs its robot_die functions and exits)
-MAX_IMAGE_BYTES = 416 * 320 * 3  # the shared memory block: the largest camera image
+MAX_IMAGE_BYTES = FULL_WIDTH * FULL_HEIGHT * 3  # the shared memory block: the largest camera image
 
 
 def c_header() -> str:
