@@ -366,19 +366,12 @@ class World:
         model, data, options, cameras = self.model, self.data, self.model.opt, self.cameras
         steps = [self.steps_per_frame] * frames
         steps[-1] -= sensors  # the last step, with sensors, after the loop
-        # Camera ticks within these frames: after frame k (counted from 1) when the index moves.
-        ticks = [
-            k
-            for k in range(1, frames + 1)
-            if self.camera_frame_index(self.frame + k) != self.camera_frame_index(self.frame + k - 1)
-        ]
         flags = options.disableflags
         options.disableflags = flags | mujoco.mjtDisableBit.mjDSBL_SENSOR
         try:
             for k, nstep in enumerate(steps, start=1):
                 for camera in cameras:
-                    if camera.live:
-                        camera.freeze()
+                    camera.before_frame()
                 if before_frame is not None:
                     before_frame()
                 for actuators, commands in plans:
@@ -386,16 +379,15 @@ class World:
                 if nstep:
                     mujoco.mj_step(model, data, nstep=nstep)
                 self.frame += 1
-                if k < frames and k in ticks:
+                if k < frames:
                     for camera in cameras:
-                        camera.tick()
+                        camera.after_frame()
         finally:
             options.disableflags = flags
         if sensors:
             mujoco.mj_step(model, data)
-        if frames in ticks:
-            for camera in cameras:
-                camera.tick()
+        for camera in cameras:
+            camera.after_frame()
         if any(w.number for w in self._divergence_warnings) or not np.isfinite(data.qpos).all():
             raise SimulationDiverged(f"physics diverged at t = {data.time:.3f} s (by frame {self.frame})")
 

@@ -1,7 +1,10 @@
 """The head camera: the one place that turns the simulation's state into camera frames.
 
-Timing: camera frame k is exposed at its tick, the first 8 ms joint frame at or after k / 30 s
-(``Simulation`` calls ``tick`` there, and ``freeze`` before the state moves on). Its picture,
+Timing: camera frame k is exposed at its tick, the first 8 ms joint frame at or after k / 30 s.
+The camera sees the simulation through a small interface (``CameraMount``: the model, the live
+data, the clock, the world's render lock and robots); the simulation tells it two things only:
+a joint frame is about to change the state (``before_frame``) and one has ended
+(``after_frame``); the camera keeps its own exposures. Its picture,
 labels and OPEN-R message are made from the state at that tick, whoever asks and whenever
 (until the next tick, or ``latency_frames`` later): ``run``, ``dump`` and the environments
 see the same frames, bit for bit. Settings changed during a frame apply from the next tick.
@@ -13,6 +16,8 @@ pose at the exposure, and the OPEN-R message, encoded once.
 """
 
 from __future__ import annotations
+
+from typing import Protocol
 
 import cv2
 import mujoco
@@ -134,12 +139,26 @@ class _Exposure:
         self.frame: CameraFrame | None = None
 
 
+class CameraMount(Protocol):
+    """What the head camera reads of the robot that carries it (``sim.Simulation`` is one): the
+    compiled model, the live state, the clock, and its world's render lock and robots."""
+
+    model: mujoco.MjModel
+    data: mujoco.MjData  # the live state
+    frame: int  # 8 ms joint frames since reset
+    world: object  # ``render_lock`` (an RLock) and ``robots`` (each with its root body ``_body``)
+    _body: int  # the carrying robot's root body
+
+    def camera_frame_index(self) -> int: ...
+
+
 class HeadCamera:
-    """The ERS-7's head camera on one simulation: renderer, lens, sensor, frames and labels."""
+    """The ERS-7's head camera on the robot ``sim`` (a ``CameraMount``): renderer, lens, sensor,
+    frames and labels."""
 
     def __init__(
         self,
-        sim,
+        sim: CameraMount,
         size: tuple[int, int],
         profile: str | CameraProfile = "ers7",
         settings: CameraSettings | None = None,
@@ -195,7 +214,17 @@ class HeadCamera:
         ``size`` (default the camera's own; the openr backend serves layer H of it)."""
         return describe_camera(self.profile, self._settings, size or (self.width, self.height), self.light)
 
-    # ---------------------------------------------------------------- timing (called by Simulation)
+    # ---------------------------------------------------------------- timing (called by the simulation)
+
+    def before_frame(self) -> None:
+        """A joint frame is about to change the live state: the newest exposure keeps a copy."""
+        if self.live:
+            self.freeze()
+
+    def after_frame(self) -> None:
+        """A joint frame has ended: a new exposure when the clock reached the next camera frame."""
+        if self.sim.camera_frame_index() != self._exposures[-1].index:
+            self.tick()
 
     def reset(self, seed: int) -> None:
         self.seed = seed
