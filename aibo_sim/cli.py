@@ -65,7 +65,9 @@ def _run_match(args, robots) -> int:
     from .match import run_match
     from .viewer import LiveViewer
 
-    viewer = LiveViewer() if args.view else None
+    if args.view_robot is not None and not 1 <= args.view_robot <= len(robots):
+        raise ValueError(f"--view-robot {args.view_robot}: the match has robots 1 to {len(robots)}")
+    viewer = LiveViewer((args.view_robot or 1) - 1) if args.view else None
     try:
         summary = run_match(
             robots,
@@ -93,6 +95,8 @@ def _run(args) -> int:
     from .viewer import LiveViewer
 
     robots = _match_robots(args)
+    if args.view_robot is not None and (robots is None or not args.view):
+        raise ValueError("--view-robot applies to --view in a match (--robots, --robot)")
     if robots is not None:
         return _run_match(args, robots)
     viewer = LiveViewer() if args.view else None
@@ -322,6 +326,12 @@ def build_parser() -> argparse.ArgumentParser:
         "--view",
         action="store_true",
         help="watch it in MuJoCo's viewer, in real time (needs a display; space pauses, right arrow steps)",
+    )
+    run.add_argument(
+        "--view-robot",
+        type=int,
+        metavar="N",
+        help="in a match, the robot --view follows and whose camera it shows (default 1)",
     )
     add_world_options(run)
     run.set_defaults(handler=_run)

@@ -45,10 +45,14 @@ def check_display() -> None:
 
 
 class LiveViewer:
-    """A frame listener for ``run_controller``: shows the robot's simulation live."""
+    """A frame listener for ``run_controller`` (or robot 1's in ``run_match``): shows the
+    simulation live, following robot ``robot`` (0: the first) with its camera's newest frame;
+    in a match, another robot's newest frame its controller has already made (its camera renders
+    in its own thread)."""
 
-    def __init__(self):
+    def __init__(self, robot: int = 0):
         check_display()
+        self.robot = robot
         self._handle, self._threads = None, set()
         self.paused, self._steps_asked = False, 0
         self._shown_camera_frame = -1
@@ -60,8 +64,8 @@ class LiveViewer:
         elif key == KEY_RIGHT and self.paused:
             self._steps_asked += 1
 
-    def __call__(self, robot) -> None:
-        sim = robot.sim
+    def __call__(self, program) -> None:
+        sim = program.sim.world.robots[self.robot]
         if self._handle is None:
             import mujoco.viewer
 
@@ -70,7 +74,7 @@ class LiveViewer:
             self._threads = set(threading.enumerate()) - before  # the viewer's, joined by close()
             with self._handle.lock():
                 camera = self._handle.cam
-                camera.type, camera.trackbodyid = mujoco.mjtCamera.mjCAMERA_TRACKING, sim.model.body("body").id
+                camera.type, camera.trackbodyid = mujoco.mjtCamera.mjCAMERA_TRACKING, sim._body
                 for name, value in TRACKING_VIEW.items():
                     setattr(camera, name, value)
             self._clock_start = time.monotonic() - sim.time_ms / 1000
@@ -93,8 +97,11 @@ class LiveViewer:
         index = sim.camera_frame_index()
         if index == self._shown_camera_frame:
             return
+        frame = sim.camera.frame() if self.robot == 0 else sim.camera.made_frame()
+        if frame is None:
+            return
         self._shown_camera_frame = index
-        inset = sim.camera.frame().rgb
+        inset = frame.rgb
         view = self._handle.viewport
         left = max(0, (view.left + view.width - inset.shape[1]) if view is not None else 0)
         self._handle.set_images((mujoco.MjrRect(left, 0, inset.shape[1], inset.shape[0]), np.ascontiguousarray(inset)))

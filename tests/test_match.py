@@ -196,6 +196,8 @@ def test_run_robots_file_on_the_command_line(tmp_path, capsys):
         ([f"--robot={t}:{n}" for t in ("red", "blue") for n in (1, 2, 3, 4)] + ["--robot", "red:1:0,1,0"], "8"),
         (["--robot", "red:1:0,0,0", "--robot", "blue:1:0.25,0,0"], "--robots: blue 1 starts inside red 1"),
         (["--robot", "red:1", "--pose", "0", "0", "0"], "--pose applies to a run of one robot"),
+        (["--robot", "red:1", "--robot", "blue:1", "--view-robot", "2"], "--view-robot applies to --view in a match"),
+        (["--view-robot", "1"], "--view-robot applies to --view in a match"),
     ],
 )
 def test_bad_robots_exit_2_with_one_line(arguments, message, capsys):

@@ -119,6 +119,18 @@ def test_view_shows_the_robot_on_a_virtual_display(tmp_path):
         )
         assert watched.returncode == 0, watched.stderr
         assert json.loads((tmp_path / "stick" / "run.json").read_text())["backend"] == "memory stick"
+        # A match, following robot 2 and showing its camera.
+        match = [sys.executable, "-m", "aibo_sim.cli", "run", str(CONTROLLER), "--robot", "red:4", "--robot", "blue:4"]
+        watched = subprocess.run(
+            [*match, "--duration", "0.3", "--view", "--view-robot", "2", "--out", "match"],
+            env={**os.environ, "DISPLAY": display},
+            cwd=tmp_path,
+            capture_output=True,
+            text=True,
+            timeout=120,
+        )
+        assert watched.returncode == 0, watched.stderr
+        assert json.loads((tmp_path / "match" / "run.json").read_text())["status"] == "done"
     finally:
         if run is not None:
             run.terminate()
