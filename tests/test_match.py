@@ -82,6 +82,20 @@ def test_a_robot_running_into_another_pushes_it_and_does_not_pass_through():
         sim.close()
 
 
+def test_every_robot_pushes_the_ball():
+    robots = (RobotSpec("red", 1, (-2.0, 1.0, 0.0)), RobotSpec("blue", 3, (0.0, 0.0, 0.0)))
+    sim = Simulation(camera=CameraConfig("ideal"), robots=robots)
+    try:
+        blue = sim.world.robots[1]  # a robot the match added, with its own contact bits
+        sim.place_ball(0.24, 0.0)  # just ahead of its front paws
+        sim.data.qvel[sim.model.jnt_dofadr[sim.model.body_jntadr[blue._body]]] = 1.5  # it runs into the ball
+        for _ in range(40):
+            sim.step_frames(1)
+        assert sim.ball_position()[0] > 0.26  # pushed forward (5.7 cm here)
+    finally:
+        sim.close()
+
+
 def test_each_camera_sees_the_other_robot_and_its_uniform_not_its_own():
     sim = Simulation(robots=facing(-0.5, 0.2), ball=False, camera=CameraConfig("ideal"))
     try:
