@@ -365,3 +365,18 @@ def test_render_takes_the_camera_and_world_options(tmp_path, capsys):
     assert main(["render", "--out", str(tmp_path / "full"), "--settle", "0", "--camera-full"]) == 0
     assert cv2.imread(str(tmp_path / "full" / "head_camera.png")).shape == (320, 416, 3)
     assert "head_camera.png (416x320)" in capsys.readouterr().out
+
+
+def test_a_dumps_and_a_renders_records_read_back_as_configs(tmp_path):
+    from aibo_sim.dump import dump
+
+    world = WorldConfig(seed=5, pose=(0.2, 0.1, 10.0), ball=(0.7, -0.1))
+    camera = CameraConfig("ideal", settings=CameraSettings("outdoor", "low", "mid"))
+    dump(tmp_path / "dump", controller=SCRIPTED, frames=2, formats=("rgb",), world=world, camera=camera)
+    meta = json.loads((tmp_path / "dump" / "meta.json").read_text())
+    assert WorldConfig.from_dict(meta["parameters"]) == world and CameraConfig.from_dict(meta["camera"]) == camera
+    flags = ["--seed", "5", "--pose", "0.2", "0.1", "10", "--ball", "0.7", "-0.1", "--camera-profile", "ideal"]
+    flags += ["--camera-wb", "outdoor", "--camera-gain", "low", "--camera-full"]
+    assert main(["render", "--out", str(tmp_path / "render"), "--settle", "0", *flags]) == 0
+    recorded = json.loads((tmp_path / "render" / "head_camera.json").read_text())
+    assert CameraConfig.from_dict(recorded["camera"]) == CameraConfig("ideal", True, camera.settings)
