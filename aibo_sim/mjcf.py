@@ -9,7 +9,6 @@ from __future__ import annotations
 import math
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass
-from pathlib import Path
 from xml.sax.saxutils import escape
 
 import numpy as np
@@ -18,8 +17,7 @@ from openr_bridge import FULL_HEIGHT, FULL_WIDTH, HORIZONTAL_FOV_DEG, VERTICAL_F
 
 from . import field as F
 from .ers7 import HEAD_CAMERA, JOINT_BY_NAME, JOINTS, LED_OFF_RGBA, LEGS, SENSORS
-
-MODELS_DIR = Path(__file__).resolve().parent.parent / "models"
+from .sim import models_dir
 
 CAMERA_FOCAL = 0.00327  # m (Sony: f = 3.27 mm)
 PAW_RADIUS = 0.01172  # Tekkotsu BallOfFootRadius; Webots uses 0.017 (see models/README.md)
@@ -914,9 +912,10 @@ def generated_files() -> dict[str, str]:
 
 
 def main() -> None:
+    """Write the generated files into the models folder (``sim.models_dir``)."""
     for name, text in generated_files().items():
-        (MODELS_DIR / name).write_text(text)
-        print(f"wrote {MODELS_DIR / name}")
+        (models_dir() / name).write_text(text)
+        print(f"wrote {models_dir() / name}")
 
 
 if __name__ == "__main__":
