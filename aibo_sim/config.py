@@ -35,6 +35,10 @@ class ParameterError(ValueError):
 
     @classmethod
     def at(cls, parameter: str, value, reason: str, fix: str | None = None) -> ParameterError:
+        """The error for ``parameter`` at ``value``: ``"<parameter> <value>: <reason> [<fix>]"``.
+
+        :param fix: another parameter that would set it right, named last in the message.
+        """
         error = cls(f"{parameter} {value}: {reason}" + (f" {fix}" if fix else ""))
         error.parameter, error.fix = parameter, fix
         return error

@@ -92,6 +92,10 @@ def _state() -> _Installed:
 
 
 def current_robot() -> Robot:
+    """The robot the API functions drive in this thread.
+
+    :raises RuntimeError: no robot installed (the controller was not started by ``aibo-sim run``).
+    """
     global last_call_s
     robot = _state().robot
     if robot is None:
@@ -177,11 +181,22 @@ def robot_run(run_fn) -> None:
 
 
 def robot_step(ms: int) -> int:
+    """Advance ``ms`` of simulated time (a positive multiple of 8 ms); returns 0.
+
+    :raises SimulationEnd: the run's duration is over.
+    :raises ValueError: ``ms`` is not a positive multiple of 8.
+    :raises DeviceError: called from another thread than the controller's.
+    """
     _rendering("robot_step").step(ms)
     return 0
 
 
 def robot_get_device(name: str) -> int:
+    """The tag (1, 2, ...) of the device with OPEN-R locator ``name``; the same device always gets
+    the same tag.
+
+    :raises DeviceError: no such device; the message names the nearest locators.
+    """
     device, tags = current_robot().get_device(name), _state().tags
     if device not in tags:
         tags.append(device)
@@ -189,14 +204,17 @@ def robot_get_device(name: str) -> int:
 
 
 def robot_get_time() -> float:
+    """Simulated time in seconds."""
     return current_robot().time_ms / 1000.0
 
 
 def robot_get_name() -> str:
+    """The robot's name: ``"ERS-7"``."""
     return "ERS-7"
 
 
 def robot_console_printf(fmt: str, *args) -> None:
+    """Write ``fmt % args`` (``fmt`` itself without ``args``) to stdout and flush it."""
     sys.stdout.write(fmt % args if args else fmt)
     sys.stdout.flush()
 
@@ -205,34 +223,45 @@ def robot_console_printf(fmt: str, *args) -> None:
 
 
 def servo_enable_position(tag, ms: int) -> None:
+    """Sample the servo's position every ``ms`` milliseconds."""
     _device(tag, Servo).enable(ms)
 
 
 def servo_disable_position(tag) -> None:
+    """Stop sampling the servo's position."""
     _device(tag, Servo).disable()
 
 
 def servo_get_position(tag) -> float:
+    """The joint angle in radians at the last sample.
+
+    :raises DeviceError: not enabled, or before its first sample.
+    """
     return _device(tag, Servo).get_position()
 
 
 def servo_set_position(tag, radians: float) -> None:
+    """Target angle in radians, clipped to the joint's range."""
     _device(tag, Servo).set_position(radians)
 
 
 def servo_set_velocity(tag, rad_per_s: float) -> None:
+    """Speed limit in rad/s (its absolute value); never above Sony's maximum for the joint."""
     _device(tag, Servo).set_velocity(rad_per_s)
 
 
 def servo_set_acceleration(tag, rad_per_s2: float) -> None:
+    """Acceleration limit in rad/s^2; a negative value (Webots' -1) means unlimited."""
     _device(tag, Servo).set_acceleration(rad_per_s2)
 
 
 def servo_set_motor_force(tag, newton_metres: float) -> None:
+    """Torque limit in N m (its absolute value)."""
     _device(tag, Servo).set_motor_force(newton_metres)
 
 
 def servo_set_control_p(tag, p: float) -> None:
+    """Proportional gain of the servo's position control."""
     _device(tag, Servo).set_control_p(p)
 
 
@@ -240,27 +269,37 @@ def servo_set_control_p(tag, p: float) -> None:
 
 
 def camera_enable(tag, ms: int) -> None:
+    """Take a picture every ``ms`` milliseconds (at most 30 a second)."""
     _device(tag, Camera).enable(ms)
 
 
 def camera_disable(tag) -> None:
+    """Stop taking pictures."""
     _device(tag, Camera).disable()
 
 
 def camera_get_image(tag) -> np.ndarray:
+    """The last picture: row-major RGB from the top left, 3 bytes a pixel, a flat uint8 array.
+
+    :raises DeviceError: not enabled, before its first picture, or called from another thread than
+        the controller's.
+    """
     _rendering("camera_get_image")
     return _device(tag, Camera).get_image()
 
 
 def camera_get_width(tag) -> int:
+    """Image width in pixels."""
     return _device(tag, Camera).width
 
 
 def camera_get_height(tag) -> int:
+    """Image height in pixels."""
     return _device(tag, Camera).height
 
 
 def camera_get_fov(tag) -> float:
+    """Horizontal field of view in radians."""
     return _device(tag, Camera).fov
 
 
@@ -309,54 +348,67 @@ camera_image_get_gray = camera_image_get_grey  # the later Webots spelling
 
 
 def distance_sensor_enable(tag, ms: int) -> None:
+    """Sample the IR distance sensor every ``ms`` milliseconds."""
     _device(tag, DistanceSensor).enable(ms)
 
 
 def distance_sensor_disable(tag) -> None:
+    """Stop sampling the distance sensor."""
     _device(tag, DistanceSensor).disable()
 
 
 def distance_sensor_get_value(tag) -> float:
+    """The range in millimetres at the last sample; DeviceError before one."""
     return _device(tag, DistanceSensor).value()
 
 
 def touch_sensor_enable(tag, ms: int) -> None:
+    """Sample the touch sensor every ``ms`` milliseconds."""
     _device(tag, TouchSensor).enable(ms)
 
 
 def touch_sensor_disable(tag) -> None:
+    """Stop sampling the touch sensor."""
     _device(tag, TouchSensor).disable()
 
 
 def touch_sensor_get_value(tag) -> float:
+    """1.0 when pressed at the last sample, else 0.0; DeviceError before one."""
     return _device(tag, TouchSensor).value()
 
 
 def accelerometer_enable(tag, ms: int) -> None:
+    """Sample the accelerometer every ``ms`` milliseconds."""
     _device(tag, Accelerometer).enable(ms)
 
 
 def accelerometer_disable(tag) -> None:
+    """Stop sampling the accelerometer."""
     _device(tag, Accelerometer).disable()
 
 
 def accelerometer_get_values(tag) -> tuple[float, float, float]:
+    """(x, y, z) in m/s^2 at the last sample (x forward, y left, z up); DeviceError before one."""
     return _device(tag, Accelerometer).value()
 
 
 def accelerometer_value_x(values) -> float:
+    """The x (forward) component of ``accelerometer_get_values``' result."""
     return values[0]
 
 
 def accelerometer_value_y(values) -> float:
+    """The y (left) component of ``accelerometer_get_values``' result."""
     return values[1]
 
 
 def accelerometer_value_z(values) -> float:
+    """The z (up) component of ``accelerometer_get_values``' result."""
     return values[2]
 
 
 def led_set(tag, value: int) -> None:
+    """0 switches the LED off, 1 on at full intensity, 2..255 a Sony intensity (value / 255)."""
     _device(tag, Led).set(value)
 
 
@@ -389,14 +441,17 @@ def mtn_play(motion) -> None:
 
 
 def mtn_is_over(motion) -> bool:
+    """Whether ``motion`` is not playing (never started, ended or deleted)."""
     return current_robot().mtn_is_over(_motion(motion, "mtn_is_over"))
 
 
 def mtn_get_length(motion) -> int:
+    """The motion's length in ms (its last keyframe lasts 0 ms)."""
     return int(_motion(motion, "mtn_get_length").length_ms)
 
 
 def mtn_get_time(motion) -> int:
+    """Milliseconds ``motion`` has played (0 when it is not playing)."""
     return current_robot().mtn_get_time(_motion(motion, "mtn_get_time"))
 
 

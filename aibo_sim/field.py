@@ -78,6 +78,9 @@ LINE_SEGMENTS = _line_segments()
 
 @dataclass(frozen=True)
 class Beacon:
+    """A landmark beacon: its name, position (x, y in metres) and the colours of its top (part A) and
+    middle (part B)."""
+
     name: str
     x: float
     y: float

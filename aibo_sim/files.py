@@ -36,6 +36,7 @@ class SymlinkRefused(OSError):
 
     @classmethod
     def at(cls, path) -> SymlinkRefused:
+        """The error for the symbolic link at ``path``, saying what to do instead."""
         return cls(
             f"{path} is a symbolic link: refusing to follow it (aibo-sim reads and writes only its own "
             "files there); remove it or choose another folder"
@@ -198,6 +199,7 @@ class FolderLock:
             return "a process that has just started"
 
     def release(self) -> None:
+        """Unlock the folder and clear the lock file's holder description; a second call does nothing."""
         if self._fd is not None:
             with contextlib.suppress(OSError):
                 os.ftruncate(self._fd, 0)

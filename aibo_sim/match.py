@@ -106,12 +106,14 @@ class Lockstep:
                     pass
 
     def stop(self) -> None:
+        """End every robot's next ``step`` (and those waiting now) with SimulationEnd."""
         with self._condition:
             self._stopped = True
             self._condition.notify_all()
 
     @property
     def failure(self) -> BaseException | None:
+        """The error that stopped the world (its physics diverged), or None."""
         return self._failure
 
 

@@ -291,6 +291,7 @@ class GaitMeter:
 
     @property
     def paw_share(self) -> float | None:
+        """The share of the legs' ground contact force the paws carried; None before any contact."""
         return self.paw_force / self.leg_force if self.leg_force > 0 else None
 
 
@@ -397,6 +398,7 @@ def _play(sim: Simulation, motion: Motion, player: MotionPlayer, repeat: int, mo
 
 
 def main() -> None:
+    """Write the bundled motion files into the models folder's ``motions/``."""
     for path in generate_motion_files(models_dir() / "motions"):
         print(f"wrote {path}")
 

@@ -174,6 +174,7 @@ class Motion:
 
     @property
     def num_keyframes(self) -> int:
+        """Number of keyframes."""
         return len(self.keyframes)
 
     @property
@@ -539,6 +540,7 @@ class MotionPlayer:
 
     @property
     def is_over(self) -> bool:
+        """Whether the motion has played to its end (Webots mode only)."""
         self._need("webots")
         return self._over
 
@@ -550,6 +552,7 @@ class MotionPlayer:
 
     @property
     def length_ms(self) -> int:
+        """The motion's total length in ms (``Motion.length_ms``)."""
         return self.motion.length_ms
 
     def _need(self, mode: str) -> None:

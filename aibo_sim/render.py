@@ -319,6 +319,7 @@ class Renderer:
 
     @property
     def scene(self) -> mujoco.MjvScene:
+        """The MuJoCo scene the renderer draws (its flags and geoms)."""
         return self._scene
 
     def _outside_view(self, data: mujoco.MjData, cam: mujoco.MjvCamera) -> np.ndarray:
@@ -437,6 +438,7 @@ class Renderer:
         return geom_ids[np.minimum(scene_index_plus_one, len(drawn) + 1)]
 
     def close(self) -> None:
+        """Free the OpenGL context and MuJoCo's rendering context; a second call does nothing."""
         if self._gl is not None:
             self._enter()  # the GL objects freed are this context's
             self._context.free()

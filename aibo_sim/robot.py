@@ -63,6 +63,10 @@ class Device:
         self._value = None
 
     def enable(self, ms: int) -> None:
+        """Sample every ``ms`` milliseconds, the first sample ``ms`` after now; drops any earlier value.
+
+        :raises DeviceError: ``ms`` is not a positive whole number.
+        """
         period = whole_ms(ms)
         if period is None or period <= 0:
             raise DeviceError(f"{self.locator}: sampling period must be a positive whole number of ms, not {ms!r}")
@@ -72,6 +76,7 @@ class Device:
         self.robot.enabled_devices[self.locator] = self
 
     def disable(self) -> None:
+        """Stop sampling and forget the last value."""
         self.period, self._value = None, None
         self.robot.enabled_devices.pop(self.locator, None)
 
@@ -85,6 +90,10 @@ class Device:
         raise NotImplementedError
 
     def value(self):
+        """The last sample.
+
+        :raises DeviceError: the device is not enabled, or its first sample is not due yet.
+        """
         if self.period is None:
             call = self.enable_call or f"{self.kind}_enable"
             raise DeviceError(f"{self.locator}: {self.kind} is not enabled (call {call} first)")
@@ -97,6 +106,8 @@ class Device:
 
 
 class Servo(Device):
+    """A joint's position servo (``ers7.JOINTS``); its position is sampled as a sensor's value."""
+
     kind = "servo"
     enable_call = "servo_enable_position"
 
@@ -112,6 +123,7 @@ class Servo(Device):
         return number
 
     def set_position(self, radians: float) -> None:
+        """Target angle in radians, clipped to the joint's range."""
         self.robot.sim.servos.set_target(self.index, self._number(radians, "position"))
 
     def set_velocity(self, rad_per_s: float) -> None:
@@ -124,10 +136,12 @@ class Servo(Device):
         self.robot.sim.servos.acceleration[self.index] = math.inf if value < 0 else value
 
     def set_motor_force(self, newton_metres: float) -> None:
+        """Torque limit in N m (the absolute value of ``newton_metres``) of the joint's actuator."""
         force = abs(self._number(newton_metres, "motor force"))
         self.robot.sim.model.actuator_forcerange[self._actuator] = (-force, force)
 
     def set_control_p(self, p: float) -> None:
+        """Proportional gain of the joint's position actuator."""
         p = self._number(p, "control P")
         model = self.robot.sim.model
         model.actuator_gainprm[self._actuator, 0] = p
@@ -137,10 +151,13 @@ class Servo(Device):
         return float(self.robot.sim.joint_positions()[self.index])
 
     def get_position(self) -> float:
+        """The joint angle in radians at the last sample (``value``)."""
         return self.value()
 
 
 class DistanceSensor(Device):
+    """An IR distance sensor: range in millimetres (``Simulation.distance_mm``)."""
+
     kind = "distance_sensor"
 
     def _sample(self) -> float:
@@ -148,6 +165,8 @@ class DistanceSensor(Device):
 
 
 class TouchSensor(Device):
+    """A touch sensor: 1.0 when pressed beyond its threshold, else 0.0."""
+
     kind = "touch_sensor"
 
     def _sample(self) -> float:
@@ -156,6 +175,8 @@ class TouchSensor(Device):
 
 
 class Accelerometer(Device):
+    """The body's accelerometer: (x, y, z) in m/s^2 (``Simulation.acceleration``)."""
+
     kind = "accelerometer"
 
     def _sample(self) -> tuple[float, float, float]:
@@ -163,6 +184,8 @@ class Accelerometer(Device):
 
 
 class Camera(Device):
+    """The head camera: each sample is the newest 30 fps frame, row-major RGB from the backend."""
+
     kind = "camera"
 
     def _after_frame(self, time_ms: int) -> None:
@@ -183,14 +206,17 @@ class Camera(Device):
 
     @property
     def width(self) -> int:
+        """Image width in pixels."""
         return self.robot.camera_source.width
 
     @property
     def height(self) -> int:
+        """Image height in pixels."""
         return self.robot.camera_source.height
 
     @property
     def fov(self) -> float:
+        """Horizontal field of view in radians."""
         return self.robot.camera_source.fov
 
     # Settings (an extension of the Webots API): Sony's values 1..3, from the next camera frame.
@@ -226,6 +252,7 @@ class Led(Device):
     kind = "led"
 
     def set(self, value: int) -> None:
+        """0 (or less) off, 1 full intensity, 2..255 that intensity out of 255 (above 255: 255)."""
         value = int(value)
         level = 0.0 if value <= 0 else 1.0 if value == 1 else min(value, 255) / 255
         self.robot.sim.set_led(self.name, level)
@@ -308,9 +335,14 @@ class Robot:
 
     @property
     def time_ms(self) -> int:
+        """Simulated time in ms since reset."""
         return self.sim.time_ms
 
     def get_device(self, name: str) -> Device:
+        """The device with OPEN-R locator ``name`` (the accelerometer also by its aliases).
+
+        :raises DeviceError: no such device; the message names the nearest locators.
+        """
         try:
             return self.devices[name]
         except (KeyError, TypeError):
@@ -376,6 +408,7 @@ class Robot:
         return next((p for p in self.playing if p.motion is motion), None)
 
     def mtn_is_over(self, motion) -> bool:
+        """Whether ``motion`` is not playing (never started, ended or stopped)."""
         return self._playing(self._motion("mtn_is_over", motion)) is None
 
     def mtn_get_time(self, motion) -> int:

@@ -50,6 +50,8 @@ class ControllerFailed(RuntimeError):
 
 @dataclass
 class RunSummary:
+    """What ``run_controller`` returns and ``run.json`` records of a run that ended normally."""
+
     controller: str
     backend: str
     simulated_s: float
@@ -189,6 +191,7 @@ class FrameWriter:
         self.write_run_json(marker)
 
     def write_run_json(self, content: dict) -> None:
+        """Replace ``run.json`` in ``--out`` with ``content``, atomically."""
         write_file_atomic(self.out / RUN_FILE, (json.dumps(content, indent=2) + "\n").encode())
 
     def __call__(self, index: int, rgb: np.ndarray) -> None:
@@ -327,6 +330,7 @@ class Progress:
         self.update(robot.time_ms / 1000, robot.sim.camera_frame_index() + 1)
 
     def update(self, simulated_s: float, frames: int | None = None) -> None:
+        """Redraw the bar (at most every 0.25 s) for ``simulated_s`` seconds and ``frames`` frames."""
         now = time.monotonic()
         if self._origin is None:
             self._origin = now, simulated_s
@@ -343,6 +347,7 @@ class Progress:
             self.stream.flush()
 
     def close(self) -> None:
+        """End the bar's line."""
         if self.enabled:
             self.stream.write("\n")
 

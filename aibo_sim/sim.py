@@ -201,10 +201,12 @@ class Servos:
         self._speed = np.zeros(len(JOINTS))
 
     def reset(self, positions: np.ndarray) -> None:
+        """Targets and set-points to ``positions`` (clipped to the joint ranges), at rest."""
         self.target[:] = self.command[:] = np.clip(positions, self.low, self.high)
         self._speed[:] = 0
 
     def set_target(self, index, position) -> None:
+        """Target of the joints ``index`` (an index, slice or array), clipped to their ranges."""
         self.target[index] = np.minimum(np.maximum(position, self.low[index]), self.high[index])
 
     def advance(self, dt: float) -> np.ndarray:
@@ -356,6 +358,7 @@ class World:
 
     @property
     def cameras(self) -> list[HeadCamera]:
+        """Each robot's head camera, in robot order."""
         return [robot.camera for robot in self.robots]
 
     def step_frames(self, frames: int, before_frame: Callable[[], None] | None = None, sensors: bool = True) -> None:
@@ -397,6 +400,7 @@ class World:
         return (self.frame if frame is None else frame) * FRAME_MS * FRAME_RATE_HZ // 1000
 
     def close(self) -> None:
+        """Free every robot's camera renderer."""
         for camera in self.cameras:
             camera.close()
 
@@ -544,6 +548,7 @@ class Simulation:
 
     @property
     def has_ball(self) -> bool:
+        """Whether the scene has a ball."""
         return self.world.ball_body >= 0
 
     def place_ball(self, x: float, y: float) -> None:
@@ -593,6 +598,7 @@ class Simulation:
 
     @property
     def time_ms(self) -> int:
+        """Simulated time in ms since reset (8 ms joint frames)."""
         return self.frame * FRAME_MS
 
     def step_frame(self, sensors: bool = True) -> None:
@@ -632,9 +638,11 @@ class Simulation:
     # ---------------------------------------------------------------- readings
 
     def joint_positions(self) -> np.ndarray:
+        """Joint angles in radians, in ``ers7.JOINTS`` order (a copy)."""
         return self.data.qpos[self._joint_qpos]  # indexing copies
 
     def sensor(self, name: str) -> np.ndarray:
+        """The MuJoCo sensor ``name``'s reading, a view of ``data.sensordata``."""
         return self.data.sensordata[self._sensor_slices[name]]
 
     def distances_mm(self, which: slice = slice(None)) -> list[float]:
@@ -660,6 +668,7 @@ class Simulation:
         return self.data.sensordata[self._touch_adr] > self._touch_threshold
 
     def touched(self, name: str, threshold: float) -> bool:
+        """Whether the touch sensor ``name`` reads more than ``threshold``."""
         return float(self.sensor(name)[0]) > threshold
 
     def acceleration(self) -> np.ndarray:
@@ -676,6 +685,7 @@ class Simulation:
         return self.data.xpos[self._body].copy(), yaw, tilt
 
     def fallen(self) -> bool:
+        """Whether the body is tilted more than 60 degrees from upright."""
         return self.body_pose()[2] > math.radians(60)
 
     # ---------------------------------------------------------------- LEDs

@@ -49,12 +49,17 @@ class OCdtInfo:
         self.table = [0] * ocdtMAX_Y_SEGMENT
 
     def Init(self, prmID: int, chan: int) -> None:
+        """Set up the table for primitive ``prmID`` and channel mask ``chan``, every box empty."""
         self.type = odataCDT
         self.primitiveID = prmID
         self.channel = chan
         self.table = [ocdtINIT] * ocdtMAX_Y_SEGMENT
 
     def Set(self, y_segment: int, cr_max: int, cr_min: int, cb_max: int, cb_min: int) -> None:
+        """The Cr/Cb box of Y segment ``y_segment`` (bounds inclusive).
+
+        :raises CdtError: the segment is not 0..31 or a bound is not 0..255.
+        """
         if not 0 <= y_segment < ocdtMAX_Y_SEGMENT:
             raise CdtError(f"Y segment {y_segment} not in 0..{ocdtMAX_Y_SEGMENT - 1}")
         bounds = (cr_min, cr_max, cb_min, cb_max)
@@ -80,11 +85,13 @@ class OCdtVectorData:
         self.info = [OCdtInfo() for _ in range(ocdtNUM_CHANNELS)]
 
     def SetNumData(self, ndata: int) -> None:
+        """Use the first ``ndata`` tables; CdtError unless 0..8."""
         if not 0 <= ndata <= ocdtNUM_CHANNELS:
             raise CdtError(f"numData {ndata} not in 0..{ocdtNUM_CHANNELS}")
         self.numData = ndata
 
     def GetInfo(self, index: int) -> OCdtInfo:
+        """The table ``index`` (0..7)."""
         return self.info[index]
 
     @classmethod
@@ -106,6 +113,7 @@ class OCdtVectorData:
 
     @classmethod
     def of(cls, *infos: OCdtInfo) -> "OCdtVectorData":
+        """A vector using the tables ``infos``, in order; CdtError for more than 8."""
         vector = cls()
         vector.SetNumData(len(infos))
         vector.info[: len(infos)] = infos

@@ -65,6 +65,8 @@ def _cut(text) -> str:
 
 @dataclass(frozen=True)
 class ServiceName:
+    """``Object.Subname.Data.Kind``, Kind ``S`` (subject) or ``O`` (observer)."""
+
     object: str
     sub: str
     data: str
@@ -86,12 +88,15 @@ class Service:
 
 @dataclass(frozen=True)
 class StubConfig:
+    """A parsed stub.cfg: the object's name, its services in listed order, its Extra entries."""
+
     path: str
     object_name: str
     services: tuple[Service, ...]
     extras: tuple[str, ...] = ()  # the Extra entries' member names, in order
 
     def of_kind(self, kind: str) -> list[Service]:
+        """The services of kind ``kind`` (``"S"`` or ``"O"``), in listed order."""
         return [service for service in self.services if service.name.kind == kind]
 
 
@@ -106,6 +111,11 @@ class Connection:
 
 
 def parse_stub_cfg(source: bytes | str, path: str = "stub.cfg") -> StubConfig:
+    """Parse the text of a stub.cfg.
+
+    :param path: the file's name in error messages.
+    :raises ConfigError: naming the line of a problem.
+    """
     values: dict[str, tuple[str, int]] = {}
     services: list[Service] = []
     extras: list[str] = []
@@ -173,6 +183,11 @@ def design_lines(source: bytes | str, path: str, design: str = ROBOT_DESIGN):
 
 
 def parse_connect_cfg(source: bytes | str, path: str = "CONNECT.CFG") -> list[Connection]:
+    """The connections of a CONNECT.CFG's text (its lines for the ERS-7), in file order.
+
+    :param path: the file's name in error messages.
+    :raises ConfigError: naming the line of a problem.
+    """
     connections: list[Connection] = []
     first_line: dict[tuple[ServiceName, ServiceName], int] = {}  # each connection's line, for the repeat check
     names: dict[str, ServiceName] = {}  # each service name's text parsed once
@@ -202,10 +217,12 @@ def parse_connect_cfg(source: bytes | str, path: str = "CONNECT.CFG") -> list[Co
 
 
 def load_stub_cfg(path) -> StubConfig:
+    """Read and parse the stub.cfg at ``path``; ConfigError naming the file (and line)."""
     return parse_stub_cfg(read_config(path), str(path))
 
 
 def load_connect_cfg(path) -> list[Connection]:
+    """Read and parse the CONNECT.CFG at ``path``; ConfigError naming the file (and line)."""
     return parse_connect_cfg(read_config(path), str(path))
 
 

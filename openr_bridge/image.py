@@ -90,6 +90,7 @@ class ODataVectorInfo(NamedTuple):
     optional: bytes = bytes(128)
 
     def pack(self) -> bytes:
+        """The header's 192 bytes."""
         return struct.pack(VECTOR_INFO_FORMAT, *self)
 
 
@@ -106,6 +107,7 @@ class OFbkImageInfo(NamedTuple):
     padding: int = 0
 
     def pack(self) -> bytes:
+        """The description's 32 bytes."""
         return struct.pack(IMAGE_INFO_FORMAT, *self)
 
 
@@ -148,13 +150,16 @@ class OFbkImageVectorData:
 
     @property
     def numData(self) -> int:
+        """Number of layers in the message."""
         return self.vectorInfo.numData
 
     @property
     def maxNumData(self) -> int:
+        """The header's ``maxNumData``."""
         return self.vectorInfo.maxNumData
 
     def GetInfo(self, layer: int) -> OFbkImageInfo:
+        """The description of ``layer``; ImageAccessError for a layer not in the message."""
         return self._infos[self._layer_index(layer)]
 
     def GetData(self, layer: int) -> np.ndarray:
@@ -209,15 +214,19 @@ class OFbkImage:
             self._array = rows.reshape(info.height, runs_per_row, info.width)[:, runs[band], :]
 
     def IsValid(self) -> bool:
+        """Whether the layer has this band."""
         return self._array is not None
 
     def Width(self) -> int:
+        """Band width in pixels."""
         return self._width
 
     def Height(self) -> int:
+        """Band height in pixels."""
         return self._height
 
     def Skip(self) -> int:
+        """Bytes from the end of a row of the band to the start of its next row."""
         return self._skip
 
     def Pixel(self, x: int, y: int) -> int:
@@ -227,6 +236,7 @@ class OFbkImage:
         return int(self.array[y, x])
 
     def FieldCounter(self) -> int:
+        """The frame counter the last row's tag carries (its first two bytes, little-endian)."""
         tag = self._tag()
         return int(tag[0]) | int(tag[1]) << 8
 

@@ -38,6 +38,8 @@ class StickObject:
 
 @dataclass(frozen=True)
 class MemoryStick:
+    """A memory stick's OBJECT.CFG objects, CONNECT.CFG connections and DESIGNDB.CFG entries."""
+
     root: Path
     objects: tuple[StickObject, ...]
     connections: tuple[Connection, ...]
@@ -45,6 +47,7 @@ class MemoryStick:
 
     @property
     def object_cfg(self) -> Path:
+        """The stick's ``OPEN-R/MW/CONF/OBJECT.CFG`` (any letter case)."""
         return find_in_stick(self.root, "OBJECT.CFG")
 
 

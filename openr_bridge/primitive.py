@@ -97,6 +97,7 @@ VALUE_NAMES = {
 
 
 def status_name(status: int) -> str:
+    """The C name of an OStatus (``oSUCCESS``, ...), or ``OStatus <n>`` for an unknown one."""
     return OSTATUS_NAMES.get(status, f"OStatus {status}")
 
 
@@ -132,6 +133,7 @@ class OPrimitive:
     locator: str
 
     def control(self, request: int, param, param_size: int | None) -> int:
+        """What ``ControlPrimitive`` does with ``request``; an OStatus (here ``oINVALID_REQUEST``)."""
         return oINVALID_REQUEST
 
 
@@ -160,6 +162,13 @@ class OCameraPrimitive(OPrimitive):
         return dict(self._settings)
 
     def control(self, request: int, param, param_size: int | None) -> int:
+        """Apply a ``oprmreqCAM_SET_*`` request; returns an OStatus.
+
+        :param param: an ``OPrimitiveControl_CameraParam`` or its ``camparam`` as an int.
+        :param param_size: ``sizeof(param)``, 4; None skips the check.
+        :returns: ``oSUCCESS`` (listeners told), ``oOUT_OF_RANGE`` or ``oINVALID_ARG`` for a bad value or
+            size, ``oNOT_SUPPORTED`` for a camera request not modelled, ``oINVALID_REQUEST`` otherwise.
+        """
         request = int(request) if _is_integer(request) else None
         if request in _UNSUPPORTED_CAMERA_REQUESTS:
             return oNOT_SUPPORTED
@@ -224,6 +233,7 @@ class OPENR:
         return primitive.control(request, param, param_size)
 
     def ClosePrimitive(self, primitive_id: int) -> int:
+        """Close an open primitive: ``oSUCCESS``, or ``oINVALID_PRIMITIVE_ID`` for one not open."""
         if not _is_integer(primitive_id) or self._open.pop(int(primitive_id), None) is None:
             return oINVALID_PRIMITIVE_ID
         return oSUCCESS

@@ -45,6 +45,7 @@ def _list(values) -> str:
 
 
 def def_h(stub: StubConfig) -> str:
+    """The text of ``def.h``: the object's name, service names and their indices."""
     subjects, observers = stub.of_kind("S"), stub.of_kind("O")
     lines = [
         f"// def.h: {_NOTE}",
@@ -68,6 +69,7 @@ def def_h(stub: StubConfig) -> str:
 
 
 def entry_h(stub: StubConfig) -> str:
+    """The text of ``entry.h``: the entry selectors of each table."""
     tables = selectors(stub)
     lines = [
         f"// entry.h: {_NOTE}",
@@ -92,6 +94,7 @@ def entry_h(stub: StubConfig) -> str:
 
 
 def stub_h(stub: StubConfig) -> str:
+    """The text of ``<Name>Stub.h``: the entry functions' declarations."""
     name = stub.object_name
     lines = [
         f"// {name}Stub.h: {_NOTE}",
@@ -122,6 +125,7 @@ def stub_h(stub: StubConfig) -> str:
 
 
 def stub_cc(stub: StubConfig) -> str:
+    """The text of ``<Name>Stub.cc``: ``Self``, the entry functions and ``ObjectEntryTable``."""
     name = stub.object_name
     tables = selectors(stub)
     lines = [
@@ -177,6 +181,8 @@ def generate(stub: StubConfig) -> dict[str, str]:
 
 
 def main(argv: list[str]) -> int:
+    """``stubgen2 stub.cfg``: write the files into the current folder; returns the exit status (1: a bad
+    stub.cfg, 2: wrong arguments)."""
     if len(argv) != 1:
         print("usage: stubgen2 stub.cfg", file=sys.stderr)
         return 2

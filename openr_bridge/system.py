@@ -25,6 +25,8 @@ DEFAULT_MEMORY_STICK = DATA_DIR / "ms"
 
 
 class OpenRSystem:
+    """OPEN-R objects connected by CONNECT.CFG, with the primitives they open."""
+
     def __init__(
         self,
         connections: list[Connection],
@@ -55,6 +57,11 @@ class OpenRSystem:
         *,
         camera: OCameraPrimitive | None = None,
     ) -> "OpenRSystem":
+        """The system a memory stick's CONNECT.CFG wires.
+
+        :raises ConfigError: no CONNECT.CFG, a bad line, or (with the wrapper ``Controller``) no line
+            connecting its camera observer.
+        """
         path = find_connect_cfg(memory_stick)
         connections = load_connect_cfg(path)
         system = cls(connections, objects, camera=camera)
@@ -68,10 +75,12 @@ class OpenRSystem:
 
     @property
     def robot_comm(self) -> OVirtualRobotComm:
+        """The system object ``OVirtualRobotComm``."""
         return self.objects["OVirtualRobotComm"]
 
     @property
     def controller(self) -> Controller:
+        """The wrapper object ``Controller``."""
         return self.objects["Controller"]
 
     def _gate(self, name: ServiceName, connection: Connection):

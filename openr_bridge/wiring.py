@@ -25,15 +25,19 @@ class ONotifyEvent:
         self._sender = sender
 
     def Data(self, index: int = 0):
+        """The ``index``-th data item delivered."""
         return self._data[index]
 
     def NumOfData(self) -> int:
+        """Number of data items delivered."""
         return len(self._data)
 
     def ObsIndex(self) -> int:
+        """Index of the receiving observer among its object's observers."""
         return self._obs_index
 
     def SenderID(self) -> "OSubject":
+        """The subject that sent the data."""
         return self._sender
 
 
@@ -64,20 +68,25 @@ class _Link:
 
 
 class OSubject:
+    """A subject service: sends its data to the connected observers that are ready."""
+
     def __init__(self, service: Service):
         self.service = service
         self._links: list[_Link] = []
         self._data = None
 
     def connect(self, observer: "OObserver") -> None:
+        """Connect ``observer`` (not ready until it asserts ready)."""
         link = _Link(self, observer)
         self._links.append(link)
         observer.links.append(link)
 
     def SetData(self, data) -> None:
+        """The data the next ``NotifyObservers`` sends."""
         self._data = data
 
     def NotifyObservers(self) -> None:
+        """Offer the data to each connection: delivered at once to a ready observer, else kept."""
         for link in self._links:
             link.offer(self._data)
 
@@ -88,6 +97,8 @@ class OSubject:
 
 
 class OObserver:
+    """An observer service: ``handler`` (its object's Notify method, or None) receives the data."""
+
     def __init__(self, service: Service, index: int, handler):
         self.service = service
         self.index = index
@@ -100,13 +111,16 @@ class OObserver:
             link.set_ready(True)
 
     def DeassertReady(self, sender: OSubject | None = None) -> None:
+        """Not ready for data from ``sender``, or from every connected subject."""
         for link in self._links_to(sender):
             link.set_ready(False)
 
     def is_connected(self) -> bool:
+        """Whether any subject is connected to it."""
         return bool(self.links)
 
     def receive(self, event: ONotifyEvent) -> None:
+        """Pass ``event`` to the handler, if any."""
         if self.handler is not None:
             self.handler(event)
 
@@ -147,6 +161,7 @@ class OVirtualRobotComm(OObject):
 
     @property
     def image_subject(self) -> OSubject:
+        """The camera image subject, ``FbkImageSensor.OFbkImageVectorData.S``."""
         return self.subject[0]
 
     def publish_image(self, message) -> None:

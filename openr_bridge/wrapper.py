@@ -77,18 +77,22 @@ class Controller(OObject):
         self._camera_id = None  # fbkID, once opened
 
     def DoStart(self) -> None:
+        """Assert ready on every observer."""
         for observer in self.observer:
             observer.AssertReady()
 
     def Notify(self, event) -> None:
+        """Keep the newest image message and assert ready for the next."""
         self._image = event.Data(0)
         self._bands = {}
         self.observer[event.ObsIndex()].AssertReady(event.SenderID())
 
     def camera_get_width(self) -> int:
+        """Layer H's width in pixels; NotConnectedError or NoImageError as the module says."""
         return self._band(ofbkimageBAND_Y).Width()
 
     def camera_get_height(self) -> int:
+        """Layer H's height in pixels; NotConnectedError or NoImageError as the module says."""
         return self._band(ofbkimageBAND_Y).Height()
 
     def camera_get_image(self) -> np.ndarray:
@@ -100,6 +104,7 @@ class Controller(OObject):
         return rgb.reshape(-1)
 
     def camera_get_fov(self) -> float:
+        """The report's horizontal field of view in radians (``FIELD_OF_VIEW``)."""
         return FIELD_OF_VIEW
 
     def camera_set_white_balance(self, value: int) -> None:
@@ -154,10 +159,12 @@ def camera_image_get_red(image, width: int, x: int, y: int) -> int:
 
 
 def camera_image_get_green(image, width: int, x: int, y: int) -> int:
+    """The report's macro ``image[3 * (y * width + x) + 1]`` on camera_get_image's array."""
     return _component(image, width, x, y, 1)
 
 
 def camera_image_get_blue(image, width: int, x: int, y: int) -> int:
+    """The report's macro ``image[3 * (y * width + x) + 2]`` on camera_get_image's array."""
     return _component(image, width, x, y, 2)
 
 

@@ -37,6 +37,8 @@ WRAPPER_FUNCTIONS = {setting: function for function, (_, setting) in openr_bridg
 
 
 class SimCamera:
+    """The ``sim`` backend's camera: the rendered frame's RGB picture."""
+
     def __init__(self, sim):
         self.sim = sim
         self.width, self.height = sim.camera.width, sim.camera.height
@@ -51,6 +53,7 @@ class SimCamera:
         self.sim.camera.set_settings(**{setting: values[int(value)]})
 
     def capture(self) -> np.ndarray:
+        """The camera's current frame, row-major RGB as a flat uint8 array; tells the listeners."""
         frame = self.sim.camera.frame()
         self._notify(frame.index, frame.rgb)
         return frame.rgb.reshape(-1)
@@ -61,6 +64,9 @@ class SimCamera:
 
 
 class OpenRCamera(SimCamera):
+    """The ``openr`` backend's camera: each frame goes through OPEN-R's wiring to the wrapper
+    ``Controller``, the memory stick's CONNECT.CFG (default: the bundled one) routing it."""
+
     def __init__(self, sim, memory_stick=None):
         super().__init__(sim)
         self.width, self.height = openr_bridge.LAYER_SIZE[openr_bridge.ofbkimageLAYER_H]
@@ -97,6 +103,7 @@ class OpenRCamera(SimCamera):
         return image.reshape(self.height, self.width, 3)
 
     def capture(self) -> np.ndarray:
+        """The current frame as the wrapper's ``camera_get_image`` serves it; tells the listeners."""
         frame = self.sim.camera.frame()
         image = self.serve(frame)
         self._notify(frame.index, image)

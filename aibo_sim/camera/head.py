@@ -149,7 +149,9 @@ class CameraMount(Protocol):
     world: object  # ``render_lock`` (an RLock) and ``robots`` (each with its root body ``_body``)
     _body: int  # the carrying robot's root body
 
-    def camera_frame_index(self) -> int: ...
+    def camera_frame_index(self) -> int:
+        """Index of the newest 30 fps camera frame (frame k at k/30 s)."""
+        ...
 
 
 class HeadCamera:
@@ -227,6 +229,7 @@ class HeadCamera:
             self.tick()
 
     def reset(self, seed: int) -> None:
+        """Start again from the live state with the noise seed ``seed``: earlier exposures are dropped."""
         self.seed = seed
         self._spare.extend(e.data for e in self._exposures if e.data is not self.sim.data)
         self._exposures.clear()
@@ -255,6 +258,7 @@ class HeadCamera:
 
     @property
     def live(self) -> bool:
+        """Whether the newest exposure is still the live state (no copy kept yet)."""
         return bool(self._exposures) and self._exposures[-1].data is self.sim.data
 
     # ---------------------------------------------------------------- frames
@@ -407,6 +411,7 @@ class HeadCamera:
         return (x, y), abs(x) <= 1 and abs(y) <= 1
 
     def close(self) -> None:
+        """Free the renderer; a second call does nothing."""
         if self._renderer is not None:
             self._renderer.close()
             self._renderer = None

@@ -52,6 +52,7 @@ class Lens:
 
     @property
     def distorted(self) -> bool:
+        """Whether any distortion coefficient is non-zero."""
         return any(self.distortion)
 
     def scaled(self, width: int, height: int) -> Lens:
@@ -68,6 +69,7 @@ class Lens:
         )
 
     def camera_matrix(self) -> np.ndarray:
+        """The 3x3 pinhole camera matrix (OpenCV's K)."""
         return np.array([[self.fx, 0, self.cx], [0, self.fy, self.cy], [0, 0, 1.0]])
 
     def field_of_view_deg(self) -> tuple[float, float]:
@@ -213,6 +215,11 @@ class Warp:
 
     @classmethod
     def from_maps(cls, map_x: np.ndarray, map_y: np.ndarray, render_width: int, slack: int = 0) -> Warp:
+        """The two passes of the remap ``map_x``, ``map_y`` (each (h, w)) of a render ``render_width``
+        pixels wide, with ``slack`` zero columns past each row of fractions.
+
+        :raises ValueError: ``map_x`` decreases along a row.
+        """
         height, width = map_x.shape
         if np.any(np.diff(map_x, axis=1) < 0):
             raise ValueError("a two-pass warp needs a map that never decreases along a row")

@@ -114,6 +114,7 @@ class CameraSettings:
 
     @property
     def exposure_s(self) -> float:
+        """The shutter's exposure time in seconds (``SHUTTER_S``)."""
         return SHUTTER_S[self.shutter]
 
     @property
@@ -122,6 +123,7 @@ class CameraSettings:
         return 2.0 ** (GAIN_STEPS[self.gain] + round(math.log2(SHUTTER_S[self.shutter] / SHUTTER_S["mid"])))
 
     def as_dict(self) -> dict:
+        """``{"white_balance": ..., "gain": ..., "shutter": ...}``, by name."""
         return {"white_balance": self.white_balance, "gain": self.gain, "shutter": self.shutter}
 
 
@@ -161,6 +163,7 @@ class SceneLight:
         return 1 + self.flicker_depth * (math.sin(w * end_s) - math.sin(w * (end_s - exposure_s))) / (w * exposure_s)
 
     def as_dict(self) -> dict:
+        """The light as the scene's custom numerics name it."""
         return {
             "light_temperature_K": self.temperature_k,
             "light_flicker_depth": self.flicker_depth,
@@ -235,6 +238,7 @@ class CameraProfile:
             raise ValueError(f"camera profile {self.name!r}: latency_frames must be a whole number >= 0")
 
     def with_options(self, **options) -> CameraProfile:
+        """A copy with ``options`` (field names) replaced; ValueError for values out of range."""
         return replace(self, **options)
 
     def options(self) -> dict:

@@ -80,9 +80,12 @@ class Child:
 
     @property
     def returncode(self) -> int | None:
+        """The child's exit status (negative: the signal that ended it); None until its exit is seen."""
         return self._process.returncode
 
     def start(self) -> Child:
+        """Start the child in its own session, dying with this thread, and note SIGINT and SIGTERM
+        (from the main thread) for ``wait``; returns ``self``."""
         self._wake = os.pipe()
         for fd in self._wake:
             os.set_blocking(fd, False)

@@ -167,6 +167,10 @@ class DumpFrame:
         self.width, self.height = dump_meta["camera"]["width"], dump_meta["camera"]["height"]
 
     def path(self, name: str, layer: str = "") -> Path:
+        """The file of format ``name`` (a layer's, for ``bands``) of this frame.
+
+        :raises FileNotFoundError: the dump has no files of that format.
+        """
         files = self._dump_meta["files"]
         if name not in files:
             raise FileNotFoundError(f"{self.folder}: the dump has no {name!r} files (its formats: {', '.join(files)})")
@@ -196,6 +200,7 @@ class DumpFrame:
 
     @property
     def rgb(self) -> np.ndarray:
+        """The RGB picture, (h, w, 3) uint8."""
         return self._png("rgb", cv2.IMREAD_COLOR)[..., ::-1].copy()
 
     @property
@@ -217,6 +222,7 @@ class DumpFrame:
 
     @property
     def message(self) -> openr_bridge.OFbkImageVectorData:
+        """The frame's ``OFbkImageVectorData``; DumpError if the file is not one."""
         try:
             return openr_bridge.OFbkImageVectorData.from_bytes(self._raw("openr"))
         except openr_bridge.MessageFormatError as exc:
@@ -233,10 +239,12 @@ class DumpFrame:
 
     @property
     def luma(self) -> np.ndarray:
+        """Layer H's reconstructed full-size luma, (h, w) uint8."""
         return self._png("luma", cv2.IMREAD_GRAYSCALE)
 
     @property
     def depth(self) -> np.ndarray:
+        """Depth in metres along the optical axis, (h, w) float32."""
         try:
             return np.load(io.BytesIO(self._raw("depth")))
         except (ValueError, EOFError):

@@ -173,6 +173,11 @@ def _dump_env(parameters: dict, out: Path, resume: bool, **lock) -> DumpWriter:
 
 
 def dump_one(parameters: dict, out: Path, resume: bool, **lock) -> DumpSummary:
+    """Dump one folder (a whole dump, or one shard) as ``parameters`` say; returns its summary.
+
+    :param resume: keep the frames already complete in ``out`` and write the rest.
+    :param lock: ``lock_wait_s`` and ``command``, for ``DumpWriter``'s lock on ``out``.
+    """
     start = time.perf_counter()
     run = _dump_env if parameters["env"] else _dump_controller
     writer = run(parameters, out, resume, **lock)
@@ -218,6 +223,7 @@ def _check_env(env_id: str) -> None:
 
 
 def file_sha256(path: Path) -> str:
+    """The SHA-256 of the file at ``path``, in hex."""
     digest = hashlib.sha256()
     with open(path, "rb") as file:
         for block in iter(lambda: file.read(1 << 20), b""):

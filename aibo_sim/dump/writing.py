@@ -258,6 +258,7 @@ class DumpSummary:
 
     @property
     def frames_per_s(self) -> float:
+        """Frames this run wrote per second of wall time."""
         return self.new_frames / max(self.wall_s, 1e-9)
 
 
