@@ -280,7 +280,7 @@ def test_frame_numbers_wrap_to_one_after_oframe_max_number(objects, tmp_path):
     original = host.MemoryStickRun._start
 
     def start_late(self, libraries):
-        self.sim.frame = openr_bridge.ers7_camera.oframeMAX_NUMBER - 5
+        self.sim.world.frame = openr_bridge.ers7_camera.oframeMAX_NUMBER - 5  # the world counts frames
         self.end_ms = self.time_ms + 100
         original(self, libraries)
 
