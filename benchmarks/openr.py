@@ -6,10 +6,15 @@ swings the head with one set-point every 8 ms frame, observes the sensor vectors
 and the camera's images. ``benchmarks/head_swing/head_swing.py`` does the same through the
 Webots-era API, on the default backend (the reference) and on the openr backend (its images
 through OPEN-R's message, as the object's). All run through ``run_controller`` with the default
-``ers7`` camera and no frames written; the ratio is what the runtime costs (a round trip to its
-process every frame, the sensor vector, the image message). Sony's MovingHead7 and
-BallTrackingHead7 are timed too when ``../shared/data/openr-samples`` is there. Best of
-``ROUNDS``, alternating.
+``ers7`` camera and no frames written; the ratio is what the runtime costs: the sensor vector
+every frame; a round trip to its process on the frames where object code runs (a sensor
+vector, an image or an effector ready event for HeadSwing: 540 of 1250 frames; the runtime
+foretells the others and their set-points, ``host_protocol``'s Lookahead); the image message,
+which the runtime makes from the sensor's Y, Cr, Cb frame in the shared memory that becomes
+its region. Sony's MovingHead7 and BallTrackingHead7 are timed too when
+``../shared/data/openr-samples`` is there. Best of ``ROUNDS``, alternating: on the shared
+2-core machine one program's 10 s runs differ by up to 1.5x from one to the next, so that a
+best of three could meet or miss the target by luck (docs/benchmark-notes.md).
 
 Run: ``python -m benchmarks --only openr``
 """
@@ -34,7 +39,7 @@ SAMPLES = ROOT.parent / "shared" / "data" / "openr-samples"
 SONY = ("ers7/MovingHead7", "ers7/BallTrackingHead7")
 SIM_SECONDS = 10.0
 FRAME_MS = 8.0
-ROUNDS = 3
+ROUNDS = 5
 
 
 def build(folder: Path) -> None:

@@ -406,3 +406,102 @@ def test_the_speaker_plays_sound_vectors_one_after_the_other_into_a_wav_file(obj
         samples = np.frombuffer(sound.readframes(sound.getnframes()), "<i2").astype(int)
     tone = np.trunc(10000 * np.sin(2 * np.pi * 1000 * np.arange(5120) / 16000)).astype(int)
     assert len(samples) == 5120 and np.abs(samples - tone).max() <= 1  # from t = 0, without a gap
+
+
+def test_foretold_frames_change_nothing_but_the_number_of_messages(objects, tmp_path):
+    """The runtime's lookahead (host_protocol: frames stepped without a message) gives the run of
+    a message every frame: the same joints, set-points, console and sound, frame for frame,
+    with sensor vectors, images, effector and speaker ready events and power events."""
+    stick = make_stick(
+        tmp_path / "ms",
+        objects,
+        ["JPROBE", "CDTPROBE", "SPROBE", "PPROBE"],
+        JOINT_PROBE
+        + f"{IMAGE} CdtProbe.Image.OFbkImageVectorData.O\n"
+        + "SoundProbe.Speaker.OSoundVectorData.S OVirtualRobotAudioComm.Speaker.OSoundVectorData.O\n",
+    )
+    runs, messages = [], []
+    for ahead in (host_protocol.LOOKAHEAD_FRAMES, 0):
+        sent = []
+        original = host.MemoryStickRun._send
+
+        def send(self, kind, payload, sent=sent, original=original):
+            sent.append(kind)
+            original(self, kind, payload)
+
+        with pytest.MonkeyPatch.context() as patch:
+            patch.setattr(host.protocol, "LOOKAHEAD_FRAMES", ahead)
+            patch.setattr(host.MemoryStickRun, "_send", send)
+            out = tmp_path / f"out{ahead}"
+            runs.append(
+                run_stick(
+                    stick,
+                    0.6,
+                    out,
+                    lambda r: np.concatenate([r.sim.data.qpos, r.sim.servos.command, r.sim.data.ctrl]),
+                    seed=7,
+                )
+            )
+            runs[-1].sound = (out / "speaker.wav").read_bytes()
+        messages.append(sent.count(host_protocol.MESSAGES["FRAME"]))
+    foretold, plain = runs
+    assert len(plain.frames) == 75 and messages[1] == 75  # a message every frame without lookahead
+    assert messages[0] < 0.6 * messages[1]  # most frames need none (31 of 75 messages when written)
+    assert foretold.console == plain.console and foretold.sound == plain.sound
+    for name in ("JointProbe", "CdtProbe", "SoundProbe", "PowerProbe"):
+        assert foretold.lines(name)
+    assert np.array_equal(np.array(foretold.frames), np.array(plain.frames))
+
+
+def test_the_runtimes_image_messages_are_the_encoders(objects, tmp_path):
+    """The runtime makes the messages of the ers7 sensor's frames itself (RAW_IMAGE): every one
+    is encode_ycrcb's, byte for byte, colour tables, tag and all (but for the region and
+    primitive IDs, which the runtime sets on every image), and the run is the one in which this
+    process encodes them."""
+    stick = make_stick(tmp_path / "ms", objects, ["CDTPROBE"], f"{IMAGE} CdtProbe.Image.OFbkImageVectorData.O\n")
+    tables = OCdtVectorData.of(pink_ball_cdt(), orange_ball_cdt())
+    made = []  # (camera frame, the message's bytes in the shared memory after the runtime's answer)
+    events, reply = host.MemoryStickRun._events, host.MemoryStickRun._reply
+
+    def record_events(self):
+        flags, extra = events(self)
+        self.raw_frame = None
+        if flags & host_protocol.FRAME_FLAGS["RAW_IMAGE"]:
+            self.raw_frame = (self.sim.camera.frame(), self._image_slot)
+        return flags, extra
+
+    def read_image(self, expected):
+        payload = reply(self, expected)
+        if getattr(self, "raw_frame", None) is not None:
+            frame, slot = self.raw_frame
+            assert slot < host_protocol.IMAGE_SLOTS  # CdtProbe gives every image back
+            start = host_protocol.SHM_HEADER + slot * host_protocol.MAX_IMAGE_BYTES
+            made.append((frame, bytes(self._memory[start : start + 270720])))
+            self.raw_frame = None
+        return payload
+
+    def normalised(message: bytes) -> bytes:
+        data = bytearray(message)
+        data[0:4] = bytes(4)  # memRegionID
+        for layer in range(4):
+            start = 192 + 32 * layer + 4  # primitiveID
+            data[start : start + 4] = bytes(4)
+        return bytes(data)
+
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(host.MemoryStickRun, "_events", record_events)
+        patch.setattr(host.MemoryStickRun, "_reply", read_image)
+        made_here = run_stick(stick, 0.3, tmp_path / "out", lambda r: r.sim.data.qpos.copy())
+    assert len(made) == 9
+    for frame, message in made:
+        encoded = bytes(
+            openr_bridge.encode_ycrcb(
+                frame.ycrcb, frame_number=frame.frame_number, field_counter=frame.index, cdt=tables
+            )
+        )
+        assert normalised(message) == normalised(encoded)
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(host.MemoryStickRun, "_runtime_encodes", lambda self, frame: False)
+        encoded_here = run_stick(stick, 0.3, tmp_path / "out2", lambda r: r.sim.data.qpos.copy())
+    assert made_here.console == encoded_here.console and "CdtProbe: image 8" in made_here.console
+    assert np.array_equal(np.array(made_here.frames), np.array(encoded_here.frames))

@@ -8,11 +8,22 @@ naming a service no object has is a ``ConfigError`` naming the line), then, ever
 1. sends the state at this tick: for each sensor vector entry its value, signal, PWM duty and
    commanded value (joints in micro-radians, distances in micrometres, accelerations in
    micrometres/s^2 as a1 forward, a2 left, a3 up, switches 0/1, the electrostatic head and back
-   sensors an AD value 0..80), and, when the camera made a frame, its OFbkImageVectorData
-   (with the CDT layer of the table the objects set);
+   sensors an AD value 0..80), and, when the camera made a frame that an object observes, its
+   OFbkImageVectorData (with the CDT layer of the table the objects set) in the shared memory
+   area the runtime named, which becomes the image's region there: the ers7 sensor's Y, Cr,
+   Cb frame, from which the runtime makes ``encode_ycrcb``'s message itself (``RAW_IMAGE``:
+   the encoding and its memory traffic cost this process more than the runtime), or the
+   message encoded here (other cameras, colour tables ``encode_ycrcb`` refuses);
 2. applies what the objects did (joint set-points, LEDs, motor power, joint gains, camera
    settings, colour tables, sound, Shutdown);
 3. steps the physics one frame.
+
+A frame in which no object code can run (most of them: the runtime foretells them in its
+answer, with the set-points its effector plays in them; see ``host_protocol``'s Lookahead)
+and that has no image or power event skips the message: its foretold records are applied
+and its sensor values go with the next message. The runtime then plays those frames as
+foretold, so every run is the one a message every frame gives (``lookahead = 0``), frame
+for frame; only the round trips are fewer (fewer than half of HeadSwing's frames have one).
 
 The robot's servos act only when powered (``OPENR::SetMotorPower``) and, for the Joint2
 joints, once their gain is enabled and set (``EnableJointGain``, ``SetJointGain``): a joint's
@@ -46,12 +57,13 @@ import numpy as np
 import openr_bridge
 from openr_bridge import host_protocol as protocol
 from openr_bridge.config import ConfigError, Connection, _cut
+from openr_bridge.errors import CdtError
 from openr_bridge.ers7_camera import CAMERA_SETTINGS, openr_frame_number
 from openr_bridge.memory_stick import MemoryStick, read_object
 
 from .. import ers7
 from ..cbind.child import Child
-from ..sim import Simulation
+from ..sim import ACCEL_RANGE, FRAME_MS, IR_NOISE, Simulation
 from .sdk import sdk_root
 
 SYSTEM_SERVICES = {
@@ -87,6 +99,22 @@ SETTING_BY_REQUEST = {
     request: (setting, {number: name for name, number in values.items()})
     for setting, (request, values) in CAMERA_SETTINGS.items()
 }
+
+
+_U32, _FIELDS2, _FIELDS3, _FRAME = struct.Struct("<I"), struct.Struct("<2I"), struct.Struct("<3I"), struct.Struct("<5I")
+_HEADER = _FIELDS2  # a message's size and kind
+_RECORD, _JOINT = struct.Struct("<2I"), struct.Struct("<2i")
+_JOINT_RECORD = protocol.RECORDS["JOINT"]
+
+
+def _usable(cdt) -> bool:
+    """Whether ``encode_ycrcb`` takes these colour tables (one-bit masks of channels 0-6, one
+    table each); it raises CdtError for others, which then happens as before, in this process."""
+    try:
+        channels = [info.channel_index() for info in cdt.info[: cdt.numData]]
+    except CdtError:
+        return False
+    return len(set(channels)) == len(channels)
 
 
 class OpenRObjectCrashed(RuntimeError):
@@ -130,11 +158,13 @@ class SensorFrame:
             + [(index[ers7.WLAN_SWITCH_LOCATOR], kinds["SWITCH"])]
         )
         distances = len(ers7.DISTANCE_SENSORS)
-        self._qpos = np.array([sim.model.joint(sim.prefix + ers7.JOINTS[i].name).qposadr[0] for i in self.joints])
-        self._touch_adr = np.array([sim.model.sensor(sim.prefix + s.name).adr[0] for s in touches])
+        model = sim.model
+        self._qpos = np.array([model.joint(sim.prefix + ers7.JOINTS[i].name).qposadr[0] for i in self.joints])
+        self._touch_adr = np.array([model.sensor(sim.prefix + s.name).adr[0] for s in touches])
         self._threshold = np.array([s.threshold for s in touches])
         self._joints = np.array(self.joints)
-        self._max_force = sim.model.actuator_forcerange[sim.servos.ctrl][self._joints, 1]
+        self._force_index = np.arange(model.nu)[sim.servos.ctrl][self._joints]  # this robot's actuators
+        self._max_force = model.actuator_forcerange[self._force_index, 1]
         head = [i for i, s in enumerate(ers7.DISTANCE_SENSORS) if s.name in ("ir_near", "ir_far")]
         # The head's two sensors take turns, one a frame: on the other's frame a sensor keeps
         # its last value and gives no signal. _silent[tick % 2] marks the one that rests.
@@ -146,30 +176,40 @@ class SensorFrame:
         from .sensor_values import fill  # compiled with numba on first use
 
         self._fill = fill
+        self._distances = distances
         self._layout = (
             self._qpos,
+            self._force_index,
             self._joints,
             self._max_force,
+            np.array([model.sensor(sim.prefix + s.name).adr[0] for s in ers7.DISTANCE_SENSORS]),
+            np.array([s.range_mm for s in ers7.DISTANCE_SENSORS], float),
+            float(IR_NOISE),
+            int(model.sensor(sim.prefix + "accelerometer").adr[0]),
+            float(ACCEL_RANGE),
             self._touch_adr,
             self.switch,
             self._threshold,
             float(TOUCH_AD_PER_NEWTON),
             float(TOUCH_AD_MAX),
+            self._raw,
+            self._values,
         )
 
     def at(self, tick: int) -> bytes:
-        sim, data = self.sim, self.sim.data
+        """The values at ``tick`` (the state now); draws the distance sensors' noise, as
+        ``Simulation.distances_mm`` does."""
+        sim = self.sim
+        data = sim.data
+        noise = sim.rng.standard_normal(self._distances)  # Simulation.distances_mm's draws
         self._fill(
             data.qpos,
-            data.actuator_force[sim.servos.ctrl],
+            data.actuator_force,
             sim.servos.command,
-            np.array(sim.distances_mm()),
-            self._silent[tick % 2],
-            sim.acceleration(),
             data.sensordata,
+            noise,
+            self._silent[tick & 1],
             *self._layout,
-            self._raw,
-            self._values,
         )
         return self._values.tobytes()
 
@@ -196,6 +236,7 @@ class MemoryStickRun:
         self.log_path, self.sound_path = log_path, sound_path
         self.frame_listeners, self.camera_listeners = [], []
         self.end_ms: int | None = None
+        self.lookahead = protocol.LOOKAHEAD_FRAMES  # frames an answer may foretell (0: a message every frame)
         self.shutdown = False
         self.object_names: list[str] = []
         self._sensors = SensorFrame(sim)
@@ -208,9 +249,12 @@ class MemoryStickRun:
         self._kp[self._ears] = self._standard_kp[self._ears]
         self._powered = False
         self._power = dict(BATTERY)
+        self._power_key = None  # (minute, motors powered) of the last _update_power
         self._cdt = None
+        self._cdt_usable = True  # no table, or tables the runtime's encoding takes as encode_ycrcb does
         self._sound: dict[int, np.ndarray] = {}
         self._camera_index = -1
+        self._image_slot = 0  # the shared memory's area for the next image (the runtime names it)
         self._image_observed = any(str(c.subject) == SYSTEM_SERVICES["OVirtualRobotComm"][2] for c in stick.connections)
         self._apply_gains()
         self._host = sdk_root() / "OPEN_R" / "bin" / "openr-host"  # built now, if it must be, not during the run
@@ -230,7 +274,8 @@ class MemoryStickRun:
                 library.write_bytes(read_object(stick_object, self.stick.object_cfg))
                 libraries.append((library, stick_object))
             shared = scratch / "shared"
-            shared.write_bytes(bytes(protocol.SHM_HEADER + protocol.MAX_IMAGE_BYTES))
+            with open(shared, "wb") as block:
+                block.truncate(protocol.SHM_SIZE)  # zeros, written only where used
             with open(shared, "r+b") as block, mmap.mmap(block.fileno(), 0) as memory:
                 self._memory = memory
                 self._serve(libraries, shared)
@@ -260,13 +305,17 @@ class MemoryStickRun:
             with child, ours:
                 theirs.close()
                 self._channel, self._child, self._buffer = ours, child, bytearray()
+                self._foretold, self._stepped = [], []  # lookahead: records to come, frames stepped
                 self._start(libraries)
                 while not self.shutdown and (self.end_ms is None or self.time_ms < self.end_ms):
                     if child.pending is not None:
                         break
                     self._frame()
                 if child.pending is None:
-                    self._send(protocol.MESSAGES["STOP"], struct.pack("<I", openr_frame_number(self.sim.frame)))
+                    self._send(
+                        protocol.MESSAGES["STOP"],
+                        _U32.pack(openr_frame_number(self.sim.frame)) + self._stepped_frames(),
+                    )
                     self._apply(self._reply(protocol.REPLIES["FRAME_DONE"]))
                     # The runtime's own exit then flushes the files its objects left open.
                     child.wait(None, protocol.WAIT_NOTICE_S, self._waiting)
@@ -343,32 +392,108 @@ class MemoryStickRun:
                 raise ConfigError(problem, connection.path, connection.line)
 
     def _frame(self) -> None:
-        tick = self.sim.frame
+        """One 8 ms frame: its events and sensor values to the runtime and its answer back, or,
+        on a frame the last answer foretold and that has no event for the runtime, its foretold
+        records without a message (its sensor values go with the next one: see
+        ``host_protocol``'s Lookahead)."""
+        sim = self.sim
+        tick = sim.frame
+        flags, extra = self._events()
+        values = self._sensors.at(tick)
+        foretold = self._foretold
+        if foretold and not flags:
+            records = foretold.pop()
+            self._stepped.append(_U32.pack(openr_frame_number(tick)) + values)
+        else:
+            ahead = self.lookahead
+            if self.end_ms is not None:  # the frames after this one before the end
+                ahead = min(ahead, -(-(self.end_ms - self.time_ms) // FRAME_MS) - 1)
+            self._send(
+                protocol.MESSAGES["FRAME"],
+                _FRAME.pack(tick & 0xFFFFFFFF, tick >> 32, openr_frame_number(tick), flags, max(ahead, 0))
+                + self._stepped_frames()
+                + values
+                + extra,
+            )
+            records, *later = protocol.split_frames(self._reply(protocol.REPLIES["FRAME_DONE"]))
+            later.reverse()  # popped from the end
+            self._foretold = later
+        self._apply(records)
+        sim.step_frame()
+        for listener in self.frame_listeners:
+            listener(self)
+
+    def _events(self) -> tuple[int, bytes]:
+        """This frame's ``FRAME_FLAGS`` and their fields: a camera frame for the objects (its
+        message written to the shared memory; the camera's listeners called), a power change."""
         flags, extra = 0, b""
         index = self.sim.camera_frame_index()
         if index != self._camera_index and (self._image_observed or self.camera_listeners):
             self._camera_index = index
             frame = self.sim.camera.frame()
-            if self._image_observed:  # else no object would see the message: it is not made
-                message = bytes(frame.message) if self._cdt is None else bytes(self._encode_with_cdt(frame))
-                self._memory[protocol.SHM_HEADER : protocol.SHM_HEADER + len(message)] = message
+            if self._image_observed and self._runtime_encodes(frame):  # the runtime makes the message
+                start = protocol.SHM_HEADER + protocol.IMAGE_SLOTS * protocol.MAX_IMAGE_BYTES
+                ycrcb = frame.ycrcb
+                self._memory[start : start + ycrcb.nbytes] = ycrcb
+                flags |= protocol.FRAME_FLAGS["RAW_IMAGE"]
+                extra += _FIELDS3.pack(self._image_slot, openr_frame_number(frame.frame_number), frame.index % 2**16)
+            elif self._image_observed:  # else no object would see the message: it is not made
+                message = frame.message if self._cdt is None else self._encode_with_cdt(frame)
+                size = self._write_image(message, self._image_slot)
                 flags |= protocol.FRAME_FLAGS["IMAGE"]
-                extra += struct.pack("<I", len(message))
+                extra += _FIELDS2.pack(self._image_slot, size)
             for listener in self.camera_listeners:
                 listener(frame.index, frame.rgb)
         if self._update_power():
             flags |= protocol.FRAME_FLAGS["POWER"]
             extra += self._power_fields()
-        self._send(
-            protocol.MESSAGES["FRAME"],
-            struct.pack("<4I", tick & 0xFFFFFFFF, tick >> 32, openr_frame_number(tick), flags)
-            + self._sensors.at(tick)
-            + extra,
+        return flags, extra
+
+    def _runtime_encodes(self, frame) -> bool:
+        """Whether the runtime makes this camera frame's message itself (``RAW_IMAGE``): a frame
+        of Y, Cr, Cb from the ers7 sensor of layer H's size, with no colour table or tables
+        ``encode_ycrcb`` takes. The runtime's message is ``encode_ycrcb``'s, byte for byte; it
+        spares this process the encoding and its memory traffic. Other frames are encoded here."""
+        return (
+            self.sim.camera.sensor is not None
+            and frame.ycrcb.shape == (protocol.RAW_IMAGE_SIZE[1], protocol.RAW_IMAGE_SIZE[0], 3)
+            and frame.ycrcb.flags.c_contiguous
+            and self._cdt_usable
         )
-        self._apply(self._reply(protocol.REPLIES["FRAME_DONE"]))
-        self.sim.step_frame()
-        for listener in self.frame_listeners:
-            listener(self)
+
+    def _write_image(self, message, slot: int) -> int:
+        """``message`` (an OFbkImageVectorData) into the shared memory's area ``slot``; its size.
+        Its header and infos, then each layer's data, copied once (``bytes(message)`` would
+        copy it twice); a message whose data do not follow its infos back to back as bytes."""
+        start = protocol.SHM_HEADER + slot * protocol.MAX_IMAGE_BYTES
+        infos = [message.GetInfo(layer) for layer in range(message.numData)]
+        head = message.vectorInfo.pack() + b"".join(info.pack() for info in infos)
+        offsets = [len(head), *(info.dataOffset + info.dataSize for info in infos)]
+        size = offsets[-1]
+        if message.vectorInfo.totalSize != size or any(i.dataOffset != o for i, o in zip(infos, offsets)):
+            data = bytes(message)
+            size = len(data)
+            self._check_image_size(size)
+            self._memory[start : start + size] = data
+            return size
+        self._check_image_size(size)
+        memory = self._memory
+        memory[start : start + len(head)] = head
+        for layer, (info, offset) in enumerate(zip(infos, offsets)):
+            memory[start + offset : start + offset + info.dataSize] = message.GetData(layer)
+        return size
+
+    @staticmethod
+    def _check_image_size(size: int) -> None:
+        if size > protocol.MAX_IMAGE_BYTES:
+            raise ValueError(f"an image message of {size} bytes: the runtime takes at most {protocol.MAX_IMAGE_BYTES}")
+
+    def _stepped_frames(self) -> bytes:
+        """The foretold frames stepped since the last message, as ``FRAME`` and ``STOP`` carry them."""
+        stepped = self._stepped
+        fields = _U32.pack(len(stepped)) + b"".join(stepped)
+        stepped.clear()
+        return fields
 
     def _encode_with_cdt(self, frame):
         if self.sim.camera.sensor is not None:  # the ers7 sensor delivers Y, Cr, Cb
@@ -381,14 +506,20 @@ class MemoryStickRun:
 
     def _update_power(self) -> bool:
         """The battery at this time; whether anything changed."""
-        before = dict(self._power)
+        key = (self.time_ms // 60000, self._powered)  # what it depends on
+        if key == self._power_key:
+            return False
+        self._power_key = key
+        power = self._power
         capacity = max(0, BATTERY["remainingCapacity"] - self.time_ms // 60000)
-        status = self._power["robotStatus"] & ~(orsbMOTOR_POWER | orsbBATTERY_CAPACITY_LOW)
+        status = power["robotStatus"] & ~(orsbMOTOR_POWER | orsbBATTERY_CAPACITY_LOW)
         status |= (orsbMOTOR_POWER if self._powered else 0) | (
             orsbBATTERY_CAPACITY_LOW if capacity <= CAPACITY_LOW else 0
         )
-        self._power.update(remainingCapacity=capacity, robotStatus=status)
-        return self._power != before
+        if capacity == power["remainingCapacity"] and status == power["robotStatus"]:
+            return False
+        power.update(remainingCapacity=capacity, robotStatus=status)
+        return True
 
     def _power_fields(self) -> bytes:
         return struct.pack(f"<{len(protocol.POWER_FIELDS)}i", *(self._power[f] for f in protocol.POWER_FIELDS))
@@ -396,43 +527,52 @@ class MemoryStickRun:
     # ---------------------------------------------------------------- what the objects did
 
     def _apply(self, payload: bytes) -> None:
-        servos, gains_changed = self.sim.servos, False
-        for kind, data in protocol.iter_records(payload):
-            if kind == protocol.RECORDS["JOINT"]:
-                primitive, value = struct.unpack("<2i", data)
+        """What the objects did in a frame (its records), in order; set-points, the commonest,
+        without a call more."""
+        servos, offset, end = self.sim.servos, 0, len(payload)
+        while offset < end:
+            kind, size = _RECORD.unpack_from(payload, offset)
+            offset += 8 + size
+            if kind == _JOINT_RECORD:
+                primitive, value = _JOINT.unpack_from(payload, offset - size)
                 joint = self._joint_of[primitive]
                 if joint in self._ears:
-                    low, high = servos.low[joint], servos.high[joint]
-                    target = high if value else low
+                    target = servos.high[joint] if value else servos.low[joint]
                 else:
                     target = value / 1e6
                 servos.set_target(joint, target)
                 servos.command[joint] = servos.target[joint]
-            elif kind == protocol.RECORDS["LED"]:
-                primitive, intensity, _ = struct.unpack("<3i", data)
-                self.sim.set_led(self._led_of[primitive], min(max(intensity, 0), 255) / 255)
-            elif kind == protocol.RECORDS["MOTOR_POWER"]:
-                self._powered, gains_changed = bool(struct.unpack("<i", data)[0]), True
-            elif kind == protocol.RECORDS["GAIN"]:
-                primitive, enabled, p, _, _, p_shift, _, _ = struct.unpack("<8i", data)
-                joint = self._joint_of[primitive]
-                ratio = p / ers7.JOINTS[joint].gains[0] * 2.0 ** (STANDARD_PSHIFT - p_shift)
-                self._kp[joint] = self._standard_kp[joint] * ratio if enabled else 0.0
-                gains_changed = True
-            elif kind == protocol.RECORDS["CAMERA"]:
-                request, value = struct.unpack("<2I", data)
-                setting, names = SETTING_BY_REQUEST[request]
-                self.sim.camera.set_settings(**{setting: names[value]})
-            elif kind == protocol.RECORDS["CDT"]:
-                self._cdt = openr_bridge.OCdtVectorData.from_bytes(data)
-            elif kind == protocol.RECORDS["SOUND"]:
-                start = struct.unpack_from("<I", data)[0]
-                self._sound[start] = np.frombuffer(data, "<i2", offset=4).copy()
-            elif kind == protocol.RECORDS["SHUTDOWN"]:
-                self.shutdown = True
-            if gains_changed:
-                self._apply_gains()
-                gains_changed = False
+            else:
+                self._apply_record(kind, payload[offset - size : offset])
+
+    def _apply_record(self, kind: int, data: bytes) -> None:
+        """A record other than a set-point."""
+        if kind == protocol.RECORDS["LED"]:
+            primitive, intensity, _ = struct.unpack("<3i", data)
+            self.sim.set_led(self._led_of[primitive], min(max(intensity, 0), 255) / 255)
+        elif kind == protocol.RECORDS["MOTOR_POWER"]:
+            self._powered = bool(struct.unpack("<i", data)[0])
+            self._apply_gains()
+        elif kind == protocol.RECORDS["GAIN"]:
+            primitive, enabled, p, _, _, p_shift, _, _ = struct.unpack("<8i", data)
+            joint = self._joint_of[primitive]
+            ratio = p / ers7.JOINTS[joint].gains[0] * 2.0 ** (STANDARD_PSHIFT - p_shift)
+            self._kp[joint] = self._standard_kp[joint] * ratio if enabled else 0.0
+            self._apply_gains()
+        elif kind == protocol.RECORDS["CAMERA"]:
+            request, value = struct.unpack("<2I", data)
+            setting, names = SETTING_BY_REQUEST[request]
+            self.sim.camera.set_settings(**{setting: names[value]})
+        elif kind == protocol.RECORDS["CDT"]:
+            self._cdt = openr_bridge.OCdtVectorData.from_bytes(data)
+            self._cdt_usable = _usable(self._cdt)
+        elif kind == protocol.RECORDS["SOUND"]:
+            start = struct.unpack_from("<I", data)[0]
+            self._sound[start] = np.frombuffer(data, "<i2", offset=4).copy()
+        elif kind == protocol.RECORDS["SHUTDOWN"]:
+            self.shutdown = True
+        elif kind == protocol.RECORDS["IMAGE_SLOT"]:
+            self._image_slot = _U32.unpack(data)[0]
 
     def _apply_gains(self) -> None:
         """Each actuator's stiffness: its gain when powered, none otherwise; a joint whose
@@ -464,7 +604,7 @@ class MemoryStickRun:
     # ---------------------------------------------------------------- messages
 
     def _send(self, kind: int, payload: bytes) -> None:
-        self._channel.sendall(struct.pack("<2I", len(payload) + 4, kind) + payload)
+        self._channel.sendall(_HEADER.pack(len(payload) + 4, kind) + payload)
 
     def _reply(self, expected: int) -> bytes:
         """The next reply's payload if it is ``expected``; raises for FAILED and CRASHED."""

@@ -37,6 +37,7 @@ const std::vector<Object*>& Objects();
 /* Messages between entries. */
 void Send(const OServiceEntry& to, const void* message, size_t size);
 bool Deliver(size_t limit);            /* deliver queued messages; false when `limit` were delivered and more wait */
+bool MailboxEmpty();
 void Invoke(Object* object, Selector selector, void* message);
 OStatus Call(const OServiceEntry& to, void* message, void* reply, size_t replySize);
 void Reply(const void* reply, size_t size);
@@ -48,6 +49,7 @@ OStatus Connect(const std::string& subject, const std::string& observer);
 
 /* Shared memory regions, by MemoryRegionID. */
 MemoryRegionID NewRegion(size_t size, void** base);
+void   PlaceNextRegion(void* memory);  /* the next NewRegion uses `memory` (its bytes as they are) */
 void*  RegionBase(MemoryRegionID id, size_t* size = NULL);
 void   DeleteRegion(MemoryRegionID id);
 
@@ -71,9 +73,22 @@ void SetRobot(const std::string& design, const std::vector<Primitive>& primitive
 void StartSystemObjects();             /* creates OVirtualRobotComm and OVirtualRobotAudioComm */
 void SetLatestValues(const std::vector<slongword>& values);  /* the state at boot: what GetJointValue reads */
 void SetFrameValues(const slongword* values);             /* 4 per sensor-order entry */
-void PublishImage(const void* bytes, size_t size);
+void SetImageSlots(char* slots);      /* AIBO_OPENR_IMAGE_SLOTS + 1 areas of AIBO_OPENR_MAX_IMAGE_BYTES */
+struct ImageFrame {                    /* a camera frame whose message the runtime makes */
+    longword frameNumber;              /* the OPEN-R frame number of its exposure */
+    longword fieldCounter;             /* its index, modulo 2^16 */
+};
+/* The image message the simulator wrote into area `slot` (`size` bytes) or, with `frame`, the
+ * message made here of the Y, Cr, Cb frame in the last area, in `slot` (the copying one: a
+ * region of its own). */
+void PublishImage(longword slot, size_t size, const ImageFrame* frame);
+void AnnounceImageSlot();              /* records where the next image goes, if that changed */
 void SetPowerStatus(const OPowerStatus& status);  /* observers of what changed are told */
 void PlayFrame();                      /* the effector and speaker at this frame */
+/* The frames after frame `frame` (at most `limit`) in which no object code runs whatever the
+ * simulator sends (the simulator's own events, images and power, aside), each with the records
+ * the effector will make in it; nothing changes (host_protocol.py: lookahead). */
+std::vector<std::string> Lookahead(longword frame, size_t limit);
 void SetDesignData(const std::map<std::string, std::string>& data);  /* DESIGNDB.CFG: keyword -> /MS path */
 void StopRun();                        /* OPENR::Shutdown was called */
 

@@ -31,9 +31,12 @@ bool   replied = false;
 
 struct Region {
     std::vector<char> bytes;
+    char*  memory;                    /* the region's bytes: its own, or memory it was placed in */
+    size_t size;
 };
 std::map<MemoryRegionID, Region*> regions;
 MemoryRegionID nextRegion = 1;
+char* placement = NULL;               /* where the next region goes (PlaceNextRegion) */
 
 int consoleFd = 1, logFd = -1;
 std::map<Object*, std::string> partialLines;
@@ -129,6 +132,8 @@ bool Deliver(size_t limit) {
     return true;
 }
 
+bool MailboxEmpty() { return mailbox.empty(); }
+
 OStatus Call(const OServiceEntry& to, void* message, void* reply, size_t size) {
     Object* target = ObjectOf(to.oid);
     if (target == NULL) return oINVALID_OID;
@@ -182,18 +187,27 @@ OStatus Connect(const std::string& subject, const std::string& observer) {
 
 MemoryRegionID NewRegion(size_t size, void** base) {
     Region* region = new Region();
-    region->bytes.assign(size ? size : 1, 0);
+    region->size = size ? size : 1;
+    if (placement != NULL) {
+        region->memory = placement;   /* its bytes are already there: not cleared */
+        placement = NULL;
+    } else {
+        region->bytes.assign(region->size, 0);
+        region->memory = &region->bytes[0];
+    }
     MemoryRegionID id = nextRegion++;
     regions[id] = region;
-    *base = &region->bytes[0];
+    *base = region->memory;
     return id;
 }
+
+void PlaceNextRegion(void* memory) { placement = (char*)memory; }
 
 void* RegionBase(MemoryRegionID id, size_t* size) {
     std::map<MemoryRegionID, Region*>::iterator found = regions.find(id);
     if (found == regions.end()) return NULL;
-    if (size != NULL) *size = found->second->bytes.size();
-    return &found->second->bytes[0];
+    if (size != NULL) *size = found->second->size;
+    return found->second->memory;
 }
 
 void DeleteRegion(MemoryRegionID id) {

@@ -22,6 +22,7 @@ const size_t MESSAGES_PER_FRAME = 100000;  /* deliveries in one 8 ms frame befor
 
 int channel = -1;
 char* shared = NULL;
+std::vector<std::string> foretold;  /* the records of the frames the last answer foretold */
 
 bool ReadAll(void* buffer, size_t size) {
     char* at = (char*)buffer;
@@ -210,17 +211,51 @@ void ConnectAndStart(const std::string& payload) {
     Answer(AIBO_OPENR_REPLY_FRAME_DONE, TakeRecords());
 }
 
+/* The frames the simulator stepped on the last answer's lookahead (their count, then each one's
+ * frame number and sensor values), played now as they were foretold: no object code runs. */
+void CatchUp(Reader& frame, size_t sensors) {
+    longword count = frame.U32();
+    if (count > foretold.size()) Fail("openr-host: the simulator stepped frames the runtime did not foretell");
+    std::vector<slongword> values(sensors * AIBO_OPENR_VALUES_PER_SENSOR);
+    for (longword i = 0; i < count; i++) {
+        SetFrameNumber(frame.U32());
+        if (!values.empty()) memcpy(&values[0], frame.Here(), values.size() * sizeof(slongword));
+        frame.Skip(values.size() * sizeof(slongword));
+        SetFrameValues(values.empty() ? NULL : &values[0]);
+        PlayFrame();
+        if (!MailboxEmpty() || TakeRecords() != foretold[i]) {
+            Fail("openr-host: a foretold frame did not play as foretold (a bug of aibo-sim's OPEN-R runtime)");
+        }
+    }
+    foretold.clear();
+}
+
 void Frame(const std::string& payload, size_t sensors) {
     Reader frame(payload);
     frame.U32();  /* the tick, low and high words: the runtime counts time in frame numbers */
     frame.U32();
-    SetFrameNumber(frame.U32());
-    longword flags = frame.U32();
+    longword number = frame.U32(), flags = frame.U32(), lookahead = frame.U32();
+    CatchUp(frame, sensors);
+    SetFrameNumber(number);
     std::vector<slongword> values(sensors * AIBO_OPENR_VALUES_PER_SENSOR);
     if (!values.empty()) memcpy(&values[0], frame.Here(), values.size() * sizeof(slongword));
     frame.Skip(values.size() * sizeof(slongword));
     SetFrameValues(values.empty() ? NULL : &values[0]);
-    if (flags & AIBO_OPENR_FLAG_IMAGE) PublishImage(shared + AIBO_OPENR_SHM_HEADER, frame.U32());
+    if (flags & AIBO_OPENR_FLAG_IMAGE) {
+        longword slot = frame.U32(), size = frame.U32();
+        if (slot > AIBO_OPENR_IMAGE_SLOTS || size > AIBO_OPENR_MAX_IMAGE_BYTES) {
+            Fail("openr-host: an image out of the shared memory");
+        }
+        PublishImage(slot, size, NULL);
+    }
+    if (flags & AIBO_OPENR_FLAG_RAW_IMAGE) {
+        longword slot = frame.U32();
+        ImageFrame image;
+        image.frameNumber = frame.U32();
+        image.fieldCounter = frame.U32();
+        if (slot > AIBO_OPENR_IMAGE_SLOTS) Fail("openr-host: an image out of the shared memory");
+        PublishImage(slot, 0, &image);
+    }
     if (flags & AIBO_OPENR_FLAG_POWER) {
         slongword v[AIBO_OPENR_POWER_FIELDS];
         for (int k = 0; k < AIBO_OPENR_POWER_FIELDS; k++) v[k] = frame.I32();
@@ -229,7 +264,15 @@ void Frame(const std::string& payload, size_t sensors) {
     Deliver(MESSAGES_PER_FRAME);
     PlayFrame();
     Deliver(MESSAGES_PER_FRAME);
-    Answer(AIBO_OPENR_REPLY_FRAME_DONE, TakeRecords());
+    AnnounceImageSlot();
+    std::string answer = TakeRecords();
+    foretold = Lookahead(number, lookahead < AIBO_OPENR_LOOKAHEAD_FRAMES ? lookahead : AIBO_OPENR_LOOKAHEAD_FRAMES);
+    const longword next[2] = {AIBO_OPENR_RECORD_NEXT_FRAME, 0};
+    for (size_t i = 0; i < foretold.size(); i++) {
+        answer.append((const char*)next, sizeof next);
+        answer += foretold[i];
+    }
+    Answer(AIBO_OPENR_REPLY_FRAME_DONE, answer);
 }
 
 }  // namespace
@@ -244,10 +287,10 @@ int main() {
     }
     channel = atoi(fd);
     int shmFd = open(shm, O_RDWR);
-    shared = shmFd < 0 ? NULL : (char*)mmap(NULL, AIBO_OPENR_SHM_HEADER + AIBO_OPENR_MAX_IMAGE_BYTES,
-                                            PROT_READ | PROT_WRITE, MAP_SHARED, shmFd, 0);
+    shared = shmFd < 0 ? NULL : (char*)mmap(NULL, AIBO_OPENR_SHM_SIZE, PROT_READ | PROT_WRITE, MAP_SHARED, shmFd, 0);
     if (shared == NULL || shared == MAP_FAILED) Fail(std::string("cannot map ") + shm);
     SetStatusArea((volatile longword*)shared);
+    SetImageSlots(shared + AIBO_OPENR_SHM_HEADER);
     SetConsole(1, log != NULL ? atoi(log) : -1);
     setvbuf(stdout, NULL, _IOLBF, 0);
     const int fatal[] = {SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGABRT};
@@ -270,7 +313,10 @@ int main() {
         } else if (kind == AIBO_OPENR_MSG_FRAME) {
             Frame(payload, sensors);
         } else if (kind == AIBO_OPENR_MSG_STOP) {
-            SetFrameNumber(Reader(payload).U32());
+            Reader stop(payload);
+            longword number = stop.U32();
+            CatchUp(stop, sensors);
+            SetFrameNumber(number);
             std::vector<Object*> users;
             for (size_t i = 0; i < Objects().size(); i++) {
                 if (!Objects()[i]->system) users.push_back(Objects()[i]);

@@ -6,8 +6,11 @@
  * - Sensors: every frame the simulator gives each sensor entry's values; every
  *   AIBO_OPENR_SENSOR_FRAMES frames OVirtualRobotComm.Sensor sends an OSensorFrameVectorData
  *   of them, numbered by the frames' OPEN-R frame numbers.
- * - Images: OVirtualRobotComm.FbkImageSensor sends each camera frame's OFbkImageVectorData.
+ * - Images: OVirtualRobotComm.FbkImageSensor sends each camera frame's OFbkImageVectorData,
+ *   in a region that is the shared memory the simulator wrote it to (a slot no object holds).
  *   These two subjects keep only the newest data for an observer not yet ready.
+ * - Lookahead: each answer foretells the frames after it in which no object code runs
+ *   (host_protocol.py), which the simulator may step without a message.
  * - The effector (OVirtualRobotComm.Effector) plays the command vectors of each subject connected
  *   to it, one at a time from the frame it takes it, holding a reference to its region until its
  *   frames are played; it asserts ready to the subject at the start and after each vector's last
@@ -20,6 +23,7 @@
  *   EnableJointGain and SetJointGain (Sony's registers, passed to the simulator as they are).
  */
 #include <deque>
+#include <stdint.h>
 #include <math.h>
 #include <OPENR/OObject.h>
 #include <OPENR/OSubject.h>
@@ -75,6 +79,15 @@ OVolumeSwitch volumeSwitch = ovolumeSW2;
 long clockOffset = 0;
 sbyte timeDifference = 9;
 OVRSyncKey nextSyncKey = 1;
+bool stopped = false;                     /* OPENR::Shutdown was called: the run ends with this frame */
+/* Images: the simulator writes each into a slot of the shared memory that the runtime named
+ * (AnnounceImageSlot), and the image's region is that memory while the objects hold it; when
+ * every slot is held, into the last area, which the runtime copies. */
+char* imageSlots = NULL;
+MemoryRegionID slotImage[AIBO_OPENR_IMAGE_SLOTS] = {0};  /* the region of each slot's image (0: none yet) */
+slongword announcedSlot = 0;
+OCdtVectorData cdtInUse;                  /* the last SetCdtVectorData's tables */
+bool cdtSet = false;
 
 bool Valid(OPrimitiveID id) { return id < primitives.size(); }
 
@@ -234,6 +247,26 @@ void PlayQueues(OObserver* observer, std::vector<Queue>& queues, void (*play)(Pl
             queue.vectors.pop_front();
             if (queue.vectors.empty()) observer->AssertReady(queue.subject);
         }
+    }
+}
+
+/* Whether one more frame of `queues` would finish a subject's last vector: it would then be asked
+ * for the next (a message: object code runs). */
+bool AsksForMore(const std::vector<Queue>& queues) {
+    for (size_t q = 0; q < queues.size(); q++) {
+        const std::deque<Playing>& vectors = queues[q].vectors;
+        if (vectors.size() == 1 && vectors.front().frame + 1 >= vectors.front().frames) return true;
+    }
+    return false;
+}
+
+/* PlayQueues on a copy of the queues (Lookahead): the same frame, without giving regions back. */
+void Advance(std::vector<Queue>& queues, void (*play)(Playing&)) {
+    for (size_t q = 0; q < queues.size(); q++) {
+        std::deque<Playing>& vectors = queues[q].vectors;
+        if (vectors.empty()) continue;
+        if (play != NULL) play(vectors.front());
+        if (++vectors.front().frame >= vectors.front().frames) vectors.pop_front();
     }
 }
 
@@ -417,6 +450,142 @@ const ObjectEntry audioEntries[] = {
     {4, (Entry)AudioControl0}, {5, (Entry)AudioReady0}, {6, (Entry)AudioConnect0}, {7, (Entry)AudioNotify0},
     {UNDEF, (Entry)ENTRY_UNDEF}};
 
+/* Images made here from the simulator's Y, Cr, Cb frame: the message openr_bridge.encoder's
+ * encode_ycrcb makes of a frame of the H layer's size, byte for byte (the header and infos;
+ * H: the frame's Y, Cr, Cb and flat detail bands; M and L: pyramid.next_level's Haar bands and
+ * 2x2 means; C: cdt_layer's bits of M's Y, Cr, Cb; the tag in the last row of H, M, L and C);
+ * tests/test_openr_runtime.py compares every image of runs with and without colour tables. */
+const int IMAGE_W = AIBO_OPENR_IMAGE_WIDTH, IMAGE_H = AIBO_OPENR_IMAGE_HEIGHT;
+OPENR_STATIC_ASSERT(IMAGE_W % 4 == 0 && IMAGE_H % 4 == 0, image_in_blocks_of_four);
+const struct { int width, height, runs; ODataType type; } IMAGE_LAYERS[4] = {
+    {IMAGE_W, IMAGE_H, 6, odataFBK_YCrCb_HPF},
+    {IMAGE_W / 2, IMAGE_H / 2, 6, odataFBK_YCrCb_HPF},
+    {IMAGE_W / 4, IMAGE_H / 4, 6, odataFBK_YCrCb_HPF},
+    {IMAGE_W / 2, IMAGE_H / 2, 1, odataFBK_CDT}};
+const size_t IMAGE_HEADER = sizeof(ODataVectorInfo) + 4 * sizeof(OFbkImageInfo);
+const size_t IMAGE_BYTES = IMAGE_HEADER + (size_t)IMAGE_W * IMAGE_H * 6 + (size_t)IMAGE_W * IMAGE_H / 4 * 6
+                         + (size_t)IMAGE_W * IMAGE_H / 16 * 6 + (size_t)IMAGE_W * IMAGE_H / 4;
+
+#if defined(__GNUC__) && !defined(__clang__)
+#define IMAGE_LOOP __attribute__((optimize("O3")))  /* the library is -O2: vectorise these loops */
+#else
+#define IMAGE_LOOP
+#endif
+
+/* H: the frame's Y, Cr, Cb (interleaved) as the rows' first three runs, four pixels (three
+ * little-endian words) at a time; the detail runs flat. */
+IMAGE_LOOP void LayerH(const byte* __restrict__ pixels, byte* __restrict__ layer) {
+    for (int y = 0; y < IMAGE_H; y++) {
+        byte* __restrict__ row = layer + (size_t)y * 6 * IMAGE_W;
+        const byte* __restrict__ from = pixels + (size_t)y * IMAGE_W * 3;
+        for (int x = 0; x < IMAGE_W; x += 4) {
+            uint32_t w[3];
+            memcpy(w, from + 3 * x, sizeof w);
+            uint32_t Y = (w[0] & 0xFF) | (w[0] >> 24) << 8 | (w[1] >> 16 & 0xFF) << 16 | (w[2] >> 8 & 0xFF) << 24;
+            uint32_t Cr = (w[0] >> 8 & 0xFF) | (w[1] & 0xFF) << 8 | (w[1] >> 24) << 16 | (w[2] >> 16 & 0xFF) << 24;
+            uint32_t Cb = (w[0] >> 16 & 0xFF) | (w[1] >> 8 & 0xFF) << 8 | (w[2] & 0xFF) << 16 | (w[2] >> 24) << 24;
+            memcpy(row + x, &Y, 4);
+            memcpy(row + IMAGE_W + x, &Cr, 4);
+            memcpy(row + 2 * IMAGE_W + x, &Cb, 4);
+        }
+        memset(row + 3 * IMAGE_W, 128, 3 * IMAGE_W);
+    }
+}
+
+/* pyramid.next_level: the layer `dst` (width w, height h; rows of 6 runs) from `src`, twice its
+ * size: the Haar bands of its Y (clipped to 255) and the 2x2 means of its Cr and Cb. */
+IMAGE_LOOP void NextLevel(const byte* __restrict__ src, byte* __restrict__ dst, int w, int h) {
+    const int sw = 2 * w;
+    for (int y = 0; y < h; y++) {
+        const byte* __restrict__ top = src + (size_t)(2 * y) * 6 * sw;
+        const byte* __restrict__ bottom = top + 6 * sw;
+        byte* __restrict__ row = dst + (size_t)y * 6 * w;
+        for (int x = 0; x < w; x++) {
+            int p00 = top[2 * x], p10 = top[2 * x + 1], p01 = bottom[2 * x], p11 = bottom[2 * x + 1];
+            int lh = 128 + ((p01 + p11 - p00 - p10 + 2) >> 2), hl = 128 + ((p10 + p11 - p00 - p01 + 2) >> 2);
+            int hh = 128 + ((p00 + p11 - p10 - p01 + 2) >> 2);
+            row[x] = (byte)((p00 + p10 + p01 + p11 + 2) >> 2);
+            row[3 * w + x] = (byte)(lh < 255 ? lh : 255);
+            row[4 * w + x] = (byte)(hl < 255 ? hl : 255);
+            row[5 * w + x] = (byte)(hh < 255 ? hh : 255);
+        }
+        for (int c = 1; c <= 2; c++) {
+            const byte* __restrict__ t = top + c * sw;
+            const byte* __restrict__ b = bottom + c * sw;
+            byte* __restrict__ out = row + c * w;
+            for (int x = 0; x < w; x++) out[x] = (byte)((t[2 * x] + t[2 * x + 1] + b[2 * x] + b[2 * x + 1] + 2) >> 2);
+        }
+    }
+}
+
+/* cdt_layer: bit k of a C pixel where channel k's Cr/Cb box of its Y segment (not ocdtINIT)
+ * holds M's pixel, bounds inclusive. */
+IMAGE_LOOP void LayerC(const byte* __restrict__ m, byte* __restrict__ c, int w, int h, const OCdtVectorData* cdt) {
+    memset(c, 0, (size_t)w * h);
+    for (longword n = 0; cdt != NULL && n < cdt->vectorInfo.numData && n < (longword)ocdtNUM_CHANNELS; n++) {
+        const OCdtInfo& info = cdt->info[n];
+        int k = 0;
+        while (k < ocdtNUM_CHANNELS - 1 && !(info.channel & (1u << k))) k++;
+        for (int y = 0; y < h; y++) {
+            const byte* __restrict__ row = m + (size_t)y * 6 * w;
+            byte* __restrict__ bits = c + (size_t)y * w;
+            for (int x = 0; x < w; x++) {
+                longword box = info.table[row[x] >> 3];
+                longword cr = row[w + x], cb = row[2 * w + x];
+                bool inside = box != ocdtINIT && cr >= (box & 0xFF) && cr <= (box >> 8 & 0xFF)
+                           && cb >= (box >> 16 & 0xFF) && cb <= (box >> 24);
+                bits[x] |= (byte)((inside ? 1u : 0u) << k);
+            }
+        }
+    }
+}
+
+void BuildImage(byte* out, const byte* pixels, const ImageFrame& frame, const OCdtVectorData* cdt) {
+    memset(out, 0, IMAGE_HEADER);
+    OFbkImageVectorData* image = (OFbkImageVectorData*)out;
+    image->vectorInfo.totalSize = (longword)IMAGE_BYTES;
+    image->vectorInfo.type = odataFBKIMAGE_VECTOR;
+    image->vectorInfo.infoOffset = sizeof(ODataVectorInfo);
+    image->vectorInfo.infoSize = sizeof(OFbkImageInfo);
+    image->vectorInfo.maxNumData = image->vectorInfo.numData = 4;
+    byte* layer[4];
+    size_t offset = IMAGE_HEADER;
+    for (int i = 0; i < 4; i++) {
+        OFbkImageInfo* info = &image->info[i];
+        size_t size = (size_t)IMAGE_LAYERS[i].width * IMAGE_LAYERS[i].height * IMAGE_LAYERS[i].runs;
+        info->type = IMAGE_LAYERS[i].type;
+        info->frameNumber = frame.frameNumber;
+        info->dataOffset = (longword)offset;
+        info->dataSize = (longword)size;
+        info->width = IMAGE_LAYERS[i].width;
+        info->height = IMAGE_LAYERS[i].height;
+        layer[i] = out + offset;
+        offset += size;
+    }
+    LayerH(pixels, layer[0]);
+    NextLevel(layer[0], layer[1], IMAGE_W / 2, IMAGE_H / 2);
+    NextLevel(layer[1], layer[2], IMAGE_W / 4, IMAGE_H / 4);
+    LayerC(layer[1], layer[3], IMAGE_W / 2, IMAGE_H / 2, cdt);
+    longword pixelsIn[ocdtNUM_CHANNELS] = {0};  /* the tag: each channel's pixels / 16 */
+    if (cdt != NULL && cdt->vectorInfo.numData > 0) {  /* else C is all 0 */
+        longword values[4][256] = {{0}};  /* four histograms: no increment waits for the one before */
+        for (int i = 0; i < IMAGE_W / 2 * IMAGE_H / 2; i++) values[i & 3][layer[3][i]]++;
+        for (int v = 1; v < 256; v++) {
+            longword n = values[0][v] + values[1][v] + values[2][v] + values[3][v];
+            for (int k = 0; k < ocdtNUM_CHANNELS; k++) pixelsIn[k] += (v >> k & 1) ? n : 0;
+        }
+    }
+    byte tag[AIBO_OPENR_TAG_LENGTH] = {(byte)(frame.fieldCounter & 0xFF), (byte)(frame.fieldCounter >> 8 & 0xFF), 0, 0};
+    for (int k = 0; k < ocdtNUM_CHANNELS; k++) {  /* bytes 4-7 channels 4-7, 8-11 channels 0-3 */
+        longword frequency = pixelsIn[k] / 16;
+        tag[k < 4 ? 8 + k : k] = (byte)(frequency < 255 ? frequency : 255);
+    }
+    for (int i = 0; i < 4; i++) {  /* last: into the first bytes of each layer's last row */
+        size_t row = (size_t)IMAGE_LAYERS[i].width * IMAGE_LAYERS[i].runs;
+        memcpy(layer[i] + row * (IMAGE_LAYERS[i].height - 1), tag, sizeof tag);
+    }
+}
+
 void PublishSensors() {
     size_t count = sensorOrder.size();
     size_t infos = sizeof(ODataVectorInfo) + count * sizeof(OSensorFrameInfo);
@@ -499,9 +668,22 @@ void SetFrameValues(const slongword* values) {
     if (pending.size() == AIBO_OPENR_SENSOR_FRAMES) PublishSensors();
 }
 
-void PublishImage(const void* bytes, size_t size) {
+void SetImageSlots(char* slots) { imageSlots = slots; }
+
+void PublishImage(longword slot, size_t size, const ImageFrame* frame) {
+    char* bytes = imageSlots + (size_t)slot * AIBO_OPENR_MAX_IMAGE_BYTES;
+    if (frame != NULL) size = IMAGE_BYTES;
+    if (slot < AIBO_OPENR_IMAGE_SLOTS) PlaceNextRegion(bytes);  /* the region is the slot: no copy */
     RCRegion* region = new RCRegion(size);
-    memcpy(region->Base(), bytes, size);
+    if (slot < AIBO_OPENR_IMAGE_SLOTS) {
+        slotImage[slot] = region->MemID();
+    } else if (frame == NULL) {
+        memcpy(region->Base(), bytes, size);
+    }
+    if (frame != NULL) {
+        const byte* pixels = (const byte*)imageSlots + (size_t)AIBO_OPENR_IMAGE_SLOTS * AIBO_OPENR_MAX_IMAGE_BYTES;
+        BuildImage((byte*)region->Base(), pixels, *frame, cdtSet ? &cdtInUse : NULL);
+    }
     OFbkImageVectorData* image = (OFbkImageVectorData*)region->Base();
     image->vectorInfo.memRegionID = region->MemID();
     if (cameraIndex >= 0) image->SetPrimitiveID((OPrimitiveID)cameraIndex);
@@ -509,6 +691,15 @@ void PublishImage(const void* bytes, size_t size) {
     fbk->SetData(region);
     fbk->NotifyObservers();
     region->RemoveReference();
+}
+
+void AnnounceImageSlot() {
+    slongword slot = 0;  /* a slot whose image's region is gone, else the copying one */
+    while (slot < AIBO_OPENR_IMAGE_SLOTS && slotImage[slot] != 0 && RegionBase(slotImage[slot]) != NULL) slot++;
+    if (slot != announcedSlot) {
+        announcedSlot = slot;
+        RecordValues(AIBO_OPENR_RECORD_IMAGE_SLOT, &slot, 1);
+    }
 }
 
 void SetPowerStatus(const OPowerStatus& status) {
@@ -524,7 +715,36 @@ void PlayFrame() {
 }
 
 void StopRun() {
+    stopped = true;
     Record(AIBO_OPENR_RECORD_SHUTDOWN, "", 0);
+}
+
+std::vector<std::string> Lookahead(longword frame, size_t limit) {
+    std::vector<std::string> frames;
+    if (stopped || !MailboxEmpty()) return frames;
+    /* What would send a message in a coming frame: a sensor vector for an observer, the
+     * microphone's 32 ms, a subject's last vector played (its ready event). Images and power
+     * events come from the simulator, which knows when they come and answers before them. */
+    bool sensorsObserved = robotComm->subject[VirtualRobotComm::SENSOR]->NumberOfObservers() > 0;
+    bool micObserved = micIndex >= 0 && audioComm->subject[0]->NumberOfObservers() > 0;
+    std::vector<Queue> effector, speaker;
+    std::map<int, slongword> before;
+    for (size_t ahead = 1; ahead <= limit; ahead++) {
+        frame = frame >= oframeMAX_NUMBER ? 1 : frame + 1;
+        if (sensorsObserved && (pending.size() + ahead) % AIBO_OPENR_SENSOR_FRAMES == 0) break;
+        if (micObserved && frame % AIBO_OPENR_SENSOR_FRAMES == 0) break;
+        if (ahead == 1) {  /* the queues as they are now, copied: this frame's play changes nothing */
+            effector = robotComm->effector;
+            speaker = audioComm->speaker;
+        }
+        if (AsksForMore(effector) || AsksForMore(speaker)) break;
+        if (ahead == 1) before = commanded;
+        Advance(effector, PlayCommands);
+        Advance(speaker, NULL);
+        frames.push_back(TakeRecords());
+    }
+    if (!frames.empty()) commanded.swap(before);  /* Command's memory of what it recorded, as it was */
+    return frames;
 }
 
 }  // namespace host
@@ -887,6 +1107,8 @@ OStatus OPENR::SetCdtVectorData(MemoryRegionID memID) {
         if (cdt->info[i].primitiveID != (OPrimitiveID)cameraIndex) return oINVALID_PRIMITIVE_ID;
     }
     Record(AIBO_OPENR_RECORD_CDT, cdt, sizeof *cdt);
+    memcpy(&cdtInUse, cdt, sizeof cdtInUse);  /* the C layer of the images the runtime makes */
+    cdtSet = true;
     return oSUCCESS;
 }
 
