@@ -37,6 +37,42 @@ HEAD_JOINTS = ("neck_tilt", "head_pan", "head_tilt")
 LEG_JOINTS = tuple(j.name for j in JOINTS if j.name.split("_")[0] in LEGS)
 
 
+def check_options(camera, camera_layer, render_mode, randomize, image_only) -> dict:
+    """ValueError naming the first environment option that cannot be used (``AiboEnv``'s and
+    ``MatchEnv``'s); returns ``randomize`` as a dict."""
+    if camera not in CAMERA_MODES:
+        raise ValueError(f"camera must be one of {CAMERA_MODES}, not {camera!r}")
+    if not isinstance(image_only, bool) or image_only and camera is None:
+        raise ValueError(f"image_only must be True or False, and False with camera=None, not {image_only!r}")
+    if camera_layer not in LAYERS:
+        raise ValueError(f"camera_layer must be one of {tuple(LAYERS)}, not {camera_layer!r}")
+    if render_mode not in (None, "rgb_array"):
+        raise ValueError(f"render_mode must be None or 'rgb_array', not {render_mode!r}")
+    if randomize is not None and not isinstance(randomize, Mapping):
+        raise ValueError(f"randomize must be a dict of {RANDOMIZATIONS} to numbers, not {randomize!r}")
+    randomize = dict(randomize or {})
+    unknown = set(randomize) - set(RANDOMIZATIONS)
+    if unknown:
+        raise ValueError(f"unknown randomisations {sorted(unknown)}; known: {RANDOMIZATIONS}")
+    for name, value in randomize.items():
+        largest = {"lighting": 1.0, "ball_start": MAX_PLACEMENT}.get(name, math.inf)
+        if (
+            isinstance(value, bool)
+            or not isinstance(value, numbers.Real)
+            or not (0 <= value <= largest and math.isfinite(value))
+        ):
+            raise ValueError(
+                f"randomize[{name!r}] = {value!r}: must be a finite number >= 0"
+                + (f" and at most {largest:g}" if math.isfinite(largest) else "")
+            )
+    if camera == "openr" and camera_layer != "H":
+        raise ValueError(
+            "camera='openr' serves layer H, as the wrapper's camera_get_image does; "
+            "use camera='ycrcb' or 'rgb' for layers M and L"
+        )
+    return randomize
+
+
 class AiboEnv(gym.Env):
     """An ERS-7 in the RoboCup scene, seen through its head camera: the base of the single-robot environments.
 
@@ -156,36 +192,7 @@ class AiboEnv(gym.Env):
         camera_shutter: str = "mid",
         image_only: bool = False,
     ):
-        if camera not in CAMERA_MODES:
-            raise ValueError(f"camera must be one of {CAMERA_MODES}, not {camera!r}")
-        if not isinstance(image_only, bool) or image_only and camera is None:
-            raise ValueError(f"image_only must be True or False, and False with camera=None, not {image_only!r}")
-        if camera_layer not in LAYERS:
-            raise ValueError(f"camera_layer must be one of {tuple(LAYERS)}, not {camera_layer!r}")
-        if render_mode not in (None, *self.metadata["render_modes"]):
-            raise ValueError(f"render_mode must be None or 'rgb_array', not {render_mode!r}")
-        if randomize is not None and not isinstance(randomize, Mapping):
-            raise ValueError(f"randomize must be a dict of {RANDOMIZATIONS} to numbers, not {randomize!r}")
-        self.randomize = dict(randomize or {})
-        unknown = set(self.randomize) - set(RANDOMIZATIONS)
-        if unknown:
-            raise ValueError(f"unknown randomisations {sorted(unknown)}; known: {RANDOMIZATIONS}")
-        for name, value in self.randomize.items():
-            largest = {"lighting": 1.0, "ball_start": MAX_PLACEMENT}.get(name, math.inf)
-            if (
-                isinstance(value, bool)
-                or not isinstance(value, numbers.Real)
-                or not (0 <= value <= largest and math.isfinite(value))
-            ):
-                raise ValueError(
-                    f"randomize[{name!r}] = {value!r}: must be a finite number >= 0"
-                    + (f" and at most {largest:g}" if math.isfinite(largest) else "")
-                )
-        if camera == "openr" and camera_layer != "H":
-            raise ValueError(
-                "camera='openr' serves layer H, as the wrapper's camera_get_image does; "
-                "use camera='ycrcb' or 'rgb' for layers M and L"
-            )
+        self.randomize = check_options(camera, camera_layer, render_mode, randomize, image_only)
         self.camera, self.camera_layer, self.render_mode, self.image_only = (
             camera,
             camera_layer,

@@ -43,9 +43,9 @@ from ..ers7 import DISTANCE_SENSORS, JOINT_INDEX, JOINTS, TOUCH_SENSORS, joint_i
 from ..motions import BLEND_MS
 from ..mtn import MotionPlayer, read_mtn
 from ..render import Renderer
-from ..sim import ACCEL_RANGE, FRAME_MS, MAX_PLACEMENT, Simulation, models_dir, release_freed_memory
+from ..sim import ACCEL_RANGE, FRAME_MS, Simulation, models_dir, release_freed_memory
 from ..team import PLAYERS_PER_TEAM, TEAMS, RobotSpec, check_robots, load_robots
-from .base import CAMERA_MODES, HEAD_JOINTS, LAYERS, LEG_JOINTS, RANDOMIZATIONS, RENDER_SIZE, AiboEnv, _ClosedSimulation
+from .base import HEAD_JOINTS, LAYERS, LEG_JOINTS, RENDER_SIZE, AiboEnv, _ClosedSimulation, check_options
 
 MAX_CYCLES = 900  # steps (camera frames at 30 fps): 30 s of play
 BALL_PROGRESS_REWARD = 10.0  # per metre the ball moves towards the opposing goal, as ReachBall's progress
@@ -75,43 +75,6 @@ def match_robots(robots=None) -> tuple[RobotSpec, ...]:
     if any(robot.team is None for robot in robots):
         raise ValueError("robots: every robot of a match needs a team (red or blue)")
     return check_robots(robots, "robots")
-
-
-def _check_options(camera, camera_layer, render_mode, randomize, image_only, max_cycles) -> dict:
-    """The options' checks of ``AiboEnv`` (same messages); returns ``randomize`` as a dict."""
-    if camera not in CAMERA_MODES:
-        raise ValueError(f"camera must be one of {CAMERA_MODES}, not {camera!r}")
-    if not isinstance(image_only, bool) or image_only and camera is None:
-        raise ValueError(f"image_only must be True or False, and False with camera=None, not {image_only!r}")
-    if camera_layer not in LAYERS:
-        raise ValueError(f"camera_layer must be one of {tuple(LAYERS)}, not {camera_layer!r}")
-    if camera == "openr" and camera_layer != "H":
-        raise ValueError(
-            "camera='openr' serves layer H, as the wrapper's camera_get_image does; "
-            "use camera='ycrcb' or 'rgb' for layers M and L"
-        )
-    if render_mode not in (None, "rgb_array"):
-        raise ValueError(f"render_mode must be None or 'rgb_array', not {render_mode!r}")
-    if isinstance(max_cycles, bool) or not isinstance(max_cycles, numbers.Integral) or max_cycles < 1:
-        raise ValueError(f"max_cycles must be a whole number >= 1, not {max_cycles!r}")
-    if randomize is not None and not isinstance(randomize, Mapping):
-        raise ValueError(f"randomize must be a dict of {RANDOMIZATIONS} to numbers, not {randomize!r}")
-    randomize = dict(randomize or {})
-    unknown = set(randomize) - set(RANDOMIZATIONS)
-    if unknown:
-        raise ValueError(f"unknown randomisations {sorted(unknown)}; known: {RANDOMIZATIONS}")
-    for name, value in randomize.items():
-        largest = {"lighting": 1.0, "ball_start": MAX_PLACEMENT}.get(name, math.inf)
-        if (
-            isinstance(value, bool)
-            or not isinstance(value, numbers.Real)
-            or not (0 <= value <= largest and math.isfinite(value))
-        ):
-            raise ValueError(
-                f"randomize[{name!r}] = {value!r}: must be a finite number >= 0"
-                + (f" and at most {largest:g}" if math.isfinite(largest) else "")
-            )
-    return randomize
 
 
 class _Agent:
@@ -294,7 +257,9 @@ class MatchEnv(pettingzoo.ParallelEnv):
         image_only: bool = False,
         scripted: Mapping[str, Callable[[Simulation], object]] | None = None,
     ):
-        self.randomize = _check_options(camera, camera_layer, render_mode, randomize, image_only, max_cycles)
+        self.randomize = check_options(camera, camera_layer, render_mode, randomize, image_only)
+        if isinstance(max_cycles, bool) or not isinstance(max_cycles, numbers.Integral) or max_cycles < 1:
+            raise ValueError(f"max_cycles must be a whole number >= 1, not {max_cycles!r}")
         self.camera, self.camera_layer, self.render_mode, self.image_only = (
             camera,
             camera_layer,
