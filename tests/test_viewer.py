@@ -97,39 +97,25 @@ def test_view_shows_the_robot_on_a_virtual_display(tmp_path):
         assert screen is not None, "xwd never dumped the screen"
         cv2.imwrite(str(tmp_path / "screenshot.png"), screen[..., ::-1])
         assert blob >= 1000, f"no robot on the screen (largest white patch {blob} px): {tmp_path / 'screenshot.png'}"
-        # A run that ends by itself closes the window and exits cleanly (GLFW ends after the viewer).
-        short = subprocess.run(
-            [sys.executable, "-m", "aibo_sim.cli", "run", str(CONTROLLER), "--duration", "0.3", "--view"],
-            env={**os.environ, "DISPLAY": display},
-            cwd=tmp_path,
-            capture_output=True,
-            text=True,
-            timeout=120,
-        )
-        assert short.returncode == 0, short.stderr
+
+        def watch(*arguments: str) -> None:
+            """A short run with --view ends by itself and exits cleanly (GLFW ends after the viewer)."""
+            watched = subprocess.run(
+                [sys.executable, "-m", "aibo_sim.cli", "run", *arguments, "--duration", "0.3", "--view"],
+                env={**os.environ, "DISPLAY": display},
+                cwd=tmp_path,
+                capture_output=True,
+                text=True,
+                timeout=120,
+            )
+            assert watched.returncode == 0, watched.stderr
+
+        watch(str(CONTROLLER))
         # A memory stick's objects, watched the same way.
-        stick = make_stick(tmp_path / "ms", build_programs(tmp_path / "openr"), ["JPROBE"])
-        watched = subprocess.run(
-            [sys.executable, "-m", "aibo_sim.cli", "run", str(stick), "--duration", "0.3", "--view", "--out", "stick"],
-            env={**os.environ, "DISPLAY": display},
-            cwd=tmp_path,
-            capture_output=True,
-            text=True,
-            timeout=120,
-        )
-        assert watched.returncode == 0, watched.stderr
+        watch(str(make_stick(tmp_path / "ms", build_programs(tmp_path / "openr"), ["JPROBE"])), "--out", "stick")
         assert json.loads((tmp_path / "stick" / "run.json").read_text())["backend"] == "memory stick"
         # A match, following robot 2 and showing its camera.
-        match = [sys.executable, "-m", "aibo_sim.cli", "run", str(CONTROLLER), "--robot", "red:4", "--robot", "blue:4"]
-        watched = subprocess.run(
-            [*match, "--duration", "0.3", "--view", "--view-robot", "2", "--out", "match"],
-            env={**os.environ, "DISPLAY": display},
-            cwd=tmp_path,
-            capture_output=True,
-            text=True,
-            timeout=120,
-        )
-        assert watched.returncode == 0, watched.stderr
+        watch(str(CONTROLLER), "--robot", "red:4", "--robot", "blue:4", "--view-robot", "2", "--out", "match")
         assert json.loads((tmp_path / "match" / "run.json").read_text())["status"] == "done"
     finally:
         if run is not None:
