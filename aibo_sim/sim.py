@@ -506,7 +506,7 @@ class Simulation:
 
     def _reset(self, reseed: bool) -> None:
         """After the world's reset: servos at the posture, noise streams restarted on a new seed."""
-        if reseed or not hasattr(self, "rng"):
+        if reseed:  # the world is made with its seed, so every robot gets one at the start
             self.rng = np.random.default_rng(self.robot_seed)  # IR noise; the camera's noise has its own stream
         self.servos.reset(self.joint_positions())
         self._queued = np.tile(self.servos.command, (self.command_latency_frames, 1))  # set-points on their way
