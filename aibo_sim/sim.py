@@ -19,9 +19,11 @@ import numpy as np
 from openr_bridge import FRAME_RATE_HZ, FRAME_TICK_MS
 
 from .camera import HeadCamera, scene_light
+from .camera.head import BEHIND_CAMERA_GROUP, HEAD_CAMERA_GROUPS
 from .config import CameraConfig, is_seed
 from .ers7 import DISTANCE_SENSORS, HEAD_CAMERA, JOINTS, LED_BY_NAME, LED_OFF_RGBA, SENSORS, TOUCH_SENSORS
 from .field import BALL_TYPES, COLOURS, PINK_BALL_MASS, PINK_BALL_RADIUS, SPECULAR, UNIFORM_COLOURS
+from .lod import add_levels_of_detail
 
 FRAME_MS = FRAME_TICK_MS  # OPEN-R joint frame, 8 ms
 GRAVITY = 9.80665
@@ -266,7 +268,8 @@ def add_robots(spec: mujoco.MjSpec, robots) -> None:
     ``models/ers7.xml`` named with ``robot_prefix``) and each team's uniform on every robot
     that has a team: patches on the flanks in the team's colour (``field.UNIFORM_COLOURS``), visual only
     (no mass, no contact: the physics stays that of the bare robot). The robots collide with
-    each other, never with themselves."""
+    each other, never with themselves. With several robots, the coarser copies of their visual
+    geoms their cameras draw the other robots with (``lod.add_levels_of_detail``)."""
     for index, robot in enumerate(robots):
         prefix = robot_prefix(index)
         if index:
@@ -294,6 +297,9 @@ def add_robots(spec: mujoco.MjSpec, robots) -> None:
                     conaffinity=0,
                     density=0,
                 )
+    if len(robots) > 1:  # the robots' cameras see each other: coarser copies of what they draw
+        bodies = [robot_prefix(index) + "body" for index in range(len(robots))]
+        add_levels_of_detail(spec, bodies, (*HEAD_CAMERA_GROUPS, BEHIND_CAMERA_GROUP))
 
 
 UNIFORM_PATCH = (0.05, 0.002, 0.028)  # half sizes: a 10 x 5.6 cm patch on each flank (the league's uniforms)

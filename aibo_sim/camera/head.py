@@ -329,7 +329,7 @@ class HeadCamera:
                     *self.render_size,
                     groups=(*HEAD_CAMERA_GROUPS, BEHIND_CAMERA_GROUP),
                     hidden=self.own_geoms(),
-                    subpixel=self.other_robots_geoms(),
+                    distant=self.other_robots_geoms(),
                 )
             render = {
                 "rgb": self._renderer.render,
