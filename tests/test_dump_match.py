@@ -17,6 +17,7 @@ from aibo_sim.cli import main
 from aibo_sim.config import CameraConfig, WorldConfig
 from aibo_sim.dump import DumpError, dump, load_dump
 from aibo_sim.dump.formats import instance_teams
+from aibo_sim.dump.running import PARAMETER_ORDER, recorded_parameters
 from aibo_sim.field import COCO_CATEGORIES, LABEL_TEAMS, SEGMENTATION_CLASSES
 from aibo_sim.team import RobotSpec
 
@@ -104,6 +105,11 @@ def test_each_robots_meta_names_its_spec_and_the_match(match_dump):
             (2, "blue", 1, "blue 1"),
         ]
         assert meta["camera"]["profile"] == "ideal"
+        # One order for every dump's parameters: a match robot's keys in a single robot's order.
+        assert list(parameters) == [key for key in PARAMETER_ORDER if key in parameters]
+        assert "robots" not in parameters and list(parameters)[:2] == ["controller", "env"]
+    with pytest.raises(KeyError, match="colour"):
+        recorded_parameters({"frames": 1}, {"colour": "red"})
 
 
 def test_robots_images_hold_the_other_robots_instance_id_in_the_specs_order(match_dump):

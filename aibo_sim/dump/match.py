@@ -34,8 +34,8 @@ from ..runner import MEMORY_STICK, Progress
 from ..sim import Simulation, load_model
 from ..team import check_robots
 from .coco import coco_bytes
-from .formats import DUMP_FORMAT, FORMATS, robots_meta
-from .running import _CameraFrames, check_formats, controller_sha256, model_sha256
+from .formats import DUMP_FORMAT, robots_meta
+from .running import _CameraFrames, check_formats, controller_sha256, recorded_parameters, world_parameters
 from .writing import COCO, CONTROLLER_FILES, DumpSummary, DumpWriter, check_destination, prepare_folder, write_atomic
 
 
@@ -147,24 +147,10 @@ def dump_match(
     _check_places(scene, robots, ball, ball_type)
     hashes = {path: controller_sha256(Path(path)) for path in dict.fromkeys(r.controller for r in robots)}
     out = Path(out).resolve()
-    recorded = {
-        "frames": frames,
-        "scene": scene and str(Path(scene).resolve()),
-        "seed": seed,
-        "ball": ball and list(ball),
-        "formats": [f for f in FORMATS if f in formats],
-        "camera_full": camera_full,
-        "camera_profile": profile.name,
-        "camera_settings": settings.as_dict(),
-    }
-    if ball_type != "robocup":
-        recorded["ball_type"] = ball_type
-    if profile.options():
-        recorded["camera_profile_options"] = profile.options()
-    recorded["model_sha256"] = model_sha256(model)
+    recorded = world_parameters(frames, scene, seed, ball, ball_type, formats, camera_full, profile, settings, model)
     match = {"controller": controller and str(Path(controller).resolve()), "robots": [r.as_dict() for r in robots]}
     shards = [robot_folder(k) for k in range(len(robots))]
-    meta = {"format": DUMP_FORMAT, "parameters": {**match, **recorded}, "shards": shards}
+    meta = {"format": DUMP_FORMAT, "parameters": recorded_parameters(recorded, match), "shards": shards}
     described = describe_camera(profile, settings, camera_size(camera_full), scene_light(model))
     start = time.perf_counter()
     prepared = prepare_folder(out, meta, resume)
@@ -174,7 +160,7 @@ def dump_match(
             check_destination(out / shard, shard_of=out)
         for k, robot in enumerate(robots):
             stick = memory_stick_folder(robot.controller) is not None
-            parameters = {
+            run = {
                 "controller": robot.controller,
                 "env": None,
                 "policy": None,
@@ -183,9 +169,9 @@ def dump_match(
                 "mtn_mode": None if stick else "openr",
                 "memory_stick": None,
                 "robot": robot.as_dict(),
-                **recorded,
                 "controller_sha256": hashes[robot.controller],
             }
+            parameters = recorded_parameters(recorded, run)
             writers.append(
                 DumpWriter(
                     out / shards[k],

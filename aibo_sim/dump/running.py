@@ -172,6 +172,62 @@ def _dump_env(parameters: dict, out: Path, resume: bool, **lock) -> DumpWriter:
     return writer
 
 
+PARAMETER_ORDER = (  # meta.json's "parameters", in this order: a dump's file reads the same run after run
+    "controller",
+    "robots",
+    "env",
+    "policy",
+    "frames",
+    "backend",
+    "scene",
+    "seed",
+    "pose",
+    "ball",
+    "mtn_mode",
+    "memory_stick",
+    "robot",
+    "formats",
+    "camera_full",
+    "camera_profile",
+    "camera_settings",
+    "ball_type",
+    "camera_profile_options",
+    "controller_sha256",
+    "model_sha256",
+)
+
+
+def world_parameters(
+    frames: int, scene, seed: int, ball, ball_type: str, formats, camera_full: bool, profile, settings, model
+) -> dict:
+    """What every dump records of its world and camera (a single robot's, each robot's of a match):
+    frames, scene, seed, ball, formats, camera and the model's hash."""
+    world = {
+        "frames": frames,
+        "scene": scene and str(Path(scene).resolve()),
+        "seed": seed,
+        "ball": ball and list(ball),
+        "formats": [f for f in FORMATS if f in formats],
+        "camera_full": camera_full,
+        "camera_profile": profile.name,
+        "camera_settings": (settings or CameraSettings()).as_dict(),
+        "model_sha256": model_sha256(model),
+    }
+    if ball_type != "robocup":  # only then: a dump resumes one made before the pink ball existed
+        world["ball_type"] = ball_type
+    if profile.options():  # only then: a dump of a preset resumes one made before options were recorded
+        world["camera_profile_options"] = profile.options()
+    return world
+
+
+def recorded_parameters(*parts: dict) -> dict:
+    """``parts`` merged in ``PARAMETER_ORDER`` (the world's, the run's: meta.json's "parameters")."""
+    merged = {key: value for part in parts for key, value in part.items()}
+    if unknown := merged.keys() - set(PARAMETER_ORDER):
+        raise KeyError(f"parameters without a place in PARAMETER_ORDER: {sorted(unknown)}")
+    return {key: merged[key] for key in PARAMETER_ORDER if key in merged}
+
+
 def dump_one(parameters: dict, out: Path, resume: bool, **lock) -> DumpSummary:
     """Dump one folder (a whole dump, or one shard) as ``parameters`` say; returns its summary.
 
@@ -407,31 +463,21 @@ def dump(
         controller = Path(controller).resolve()
         source_sha256 = controller_sha256(controller)
     out = Path(out).resolve()
-    parameters = {
+    world = world_parameters(
+        frames, scene, seed, ball, ball_type, formats, camera_full, profile, camera_settings, model
+    )
+    run = {
         "controller": controller and str(controller),
         "env": env,
         "policy": env and policy,
-        "frames": frames,
         "backend": backend,
-        "scene": scene and str(Path(scene).resolve()),
-        "seed": seed,
         "pose": pose and list(pose),
-        "ball": ball and list(ball),
         "mtn_mode": controller and backend != MEMORY_STICK and (mtn_mode or "openr") or None,
         "memory_stick": memory_stick and str(memory_stick),
-        "formats": [f for f in FORMATS if f in formats],
-        "camera_full": camera_full,
-        "camera_profile": profile.name,
-        "camera_settings": (camera_settings or CameraSettings()).as_dict(),
     }
-    if ball_type != "robocup":  # only then: a dump resumes one made before the pink ball existed
-        parameters["ball_type"] = ball_type
-    options = profile.options()
-    if options:  # only then: a dump of a preset resumes one made before options were recorded
-        parameters["camera_profile_options"] = options
     if source_sha256 is not None:
-        parameters["controller_sha256"] = source_sha256  # a resume refuses another controller
-    parameters["model_sha256"] = model_sha256(model)
+        run["controller_sha256"] = source_sha256  # a resume refuses another controller
+    parameters = recorded_parameters(world, run)
     if workers == 1:
         return dump_one(parameters, out, resume)
     if engine == "local":
