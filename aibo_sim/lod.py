@@ -150,35 +150,32 @@ class LevelsOfDetail:
         covered = (meshes >= 0).all(axis=1)
         self.geoms = geoms[covered]
         self._meshes = meshes[covered]
-        self._has = np.zeros(model.ngeom + 1, bool)  # indexed by objid; the last entry for decor's -1
+        self._has = np.zeros(model.ngeom, bool)  # by geom id
         self._has[self.geoms] = True
         self._row = np.zeros(model.ngeom, np.intp)
         self._row[self.geoms] = np.arange(self.geoms.size)
         self._radius = np.array([outline_radius(int(model.geom_type[g]), model.geom_size[g]) for g in self.geoms])
-        # MuJoCo moves a mesh's vertices to its principal axes (mesh_pos, mesh_quat): drawn at
-        # the geom's pose, a mesh needs that frame put back (here a few axis swaps).
-        self._mesh_pos = model.mesh_pos.astype(np.float32)
+        # MuJoCo turns a mesh's vertices to its principal axes (mesh_quat; the shapes are symmetric,
+        # so it moves none): drawn at the geom's pose, a mesh needs that turn put back (axis swaps).
         rotations = np.zeros((model.nmesh, 9))
         for m in range(model.nmesh):
             mujoco.mju_quat2Mat(rotations[m], model.mesh_quat[m])
         self._mesh_rot = rotations.reshape(-1, 3, 3).astype(np.float32)
-        self._moved = np.abs(model.mesh_pos).max(axis=1, initial=0) > 1e-9  # metres: below, rounding
         self._turned = np.abs(rotations - np.eye(3).ravel()).max(axis=1, initial=0) > 0
 
-    def apply(self, fields: dict, count: int, eye_pos, forward, pixels_per_metre: float) -> None:
+    def apply(self, fields: dict, count: int, geoms, depth, pixels_per_metre: float) -> None:
         """Draw the covered geoms among the scene's first ``count`` as the level their size in
-        the picture calls for (``pixels_per_metre`` at unit depth along ``forward``)."""
-        objid = fields["objid"][:count]
-        rows = np.flatnonzero((fields["objtype"][:count] == _GEOM) & self._has[objid])
-        geom_rows = self._row[objid[rows]]
-        depth = (fields["pos"][rows] - eye_pos) @ forward
-        level = np.searchsorted(LEVEL_RADII_PX, self._radius[geom_rows] * pixels_per_metre / np.maximum(depth, 1e-9))
-        small = level < len(LEVEL_SLICES)
-        rows, mesh = rows[small], self._meshes[geom_rows[small], level[small]]
-        moved, turned = self._moved[mesh], self._turned[mesh]
-        if moved.any():
-            mat = fields["mat"][rows[moved]].reshape(-1, 3, 3)
-            fields["pos"][rows[moved]] += np.einsum("nij,nj->ni", mat, self._mesh_pos[mesh[moved]])
+        the picture calls for: ``geoms`` (ids) at ``depth`` (m, along the view), where a metre
+        spans ``pixels_per_metre`` at 1 m."""
+        level = np.full(self._has.size, len(LEVEL_SLICES))  # per geom id: MuJoCo's own shape
+        covered = self._has[geoms]
+        radius_px = self._radius[self._row[geoms[covered]]] * pixels_per_metre / np.maximum(depth[covered], 1e-9)
+        level[geoms[covered]] = np.searchsorted(LEVEL_RADII_PX, radius_px)
+        rows = np.flatnonzero(fields["objtype"][:count] == _GEOM)  # objid is a geom id in these alone
+        rows = rows[level[fields["objid"][rows]] < len(LEVEL_SLICES)]
+        objid = fields["objid"][rows]
+        mesh = self._meshes[self._row[objid], level[objid]]
+        turned = self._turned[mesh]
         if turned.any():
             mat = fields["mat"][rows[turned]].reshape(-1, 3, 3)
             fields["mat"][rows[turned]] = (mat @ self._mesh_rot[mesh[turned]]).reshape(-1, 9)

@@ -296,7 +296,7 @@ class Renderer:
             cam.fixedcamid = camera if isinstance(camera, int) else self.model.camera(camera).id
         # eglMakeCurrent through PyOpenGL: ~5 us, ~20 us right after a physics step; the check ~0.4 us.
         self._enter()
-        culled, eye = self._outside_view(data, cam)
+        culled, distant = self._outside_view(data, cam)
         if self._hidden.size:
             culled = np.concatenate((culled, self._hidden))
         group = self.model.geom_group
@@ -307,8 +307,8 @@ class Renderer:
             mujoco.mjv_updateScene(self.model, data, self._option, None, cam, mujoco.mjtCatBit.mjCAT_ALL, self._scene)
         finally:
             group[culled] = saved
-        if self._geom_fields is not None and eye is not None:
-            self._lod.apply(self._geom_fields, self._scene.ngeom, eye.pos, eye.forward, self._pixels_per_metre(eye))
+        if self._geom_fields is not None and distant is not None:
+            self._lod.apply(self._geom_fields, self._scene.ngeom, *distant)
         mujoco.mjr_render(self._rect, self._scene, self._context)
 
     def _enter(self) -> None:
@@ -368,11 +368,13 @@ class Renderer:
         """The MuJoCo scene the renderer draws (its flags and geoms)."""
         return self._scene
 
-    def _outside_view(self, data: mujoco.MjData, cam: mujoco.MjvCamera) -> tuple[np.ndarray, mujoco.MjvGLCamera | None]:
+    def _outside_view(self, data: mujoco.MjData, cam: mujoco.MjvCamera) -> tuple[np.ndarray, tuple | None]:
         """Ids of the shown geoms whose bounding spheres lie outside the view frustum, with the
-        ``distant`` geoms smaller than a pixel, and the eye; none and None when culling is off,
-        shadows or reflections are on (a geom out of view can still cast or mirror), every group
-        is shown (no group left to hide them in) or the camera is orthographic."""
+        ``distant`` geoms smaller than a pixel; and the shown ``distant`` geoms' ids, depths (m)
+        and the pixels a metre spans at 1 m (for ``LevelsOfDetail.apply``), None without any.
+        None and None when culling is off, shadows or reflections are on (a geom out of view can
+        still cast or mirror), every group is shown (no group left to hide them in) or the camera
+        is orthographic."""
         flags = self._scene.flags
         if (
             not self._cull
@@ -395,14 +397,13 @@ class Renderer:
         distance = (data.geom_xpos[shown] - eye.pos) @ world_normals + offsets
         outside = (distance < minus_radius).any(axis=1)
         distant = self._distant[shown]
-        if distant.any():  # those smaller than a pixel too: 2 x radius x pixels per metre < depth
-            depth = distance[:, 4] + eye.frustum_near
-            outside |= distant & (-2 * minus_radius[:, 0] * self._pixels_per_metre(eye) < depth)
-        return shown[outside], eye
-
-    def _pixels_per_metre(self, eye: mujoco.MjvGLCamera) -> float:
-        """Pixels a metre spans across the view at a depth of one metre."""
-        return self.height * eye.frustum_near / (eye.frustum_top - eye.frustum_bottom)
+        if not distant.any():
+            return shown[outside], None
+        # Those smaller than a pixel too: 2 x radius x pixels per metre < depth.
+        depth = distance[:, 4] + eye.frustum_near
+        pixels_per_metre = self.height * eye.frustum_near / (eye.frustum_top - eye.frustum_bottom)  # at 1 m
+        outside |= distant & (-2 * minus_radius[:, 0] * pixels_per_metre < depth)
+        return shown[outside], (shown[distant], depth[distant], pixels_per_metre)
 
     def _frustum_planes(self, eye: mujoco.MjvGLCamera) -> tuple[np.ndarray, np.ndarray]:
         """Inward unit normals (columns, in the camera's right-up-forward axes) and offsets of

@@ -82,6 +82,8 @@ def test_a_match_model_has_coarse_copies_of_every_geom_a_camera_draws_a_lone_rob
         drawn = camera_geoms(model, model.body_rootid[robot._body])
         lod = LevelsOfDetail(model, drawn)
         assert drawn.size > 40 and np.array_equal(lod.geoms, drawn)  # every one: no mesh in the robot
+    lod_meshes = [m for m in range(model.nmesh) if model.mesh(m).name.startswith("lod_")]
+    assert np.abs(model.mesh_pos[lod_meshes]).max() < 1e-9  # symmetric: MuJoCo turns them, moves none
     lone = Simulation()
     assert not any(lone.model.mesh(m).name.startswith("lod_") for m in range(lone.model.nmesh))
     assert LevelsOfDetail(lone.model, camera_geoms(lone.model, lone.model.body_rootid[lone._body])).geoms.size == 0
