@@ -23,7 +23,6 @@ MAX_ERROR_PX = 0.15  # the outline's largest departure (pixels) a level may make
 LEVEL_RADII_PX = tuple(MAX_ERROR_PX / (1 - math.cos(math.pi / n)) for n in LEVEL_SLICES)  # 1.1, 2.0, 4.4
 G = mujoco.mjtGeom
 SHAPES = tuple(int(t) for t in (G.mjGEOM_SPHERE, G.mjGEOM_ELLIPSOID, G.mjGEOM_CAPSULE, G.mjGEOM_CYLINDER, G.mjGEOM_BOX))
-_GEOM, _MESH = int(mujoco.mjtObj.mjOBJ_GEOM), int(G.mjGEOM_MESH)  # ints: numpy compares enums one by one
 
 
 def mesh_name(geom_type: int, size, slices: int) -> str:
@@ -150,9 +149,7 @@ class LevelsOfDetail:
         covered = (meshes >= 0).all(axis=1)
         self.geoms = geoms[covered]
         self._meshes = meshes[covered]
-        self._has = np.zeros(model.ngeom, bool)  # by geom id
-        self._has[self.geoms] = True
-        self._row = np.zeros(model.ngeom, np.intp)
+        self._row = np.full(model.ngeom, -1, np.intp)  # by geom id: its row of meshes, -1 without
         self._row[self.geoms] = np.arange(self.geoms.size)
         self._radius = np.array([outline_radius(int(model.geom_type[g]), model.geom_size[g]) for g in self.geoms])
         # MuJoCo turns a mesh's vertices to its principal axes (mesh_quat; the shapes are symmetric,
@@ -161,23 +158,28 @@ class LevelsOfDetail:
         for m in range(model.nmesh):
             mujoco.mju_quat2Mat(rotations[m], model.mesh_quat[m])
         self._mesh_rot = rotations.reshape(-1, 3, 3).astype(np.float32)
-        self._turned = np.abs(rotations - np.eye(3).ravel()).max(axis=1, initial=0) > 0
+        self._level_radii = np.array(LEVEL_RADII_PX)
+        from . import scene_kernels  # numba, loaded by the first renderer rather than by every import of aibo_sim
 
-    def apply(self, fields: dict, count: int, geoms, depth, pixels_per_metre: float) -> None:
+        self._swap = scene_kernels.swap_levels
+
+    def apply(self, fields: dict, count: int, geoms, depth, pixels_per_metre: float) -> int:
         """Draw the covered geoms among the scene's first ``count`` as the level their size in
         the picture calls for: ``geoms`` (ids) at ``depth`` (m, along the view), where a metre
-        spans ``pixels_per_metre`` at 1 m."""
-        level = np.full(self._has.size, len(LEVEL_SLICES))  # per geom id: MuJoCo's own shape
-        covered = self._has[geoms]
-        radius_px = self._radius[self._row[geoms[covered]]] * pixels_per_metre / np.maximum(depth[covered], 1e-9)
-        level[geoms[covered]] = np.searchsorted(LEVEL_RADII_PX, radius_px)
-        rows = np.flatnonzero(fields["objtype"][:count] == _GEOM)  # objid is a geom id in these alone
-        rows = rows[level[fields["objid"][rows]] < len(LEVEL_SLICES)]
-        objid = fields["objid"][rows]
-        mesh = self._meshes[self._row[objid], level[objid]]
-        turned = self._turned[mesh]
-        if turned.any():
-            mat = fields["mat"][rows[turned]].reshape(-1, 3, 3)
-            fields["mat"][rows[turned]] = (mat @ self._mesh_rot[mesh[turned]]).reshape(-1, 9)
-        fields["type"][rows] = _MESH
-        fields["dataid"][rows] = 2 * mesh
+        spans ``pixels_per_metre`` at 1 m. Returns the number drawn coarser."""
+        return self._swap(
+            fields["type"],
+            fields["dataid"],
+            fields["objtype"],
+            fields["objid"],
+            fields["mat"],
+            count,
+            geoms,
+            depth,
+            pixels_per_metre,
+            self._row,
+            self._radius,
+            self._level_radii,
+            self._meshes,
+            self._mesh_rot,
+        )

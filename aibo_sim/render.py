@@ -24,8 +24,10 @@ drawn as coarser meshes (``lod.py``): a robot 2-4 m away costs 6-9x less, its ou
 
 from __future__ import annotations
 
+import contextlib
 import ctypes
 import ctypes.util
+import functools
 import math
 import os
 import warnings
@@ -37,7 +39,7 @@ import numpy as np
 from ._gl import SYSTEM_PACKAGES, choose_gl_backend
 from .lod import LevelsOfDetail
 
-GL_RGBA, GL_UNSIGNED_BYTE = 0x1908, 0x1401
+GL_RGBA, GL_UNSIGNED_BYTE, GL_RENDERER = 0x1908, 0x1401, 0x1F01
 GL_PACK_INVERT_MESA = 0x8758  # Mesa's GL_MESA_pack_invert: glReadPixels gives the rows top to bottom
 
 
@@ -101,6 +103,10 @@ class _EglCurrent:
     def restore(self, saved: tuple) -> None:
         self._egl.eglMakeCurrent(*saved)
 
+    def release(self) -> None:
+        """Make no context current in this thread (another thread may then make it current)."""
+        self._egl.eglMakeCurrent(self._egl.eglGetCurrentDisplay(), None, None, None)
+
 
 class _OsmesaCurrent:
     """The same as ``_EglCurrent`` for OSMesa (libOSMesa, ctypes). OSMesa makes a context
@@ -143,6 +149,10 @@ class _OsmesaCurrent:
     def restore(self, saved: tuple) -> None:
         context, buffer, width, height = saved
         self._osmesa.OSMesaMakeCurrent(context, buffer, self.GL_FLOAT, width, height)
+
+    def release(self) -> None:
+        """Make no context current in this thread."""
+        self._osmesa.OSMesaMakeCurrent(None, None, 0, 0, 0)
 
 
 def _current_context(backend: str) -> _EglCurrent | _OsmesaCurrent | None:
@@ -192,6 +202,17 @@ def scene_geom_fields(scene: mujoco.MjvScene) -> dict[str, np.ndarray]:
     }
 
 
+def _one_picture(method):
+    """``method`` holding the renderer's picture lock (see ``Renderer``)."""
+
+    @functools.wraps(method)
+    def locked(self, *args):
+        with self._picture_lock:
+            return method(self, *args)
+
+    return locked
+
+
 class Renderer:
     """Renders RGB (and optionally depth) images of one camera of a model, offscreen.
 
@@ -203,6 +224,17 @@ class Renderer:
     worth of triangles), and as the model's coarser meshes while they are small (``lod.py``).
     ``render`` returns a new ``(height, width, 3)`` uint8 array, top row first. ``cull=False`` draws the geoms outside
     the view too (same pixels, slower); ``scene`` is the ``MjvScene`` last drawn.
+
+    ``pinholes`` maps camera ids to the ``(cam_intrinsic, cam_sensorsize, cam_resolution)`` this
+    renderer draws them with instead of the model's (a lens's picture is resampled from a pinhole
+    render). ``lock`` (an RLock) is shared by the renderers of one model and data in several
+    threads (a match's cameras): the model is changed only while a scene is built from it
+    (culling hides geoms by their groups), holding the lock, and each renderer leaves its context
+    current in no thread, so that any thread may draw it next. With a software OpenGL (Mesa's
+    llvmpipe: the drawing is the CPU's work) the pictures are drawn and read outside the lock, in
+    parallel (``parallel``); a GPU's driver serializes the threads anyway, at a cost (an H200: 8
+    cameras' pictures in 2 threads took 1.5x the time of one thread), so there the lock is held
+    for the whole picture.
     """
 
     def __init__(
@@ -215,6 +247,8 @@ class Renderer:
         cull: bool = True,
         hidden=(),
         distant=(),
+        pinholes: dict[int, tuple] | None = None,
+        lock=None,
     ):
         if quality not in ("fast", "high"):
             raise ValueError(f"quality must be 'fast' or 'high', not {quality!r}")
@@ -269,9 +303,15 @@ class Renderer:
         self._cull_inputs = model.geom_group, self._option.geomgroup, model.geom_rbound  # views, read each frame
         self._hidden_group = next((g for g in range(mujoco.mjNGROUP) if g not in groups), None)
         self._cull = cull
+        self._pinholes = pinholes or {}
+        self._release = lock is not None and self._current_context is not None
         self._hidden = np.asarray(hidden, np.intp)
         self._distant = np.zeros(model.ngeom, bool)
         self._distant[np.asarray(distant, np.intp)] = True
+        from . import scene_kernels  # numba, loaded by the first renderer rather than by every import of aibo_sim
+
+        self._kernels = scene_kernels
+        self._sorted = np.empty(model.ngeom, np.intp), np.empty(model.ngeom, np.intp), np.empty(model.ngeom)
         self._lod = LevelsOfDetail(model, np.flatnonzero(self._distant))
         self._geom_fields = scene_geom_fields(self._scene) if self._lod.geoms.size else None
         if self._hidden.size and self._hidden_group is None:
@@ -280,7 +320,11 @@ class Renderer:
         self._rgba = np.empty((height, width, 4), np.uint8)
         self._rgba.flags.writeable = False  # handed out; only glReadPixels writes it
         self._rgba_address = ctypes.c_void_p(self._rgba.ctypes.data)
-        self._gl_read, self._rows_down = self._rgba_reader()
+        self._gl_read, self._rows_down, software = self._gl_functions()
+        self.parallel = lock is not None and software
+        unlocked = contextlib.nullcontext()
+        self._picture_lock = unlocked if lock is None or self.parallel else lock
+        self._scene_lock = lock if self.parallel else unlocked
         self._leave()
         self._camera = mujoco.MjvCamera()
         self._rect = mujoco.MjrRect(0, 0, width, height)
@@ -296,20 +340,42 @@ class Renderer:
             cam.fixedcamid = camera if isinstance(camera, int) else self.model.camera(camera).id
         # eglMakeCurrent through PyOpenGL: ~5 us, ~20 us right after a physics step; the check ~0.4 us.
         self._enter()
-        culled, distant = self._outside_view(data, cam)
-        if self._hidden.size:
-            culled = np.concatenate((culled, self._hidden))
-        group = self.model.geom_group
-        saved = group[culled]
-        if culled.size:
-            group[culled] = self._hidden_group
-        try:
-            mujoco.mjv_updateScene(self.model, data, self._option, None, cam, mujoco.mjtCatBit.mjCAT_ALL, self._scene)
-        finally:
-            group[culled] = saved
+        pinhole = self._pinholes.get(cam.fixedcamid) if cam.type == mujoco.mjtCamera.mjCAMERA_FIXED else None
+        with self._scene_lock, self._lens(pinhole, cam.fixedcamid):
+            culled, distant = self._outside_view(data, cam)
+            if self._hidden.size:
+                culled = np.concatenate((culled, self._hidden))
+            group = self.model.geom_group
+            saved = group[culled]
+            if culled.size:
+                group[culled] = self._hidden_group
+            try:
+                mujoco.mjv_updateScene(
+                    self.model, data, self._option, None, cam, mujoco.mjtCatBit.mjCAT_ALL, self._scene
+                )
+            finally:
+                group[culled] = saved
         if self._geom_fields is not None and distant is not None:
             self._lod.apply(self._geom_fields, self._scene.ngeom, *distant)
         mujoco.mjr_render(self._rect, self._scene, self._context)
+
+    @contextlib.contextmanager
+    def _lens(self, pinhole: tuple | None, camera: int):
+        """The model's ``camera`` with the intrinsics of ``pinhole`` (if any) for the block's time."""
+        if pinhole is None:
+            yield
+            return
+        model = self.model
+        saved = (
+            model.cam_intrinsic[camera].copy(),
+            model.cam_sensorsize[camera].copy(),
+            model.cam_resolution[camera].copy(),
+        )
+        model.cam_intrinsic[camera], model.cam_sensorsize[camera], model.cam_resolution[camera] = pinhole
+        try:
+            yield
+        finally:
+            model.cam_intrinsic[camera], model.cam_sensorsize[camera], model.cam_resolution[camera] = saved
 
     def _enter(self) -> None:
         """Make this renderer's context current, remembering another renderer's (EGL)."""
@@ -326,17 +392,23 @@ class Renderer:
         if self._other_context is not None:
             self._current_context.restore(self._other_context)
             self._other_context = None
+        elif self._release:
+            self._current_context.release()
 
     def _read(self, rgb: np.ndarray | None, depth: np.ndarray | None) -> None:
         mujoco.mjr_readPixels(rgb, depth, self._rect, self._context)
         self._leave()
 
-    def _rgba_reader(self):
+    def _gl_functions(self):
         """PyOpenGL's raw ``glPixelStorei`` and ``glReadPixels`` (imported once the context
-        exists: MuJoCo chose PyOpenGL's platform) and whether the driver reads rows top to
-        bottom (``GL_PACK_INVERT_MESA`` accepted); called with this renderer's context current."""
+        exists: MuJoCo chose PyOpenGL's platform), whether the driver reads rows top to bottom
+        (``GL_PACK_INVERT_MESA`` accepted) and whether it draws in software (Mesa's llvmpipe or
+        softpipe); called with this renderer's context current."""
         from OpenGL.error import GLError
-        from OpenGL.raw.GL.VERSION.GL_1_0 import glGetError, glPixelStorei, glReadPixels
+        from OpenGL.raw.GL.VERSION.GL_1_0 import glGetError, glGetString, glPixelStorei, glReadPixels
+
+        name = (ctypes.cast(glGetString(GL_RENDERER), ctypes.c_char_p).value or b"").decode("ascii", "replace")
+        software = any(word in name for word in ("llvmpipe", "softpipe", "swrast"))
 
         for _ in range(8):  # errors left by others (GL keeps one per kind): PyOpenGL would raise them
             if not glGetError():
@@ -346,7 +418,7 @@ class Renderer:
             rows_down = True
         except GLError:  # GL_INVALID_ENUM: a driver without the extension
             rows_down = False
-        return (glPixelStorei, glReadPixels), rows_down
+        return (glPixelStorei, glReadPixels), rows_down, software
 
     def _read_rgba(self) -> np.ndarray:
         """The drawn picture, (h, w, 4) RGBA rows top to bottom, in the renderer's own buffer (the
@@ -383,7 +455,7 @@ class Renderer:
             or flags[mujoco.mjtRndFlag.mjRND_REFLECTION]
         ):
             return np.empty(0, np.intp), None
-        shown, minus_radius = self._cullable_geoms()
+        shown, radius = self._cullable_geoms()
         mujoco.mjv_updateCamera(self.model, data, cam, self._scene)
         eye = mujoco.mjv_averageCamera(*self._scene.camera)  # the two stereo eyes sit ipd apart; mono draws their mean
         if eye.orthographic:  # a box, not a frustum: draw everything
@@ -394,16 +466,25 @@ class Renderer:
         f, u = eye.forward.tolist(), eye.up.tolist()
         r = [f[1] * u[2] - f[2] * u[1], f[2] * u[0] - f[0] * u[2], f[0] * u[1] - f[1] * u[0]]
         world_normals = np.array([r, u, f]).T @ normals
-        distance = (data.geom_xpos[shown] - eye.pos) @ world_normals + offsets
-        outside = (distance < minus_radius).any(axis=1)
-        distant = self._distant[shown]
-        if not distant.any():
-            return shown[outside], None
-        # Those smaller than a pixel too: 2 x radius x pixels per metre < depth.
-        depth = distance[:, 4] + eye.frustum_near
         pixels_per_metre = self.height * eye.frustum_near / (eye.frustum_top - eye.frustum_bottom)  # at 1 m
-        outside |= distant & (-2 * minus_radius[:, 0] * pixels_per_metre < depth)
-        return shown[outside], (shown[distant], depth[distant], pixels_per_metre)
+        culled, far, far_depth = self._sorted
+        culled_count, far_count = self._kernels.outside_view(
+            data.geom_xpos,
+            shown,
+            radius,
+            world_normals,
+            offsets,
+            eye.pos.astype(np.float64),
+            self._distant,
+            pixels_per_metre,
+            eye.frustum_near,
+            culled,
+            far,
+            far_depth,
+        )
+        if not far_count:
+            return culled[:culled_count], None
+        return culled[:culled_count], (far[:far_count], far_depth[:far_count], pixels_per_metre)
 
     def _frustum_planes(self, eye: mujoco.MjvGLCamera) -> tuple[np.ndarray, np.ndarray]:
         """Inward unit normals (columns, in the camera's right-up-forward axes) and offsets of
@@ -425,15 +506,16 @@ class Renderer:
 
     def _cullable_geoms(self) -> tuple[np.ndarray, np.ndarray]:
         """Ids of the geoms in the shown groups with a finite bounding sphere (planes have
-        radius 0), and minus their radii as a column; cached while groups and radii stay the same."""
+        radius 0), and their radii; cached while groups and radii stay the same."""
         group, shown_groups, radius = self._cull_inputs
         key = group.tobytes() + shown_groups.tobytes() + radius.tobytes()
         if self._cullable_key != key:
             shown = np.flatnonzero(shown_groups[group] & (radius > 0))
-            self._cullable = shown, -radius[shown, None]
+            self._cullable = shown, radius[shown]
             self._cullable_key = key
         return self._cullable
 
+    @_one_picture
     def render(self, data: mujoco.MjData, camera: int | str | mujoco.MjvCamera) -> np.ndarray:
         """RGB image of ``camera`` (id, name or free MjvCamera) in the state ``data``."""
         self._draw(data, camera)
@@ -442,6 +524,7 @@ class Renderer:
             return self._rgb[::-1].copy()
         return cv2.cvtColor(self._read_rgba(), cv2.COLOR_RGBA2RGB)
 
+    @_one_picture
     def render_rgba(self, data: mujoco.MjData, camera: int | str | mujoco.MjvCamera) -> np.ndarray:
         """``render``'s picture as RGBA (alpha 255), read-only; without multisampling (``fast``
         quality) the renderer's own buffer, valid until its next render."""
@@ -453,6 +536,7 @@ class Renderer:
         picture.flags.writeable = False
         return picture
 
+    @_one_picture
     def render_depth(self, data: mujoco.MjData, camera: int | str) -> np.ndarray:
         """Depth along the optical axis in metres, float32 ``(height, width)``."""
         self._draw(data, camera)
@@ -462,6 +546,7 @@ class Renderer:
         z = self._depth[::-1].astype(np.float64)
         return (near * far / (far - z * (far - near))).astype(np.float32)
 
+    @_one_picture
     def render_segmentation(self, data: mujoco.MjData, camera: int | str) -> np.ndarray:
         """Geom id of every pixel, int32 ``(height, width)``; -1 where no geom is drawn.
 

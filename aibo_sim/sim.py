@@ -9,8 +9,10 @@ from __future__ import annotations
 
 import ctypes
 import math
+import os
 import threading
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import mujoco
@@ -18,7 +20,7 @@ import numpy as np
 
 from openr_bridge import FRAME_RATE_HZ, FRAME_TICK_MS
 
-from .camera import HeadCamera, scene_light
+from .camera import CameraFrame, HeadCamera, scene_light
 from .camera.head import BEHIND_CAMERA_GROUP, HEAD_CAMERA_GROUPS
 from .config import CameraConfig, is_seed
 from .ers7 import DISTANCE_SENSORS, HEAD_CAMERA, JOINTS, LED_BY_NAME, LED_OFF_RGBA, SENSORS, TOUCH_SENSORS
@@ -336,8 +338,10 @@ class World:
         self.frame = 0
         self.lockstep = None  # a Lockstep while robots' controllers step the world together
         # Renders and labels change the model for their time (geom groups, the lens's intrinsics):
-        # the robots of a match render one at a time (HeadCamera; a dump's labels hold it too).
+        # a match's cameras build their scenes one at a time (Renderer; a dump's labels hold it
+        # too), and with a software OpenGL draw them in parallel.
         self.render_lock = threading.RLock()
+        self._frame_makers: ThreadPoolExecutor | None = None
         self.robots: list[Simulation] = []
         for index, spec in enumerate(self.robot_specs):
             robot = first if index == 0 else Simulation.__new__(Simulation)
@@ -405,8 +409,23 @@ class World:
         joint frame ``frame``."""
         return (self.frame if frame is None else frame) * FRAME_MS * FRAME_RATE_HZ // 1000
 
+    def frames(self, cameras: Sequence[HeadCamera] | None = None) -> list[CameraFrame]:
+        """The current frames (``HeadCamera.frame``) of ``cameras`` (default every robot's, in robot
+        order), made in parallel threads (one a camera, up to the machine's cores) where the
+        cameras draw in parallel (a software OpenGL, ``Renderer``), else one after another."""
+        cameras = self.cameras if cameras is None else list(cameras)
+        if len(cameras) < 2 or not all(camera.draws_in_parallel() for camera in cameras):
+            return [camera.frame() for camera in cameras]
+        if self._frame_makers is None:
+            workers = min(len(cameras), os.cpu_count() or 1)
+            self._frame_makers = ThreadPoolExecutor(workers, thread_name_prefix="camera")
+        return list(self._frame_makers.map(HeadCamera.frame, cameras))
+
     def close(self) -> None:
         """Free every robot's camera renderer."""
+        if self._frame_makers is not None:
+            self._frame_makers.shutdown()
+            self._frame_makers = None
         for camera in self.cameras:
             camera.close()
 

@@ -117,6 +117,34 @@ def test_each_camera_sees_the_other_robot_and_its_uniform_not_its_own():
         sim.close()
 
 
+def test_a_matchs_frames_made_in_parallel_equal_those_made_one_at_a_time():
+    """World.frames draws the 8 cameras in threads at once: the same pictures, bit for bit, as each
+    camera made in turn in a twin world, the model left as it was, and each renderer then drawing
+    again from this thread (its context left current in none)."""
+    parallel, serial = (Simulation(robots=FOUR_A_SIDE, seed=5) for _ in range(2))
+    try:
+        model = parallel.model
+        groups, intrinsics = model.geom_group.copy(), model.cam_intrinsic.copy()
+        cv2.setNumThreads(3)
+        for _ in range(3):
+            for sim in (parallel, serial):
+                sim.step_frames(sim.frames_to_camera_frame())
+            made = parallel.world.frames()
+            assert cv2.getNumThreads() == 3  # OpenCV's setting back after the last camera's frame
+            for frame, camera in zip(made, serial.world.cameras):
+                expected = camera.frame()
+                assert np.array_equal(frame.ycrcb, expected.ycrcb) and frame.index == expected.index
+        assert [frame is camera.frame() for frame, camera in zip(made, parallel.world.cameras)] == [True] * 8
+        assert np.array_equal(model.geom_group, groups) and np.array_equal(model.cam_intrinsic, intrinsics)
+        seen = parallel.world.robots[0].camera.segmentation()  # this thread, after the pool's threads
+        assert np.array_equal(seen, serial.world.robots[0].camera.segmentation())
+        assert np.isin(seen, parallel.world.robots[0].camera.other_robots_geoms()).sum() > 100  # it sees robots
+    finally:
+        cv2.setNumThreads(-1)
+        parallel.close()
+        serial.close()
+
+
 def test_lockstep_waits_for_every_robot_and_lets_a_finished_one_go():
     sim = Simulation(robots=facing(), ball=False, camera=CameraConfig("ideal"))
     try:

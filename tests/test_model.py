@@ -410,3 +410,31 @@ def test_culling_with_a_free_camera_changes_no_pixel():
         assert culling.scene.ngeom < drawing_all.scene.ngeom
     culling.close()
     drawing_all.close()
+
+
+def test_a_renderers_pinhole_draws_as_the_models_intrinsics_would_and_leaves_them():
+    """``pinholes``: the picture of a camera drawn with other intrinsics (an off-centre, wider
+    pinhole) equals the one drawn after writing them into the model; the model keeps its own."""
+    from aibo_sim.render import Renderer
+
+    sim = Simulation()
+    sim.place_ball(0.35, 0.05)
+    model, camera = sim.model, sim.model.camera("camera").id
+    pitch = 1e-5
+    pinhole = ((150 * pitch, 150 * pitch, 12 * pitch, -7 * pitch), (208 * pitch, 160 * pitch), (208, 160))
+    own = model.cam_intrinsic.copy(), model.cam_sensorsize.copy(), model.cam_resolution.copy()
+    lens = Renderer(model, 208, 160, pinholes={camera: pinhole})
+    plain = Renderer(model, 208, 160)
+    try:
+        through_lens = lens.render(sim.data, camera)
+        assert all(
+            np.array_equal(a, b) for a, b in zip(own, (model.cam_intrinsic, model.cam_sensorsize, model.cam_resolution))
+        )
+        assert not np.array_equal(through_lens, plain.render(sim.data, camera))
+        model.cam_intrinsic[camera], model.cam_sensorsize[camera], model.cam_resolution[camera] = pinhole
+        assert np.array_equal(through_lens, plain.render(sim.data, camera))
+    finally:
+        model.cam_intrinsic[:], model.cam_sensorsize[:], model.cam_resolution[:] = own
+        lens.close()
+        plain.close()
+        sim.close()

@@ -17,6 +17,7 @@ pose at the exposure, and the OPEN-R message, encoded once.
 
 from __future__ import annotations
 
+import threading
 from typing import Protocol
 
 import cv2
@@ -137,6 +138,32 @@ class _Exposure:
     def __init__(self, index, frame_number, settings, data):
         self.index, self.frame_number, self.settings, self.data = index, frame_number, settings, data
         self.frame: CameraFrame | None = None
+
+
+class _OpenCvOneThread:
+    """OpenCV on one thread while any camera makes a frame, the caller's setting back after the
+    last: OpenCV's worker threads cost more than they save on frames this small (an ers7 frame
+    ~15 % faster on one thread), and a match's cameras make their frames in several threads at
+    once (the setting is the process's)."""
+
+    def __init__(self):
+        self._lock, self._makers, self._saved = threading.Lock(), 0, 0
+
+    def __enter__(self) -> None:
+        with self._lock:
+            if not self._makers:
+                self._saved = cv2.getNumThreads()
+                cv2.setNumThreads(1)
+            self._makers += 1
+
+    def __exit__(self, *error) -> None:
+        with self._lock:
+            self._makers -= 1
+            if not self._makers:
+                cv2.setNumThreads(self._saved)
+
+
+_OPENCV_ONE_THREAD = _OpenCvOneThread()
 
 
 class CameraMount(Protocol):
@@ -276,14 +303,8 @@ class HeadCamera:
         return self._exposures[0].frame
 
     def _make_frame(self, exposure: _Exposure) -> CameraFrame:
-        # OpenCV's worker threads cost more than they save on frames this small (an ers7 frame
-        # ~15 % faster on one thread here); the caller's setting is restored.
-        threads = cv2.getNumThreads()
-        cv2.setNumThreads(1)
-        try:
+        with _OPENCV_ONE_THREAD:
             return self._expose(exposure)
-        finally:
-            cv2.setNumThreads(threads)
 
     def _expose(self, exposure: _Exposure) -> CameraFrame:
         data = exposure.data
@@ -319,43 +340,48 @@ class HeadCamera:
         """(width, height) of the render the picture is made from."""
         return (self.width, self.height) if self._pinhole is None else (self._pinhole.width, self._pinhole.height)
 
+    def draws_in_parallel(self) -> bool:
+        """Whether this camera draws outside the world's render lock, in parallel with the other
+        robots' cameras (``Renderer.parallel``: a match, with a software OpenGL)."""
+        return self._made_renderer().parallel
+
     def _render(self, data: mujoco.MjData, kind: str) -> np.ndarray:
-        # The renderer hides geoms by changing their groups in the model, and the lens by
-        # changing the camera's intrinsics: the robots of a match share the model, one at a time.
-        with self.sim.world.render_lock:
-            if self._renderer is None:  # its geoms read from the groups: not while another changes them
+        renderer = self._made_renderer()
+        render = {
+            "rgb": renderer.render,
+            "rgba": renderer.render_rgba,
+            "depth": renderer.render_depth,
+            "segmentation": renderer.render_segmentation,
+        }[kind]
+        return render(data, self.camera_id)
+
+    def _made_renderer(self) -> Renderer:
+        if self._renderer is None:
+            with self.sim.world.render_lock:  # its geoms read from the groups: not while another changes them
                 self._renderer = Renderer(
                     self.model,
                     *self.render_size,
                     groups=(*HEAD_CAMERA_GROUPS, BEHIND_CAMERA_GROUP),
                     hidden=self.own_geoms(),
                     distant=self.other_robots_geoms(),
+                    pinholes=None if self._pinhole is None else {self.camera_id: self._pinhole_intrinsics()},
+                    lock=self.sim.world.render_lock if len(self.sim.world.robots) > 1 else None,
                 )
-            render = {
-                "rgb": self._renderer.render,
-                "rgba": self._renderer.render_rgba,
-                "depth": self._renderer.render_depth,
-                "segmentation": self._renderer.render_segmentation,
-            }[kind]
-            if self._pinhole is None:
-                return render(data, self.camera_id)
-            return self._render_pinhole(render, data)
+        return self._renderer
 
-    def _render_pinhole(self, render, data: mujoco.MjData) -> np.ndarray:
-        """``render`` through the pinhole camera the lens's picture is resampled from."""
-        model, cam, pinhole = self.model, self.camera_id, self._pinhole
-        saved = model.cam_intrinsic[cam].copy(), model.cam_sensorsize[cam].copy(), model.cam_resolution[cam].copy()
+    def _pinhole_intrinsics(self) -> tuple:
+        """The model camera's ``(cam_intrinsic, cam_sensorsize, cam_resolution)`` for the pinhole
+        render the lens's picture is resampled from."""
+        pinhole = self._pinhole
         pitch = 1e-5  # metres per render pixel: any value, as long as the three agree
         # MuJoCo's principal point offsets (metres) are the image centre less the principal
         # point in image axes (x right, y down): positive values move the principal point left, up.
         offset = ((pinhole.width - 1) / 2 - pinhole.centre[0], (pinhole.height - 1) / 2 - pinhole.centre[1])
-        model.cam_intrinsic[cam] = (pinhole.focal * pitch, pinhole.focal * pitch, offset[0] * pitch, offset[1] * pitch)
-        model.cam_sensorsize[cam] = (pinhole.width * pitch, pinhole.height * pitch)
-        model.cam_resolution[cam] = (pinhole.width, pinhole.height)
-        try:
-            return render(data, cam)
-        finally:
-            model.cam_intrinsic[cam], model.cam_sensorsize[cam], model.cam_resolution[cam] = saved
+        return (
+            (pinhole.focal * pitch, pinhole.focal * pitch, offset[0] * pitch, offset[1] * pitch),
+            (pinhole.width * pitch, pinhole.height * pitch),
+            (pinhole.width, pinhole.height),
+        )
 
     def _other_robots(self) -> np.ndarray:
         """Whether each geom belongs to another robot of the world."""

@@ -344,6 +344,7 @@ class MatchEnv(pettingzoo.ParallelEnv):
         self._down.clear()
         self._cycles = 0
         self.agents = list(self.possible_agents)
+        self._make_frames()
         return (
             {name: self._agents[name]._observation() for name in self.agents},
             {name: self._info(name) for name in self.agents},
@@ -378,6 +379,7 @@ class MatchEnv(pettingzoo.ParallelEnv):
         progress, self._ball_x = ball_x - self._ball_x, ball_x
         truncated = self._cycles >= self.max_cycles
         observations, rewards, terminations, truncations, infos = {}, {}, {}, {}, {}
+        self._make_frames()
         for name in self.agents:
             agent = self._agents[name]
             fallen = agent.sim.fallen()
@@ -390,6 +392,11 @@ class MatchEnv(pettingzoo.ParallelEnv):
         self._down.update(name for name in self._scripts if self.robots[name].fallen())
         self.agents = [name for name in self.agents if not (terminations[name] or truncations[name])]
         return observations, rewards, terminations, truncations, infos
+
+    def _make_frames(self) -> None:
+        """The live agents' camera frames, made together (in parallel: ``World.frames``)."""
+        if self.camera is not None:
+            self.sim.world.frames(self._agents[name].sim.camera for name in self.agents)
 
     def state(self) -> np.ndarray:
         """The ball (position, m, and velocity, m/s) and every robot's body (x, y, z, yaw, tilt), in
