@@ -16,8 +16,9 @@ view of one robot of such a match, every other robot driven by a scripted ``Ball
     env.close()
 
 One step is one frame of the head cameras at 30 fps (4 or 5 joint frames of 8 ms), as in the
-single-robot environments; every robot's camera frame is rendered (about 11 ms each on a CPU's
-software OpenGL at layer H), so a step of 8 agents costs about 8 such frames.
+single-robot environments; every live agent's camera frame is made, together (``World.frames``: in
+parallel threads with a software OpenGL), so a step of 8 agents costs about 8 camera frames of a
+match (their times in docs/benchmarks.md).
 """
 
 from __future__ import annotations
