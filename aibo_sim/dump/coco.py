@@ -94,19 +94,22 @@ class Objects:
         if observer.model.ngeom != self.model.ngeom:  # the same scene, maybe compiled twice
             raise ValueError("Objects: the robot is not in a world of this model")
         if observer._body not in self._views:
-            self._views[observer._body] = _View(self.model, self.classes, observer)
+            with observer.world.render_lock:  # the geom groups, which a match camera's renders change
+                self._views[observer._body] = _View(self.model, self.classes, observer)
         return self._views[observer._body]
 
     @staticmethod
     def _render(sim: Simulation, geoms: np.ndarray) -> np.ndarray:
-        """Geom ids of the current frame with only ``geoms`` (a mask) drawn."""
+        """Geom ids of the current frame with only ``geoms`` (a mask) drawn (the model's geom groups
+        changed for the render's time, holding the world's render lock: a match's robots share them)."""
         group = sim.model.geom_group
-        saved = group.copy()
-        group[:] = np.where(geoms, HEAD_CAMERA_GROUPS[0], HIDDEN_GROUP)
-        try:
-            return sim.camera.segmentation()
-        finally:
-            group[:] = saved
+        with sim.world.render_lock:
+            saved = group.copy()
+            group[:] = np.where(geoms, HEAD_CAMERA_GROUPS[0], HIDDEN_GROUP)
+            try:
+                return sim.camera.segmentation()
+            finally:
+                group[:] = saved
 
     def detect(self, sim: Simulation | None = None) -> list[dict]:
         """The current frame's visible objects as ``sim``'s camera sees them (default: the

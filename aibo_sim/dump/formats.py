@@ -275,12 +275,13 @@ def ball_in_image(sim: Simulation) -> dict | None:
         shown = (*HEAD_CAMERA_GROUPS, BEHIND_CAMERA_GROUP)
         hidden = next(g for g in range(mujoco.mjNGROUP) if g not in shown)
         groups = np.array([g in shown for g in range(6)], np.uint8)
-        own, saved = camera.own_geoms(), model.geom_group.copy()
-        model.geom_group[own] = hidden
-        try:
-            mujoco.mj_ray(model, data, frame.position, offset, groups, 1, -1, hit)
-        finally:
-            model.geom_group[:] = saved
+        with sim.world.render_lock:  # the geom groups, which the robots' renders change too
+            own, saved = camera.own_geoms(), model.geom_group.copy()
+            model.geom_group[own] = hidden
+            try:
+                mujoco.mj_ray(model, data, frame.position, offset, groups, 1, -1, hit)
+            finally:
+                model.geom_group[:] = saved
     return {
         "pixel": [float(u), float(v)],
         "visible": bool(inside and hit[0] == model.geom("ball").id),

@@ -40,14 +40,13 @@ from .writing import COCO, CONTROLLER_FILES, DumpSummary, DumpWriter, check_dest
 
 
 class _RobotFrames(_CameraFrames):
-    """A match robot's frame listener, in its controller's thread: its camera frames to its writer,
-    holding the world's render lock while it writes (the labels' renders change the model's geom
-    groups, which every robot's renders read). A failure stops every robot."""
+    """A match robot's frame listener, in its controller's thread: its camera frames to its writer
+    (the robots' at once: what changes the shared model holds the world's render lock). A failure
+    stops every robot."""
 
     def __call__(self, program) -> None:
         try:
-            with program.sim.world.render_lock:
-                super().__call__(program)
+            super().__call__(program)
         except SimulationEnd:
             if self.error is not None and program.sim.world.lockstep is not None:
                 program.sim.world.lockstep.stop()  # the other robots end at their next step
