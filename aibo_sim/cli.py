@@ -446,7 +446,7 @@ def main(argv: list[str] | None = None) -> int:
         from .mtn import MtnError
         from .render import RenderingUnavailable
         from .robot import DeviceError
-        from .runner import ControllerFailed
+        from .runner import ControllerFailed, interrupt_behind
         from .sim import ModelError, SimulationDiverged
         from .viewer import ViewerUnavailable
     except KeyboardInterrupt:
@@ -488,13 +488,24 @@ def main(argv: list[str] | None = None) -> int:
             exc = f"{exc.filename}: {exc.strerror or exc}"
         print(f"aibo-sim: error: {error_line(exc)}", file=sys.stderr)
         return EXIT_BAD_INPUT
-    except KeyboardInterrupt as exc:  # Ctrl-C: 130, as a shell reports a process ended by SIGINT (128 + 2)
-        hint = " (the dump can continue with --resume)" if args.command == "dump" else ""
-        if isinstance(exc, Terminated):
-            print(f"aibo-sim: terminated (SIGTERM){hint}", file=sys.stderr)
-            return EXIT_TERMINATED
-        print(f"\naibo-sim: interrupted{hint}", file=sys.stderr)
-        return EXIT_INTERRUPTED
+    except SystemError as exc:
+        interrupt = interrupt_behind(exc)
+        if interrupt is None:
+            raise
+        return _interrupted(interrupt, args.command)
+    except KeyboardInterrupt as exc:
+        return _interrupted(exc, args.command)
+
+
+def _interrupted(interrupt: KeyboardInterrupt, command: str) -> int:
+    """Say that Ctrl-C (130, as a shell reports a process ended by SIGINT: 128 + 2) or SIGTERM (143)
+    ended the command; the exit status."""
+    hint = " (the dump can continue with --resume)" if command == "dump" else ""
+    if isinstance(interrupt, Terminated):
+        print(f"aibo-sim: terminated (SIGTERM){hint}", file=sys.stderr)
+        return EXIT_TERMINATED
+    print(f"\naibo-sim: interrupted{hint}", file=sys.stderr)
+    return EXIT_INTERRUPTED
 
 
 if __name__ == "__main__":

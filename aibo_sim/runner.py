@@ -39,6 +39,14 @@ from .robot import Robot, SimulationEnd
 from .sim import FRAME_MS, Simulation, SimulationDiverged, models_dir
 
 
+def interrupt_behind(error: Exception) -> KeyboardInterrupt | None:
+    """The Ctrl-C or SIGTERM (``cli.Terminated``) that ``error`` stands for: a signal's exception
+    raised while a compiled function returns (numba's, a C extension's) reaches the caller as
+    the cause of a SystemError ("returned a result with an exception set")."""
+    cause = error.__cause__
+    return cause if isinstance(error, SystemError) and isinstance(cause, KeyboardInterrupt) else None
+
+
 class ControllerFailed(RuntimeError):
     """The controller raised; the message carries the simulated time and the traceback.
     ``exit_status``: the status it passed to ``sys.exit`` when that ended it, else None."""
@@ -569,6 +577,9 @@ def _run_controller_program(
             except SystemExit as exc:
                 error = None if exc.code in (None, 0) else exc
             except Exception as exc:
+                interrupt = interrupt_behind(exc)
+                if interrupt is not None:
+                    raise interrupt from None
                 error = exc
             finally:
                 ended_ms = robot.time_ms

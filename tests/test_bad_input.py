@@ -464,6 +464,49 @@ def test_ctrl_c_in_a_controller_exits_130_after_its_robot_die_functions(tmp_path
     assert (run["status"], run["simulated_s"], run["camera"]["profile"]) == ("interrupted", 0.008, "ers7")
 
 
+def test_a_sigterm_arriving_inside_a_compiled_function_still_ends_the_run_with_143(tmp_path, capsys):
+    """A signal's exception raised while numba's (or a C extension's) function returns reaches
+    the controller as the cause of a SystemError: the run ends as SIGTERM, not as a failure."""
+    ctl = controller(
+        tmp_path,
+        "from aibo_sim.cli import Terminated\n"
+        "robot_die(lambda: open('die.txt', 'w').write('ran'))\n"
+        "robot_step(8)\n"
+        "try:\n    raise Terminated()\n"
+        "except Terminated as interrupt:\n"
+        "    raise SystemError('CPUDispatcher(<function smear_taps>) returned a result with an exception set') "
+        "from interrupt\n",
+    )
+    out = tmp_path / "out"
+    assert main(["run", str(ctl), "--duration", "1", "--out", str(out)]) == 143
+    assert capsys.readouterr().err.strip() == "aibo-sim: terminated (SIGTERM)"
+    assert (out / "die.txt").read_text() == "ran"
+    assert json.loads((out / "run.json").read_text())["status"] == "interrupted"
+
+
+def test_any_command_reads_a_signal_behind_a_compiled_functions_system_error_as_that_signal(monkeypatch, capsys):
+    import aibo_sim.cli as cli
+
+    def stopped_inside_numba(args):
+        try:
+            raise cli.Terminated()
+        except cli.Terminated as interrupt:
+            raise SystemError(
+                "CPUDispatcher(<function develop>) returned a result with an exception set"
+            ) from interrupt
+
+    monkeypatch.setattr(cli, "_render", stopped_inside_numba)
+    assert main(["render"]) == 143
+    assert capsys.readouterr().err.strip() == "aibo-sim: terminated (SIGTERM)"
+
+    def broken(args):
+        raise SystemError("a SystemError of its own")
+
+    monkeypatch.setattr(cli, "_render", broken)
+    with pytest.raises(SystemError, match="of its own"):  # not a signal: not hidden
+        main(["render"])
+
+
 @pytest.mark.slow
 def test_sigterm_ends_a_run_as_ctrl_c_does_with_143(tmp_path):
     import signal
