@@ -11,7 +11,7 @@ import ctypes
 import math
 import os
 import threading
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterable
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
@@ -409,7 +409,7 @@ class World:
         joint frame ``frame``."""
         return (self.frame if frame is None else frame) * FRAME_MS * FRAME_RATE_HZ // 1000
 
-    def frames(self, cameras: Sequence[HeadCamera] | None = None) -> list[CameraFrame]:
+    def frames(self, cameras: Iterable[HeadCamera] | None = None) -> list[CameraFrame]:
         """The current frames (``HeadCamera.frame``) of ``cameras`` (default every robot's, in robot
         order), made in parallel threads (one a camera, up to the machine's cores) where the
         cameras draw in parallel (a software OpenGL, ``Renderer``), else one after another."""

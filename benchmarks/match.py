@@ -39,7 +39,7 @@ def camera_ms_per_robot_frame() -> dict:
     """Best mean wall time (ms) of one robot's camera frame, by (robots, parallel): 1, 4 and 8 robots
     with the frames made by ``World.frames``, and 8 made one after another. The worlds take turns
     in each repeat, so that the machine's noise falls on all of them alike."""
-    cases = {(1, True): None, (4, True): None, (8, True): None, (8, False): None}
+    cases = ((1, True), (4, True), (8, True), (8, False))
     worlds = {count: Simulation(robots=KICKOFF[:count], seed=1) for count in (1, 4, 8)}
     try:
         for sim in worlds.values():

@@ -342,7 +342,8 @@ class HeadCamera:
 
     def draws_in_parallel(self) -> bool:
         """Whether this camera draws outside the world's render lock, in parallel with the other
-        robots' cameras (``Renderer.parallel``: a match, with a software OpenGL)."""
+        robots' cameras (``Renderer.parallel``: a match, with a software OpenGL); makes its
+        renderer if it has none yet."""
         return self._made_renderer().parallel
 
     def _render(self, data: mujoco.MjData, kind: str) -> np.ndarray:
