@@ -202,6 +202,19 @@ def scene_geom_fields(scene: mujoco.MjvScene) -> dict[str, np.ndarray]:
     }
 
 
+@contextlib.contextmanager
+def geom_groups(model: mujoco.MjModel, geoms, groups, lock=None):
+    """``model.geom_group[geoms] = groups`` (ids, a mask or a slice) for the block's time, holding
+    ``lock`` if given (a match's robots share the model: see ``Renderer``)."""
+    with lock if lock is not None else contextlib.nullcontext():
+        saved = np.array(model.geom_group[geoms])
+        model.geom_group[geoms] = groups
+        try:
+            yield
+        finally:
+            model.geom_group[geoms] = saved
+
+
 def _one_picture(method):
     """``method`` holding the renderer's picture lock (see ``Renderer``)."""
 
@@ -345,16 +358,10 @@ class Renderer:
             culled, distant = self._outside_view(data, cam)
             if self._hidden.size:
                 culled = np.concatenate((culled, self._hidden))
-            group = self.model.geom_group
-            saved = group[culled]
-            if culled.size:
-                group[culled] = self._hidden_group
-            try:
+            with geom_groups(self.model, culled, self._hidden_group):
                 mujoco.mjv_updateScene(
                     self.model, data, self._option, None, cam, mujoco.mjtCatBit.mjCAT_ALL, self._scene
                 )
-            finally:
-                group[culled] = saved
         if self._geom_fields is not None and distant is not None:
             self._lod.apply(self._geom_fields, self._scene.ngeom, *distant)
         mujoco.mjr_render(self._rect, self._scene, self._context)

@@ -438,3 +438,18 @@ def test_a_renderers_pinhole_draws_as_the_models_intrinsics_would_and_leaves_the
         lens.close()
         plain.close()
         sim.close()
+
+
+@pytest.mark.parametrize("geoms", [np.array([3, 1]), slice(None)])
+def test_geom_groups_sets_groups_for_the_block_and_restores_them_after_an_error(model, geoms):
+    """``geom_groups``: the groups asked for inside the block (ids or every geom), the model's own
+    after it, even when the block raises; the lock is held inside and released after."""
+    import threading
+
+    from aibo_sim.render import geom_groups
+
+    own, lock = model.geom_group.copy(), threading.Lock()
+    with pytest.raises(KeyError), geom_groups(model, geoms, 5, lock):
+        assert (model.geom_group[geoms] == 5).all() and lock.locked()
+        raise KeyError("inside")
+    assert np.array_equal(model.geom_group, own) and not lock.locked()

@@ -39,6 +39,7 @@ import numpy as np
 from ..camera import HEAD_CAMERA_GROUPS
 from ..camera.head import BEHIND_CAMERA_GROUP
 from ..field import COCO_CATEGORIES, SEGMENTATION_CLASSES, TEAM_CATEGORIES
+from ..render import geom_groups
 from ..sim import Simulation
 from .formats import PATHS, geom_classes, robot_roots
 from .reading import LINES, META, frame_limit, read_meta, read_records
@@ -102,14 +103,9 @@ class Objects:
     def _render(sim: Simulation, geoms: np.ndarray) -> np.ndarray:
         """Geom ids of the current frame with only ``geoms`` (a mask) drawn (the model's geom groups
         changed for the render's time, holding the world's render lock: a match's robots share them)."""
-        group = sim.model.geom_group
-        with sim.world.render_lock:
-            saved = group.copy()
-            group[:] = np.where(geoms, HEAD_CAMERA_GROUPS[0], HIDDEN_GROUP)
-            try:
-                return sim.camera.segmentation()
-            finally:
-                group[:] = saved
+        shown = np.where(geoms, HEAD_CAMERA_GROUPS[0], HIDDEN_GROUP)
+        with geom_groups(sim.model, slice(None), shown, sim.world.render_lock):
+            return sim.camera.segmentation()
 
     def detect(self, sim: Simulation | None = None) -> list[dict]:
         """The current frame's visible objects as ``sim``'s camera sees them (default: the

@@ -17,6 +17,7 @@ from ..camera.head import BEHIND_CAMERA_GROUP
 from ..ers7 import JOINTS
 from ..field import LABEL_TEAMS, SEGMENTATION_CLASSES
 from ..files import open_file
+from ..render import geom_groups
 from ..sim import Simulation, robot_prefix
 from ..team import MAX_ROBOTS, RobotSpec
 
@@ -275,13 +276,9 @@ def ball_in_image(sim: Simulation) -> dict | None:
         shown = (*HEAD_CAMERA_GROUPS, BEHIND_CAMERA_GROUP)
         hidden = next(g for g in range(mujoco.mjNGROUP) if g not in shown)
         groups = np.array([g in shown for g in range(6)], np.uint8)
-        with sim.world.render_lock:  # the geom groups, which the robots' renders change too
-            own, saved = camera.own_geoms(), model.geom_group.copy()
-            model.geom_group[own] = hidden
-            try:
-                mujoco.mj_ray(model, data, frame.position, offset, groups, 1, -1, hit)
-            finally:
-                model.geom_group[:] = saved
+        # under the render lock: the robots' renders change the groups too
+        with geom_groups(model, camera.own_geoms(), hidden, sim.world.render_lock):
+            mujoco.mj_ray(model, data, frame.position, offset, groups, 1, -1, hit)
     return {
         "pixel": [float(u), float(v)],
         "visible": bool(inside and hit[0] == model.geom("ball").id),
