@@ -13,6 +13,7 @@ frame about the same with 0 and 2). So ``LP_NUM_THREADS`` defaults to 0; set it 
 
 import ctypes.util
 import os
+import sys
 
 HEADLESS_LIBRARIES = (("egl", "EGL"), ("osmesa", "OSMesa"))
 SYSTEM_PACKAGES = "EGL: Debian/Ubuntu 'libegl1 libgl1-mesa-dri' (Mesa's software renderer works); OSMesa: 'libosmesa6'"
@@ -33,11 +34,16 @@ def choose_gl_backend() -> str | None:
 def import_mujoco() -> None:
     """Import MuJoCo, which loads the OpenGL library ``MUJOCO_GL`` names at import time;
     when that fails (e.g. ``MUJOCO_GL=osmesa`` without libOSMesa) the ImportError says so
-    instead of PyOpenGL's traceback."""
+    instead of PyOpenGL's traceback; imported by the command line (``aibo-sim``, ``python -m
+    aibo_sim...``), that one line and exit status 2, as for any bad input."""
     try:
         import mujoco  # noqa: F401
     except Exception as exc:
-        raise ImportError(
+        error = ImportError(
             f"MuJoCo cannot load the OpenGL backend MUJOCO_GL={os.environ.get('MUJOCO_GL', '')!r} "
             f"({type(exc).__name__}: {exc}). Install {SYSTEM_PACKAGES}, or unset MUJOCO_GL to let aibo_sim choose."
-        ) from None
+        )
+        if sys.argv and (sys.argv[0] == "-m" or os.path.basename(sys.argv[0]) == "aibo-sim"):  # while -m finds it
+            print(f"aibo-sim: error: {error}", file=sys.stderr)
+            raise SystemExit(2) from None
+        raise error from None

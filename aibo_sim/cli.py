@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import contextlib
 import dataclasses
 import json
 import os
@@ -198,7 +197,8 @@ def _side_by_side(args) -> np.ndarray:
     pictures = []
     if args.side_by_side:  # a real layer-H frame as Tekkotsu's EasyTrain stores it: R, G, B = Y, Cb, Cr
         if not Path(args.side_by_side).is_file():
-            raise FileNotFoundError(f"--side-by-side {args.side_by_side}: no such file")
+            what = "not a regular file" if Path(args.side_by_side).exists() else "no such file"
+            raise FileNotFoundError(f"--side-by-side {args.side_by_side}: {what}")
         real = cv2.imread(args.side_by_side, cv2.IMREAD_COLOR)
         if real is None or real.shape != (*LAYER_SIZE[0][::-1], 3):
             raise ValueError(f"--side-by-side {args.side_by_side}: not a 208x160 EasyTrain PNG (R, G, B = Y, Cb, Cr)")
@@ -404,6 +404,9 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+STOP_GRACE_S = 10.0  # after a signal, the time a command has to stop cleanly (robot_die, run.json, temporary files)
+
+
 class Terminated(KeyboardInterrupt):
     """SIGTERM, raised in the main thread so that a command stops as after Ctrl-C: a run's
     ``robot_die`` functions run and its run.json says so, a dump's writers abort (temporary
@@ -411,21 +414,43 @@ class Terminated(KeyboardInterrupt):
     ``except Exception`` (a controller's own) swallows it."""
 
 
-def _raise_terminated(signum, frame):
-    raise Terminated()
+class _SignalsStopCleanly:
+    """While a command runs in the main thread, Ctrl-C raises KeyboardInterrupt and SIGTERM
+    ``Terminated``. A command still running ``STOP_GRACE_S`` after the first (a controller that
+    catches it and goes on), or a second signal, ends the process at once with the signal's status."""
+
+    def __init__(self):
+        self._deadline: threading.Timer | None = None
+        self._previous: dict[int, object] = {}
+
+    def __enter__(self) -> None:
+        if threading.current_thread() is threading.main_thread():
+            self._previous[signal.SIGTERM] = signal.signal(signal.SIGTERM, self._raise)
+            if signal.getsignal(signal.SIGINT) is signal.default_int_handler:  # not where Ctrl-C is ignored
+                self._previous[signal.SIGINT] = signal.signal(signal.SIGINT, self._raise)
+
+    def __exit__(self, *exc_info) -> None:
+        if self._deadline is not None:
+            self._deadline.cancel()
+        for number, handler in self._previous.items():
+            signal.signal(number, handler)
+
+    def _raise(self, number, frame):
+        terminated = number == signal.SIGTERM
+        status, name = (EXIT_TERMINATED, "terminated (SIGTERM)") if terminated else (EXIT_INTERRUPTED, "interrupted")
+        if self._deadline is not None:
+            _stop_now(status, f"{name} again: stopped at once")
+        self._deadline = threading.Timer(
+            STOP_GRACE_S, _stop_now, (status, f"{name}, and still running {STOP_GRACE_S:g} s later: stopped at once")
+        )
+        self._deadline.daemon = True
+        self._deadline.start()
+        raise Terminated() if terminated else KeyboardInterrupt()
 
 
-@contextlib.contextmanager
-def sigterm_stops_cleanly():
-    """SIGTERM raises ``Terminated`` while the command runs (main thread only; restored after)."""
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    previous = signal.signal(signal.SIGTERM, _raise_terminated)
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGTERM, previous)
+def _stop_now(status: int, why: str) -> None:
+    print(f"\naibo-sim: {why} (files being written may be left as they were)", file=sys.stderr, flush=True)
+    os._exit(status)
 
 
 def _reader_gone(stream) -> bool:
@@ -459,7 +484,7 @@ def main(argv: list[str] | None = None) -> int:
     # 143 terminated (SIGTERM).
     args = build_parser().parse_args(argv)
     try:
-        with sigterm_stops_cleanly():
+        with _SignalsStopCleanly():
             return args.handler(args)
     except ControllerFailed as exc:
         print(f"aibo-sim: {exc}", file=sys.stderr)

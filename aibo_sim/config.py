@@ -17,6 +17,7 @@ from openr_bridge import FULL_HEIGHT, FULL_WIDTH
 from .camera import CameraProfile, CameraSettings, camera_profile, camera_size
 from .field import BALL_TYPES
 
+MAX_MAGNITUDE = 1e6  # |value| beyond this is a typo, not a position (metres) or an angle (degrees)
 SEED_LIMIT = 2**64  # seeds are whole numbers below this (the camera's noise mixes 64 bits of them)
 
 
@@ -63,6 +64,8 @@ def start_values(name: str, values, count: int) -> tuple[float, ...] | None:
         raise ValueError(f"{name} must be {count} numbers, not {values!r}") from None
     if len(numbers) != count or not all(math.isfinite(v) for v in numbers):
         raise ValueError(f"{name} must be {count} finite numbers, not {' '.join(map(str, numbers))}")
+    if any(abs(v) > MAX_MAGNITUDE for v in numbers):
+        raise ValueError(f"{name} {' '.join(map(str, numbers))}: out of range (at most {MAX_MAGNITUDE:g} in magnitude)")
     return numbers
 
 

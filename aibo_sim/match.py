@@ -24,7 +24,7 @@ from .cbind import compile_controller, controller_sources, is_c_controller
 from .config import CameraConfig, ParameterError, WorldConfig
 from .files import make_folder, write_file_atomic
 from .openr.host import MemoryStickRun
-from .placement import PLACEMENT_OVERLAP_M, make_out_folder
+from .placement import check_robots_apart, make_out_folder
 from .robot import Robot, SimulationEnd
 from .runner import (
     CONSOLE_FILE,
@@ -192,9 +192,7 @@ def run_match(
     try:
         if ball is not None:
             sim.place_ball(*ball)
-        for first, second, depth in sim.overlaps(PLACEMENT_OVERLAP_M):
-            if first != second:
-                raise ValueError(f"--robots: {first} starts inside {second} ({depth * 100:.1f} cm deep)")
+        check_robots_apart(sim)
         for robot in world.robots:
             players.append(_player(robot, robot.spec.controller or controller_path, compiled))
         for player in players:
@@ -305,7 +303,7 @@ def _summary(sim, players, seed, scene, ball, ball_type, wall: float, interrupte
                 "folder": robot_folder(player.robot.index),
                 "controller": str(player.path),
                 "backend": player.kind,
-                "status": "failed" if player.error is not None else "done",
+                "status": "failed" if player.error is not None else "interrupted" if interrupted else "done",
                 **({"error": str(player.error)} if player.error is not None else {}),
                 "camera_frames": player.writer.count if player.writer else 0,
                 "robot_pose": [float(position[0]), float(position[1]), math.degrees(yaw)],
@@ -335,7 +333,5 @@ def _write_summaries(out: Path, players, summary: dict) -> None:
     """``out/run.json`` (the match) and each robot's ``run.json`` (its entry)."""
     for player, entry in zip(players, summary.get("robots", [])):
         if player.writer is not None:
-            player.writer.write_run_json(
-                entry if summary["status"] != "interrupted" else {**entry, "status": "interrupted"}
-            )
+            player.writer.write_run_json(entry)
     write_file_atomic(out / RUN_FILE, (json.dumps({"match": True, **summary}, indent=2) + "\n").encode())

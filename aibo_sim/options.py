@@ -18,10 +18,9 @@ import re
 from openr_bridge import CAMERA_DEFAULTS, CAMERA_SETTINGS
 
 from .camera import PROFILES, CameraSettings
-from .config import SEED_LIMIT, CameraConfig, ParameterError, WorldConfig
+from .config import MAX_MAGNITUDE, SEED_LIMIT, CameraConfig, ParameterError, WorldConfig
 from .field import BALL_TYPES
 
-MAX_MAGNITUDE = 1e6  # |value| beyond this is a typo, not a position (metres) or an angle (degrees)
 CAMERA_SETTING_OPTIONS = (("white_balance", "--camera-wb"), ("gain", "--camera-gain"), ("shutter", "--camera-shutter"))
 WORLD_DESTS = ("scene", "pose", "ball", "ball_type", "seed")
 CAMERA_DESTS = ("camera_profile", "camera_wb", "camera_gain", "camera_shutter", "camera_full")

@@ -1,6 +1,6 @@
 """Where a run starts and writes, checked before it begins: the robot's pose and the ball's
 position (``start_values``, ``place``, ``check_place``) and the output folder
-(``make_out_folder``).
+(``out_path``, ``make_out_folder``).
 
 An argument that cannot be used is a ``ParameterError`` naming the parameter (``pose``,
 ``ball``, ``scene``, ``out``); the command line names its option instead (``--pose``).
@@ -9,6 +9,7 @@ An argument that cannot be used is a ``ParameterError`` naming the parameter (``
 from __future__ import annotations
 
 import math
+import os
 from pathlib import Path
 
 from .config import CameraConfig, ParameterError
@@ -17,9 +18,19 @@ from .sim import ModelError, Simulation
 PLACEMENT_OVERLAP_M = 0.005  # a placed robot or ball sunk deeper than this into something is an error
 
 
-def make_out_folder(path) -> Path:
-    """The output folder ``out``, made with its parents; a ``ParameterError`` naming it if it is a file."""
+def out_path(path) -> Path:
+    """The output folder ``out`` resolved: it may be a link to a folder, not a link to nothing (aibo-sim
+    makes no folder through a link it did not make); a ``ParameterError`` naming it."""
     path = Path(path)
+    if path.is_symlink() and not path.exists():
+        raise ParameterError.at("out", path, f"a link to {os.readlink(path)}, which does not exist")
+    return path.resolve()
+
+
+def make_out_folder(path) -> Path:
+    """The output folder ``out`` (``out_path``), made with its parents; a ``ParameterError`` naming
+    it if it is a file."""
+    path = out_path(path)
     if path.exists() and not path.is_dir():
         raise ParameterError.at("out", path, "not a folder")
     path.mkdir(parents=True, exist_ok=True)
@@ -70,3 +81,14 @@ def place(sim, pose: tuple[float, float, float] | None = None, ball: tuple[float
                 raise ParameterError.at(
                     "scene", sim.scene, f"{reason}; move it in the scene, or place it with", fix=placed[subject][0]
                 )
+
+
+def check_robots_apart(sim) -> None:
+    """A ValueError when a robot of ``sim``'s world starts inside something (a wall, a goal,
+    another robot) deeper than ``PLACEMENT_OVERLAP_M``, naming where that robot was described
+    (``RobotSpec.given``: the robots file's line, or the ``--robot`` argument)."""
+    given = {robot.spec.name: robot.spec.given for robot in sim.world.robots}
+    for first, second, depth in sim.overlaps(PLACEMENT_OVERLAP_M):
+        if first != second:
+            where = given.get(first) or given.get(second) or "--robots"
+            raise ValueError(f"{where}: {first} starts inside {second} ({depth * 100:.1f} cm deep)")

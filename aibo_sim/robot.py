@@ -35,8 +35,9 @@ class DeviceError(RuntimeError):
     """Misuse of a device: unknown name, wrong kind, not enabled, no value yet."""
 
 
-class SimulationEnd(Exception):
-    """Raised inside the controller when the run's duration is over (Webots ends it too)."""
+class SimulationEnd(BaseException):
+    """Raised inside the controller when the run's duration is over (Webots ends it too). Not an
+    ``Exception``, as ``SystemExit`` is not: a controller's ``except Exception`` lets it through."""
 
 
 def whole_ms(value) -> int | None:

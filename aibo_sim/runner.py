@@ -33,7 +33,7 @@ from .cbind import (
 from .config import CameraConfig, WorldConfig
 from .files import FolderLock, SymlinkRefused, make_folder, png, read_file, write_file_atomic
 from .openr.host import MemoryStickRun, OpenRObjectCrashed
-from .placement import make_out_folder, place
+from .placement import make_out_folder, out_path, place
 from .render import RenderingUnavailable
 from .robot import Robot, SimulationEnd
 from .sim import FRAME_MS, Simulation, SimulationDiverged, models_dir
@@ -102,6 +102,8 @@ def check_python_controller(path: Path) -> None:
         what = (
             f"a folder with no {main_files} (a C or C++ controller folder holds its main file under the folder's name)"
             if path.is_dir()
+            else "not a regular file"
+            if path.exists()
             else "no such controller file"
         )
         raise FileNotFoundError(f"{path}: {what}")
@@ -109,7 +111,8 @@ def check_python_controller(path: Path) -> None:
         compile(path.read_bytes(), str(path), "exec")
     except SyntaxError as exc:  # IndentationError too
         code = f" ({exc.text.strip()!r})" if exc.text and exc.text.strip() else ""
-        raise ValueError(f"{path}, line {exc.lineno}: {type(exc).__name__}: {exc.msg}{code}") from None
+        line = "" if exc.lineno is None else f", line {exc.lineno}"  # none for a null byte: not Python text
+        raise ValueError(f"{path}{line}: {type(exc).__name__}: {exc.msg}{code}") from None
 
 
 class FrameWriter:
@@ -414,7 +417,7 @@ def run_controller(
     writer = None
     try:
         place(sim, world.pose, world.ball)
-        out = out and Path(out).resolve()
+        out = out and out_path(out)
         folder = Path(workdir).resolve() if workdir is not None else out
         if stick is None:
             program = Robot(
@@ -576,7 +579,9 @@ def _run_controller_program(
                 pass
             except SystemExit as exc:
                 error = None if exc.code in (None, 0) else exc
-            except Exception as exc:
+            except KeyboardInterrupt:
+                raise
+            except BaseException as exc:  # an Exception, or another BaseException it raised (GeneratorExit)
                 interrupt = interrupt_behind(exc)
                 if interrupt is not None:
                     raise interrupt from None

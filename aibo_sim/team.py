@@ -19,9 +19,10 @@ from __future__ import annotations
 import math
 import re
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
+from .config import MAX_MAGNITUDE
 from .field import (
     CENTRE_CIRCLE_RADIUS,
     FIELD_LENGTH,
@@ -56,12 +57,15 @@ class TeamError(ValueError):
 class RobotSpec:
     """One robot: its team (None: the lone robot without a uniform), player number (1..4, 1 is the
     goalkeeper), pose (x, y metres, yaw degrees as ``--pose``; None: the kickoff pose) and controller (a Python
-    file, a C/C++ controller folder or file, or an OPEN-R memory stick folder; None: the run's own)."""
+    file, a C/C++ controller folder or file, or an OPEN-R memory stick folder; None: the run's own).
+    ``given``: where it was described, for errors found later (a robots file's ``file:line``, or
+    ``--robot red:2``); not part of the robot."""
 
     team: str | None
     number: int
     pose: Pose | None = None
     controller: str | None = None
+    given: str | None = field(default=None, compare=False, repr=False)
 
     @property
     def name(self) -> str:
@@ -112,6 +116,8 @@ def _pose_problem(pose: Sequence[float]) -> str | None:
     """Why ``pose`` (three numbers) cannot be a robot's pose, or None."""
     if not all(math.isfinite(v) for v in pose):
         return f"pose {_show(pose)} is not finite numbers"
+    if abs(pose[2]) > MAX_MAGNITUDE:
+        return f"pose {_show(pose)}: yaw out of range (at most {MAX_MAGNITUDE:g} degrees in magnitude, as --pose)"
     for axis, value, limit in (("x", pose[0], POSE_LIMITS[0]), ("y", pose[1], POSE_LIMITS[1])):
         if abs(value) > limit:
             return f"pose {_show(pose)} is off the carpet (|{axis}| <= {limit:g} m)"
@@ -177,9 +183,7 @@ def check_robots(
         if first != i:
             fail(i, f"{robot.name} is also {place(first)}")
     resolved = tuple(
-        robot
-        if robot.pose is not None
-        else RobotSpec(robot.team, robot.number, kickoff_pose(robot.team, robot.number), robot.controller)
+        robot if robot.pose is not None else replace(robot, pose=kickoff_pose(robot.team, robot.number))
         for robot in robots
     )
     for i, robot in enumerate(resolved):
@@ -239,6 +243,8 @@ def load_robots(path: str | Path) -> tuple[RobotSpec, ...]:
     optional ``pose`` and ``controller``), each pose resolved (``check_robots``); a relative
     controller path is taken from the file's folder. TeamError of one line otherwise."""
     where = str(path)
+    if Path(path).exists() and not Path(path).is_file():  # a folder; a FIFO would block
+        raise TeamError(f"{where}: not a regular file")
     try:
         text = Path(path).read_text(encoding="utf-8")
     except OSError as exc:
@@ -274,10 +280,10 @@ def load_robots(path: str | Path) -> tuple[RobotSpec, ...]:
     folder = Path(path).parent
     robots = []
     for i, table in enumerate(tables):
+        at = f"{where}:{lines[i]}" if lines else where
         try:
-            robots.append(_table_robot(table, folder))
+            robots.append(replace(_table_robot(table, folder), given=at))
         except ValueError as exc:
-            at = f"{where}:{lines[i]}" if lines else where
             raise TeamError(f"{at}: {_label(i, table.get('team'), table.get('number'))}: {exc}") from None
     return check_robots(robots, str(path), lines or None)
 
@@ -318,7 +324,7 @@ def parse_robot(text: str) -> RobotSpec:
         problem = _pose_problem(pose)
         if problem:
             fail(problem)
-    return RobotSpec(team=team, number=number, pose=pose, controller=controller)
+    return RobotSpec(team=team, number=number, pose=pose, controller=controller, given=f"--robot {text}")
 
 
 def _is_float(text: str) -> bool:

@@ -464,6 +464,41 @@ def test_ctrl_c_in_a_controller_exits_130_after_its_robot_die_functions(tmp_path
     assert (run["status"], run["simulated_s"], run["camera"]["profile"]) == ("interrupted", 0.008, "ers7")
 
 
+def test_a_controller_catching_every_exception_around_its_step_still_ends_with_its_run(tmp_path):
+    """The run's end (SimulationEnd) is no Exception: ``except Exception`` does not keep it going."""
+    ctl = controller(tmp_path, "while True:\n    try:\n        robot_step(8)\n    except Exception:\n        pass\n")
+    assert run_controller(ctl, duration=0.1, out=tmp_path / "out").simulated_s == pytest.approx(0.104)
+
+
+def test_a_controller_raising_another_base_exception_fails_as_any_error_does(tmp_path, capsys):
+    ctl = controller(tmp_path, "robot_step(8)\nraise GeneratorExit('given up')\n")
+    out = tmp_path / "out"
+    assert main(["run", str(ctl), "--duration", "1", "--out", str(out)]) == 1
+    err = capsys.readouterr().err
+    assert "ctl.py raised at simulated t = 0.008 s" in err and "GeneratorExit: given up" in err
+    assert json.loads((out / "run.json").read_text())["status"] == "failed"
+
+
+def test_a_signal_during_a_match_says_interrupted_for_every_robot(tmp_path, capsys):
+    ctl = controller(
+        tmp_path,
+        "import os, signal\n"
+        "robot_step(16)\n"
+        "try:  # the first robot here sends it\n"
+        "    os.close(os.open('signalled', os.O_CREAT | os.O_EXCL))\n"
+        "    os.kill(os.getpid(), signal.SIGTERM)\n"
+        "except FileExistsError:\n"
+        "    pass\n"
+        "while True:\n    robot_step(8)\n",
+    )
+    out = tmp_path / "out"
+    args = ["run", str(ctl), "--robot", "red:1", "--robot", "blue:1", "--duration", "5", "--out", str(out)]
+    assert main(args) == 143
+    match = json.loads((out / "run.json").read_text())
+    robots = [json.loads((out / f"robot{k}" / "run.json").read_text()) for k in (1, 2)]
+    assert [match["status"]] + [r["status"] for r in match["robots"] + robots] == ["interrupted"] * 5
+
+
 def test_a_sigterm_arriving_inside_a_compiled_function_still_ends_the_run_with_143(tmp_path, capsys):
     """A signal's exception raised while numba's (or a C extension's) function returns reaches
     the controller as the cause of a SystemError: the run ends as SIGTERM, not as a failure."""
@@ -537,6 +572,44 @@ def test_sigterm_ends_a_run_as_ctrl_c_does_with_143(tmp_path):
     assert run["status"] == "interrupted" and run["camera_frames"] == len(frames) > 0
     assert all(name.endswith(".png") and not name.startswith(".") for name in frames)  # no temporary file left
     assert (out / "die.txt").read_text() == "ran"
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("signals", [1, 2])
+def test_a_controller_that_swallows_the_signal_is_stopped_after_the_grace_or_a_second_signal(tmp_path, signals):
+    """One signal ends a run even when the controller catches it and steps on: ``STOP_GRACE_S``
+    later the process ends with the signal's status; a second signal ends it at once."""
+    import signal
+    import subprocess
+    import sys
+
+    from aibo_sim.cli import STOP_GRACE_S
+
+    ctl = controller(
+        tmp_path,
+        "open('started', 'w').close()\n"
+        "while True:\n    try:\n        robot_step(8)\n    except BaseException:\n        pass\n",
+    )
+    process = subprocess.Popen(
+        [sys.executable, "-m", "aibo_sim.cli", "run", str(ctl), "--duration", "1e5", "--out", str(tmp_path / "out")],
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    deadline = time.monotonic() + 60
+    while not (tmp_path / "out" / "started").exists() and time.monotonic() < deadline:
+        time.sleep(0.05)
+    process.send_signal(signal.SIGTERM)
+    signalled = time.monotonic()
+    if signals == 2:
+        time.sleep(0.5)
+        process.send_signal(signal.SIGTERM)
+    _, err = process.communicate(timeout=60)
+    took = time.monotonic() - signalled
+    assert process.returncode == 143, err
+    if signals == 1:
+        assert STOP_GRACE_S <= took and f"still running {STOP_GRACE_S:g} s later: stopped at once" in err
+    else:
+        assert took < STOP_GRACE_S and "terminated (SIGTERM) again: stopped at once" in err
 
 
 def test_a_state_mujoco_resets_silently_counts_as_diverged():

@@ -172,7 +172,20 @@ def test_a_second_run_compiles_nothing_and_a_changed_source_compiles_again(tmp_p
 def test_a_compile_error_is_exit_2_with_the_compilers_file_and_line(tmp_path, capsys):
     source = c_file(tmp_path, "broken.c", "int main(void) {\n    robot_live(0)\n    return 0;\n}\n")
     assert main(["run", str(source)]) == 2
-    assert re.search(r"broken\.c:6:\d+: error", capsys.readouterr().err)
+    err = capsys.readouterr().err
+    assert err.startswith(f"aibo-sim: error: {source}: compiling failed:\n") and re.search(
+        r"broken\.c:6:\d+: error", err
+    )
+
+
+def test_a_file_that_does_not_link_or_is_not_text_is_exit_2_naming_it(tmp_path, capsys):
+    empty = c_file(tmp_path, "empty.c", "")
+    assert main(["run", str(empty)]) == 2
+    assert capsys.readouterr().err.startswith(f"aibo-sim: error: {empty}: linking failed:\n")
+    latin = c_file(tmp_path, "latin.c", "int main(void) { return 0; }\n")
+    latin.write_bytes(latin.read_bytes() + b'char *s = "\xf3" x;\n')
+    assert main(["run", str(latin)]) == 2
+    assert capsys.readouterr().err.startswith(f"aibo-sim: error: {latin}: compiling failed:\n")
 
 
 def test_no_compiler_is_exit_2_naming_it_and_how_to_install_it(tmp_path, monkeypatch, capsys):

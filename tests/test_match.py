@@ -236,7 +236,11 @@ def test_run_robots_file_on_the_command_line(tmp_path, capsys):
         (["--robot", "red:1", "--robot", "red:1"], "red 1 is also robot 1"),
         ([f"--robot=red:{n % 4 + 1}:{n * 0.3 - 2},1,0" for n in range(5)], "red"),
         ([f"--robot={t}:{n}" for t in ("red", "blue") for n in (1, 2, 3, 4)] + ["--robot", "red:1:0,1,0"], "8"),
-        (["--robot", "red:1:0,0,0", "--robot", "blue:1:0.25,0,0"], "--robots: blue 1 starts inside red 1"),
+        (
+            ["--robot", "red:1:0,0,0", "--robot", "blue:1:0.25,0,0"],
+            "--robot blue:1:0.25,0,0: blue 1 starts inside red 1",
+        ),
+        (["--robot", "red:1:0,0,1e300"], "--robot red:1:0,0,1e300: pose 0,0,1e+300: yaw out of range"),
         (["--robot", "red:1", "--pose", "0", "0", "0"], "--pose applies to a run of one robot"),
         (["--robot", "red:1", "--robot", "blue:1", "--view-robot", "2"], "--view-robot applies to --view in a match"),
         (["--view-robot", "1"], "--view-robot applies to --view in a match"),
@@ -246,6 +250,16 @@ def test_bad_robots_exit_2_with_one_line(arguments, message, capsys):
     assert main(["run", str(TRACKER), "--duration", "0.1", *arguments]) == 2
     error = capsys.readouterr().err
     assert message in error and error.count("\n") == 1
+
+
+def test_a_robot_placed_inside_a_goal_is_named_by_its_robots_files_line(tmp_path, capsys):
+    robots = tmp_path / "robots.toml"
+    robots.write_text(
+        "[[robot]]\nteam = 'red'\nnumber = 1\n\n[[robot]]\nteam = 'blue'\nnumber = 3\npose = [2.9, 0, 0]\n"
+    )
+    assert main(["run", str(TRACKER), "--duration", "0.1", "--robots", str(robots)]) == 2
+    error = capsys.readouterr().err
+    assert error.startswith(f"aibo-sim: error: {robots}:5: blue 3 starts inside ") and error.count("\n") == 1
 
 
 def test_kickoff_poses_of_a_full_match_do_not_overlap():

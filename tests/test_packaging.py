@@ -53,3 +53,22 @@ def test_unusable_mujoco_gl_fails_at_import_with_a_clear_message():
     last = result.stderr.strip().splitlines()[-1]
     assert last.startswith("ImportError: MuJoCo cannot load the OpenGL backend MUJOCO_GL='nonsense'")
     assert "unset MUJOCO_GL" in last
+
+
+def test_unusable_mujoco_gl_is_one_line_and_exit_2_for_the_command_line():
+    import os
+    import subprocess
+    import sys
+
+    environment = {**os.environ, "MUJOCO_GL": "nonsense"}
+    for command in (["-m", "aibo_sim.cli"], ["-c", "import sys; sys.argv[0] = 'aibo-sim'; import aibo_sim.cli"]):
+        result = subprocess.run(
+            [sys.executable, *command, "mtn", "info", "x.mtn"],
+            capture_output=True,
+            text=True,
+            env=environment,
+            cwd=ROOT,
+        )
+        assert result.returncode == 2
+        assert result.stderr.startswith("aibo-sim: error: MuJoCo cannot load the OpenGL backend MUJOCO_GL='nonsense'")
+        assert len(result.stderr.splitlines()) == 1

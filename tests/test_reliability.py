@@ -142,6 +142,24 @@ def test_a_link_planted_where_aibo_sim_writes_is_refused_naming_it(tmp_path, cap
     assert victim.read_bytes() == VICTIM and (out / name).is_symlink()
 
 
+@pytest.mark.parametrize(
+    "command",
+    [
+        ["run", str(SCRIPTED), "--duration", "0.1"],
+        ["run", str(SCRIPTED), "--duration", "0.1", "--robot", "red:1", "--robot", "blue:1"],
+        ["dump", str(SCRIPTED), "--steps", "2", "--formats", "rgb"],
+        ["render", "--settle", "0"],
+        ["build-ms", str(ROOT / "controllers" / "ball_tracker_c")],
+    ],
+)
+def test_an_out_that_is_a_link_to_nothing_is_refused_and_nothing_made_through_it(tmp_path, capsys, command):
+    out, target = tmp_path / "out", tmp_path / "missing" / "target"
+    out.symlink_to(target)
+    assert main(command + ["--out", str(out)]) == 2
+    one_error_line(capsys, f"--out {out}: a link to {target}, which does not exist")
+    assert not (tmp_path / "missing").exists()
+
+
 def test_a_signal_right_after_a_temporary_file_is_made_leaves_none(tmp_path, monkeypatch):
     """Ctrl-C or SIGTERM lands between bytecodes, here just after the temporary file was made."""
     from aibo_sim import files

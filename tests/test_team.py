@@ -5,6 +5,7 @@ from __future__ import annotations
 import itertools
 import json
 import math
+import os
 from pathlib import Path
 
 import pytest
@@ -223,10 +224,16 @@ def test_bad_file_level(tmp_path, text, expected):
 
 
 def test_missing_and_unreadable_files(tmp_path):
-    for path in (tmp_path / "absent.toml", tmp_path):
+    fifo = tmp_path / "fifo.toml"
+    os.mkfifo(fifo)  # read as a file, it would wait for a writer
+    for path, why in (
+        (tmp_path / "absent.toml", "cannot read the robots file"),
+        (tmp_path, "not a regular file"),
+        (fifo, "not a regular file"),
+    ):
         with pytest.raises(TeamError) as info:
             load_robots(path)
-        assert str(info.value).startswith(f"{path}: cannot read the robots file")
+        assert str(info.value).startswith(f"{path}: {why}")
         assert "\n" not in str(info.value)
     binary = tmp_path / "binary.toml"
     binary.write_bytes(b"\xff\xfe\x00robot")

@@ -114,8 +114,10 @@ def compile_controller(path: str | os.PathLike) -> Path:
             _run(
                 [compiler, *FLAGS, "-I", str(INCLUDE), "-I", str(build), "-c", str(source), "-o", str(objects[-1])],
                 source,
+                "compiling",
             )
-        _run([compilers.get("c++", compilers["cc"]), *map(str, objects), "-o", str(build / main.stem), "-lm"], main)
+        command = [compilers.get("c++", compilers["cc"]), *map(str, objects), "-o", str(build / main.stem), "-lm"]
+        _run(command, main, "linking")
         try:
             os.replace(build, folder)  # whole or not at all; a racing build of the same key may have won
         except OSError:
@@ -126,7 +128,9 @@ def compile_controller(path: str | os.PathLike) -> Path:
     return executable
 
 
-def _run(command: list[str], source: Path) -> None:
-    result = subprocess.run(command, capture_output=True, text=True)
+def _run(command: list[str], source: Path, step: str) -> None:
+    """Run a compiler ``step`` on ``source``; CompileError naming it, then the compiler's messages."""
+    result = subprocess.run(command, capture_output=True, text=True, errors="replace")  # it quotes the source's bytes
     if result.returncode != 0:
-        raise CompileError((result.stderr or result.stdout).rstrip() or f"{command[0]} failed on {source}")
+        messages = (result.stderr or result.stdout).rstrip()
+        raise CompileError(f"{source}: {step} failed" + (f":\n{messages}" if messages else ""))

@@ -34,7 +34,7 @@ def _dump_command(args) -> int:
         from ..cli import _match_robots  # run's reading of --robots and --robot (cli imports this module)
 
         robots = _match_robots(args)
-    # Ctrl-C and SIGTERM (``cli.sigterm_stops_cleanly``) stop it cleanly: writers abort, workers stop.
+    # Ctrl-C and SIGTERM (``cli._SignalsStopCleanly``) stop it cleanly: writers abort, workers stop.
     summary = dump(
         args.out,
         controller=args.controller,

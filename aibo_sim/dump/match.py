@@ -27,7 +27,7 @@ from ..camera import camera_profile as resolve_profile
 from ..config import CameraConfig, WorldConfig, is_seed, start_values
 from ..files import make_folder
 from ..match import robot_folder, run_match
-from ..placement import PLACEMENT_OVERLAP_M, place
+from ..placement import check_robots_apart, place
 from ..render import Renderer
 from ..robot import SimulationEnd
 from ..runner import MEMORY_STICK, Progress
@@ -98,9 +98,7 @@ def _check_places(scene, robots, ball, ball_type: str) -> None:
     sim = Simulation(scene, camera=CameraConfig("ideal"), ball_type=ball_type, robots=robots)
     try:
         place(sim, None, ball)  # a ParameterError naming the ball
-        for first, second, depth in sim.overlaps(PLACEMENT_OVERLAP_M):
-            if first != second:
-                raise ValueError(f"--robots: {first} starts inside {second} ({depth * 100:.1f} cm deep)")
+        check_robots_apart(sim)
     finally:
         sim.close()
 

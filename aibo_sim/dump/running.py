@@ -23,7 +23,7 @@ from ..cbind import compile_controller, controller_sources, is_c_controller
 from ..config import CameraConfig, WorldConfig, start_values
 from ..files import make_folder
 from ..mtn import MODES as MTN_MODES
-from ..placement import check_place
+from ..placement import check_place, out_path
 from ..render import Renderer
 from ..robot import BACKENDS, SimulationEnd, check_memory_stick
 from ..runner import MEMORY_STICK, Progress, check_python_controller, run_controller
@@ -462,7 +462,7 @@ def dump(
     if controller is not None:
         controller = Path(controller).resolve()
         source_sha256 = controller_sha256(controller)
-    out = Path(out).resolve()
+    out = out_path(out)
     world = world_parameters(
         frames, scene, seed, ball, ball_type, formats, camera_full, profile, camera_settings, model
     )

@@ -41,6 +41,7 @@ from openr_bridge.primitive import REQUEST_NAMES, allowed_values
 from .. import ers7
 from ..cbind.build import C_SUFFIXES, INCLUDE, controller_sources, is_c_controller
 from ..mjcf import KP_PER_SONY_P
+from ..placement import out_path
 from ..robot import find_file
 from ..runner import motion_dirs
 from ..sim import Servos, load_model
@@ -283,9 +284,9 @@ all install clean:
 def _check_out(out_dir) -> Path:
     if str(out_dir) == "":
         raise BuildMsError("--out is empty: give the folder to write the memory-stick project in")
-    out = Path(out_dir)
-    if out.is_symlink() or (out.exists() and not out.is_dir()):
-        raise BuildMsError(f"--out {out}: exists and is not a folder")
+    out = out_path(out_dir)  # a link to a folder is that folder
+    if out.exists() and not out.is_dir():
+        raise BuildMsError(f"--out {out_dir}: exists and is not a folder")
     if out.is_dir() and any(out.iterdir()):
         raise BuildMsError(f"--out {out}: the folder exists and is not empty: give a new or empty one")
     return out
