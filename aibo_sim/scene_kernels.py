@@ -11,10 +11,11 @@ importing ``aibo_sim`` does not load numba.
 from __future__ import annotations
 
 import mujoco
-import numba
 import numpy as np
 
-_compiled = numba.njit(cache=True, nogil=True, boundscheck=False)
+from .jit import compiled
+
+_compiled = compiled(nogil=True, boundscheck=False)
 _GEOM, _MESH = int(mujoco.mjtObj.mjOBJ_GEOM), int(mujoco.mjtGeom.mjGEOM_MESH)
 
 

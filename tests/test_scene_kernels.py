@@ -73,3 +73,18 @@ def test_swap_levels_draws_each_small_geom_as_the_level_its_size_calls_for():
     expected = np.tile(np.arange(1, 10, dtype=np.float32), (5, 1))
     expected[1] = (expected[1].reshape(3, 3) @ turn[15]).ravel()
     assert np.array_equal(mats, expected)
+
+
+def test_a_kernel_numba_cannot_cache_is_compiled_without_the_cache():
+    """``jit.compiled``: where numba has nowhere to keep the compiled code (here a function with no
+    source file, as for a read-only install without a writable home), it compiles it anyway."""
+    import numba
+    import pytest
+
+    from aibo_sim.jit import compiled
+
+    namespace = {}
+    exec("def double(x):\n    return 2 * x\n", namespace)
+    with pytest.raises(RuntimeError, match="cannot cache"):
+        numba.njit(cache=True)(namespace["double"])
+    assert compiled(nogil=True)(namespace["double"])(21) == 42

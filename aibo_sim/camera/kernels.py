@@ -30,10 +30,11 @@ from __future__ import annotations
 
 import math
 
-import numba
 import numpy as np
 
-_compiled = numba.njit(cache=True, nogil=True, boundscheck=False)
+from ..jit import compiled
+
+_compiled = compiled(nogil=True, boundscheck=False)
 VECTOR = 16  # columns a pass computes at a time
 SLACK = VECTOR  # spare columns past each row's end
 

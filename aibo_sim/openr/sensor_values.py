@@ -13,11 +13,12 @@ neither reorders nor fuses them), from the same noise draws: the same values to 
 (tests/test_openr_sensor_values.py holds them to it).
 """
 
-import numba
 import numpy as np
 
+from ..jit import compiled
 
-@numba.njit(cache=True, nogil=True)
+
+@compiled(nogil=True)
 def fill(
     qpos,
     actuator_force,
