@@ -51,8 +51,9 @@ def _match_robots(args):
         ("--memory-stick", args.memory_stick),
     ):
         if value is not None:
+            given = "--robots" if args.robots is not None else "--robot"
             raise ValueError(
-                f"{option} applies to a run of one robot: with --robots, each robot's pose and controller "
+                f"{option} applies to a run of one robot: with {given}, each robot's pose and controller "
                 "come from its entry"
             )
     if args.robots is not None:

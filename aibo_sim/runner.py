@@ -300,10 +300,12 @@ class _WaitNotices:
     """While a Python controller runs, a thread that prints the line ``serve.announce_wait``
     prints for a C controller after every ``serve.WAIT_NOTICE_S`` of wall time without an API
     call: a controller that computes for long, or never returns, is not taken for a simulator
-    that hangs."""
+    that hangs. None while an API call is under way (the first frames compile the camera's
+    passes: the simulator's time, not the controller's)."""
 
-    def __init__(self, name: str, robot: Robot):
-        self._name, self._robot, self._stop = name, robot, threading.Event()
+    def __init__(self, path: Path, robot: Robot):
+        self._name, self._robot, self._stop = path.name, robot, threading.Event()
+        self._folder, self._controller_thread = str(path.parent) + os.sep, threading.get_ident()
         self._thread = threading.Thread(target=self._watch, name="aibo-sim wait notices", daemon=True)
 
     def __enter__(self) -> _WaitNotices:
@@ -321,9 +323,22 @@ class _WaitNotices:
                 seen, notices = controller.last_call_s, 0
             if self._stop.wait(max(0.0, seen + (notices + 1) * serve.WAIT_NOTICE_S - time.monotonic())):
                 return
-            if controller.last_call_s == seen:
+            if controller.last_call_s == seen and not self._in_api_call():
                 notices += 1
                 serve.announce_wait(self._name, notices * serve.WAIT_NOTICE_S, self._robot.time_ms)
+
+    def _in_api_call(self) -> bool:
+        """Whether the controller's thread runs the simulator's code called from the controller's
+        (its innermost frame of the simulator's comes before its innermost of the controller's)."""
+        frame = sys._current_frames().get(self._controller_thread)
+        while frame is not None:
+            name = frame.f_code.co_filename
+            if name.startswith(_SIMULATOR_CODE[:2]):  # aibo_sim's and openr_bridge's
+                return True
+            if name.startswith(self._folder):
+                return False
+            frame = frame.f_back
+        return False
 
 
 class Progress:
@@ -571,7 +586,7 @@ def _run_controller_program(
                     if match:
                         _run_as_main(path)
                     else:
-                        with _WaitNotices(path.name, robot):
+                        with _WaitNotices(path, robot):
                             runpy.run_path(str(path), run_name="__main__")
                 else:
                     run_c_controller(executable, path.name)

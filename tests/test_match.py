@@ -241,7 +241,7 @@ def test_run_robots_file_on_the_command_line(tmp_path, capsys):
             "--robot blue:1:0.25,0,0: blue 1 starts inside red 1",
         ),
         (["--robot", "red:1:0,0,1e300"], "--robot red:1:0,0,1e300: pose 0,0,1e+300: yaw out of range"),
-        (["--robot", "red:1", "--pose", "0", "0", "0"], "--pose applies to a run of one robot"),
+        (["--robot", "red:1", "--pose", "0", "0", "0"], "--pose applies to a run of one robot: with --robot, each"),
         (["--robot", "red:1", "--robot", "blue:1", "--view-robot", "2"], "--view-robot applies to --view in a match"),
         (["--view-robot", "1"], "--view-robot applies to --view in a match"),
     ],

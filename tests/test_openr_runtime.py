@@ -196,6 +196,9 @@ def test_files_are_the_memory_stick_and_the_runs_folder(objects, tmp_path):
         "read /MS/OPEN-R/MW/DATA/P/PROBE.TXT: on the stick",
     ]
     assert "write here.txt: ok" in lines and "read /MS/OPEN-R/MW/DATA/P/STREAM.TXT: through a C++ stream" in lines
+    assert ["printf 7", "two parts", "puts", "c"] == [
+        line for line in lines if line in ("printf 7", "two parts", "puts", "c")
+    ]
     for refused in (
         "write /MS/OPEN-R/MW/DATA/P/longer_name.txt: refused (errno 13)",
         "read /etc/hostname: refused (errno 13)",

@@ -443,6 +443,25 @@ def test_a_python_controller_that_computes_long_is_announced_as_a_c_one_is(tmp_p
     ) in err
 
 
+def test_an_api_call_that_takes_long_is_not_announced_as_the_controllers_wait(tmp_path, monkeypatch, capsys):
+    """The simulator's own time inside a call (the first frames compile the camera's passes) is
+    not the controller's: no notice."""
+    from aibo_sim.robot import Robot
+
+    monkeypatch.setattr(serve, "WAIT_NOTICE_S", 0.2)
+    step = Robot.step
+
+    def slow_step(robot, ms):
+        time.sleep(0.5)
+        step(robot, ms)
+
+    monkeypatch.setattr(Robot, "step", slow_step)
+    controller = tmp_path / "quick.py"
+    controller.write_text("from aibo_sim.controller import *\nrobot_live(None)\nrobot_step(8)\nrobot_step(8)\n")
+    assert run_controller(controller, duration=1).simulated_s == 0.016
+    assert "waiting for controller" not in capsys.readouterr().err
+
+
 def test_closing_an_env_gives_its_memory_back(monkeypatch):
     """glibc keeps what a closed env freed (RSS 282 -> 545 MiB over 80 envs made and closed,
     272 after malloc_trim): closing one trims."""

@@ -75,8 +75,8 @@ def _refuse(env, workers, pose, backend, mtn_mode, memory_stick, policy, engine,
     ):
         if value is not None:
             raise ValueError(
-                f"{option} applies to a dump of one robot: with --robots, each robot's pose and controller "
-                "come from its entry"
+                f"{option} applies to a dump of one robot: with --robots or --robot, each robot's pose and "
+                "controller come from its entry"
             )
     if policy is not None:
         raise ValueError("--policy applies to --env dumps: a controller chooses its own actions")

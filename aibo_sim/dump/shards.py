@@ -197,7 +197,13 @@ def ray_session(address: str | None):
             ray.init(address=address, include_dashboard=False, logging_level="warning")
         except Exception as exc:  # Ray's own exception types, by version
             where = f"--ray-address {address}" if address else "--engine ray"
-            raise ValueError(f"{where}: cannot start or reach Ray ({str(exc).splitlines()[0]})") from None
+            hint = (
+                "; a cluster that authenticates with a token (`ray start`'s default since Ray 2.59) needs "
+                "RAY_AUTH_MODE=token and its token here too"
+                if address and os.environ.get("RAY_AUTH_MODE", "") != "token"
+                else ""
+            )
+            raise ValueError(f"{where}: cannot start or reach Ray ({str(exc).splitlines()[0]}){hint}") from None
     try:
         yield
     finally:

@@ -126,9 +126,17 @@ def _build(build: Path, root: Path, cxx: str, cc: str) -> None:
         source = SOURCES / "src" / name
         compiler, flags = (cc, CFLAGS) if name.endswith(".c") else (cxx, CXXFLAGS)
         objects.append(build / "obj" / f"{source.stem}.o")
-        _run([compiler, *flags, "-O2", "-Wall", *includes, "-c", str(source), "-o", str(objects[-1])], source)
+        _run(
+            [compiler, *flags, "-O2", "-Wall", *includes, "-c", str(source), "-o", str(objects[-1])],
+            source,
+            "compiling",
+        )
     library = build / "OPEN_R" / "lib" / "libOPENR.so"
-    _run([cxx, "-shared", "-Wl,-soname,libOPENR.so", "-o", str(library), *map(str, objects), "-ldl", "-lm"], library)
+    _run(
+        [cxx, "-shared", "-Wl,-soname,libOPENR.so", "-o", str(library), *map(str, objects), "-ldl", "-lm"],
+        library,
+        "linking",
+    )
     (build / "OPEN_R" / "lib" / "libObjectComm.so").write_text(
         "/* aibo-sim: ObjectComm (subjects, observers, RCRegion) is part of libOPENR. */\nINPUT(-lOPENR)\n"
     )
@@ -151,6 +159,7 @@ def _build(build: Path, root: Path, cxx: str, cc: str) -> None:
             "-ldl",
         ],
         main,
+        "building",
     )
     shutil.rmtree(build / "obj")
 

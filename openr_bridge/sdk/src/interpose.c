@@ -3,6 +3,9 @@
  * object's calls (and the C++ library's, on its behalf) come here first; each maps its path with
  * aibo_openr_object_path (msfs.cc: /MS is the memory stick, a relative path the run's folder,
  * anything else refused) and calls the C library's own. gets() reads the run's console input.
+ * printf, vprintf, puts and putchar (what compilers turn a printf into) of an object write to its
+ * console, as OSYSPRINT does: stamped with the simulated time and its name, into console.log too
+ * (not a putchar of the source, which glibc inlines into the stream's buffer, nor std::cout).
  */
 #define _GNU_SOURCE
 #include <dirent.h>
@@ -11,12 +14,14 @@
 #include <fcntl.h>
 #include <stdarg.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
 #define PATH_STORAGE 4096
 
 int aibo_openr_object_path(const char* path, int create, char* storage, size_t size, const char** mapped);
+int aibo_openr_print(const char* text); /* kernel.cc: 0 for the runtime's own calls, not an object's */
 
 static int creates(const char* mode) { return mode != NULL && (mode[0] == 'w' || mode[0] == 'a'); }
 
@@ -147,4 +152,52 @@ char* gets(char* line) {
     if (c == EOF && end == line) return NULL;
     *end = 0;
     return line;
+}
+
+int vprintf(const char* format, va_list arguments) {
+    char line[1024];
+    va_list again;
+    va_copy(again, arguments);
+    int length = vsnprintf(line, sizeof line, format, arguments);
+    char* text = length >= 0 && (size_t)length >= sizeof line ? malloc((size_t)length + 1) : line;
+    if (text != line && text != NULL) vsnprintf(text, (size_t)length + 1, format, again);
+    va_end(again);
+    if (length < 0 || text == NULL) return -1;
+    if (!aibo_openr_print(text)) fputs(text, stdout);
+    if (text != line) free(text);
+    return length;
+}
+
+int printf(const char* format, ...) {
+    va_list arguments;
+    va_start(arguments, format);
+    int length = vprintf(format, arguments);
+    va_end(arguments);
+    return length;
+}
+
+int puts(const char* text) {
+    if (!aibo_openr_print(text)) return fputs(text, stdout) < 0 ? EOF : putc('\n', stdout);
+    aibo_openr_print("\n");
+    return 1;
+}
+
+int putchar(int c) {
+    char text[2] = {(char)c, 0};
+    if (c == 0 || !aibo_openr_print(text)) return putc(c, stdout);
+    return c;
+}
+
+/* The same, where a program was compiled with _FORTIFY_SOURCE (Ubuntu's default). */
+int __vprintf_chk(int flag, const char* format, va_list arguments) {
+    (void)flag;
+    return vprintf(format, arguments);
+}
+
+int __printf_chk(int flag, const char* format, ...) {
+    va_list arguments;
+    va_start(arguments, format);
+    int length = __vprintf_chk(flag, format, arguments);
+    va_end(arguments);
+    return length;
 }

@@ -265,6 +265,14 @@ std::string TakeRecords() {
 
 }  // namespace host
 
+/* For interpose.c: an object's printf, puts or putchar, printed as OSYSPRINT prints; 0 for the
+ * runtime's own calls, which the C library prints. */
+extern "C" int aibo_openr_print(const char* text) {
+    if (!host::InObjectCode()) return 0;
+    host::Print(text);
+    return 1;
+}
+
 /* Aperios: an entry returns when it is done. */
 extern "C" void Exit() {}
 extern "C" void Return(void*, size_t) {}

@@ -1,4 +1,5 @@
 #include <errno.h>
+#include <stdio.h>
 #include <fstream>
 #include <OPENR/OPENRAPI.h>
 #include <OPENR/OSyslog.h>
@@ -50,6 +51,12 @@ OStatus FileProbe::DoStart(const OSystemEvent&) {
     Read("/etc/hostname");
     FILE* unclosed = fopen("/MS/OPEN-R/MW/DATA/P/UNCLOSED.TXT", "w");
     fputs("written when the object's process ends\n", unclosed);
+    printf("printf %d\n", 7);
+    printf("two ");
+    printf("parts\n");
+    puts("puts");
+    printf("c");  // the compiler calls putchar('c'), then putchar('\n')
+    printf("\n");
     Write("../escape.txt", "no\n");
     Write("/MS/../escape.txt", "no\n");
     OPENR::Shutdown(OBootCondition(obcbPAUSE_SW));
