@@ -288,7 +288,7 @@ def _check_out(out_dir) -> Path:
     if out.exists() and not out.is_dir():
         raise BuildMsError(f"--out {out_dir}: exists and is not a folder")
     if out.is_dir() and any(out.iterdir()):
-        raise BuildMsError(f"--out {out}: the folder exists and is not empty: give a new or empty one")
+        raise BuildMsError(f"--out {out_dir}: the folder exists and is not empty: give a new or empty one")
     return out
 
 
