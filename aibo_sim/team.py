@@ -148,21 +148,17 @@ def _team_and_number(team, number) -> str | None:
     return None
 
 
-def check_robots(
-    robots: Sequence[RobotSpec], where: str, lines: Sequence[int | None] | None = None
-) -> tuple[RobotSpec, ...]:
+def check_robots(robots: Sequence[RobotSpec], where: str) -> tuple[RobotSpec, ...]:
     """The checks across robots (how many, a team's numbers given twice, separation), with each
-    robot's kickoff pose filled in where it has none. ``where`` names the description (a file, or
-    ``--robot``) and ``lines`` the line of each robot's ``[[robot]]`` table; TeamError otherwise."""
+    robot's kickoff pose filled in where it has none. An error names the robot where it was
+    described (``RobotSpec.given``: a robots file's line, a ``--robot`` argument), else ``where``
+    (the description: a file, ``--robot``); TeamError otherwise."""
 
     def fail(i: int, message: str):
-        line = lines[i] if lines is not None and i < len(lines) else None
-        at = where if line is None else f"{where}:{line}"
-        raise TeamError(f"{at}: {_label(i, robots[i].team, robots[i].number)}: {message}")
+        raise TeamError(f"{robots[i].given or where}: {_label(i, robots[i].team, robots[i].number)}: {message}")
 
     def place(i: int) -> str:
-        line = lines[i] if lines is not None and i < len(lines) else None
-        return f"robot {i + 1}" + ("" if line is None else f" (line {line})")
+        return f"robot {i + 1}" + (f" ({robots[i].given})" if robots[i].given else "")
 
     if not robots:
         raise TeamError(f"{where}: no robots")
@@ -285,7 +281,7 @@ def load_robots(path: str | Path) -> tuple[RobotSpec, ...]:
             robots.append(replace(_table_robot(table, folder), given=at))
         except ValueError as exc:
             raise TeamError(f"{at}: {_label(i, table.get('team'), table.get('number'))}: {exc}") from None
-    return check_robots(robots, str(path), lines or None)
+    return check_robots(robots, str(path))
 
 
 def parse_robot(text: str) -> RobotSpec:

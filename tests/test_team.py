@@ -174,14 +174,21 @@ BAD_LINE = 9
         (robot_table("red", 2, pose="[0, -2.01, 0]"), "robot 3 (red 2): pose 0,-2.01,0 is off the carpet (|y| <= 2 m)"),
         (robot_table("red", 2, controller="3"), "robot 3 (red 2): controller must be a path"),
         (robot_table("red", 2, controller='""'), "robot 3 (red 2): controller must be a path"),
-        (robot_table("red", 1), "robot 3 (red 1): red 1 is also robot 1 (line 2)"),
-        (robot_table("red", 2, pose="[-2.275, 0, 0]"), "robot 3 (red 2): stands 0.10 m from robot 1 (line 2) (red 1)"),
-        (robot_table("red", 2, pose="[2.275, 0, 0]"), "robot 3 (red 2): stands 0.10 m from robot 2 (line 6) (blue 1)"),
+        (robot_table("red", 1), "robot 3 (red 1): red 1 is also robot 1 ({file}:2)"),
+        (
+            robot_table("red", 2, pose="[-2.275, 0, 0]"),
+            "robot 3 (red 2): stands 0.10 m from robot 1 ({file}:2) (red 1)",
+        ),
+        (
+            robot_table("red", 2, pose="[2.275, 0, 0]"),
+            "robot 3 (red 2): stands 0.10 m from robot 2 ({file}:6) (blue 1)",
+        ),
     ],
 )
 def test_bad_robot_names_file_line_and_robot(tmp_path, table, expected):
     message = load_error(tmp_path, GOOD + table)
-    assert f"robots.toml:{BAD_LINE}: {expected}" in message, message
+    file = message.split(":", 1)[0]  # the other robot is named by its file and line too
+    assert f"robots.toml:{BAD_LINE}: {expected.format(file=file)}" in message, message
 
 
 def test_edge_of_carpet_and_exact_separation_accepted(tmp_path):
@@ -254,13 +261,17 @@ def test_check_robots_resolves_and_keeps_the_default_robot():
     ("robots", "expected"),
     [
         ([], "--robot: no robots"),
-        (["red:2", "red:2:0,1,0"], "--robot: robot 2 (red 2): red 2 is also robot 1"),
-        (["red:2:0,0,0", "blue:2:0.1,0.1,0"], "--robot: robot 2 (blue 2): stands 0.14 m from robot 1 (red 2)"),
+        (["red:2", "red:2:0,1,0"], "--robot red:2:0,1,0: robot 2 (red 2): red 2 is also robot 1 (--robot red:2)"),
+        (
+            ["red:2:0,0,0", "blue:2:0.1,0.1,0"],
+            "--robot blue:2:0.1,0.1,0: robot 2 (blue 2): stands 0.14 m from robot 1 (--robot red:2:0,0,0) (red 2)",
+        ),
+        ([RobotSpec("red", 1), RobotSpec("red", 1)], "--robot: robot 2 (red 1): red 1 is also robot 1"),
     ],
 )
 def test_check_robots_errors(robots, expected):
     with pytest.raises(TeamError) as info:
-        check_robots([parse_robot(text) for text in robots], "--robot")
+        check_robots([parse_robot(r) if isinstance(r, str) else r for r in robots], "--robot")
     assert str(info.value).startswith(expected), str(info.value)
 
 
