@@ -20,7 +20,7 @@ import numpy as np
 from .config import CameraConfig, WorldConfig
 from .ers7 import JOINT_BY_LOCATOR, JOINT_INDEX, JOINTS, LEGS, joint_indices
 from .mjcf import HIP_OFFSET, KNEE_OFFSET, PAW_OFFSET, POSES
-from .mtn import Motion, MotionPlayer, MtnError, printable, read_mtn, write_mtn
+from .mtn import Motion, MotionPlayer, MtnError, another_robot, printable, read_mtn, write_mtn
 from .placement import place
 from .sim import FRAME_MS, Simulation, models_dir
 
@@ -326,6 +326,10 @@ def play_motion(
         raise ValueError(f"step_ms must be a positive multiple of {FRAME_MS} ms")
     unknown = [loc for loc in motion.locators if loc not in JOINT_BY_LOCATOR]
     if unknown:
+        other = another_robot(motion)
+        if other:
+            count = f"{len(unknown)} of its {len(motion.locators)} locators, such as {printable(unknown[0])}"
+            raise MtnError(motion.source, None, f"{other}: no ERS-7 joint for {count}")
         raise MtnError(motion.source, None, f"no joint for locator(s) {', '.join(map(printable, unknown))}")
     world = world or WorldConfig()
     if sim is not None:

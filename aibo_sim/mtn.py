@@ -65,6 +65,8 @@ SECTION0_SIZE = 24
 DEFAULT_FRAME_TIME_MS = 16
 SUBFRAME_MS = FRAME_TICK_MS  # OPEN-R command vectors carry one joint value per 8 ms frame
 MODES = ("openr", "webots")  # MotionPlayer's playback modes
+ERS7_DESIGN = "DRX-1000"  # the robot design an ERS-7 motion names (Sony's MTN-FFORM: "DRX-1000 (ERS-7)")
+OTHER_DESIGNS = {"DRX-900": "ERS-210/220"}  # the others Sony's MTN-FFORM names
 _S32_MIN, _S32_MAX = -(2**31), 2**31 - 1
 MAX_LENGTH_MS = 10 * 60 * 1000
 MAX_JOINT_URAD = round(2 * np.pi * 1e6)
@@ -88,13 +90,15 @@ def _beyond_limits(
     frame_time_ms: int, interpolate: np.ndarray, keyframes: np.ndarray, locators: Sequence[str]
 ) -> tuple[str, int, int | None] | None:
     """The first of ``MAX_LENGTH_MS`` and ``MAX_JOINT_URAD`` a motion breaks, as (message, keyframe,
-    joint): for the length, the keyframe that ends its longest segment and joint None."""
-    length_ms = int(((interpolate + 1) * frame_time_ms).sum())
-    if length_ms > MAX_LENGTH_MS:
-        k = int(np.argmax(interpolate))
+    joint): for the length, the keyframe that ends the segment in which it passes the limit, and
+    joint None."""
+    elapsed_ms = np.cumsum((interpolate + 1) * frame_time_ms)
+    if elapsed_ms.size and elapsed_ms[-1] > MAX_LENGTH_MS:
+        k = int(np.argmax(elapsed_ms > MAX_LENGTH_MS))  # the segment in which the motion passes the limit
         return (
-            f"the motion lasts {length_ms / 1000:.0f} s, longer than the {MAX_LENGTH_MS // 1000} s a motion may "
-            f"last (segment {k} -> {k + 1}: numInterpolate {int(interpolate[k])} of {frame_time_ms} ms frames)",
+            f"the motion lasts {elapsed_ms[-1] / 1000:.0f} s, longer than the {MAX_LENGTH_MS // 1000} s a motion "
+            f"may last (it passes them in segment {k} -> {k + 1} of {len(interpolate)}: numInterpolate "
+            f"{int(interpolate[k])} of {frame_time_ms} ms frames)",
             k + 1,
             None,
         )
@@ -590,12 +594,27 @@ def mtn_new(path: str | os.PathLike, available_locators: Iterable[str] | None = 
         available = set(available_locators)
         for loc in motion.locators:
             if loc not in available:
-                raise MtnError(None, None, f"Missing device in model: {printable(loc)}")
+                raise MtnError(
+                    None,
+                    None,
+                    f"Missing device in model: {printable(loc)}"
+                    + (f" ({other})" if (other := another_robot(motion)) else ""),
+                )
             check_joint(loc)
     except MtnError as exc:
         _last_error = str(exc)
         raise
     return motion
+
+
+def another_robot(motion: Motion) -> str:
+    """For a motion whose design is not the ERS-7's, the clause an error about its joints gives
+    ("a motion for DRX-900, the ERS-210/220, not the ERS-7's DRX-1000"); "" otherwise."""
+    if motion.design == ERS7_DESIGN:
+        return ""
+    model = OTHER_DESIGNS.get(motion.design)
+    design = printable(motion.design) + (f", the {model}" if model else "")
+    return f"a motion for {design}, not the ERS-7's {ERS7_DESIGN}"
 
 
 def check_joint(locator: str, source: str | None = None) -> None:

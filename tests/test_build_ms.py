@@ -19,6 +19,7 @@ What the memory stick does differently, and what these tests hold it to:
 import fnmatch
 import functools
 import shutil
+import struct
 import subprocess
 from pathlib import Path
 
@@ -103,8 +104,8 @@ static void init(void) {
         mtn_fprint(out, walk);
         fprintf(out, "%d %s\n", mtn_get_length(walk), mtn_get_name(walk));
     } else if (is("bad motions")) {
-        static const char *const names[] = {"bad1.mtn", "bad2.mtn", "bad3.mtn", "bad4.mtn"};
-        for (int i = 0; i < 4; i++) fprintf(out, "%s\n", mtn_new(names[i]) ? "loaded" : mtn_get_error());
+        static const char *const names[] = {"bad1.mtn", "bad2.mtn", "bad3.mtn", "bad4.mtn", "bad5.mtn", "bad6.mtn"};
+        for (int i = 0; i < 6; i++) fprintf(out, "%s\n", mtn_new(names[i]) ? "loaded" : mtn_get_error());
     } else if (is("leds")) {
         led_set(robot_get_device("PRM:/r1/c1/c2/c3/l2-LED2:l2"), 1);
         led_set(robot_get_device("PRM:/r1/c1/c2/c3/la-LED3:la"), 128);
@@ -272,6 +273,16 @@ def test_ball_tracker_c_tracks_as_ball_tracker_py(tmp_path):
     assert np.abs(records[0] - records[1]).max() < 1e-8 and np.ptp(records[1][:, 1]) > 0.1  # 1.4e-10 here
 
 
+def too_long() -> bytes:
+    """A motion of two segments that passes 600 s in its second, the shorter one (320 + 304 s)."""
+    marker = struct.pack("<i", 12345)
+    data = serialize_mtn(
+        Motion.from_poses("long", ["PRM:/r2/c1-Joint2:21"], [[0], [0], [0]], [20001 * 16, 12346 * 16])
+    )  # numInterpolate 20000, 12345
+    assert data.count(marker) == 1
+    return data.replace(marker, struct.pack("<i", 19000))
+
+
 @pytest.fixture(scope="module")
 def probe(tmp_path_factory):
     """The probe controller, with the motion it opens under a long name, and its stick."""
@@ -286,6 +297,8 @@ def probe(tmp_path_factory):
         walk[:-10],
         walk[:-4] + (7_000_000).to_bytes(4, "little"),
         serialize_mtn(Motion.from_poses("odd", ["PRM:/r2/c1-Joint2:21", "PRM:/p1-Sensor:p1"], [[0, 0]], [])),
+        serialize_mtn(Motion.from_poses("sit", ["PRM:/r2/c1-Joint2:j1"], [[0]], [], design="DRX-900")),
+        too_long(),
     ]
     for number, data in enumerate(bad, start=1):
         (controller / f"bad{number}.mtn").write_bytes(data)
@@ -345,6 +358,16 @@ def test_malformed_motions_are_refused_with_the_python_readers_messages(probe, t
     assert "truncated: section 3 (21 keyframes of 12 joints) needs" in errors[0][1]
     assert errors[0][2].endswith(": 7 rad is beyond a full turn")
     assert errors[0][3] == errors[1][3] == "Not a joint: PRM:/p1-Sensor:p1 (a motion moves joints only)"
+    assert (
+        errors[0][4]
+        == errors[1][4]
+        == (
+            "Missing device in model: PRM:/r2/c1-Joint2:j1 "
+            "(a motion for DRX-900, the ERS-210/220, not the ERS-7's DRX-1000)"
+        )
+    )
+    assert errors[0][5].split(": ", 1)[1] == errors[1][5].split(": ", 1)[1]
+    assert errors[0][5].endswith("(it passes them in segment 1 -> 2 of 2: numInterpolate 19000 of 16 ms frames)")
 
 
 def test_leds_end_lit_as_on_the_openr_backend(probe, tmp_path, monkeypatch):

@@ -213,6 +213,26 @@ def test_limits_hold_at_their_edges_and_for_motions_built_in_code():
         Motion("walk", "me", "DRX-1000", 16, ("a",), [[-7_000_000], [0]], np.zeros((2, 3)), [0])
 
 
+def test_a_motion_too_long_names_the_segment_that_passes_the_limit():
+    """37,501 segments of one 16 ms frame each: none is long, the motion passes 600 s in its last."""
+    segments = MAX_LENGTH_MS // 16 + 1
+    with pytest.raises(MtnError) as info:
+        Motion(
+            "long",
+            "me",
+            "DRX-1000",
+            16,
+            ("a",),
+            np.zeros((segments + 1, 1)),
+            np.zeros((segments + 1, 3)),
+            np.zeros(segments),
+        )
+    assert str(info.value) == (
+        "long: the motion lasts 600 s, longer than the 600 s a motion may last "
+        f"(it passes them in segment {segments - 1} -> {segments} of {segments}: numInterpolate 0 of 16 ms frames)"
+    )
+
+
 def test_play_errors_name_the_file(tmp_path):
     path = tmp_path / "odd frame.mtn"
     path.write_bytes(_patch(TINY, 22, "<H", 20))
@@ -465,6 +485,24 @@ def test_mtn_new_checks_devices(tmp_path):
     with pytest.raises(MtnError, match="^File not found: "):
         mtn_new(tmp_path / "nope.mtn")
     assert mtn_get_error().startswith("File not found: ")
+
+
+def test_a_motion_for_another_robot_says_so(tmp_path):
+    """Sony's MTN-FFORM: DRX-900 is the ERS-210/220, DRX-1000 the ERS-7; a DRX-900 motion's
+    locators are not the ERS-7's. Both the Webots API and mtn play say whose motion it is."""
+    path = tmp_path / "sit.mtn"
+    locators = ["PRM:/r2/c1-Joint2:j1", "PRM:/r1/c1-Joint2:j1"]
+    write_mtn(Motion.from_poses("sit", locators, [[0.0, 0.0]], [], design="DRX-900"), path)
+    other = "a motion for DRX-900, the ERS-210/220, not the ERS-7's DRX-1000"
+    with pytest.raises(MtnError) as info:
+        mtn_new(path)
+    assert str(info.value) == f"Missing device in model: {locators[0]} ({other})"
+    with pytest.raises(MtnError) as info:
+        play_motion(path)
+    assert str(info.value) == f"{path}: {other}: no ERS-7 joint for 2 of its 2 locators, such as {locators[0]}"
+    write_mtn(Motion.from_poses("sit", locators, [[0.0, 0.0]], [], design="DRX-1000"), path)
+    with pytest.raises(MtnError, match=r"^Missing device in model: PRM:/r2/c1-Joint2:j1$"):  # Webots' own text
+        mtn_new(path)
 
 
 def test_mtn_new_refuses_a_device_that_is_not_a_joint(tmp_path):

@@ -248,15 +248,15 @@ bool ParseMotion(const std::vector<byte>& data, const std::string& source, Motio
         /* The limits no real motion reaches: its length, then each value within a full turn. */
         double length = motion->LengthMs();
         if (length > MAX_LENGTH_MS) {
-            size_t longest = 0;
-            for (size_t k = 1; k < motion->interpolate.size(); k++) {
-                if (motion->interpolate[k] > motion->interpolate[longest]) longest = k;
-            }
-            ok = r.Fail(body + ((longest + 1) * (1 + words)) * 4 - 4,
-                        Format("the motion lasts %.0f s, longer than the %.0f s a motion may last (segment %lu -> "
-                               "%lu: numInterpolate %ld of %lu ms frames)", length / 1000, MAX_LENGTH_MS / 1000,
-                               (unsigned long)longest, (unsigned long)longest + 1,
-                               (long)motion->interpolate[longest], frameTime) + hint);
+            size_t k = 0;  /* the segment in which the motion passes the limit */
+            double elapsed = ((double)motion->interpolate[0] + 1) * frameTime;
+            while (elapsed <= MAX_LENGTH_MS) elapsed += ((double)motion->interpolate[++k] + 1) * frameTime;
+            ok = r.Fail(body + ((k + 1) * (1 + words)) * 4 - 4,
+                        Format("the motion lasts %.0f s, longer than the %.0f s a motion may last (it passes them "
+                               "in segment %lu -> %lu of %lu: numInterpolate %ld of %lu ms frames)",
+                               length / 1000, MAX_LENGTH_MS / 1000, (unsigned long)k, (unsigned long)k + 1,
+                               (unsigned long)motion->interpolate.size(), (long)motion->interpolate[k],
+                               frameTime) + hint);
         }
         for (unsigned long k = 0; ok && k < numKeyframes; k++) {
             for (unsigned long j = 0; ok && j < numJoints; j++) {
@@ -313,6 +313,13 @@ void Motion::Frame(long i, slongword* values) const {
     for (size_t j = 0; j < joints; j++) {
         values[j] = keyframes[k * joints + j] + (slongword)(i - start_[k]) * delta_[k * joints + j];
     }
+}
+
+std::string AnotherRobot(const Motion& motion) {
+    if (motion.design == ERS7_DESIGN) return "";
+    std::string design = Printable(motion.design, 0);
+    if (motion.design == "DRX-900") design += ", the ERS-210/220";
+    return "a motion for " + design + ", not the ERS-7's " + ERS7_DESIGN;
 }
 
 std::string FormatMotionInfo(const Motion& motion) {

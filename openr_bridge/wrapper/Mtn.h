@@ -14,6 +14,7 @@
 namespace wrapper {
 
 const int SUBFRAME_MS = 8;   /* OPEN-R plays a motion in 8 ms frames */
+const char* const ERS7_DESIGN = "DRX-1000";  /* the robot design an ERS-7 motion names */
 
 /* A motion: keyframes in micro-radians as stored, and its OPEN-R playback. */
 struct Motion {
@@ -43,6 +44,10 @@ bool ParseMotion(const std::vector<byte>& data, const std::string& source, Motio
 /* `text` (latin-1) safe to print, as aibo_sim.mtn.printable shows it (UTF-8 out); `limit`
  * characters at most (0: all), with a note of the full length. */
 std::string Printable(const std::string& text, size_t limit);
+
+/* aibo_sim.mtn.another_robot: for a motion of another design, "a motion for DRX-900, the
+ * ERS-210/220, not the ERS-7's DRX-1000"; "" for the ERS-7's. */
+std::string AnotherRobot(const Motion& motion);
 
 /* aibo_sim.mtn.format_motion_info: what mtn_fprint prints (without its last newline). */
 std::string FormatMotionInfo(const Motion& motion);

@@ -421,7 +421,8 @@ MTN* Robot::NewMotion(const char* filename) {
             for (size_t n = 0; n < names_.size(); n++) device = device || names_[n] == locator;
             for (size_t j = 0; j < command_.size(); j++) joint = joint || devices_[j].locator == locator;
             if (!device) {
-                error = "Missing device in model: " + Printable(locator, 0);
+                std::string other = AnotherRobot(mtn->motion);
+                error = "Missing device in model: " + Printable(locator, 0) + (other.empty() ? "" : " (" + other + ")");
             } else if (!joint) {
                 error = "Not a joint: " + Printable(locator, 0) + " (a motion moves joints only)";
             }
