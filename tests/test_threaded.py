@@ -8,6 +8,7 @@ import time
 import gymnasium as gym
 import numpy as np
 import pytest
+from gymnasium.envs.registration import EnvSpec
 
 import aibo_sim  # noqa: F401  (registers the environments)
 from aibo_sim.envs.threaded import ThreadedVectorEnv
@@ -118,11 +119,16 @@ def test_an_interrupted_call_needs_a_reset_and_its_late_results_are_dropped():
 
 
 def test_make_vec_makes_a_hybrid_env_for_every_id_by_default():
+    """Also from the spec read back from its JSON (a dataset's record of it: the vector entry
+    point a "module:function" string, which a callable could not be)."""
     for env_id in aibo_sim.envs.ENV_SPECS:
-        for mode in (None, "vector_entry_point"):
-            envs = gym.make_vec(env_id, 1, mode, camera_layer="L")  # 1 env: no worker process
+        restored = EnvSpec.from_json(gym.spec(env_id).to_json())
+        assert restored == gym.spec(env_id) and isinstance(restored.vector_entry_point, str)
+        for made_from, mode in ((env_id, None), (env_id, "vector_entry_point"), (restored, None)):
+            envs = gym.make_vec(made_from, 1, mode, camera_layer="L")  # 1 env: no worker process
             try:
                 assert type(envs) is HybridVectorEnv and envs.get_attr("camera_layer") == ("L",)
+                assert envs.get_attr("spec")[0].id == env_id
                 assert envs.get_attr("spec")[0].max_episode_steps == gym.spec(env_id).max_episode_steps
             finally:
                 envs.close()

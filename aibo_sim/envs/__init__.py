@@ -21,14 +21,17 @@ workers (spawned: guard a script's top level with ``if __name__ == "__main__":``
 steps them in threads of this process instead.
 """
 
-from functools import partial
-
 import gymnasium
 
-ENV_SPECS = {
-    "aibo_sim/HeadTrackBall-v0": ("aibo_sim.envs.head_track:HeadTrackBallEnv", 300),
-    "aibo_sim/ReachBall-v0": ("aibo_sim.envs.reach_ball:ReachBallEnv", 450),
-    "aibo_sim/MatchVsScripted-v0": ("aibo_sim.envs.match:ScriptedOpponentsEnv", 900),
+HEAD_TRACK_BALL, REACH_BALL, MATCH_VS_SCRIPTED = (
+    "aibo_sim/HeadTrackBall-v0",
+    "aibo_sim/ReachBall-v0",
+    "aibo_sim/MatchVsScripted-v0",
+)
+ENV_SPECS = {  # id: (entry point, max_episode_steps, vector entry point)
+    HEAD_TRACK_BALL: ("aibo_sim.envs.head_track:HeadTrackBallEnv", 300, "aibo_sim.envs:head_track_ball_vector"),
+    REACH_BALL: ("aibo_sim.envs.reach_ball:ReachBallEnv", 450, "aibo_sim.envs:reach_ball_vector"),
+    MATCH_VS_SCRIPTED: ("aibo_sim.envs.match:ScriptedOpponentsEnv", 900, "aibo_sim.envs:match_vs_scripted_vector"),
 }
 
 
@@ -38,15 +41,29 @@ def _hybrid_vector_env(env_id: str, num_envs: int, **kwargs):
     return HybridVectorEnv(env_id, num_envs, **kwargs)
 
 
+# make_vec's vector entry points, named as "module:function" strings so that a spec serialises
+# (EnvSpec.to_json, as datasets record it) where a callable would not.
+def head_track_ball_vector(num_envs: int, **kwargs):
+    return _hybrid_vector_env(HEAD_TRACK_BALL, num_envs, **kwargs)
+
+
+def reach_ball_vector(num_envs: int, **kwargs):
+    return _hybrid_vector_env(REACH_BALL, num_envs, **kwargs)
+
+
+def match_vs_scripted_vector(num_envs: int, **kwargs):
+    return _hybrid_vector_env(MATCH_VS_SCRIPTED, num_envs, **kwargs)
+
+
 def register_envs() -> None:
     """Register the environments with Gymnasium; calling it again changes nothing."""
-    for env_id, (entry_point, max_episode_steps) in ENV_SPECS.items():
+    for env_id, (entry_point, max_episode_steps, vector_entry_point) in ENV_SPECS.items():
         if env_id not in gymnasium.registry:
             gymnasium.register(
                 env_id,
                 entry_point=entry_point,
                 max_episode_steps=max_episode_steps,
-                vector_entry_point=partial(_hybrid_vector_env, env_id),
+                vector_entry_point=vector_entry_point,
             )
 
 
