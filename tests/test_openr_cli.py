@@ -80,7 +80,10 @@ def test_run_writes_frames_console_and_run_json(objects, tmp_path, capfd):
     assert run["camera"]["profile"] == "ideal" and run["simulated_s"] == 0.2
     assert len(list((out / "frames").glob("*.png"))) == run["camera_frames"] == 6  # at frames 0, 5, 9, ..., 21
     console = (out / "console.log").read_text()
-    assert console.splitlines()[0] == "[    0.000 s] JointProbe: mode []"
+    assert console.splitlines()[:2] == [
+        "[    0.000 s] JointProbe: ready before start",
+        "[    0.000 s] JointProbe: mode []",
+    ]
 
 
 def test_a_crash_exits_1_keeping_the_frames_and_saying_so_in_run_json(objects, tmp_path, capsys):

@@ -142,12 +142,13 @@ def test_effector_plays_each_vector_and_asks_for_the_next_after_its_last_frame(o
     result = run_stick(stick, 0.3, tmp_path / "out", lambda r: (r.time_ms, r.sim.servos.command[PAN]))
     lines = result.lines("JointProbe")
     readies = [line for line in lines if line.startswith("ready")]
-    # The effector's first ready (at boot) sends the first of the two primed vectors; each later
-    # one comes after a vector's last frame: that vector's region is given back (one reference
-    # left: the program's) and the subject sends the other (two: the program's and the one the
-    # subject holds until it is played; the effector takes its own when the notification arrives).
+    # The effector's first ready (at boot) comes before the program's DoStart, as on the robot;
+    # DoStart primes two vectors and the ready effector takes the first at once. Each later ready
+    # comes after a vector's last frame: that vector's region is given back (one reference left:
+    # the program's) and the subject sends the other (two: the program's and the one the subject
+    # holds until it is played; the effector takes its own when the notification arrives).
     assert readies == [
-        "ready assert refs 2 2",
+        "ready before start",
         "ready assert refs 1 2",
         "ready assert refs 2 1",
         "ready assert refs 1 2",
@@ -155,7 +156,7 @@ def test_effector_plays_each_vector_and_asks_for_the_next_after_its_last_frame(o
         "ready assert refs 1 2",
         "ready assert refs 1 1",
     ]
-    assert lines[2] == "no free region"  # the boot ready found both regions queued
+    assert "no free region" not in lines
     # Set-points: vector v's frame k is 10 + 4v + k degrees, one frame each, without a gap; then held.
     set_points = np.round(np.degrees([command for _, command in result.frames]), 6)
     expected = [10 + 4 * (k // 4) + k % 4 for k in range(24)] + [33] * (len(set_points) - 24)
@@ -172,7 +173,7 @@ def test_joints_stay_limp_without_motor_power_or_gain(objects, tmp_path, mode):
         tmp_path / "ms", objects, ["JPROBE"], JOINT_PROBE, {"JOINTPROBE_MODE": "MODE.TXT"}, {"MODE.TXT": mode}
     )
     result = run_stick(stick, 0.3, tmp_path / "out", lambda r: r.sim.joint_positions()[PAN])
-    assert result.lines("JointProbe")[0] == f"mode [{mode}]"
+    assert result.lines("JointProbe")[:2] == ["ready before start", f"mode [{mode}]"]
     assert abs(np.degrees(result.frames[-1])) < 2  # commanded to 33 degrees, it did not move
 
 
@@ -252,8 +253,15 @@ def test_a_crashing_object_is_named_with_the_signal_and_the_time(objects, tmp_pa
 def test_an_object_that_never_returns_is_announced_and_one_signal_ends_it(objects, tmp_path, monkeypatch, capfd):
     monkeypatch.setattr(host_protocol, "WAIT_NOTICE_S", 0.2)
     stick = make_stick(tmp_path / "ms", objects, ["SPIN"], f"{SENSOR} Spin.Sensor.OSensorFrameVectorData.O\n")
-    timer = threading.Timer(1.0, signal.raise_signal, [signal.SIGINT])
-    timer.start()
+    timer = threading.Timer(0.1, signal.raise_signal, [signal.SIGINT])  # a Ctrl-C once the notice is out
+    announce = host.MemoryStickRun._waiting
+
+    def announce_then_interrupt(run, seconds):
+        announce(run, seconds)
+        if timer.ident is None:  # not started yet
+            timer.start()
+
+    monkeypatch.setattr(host.MemoryStickRun, "_waiting", announce_then_interrupt)
     try:
         with pytest.raises(KeyboardInterrupt):
             run_stick(stick, 5.0, tmp_path / "out")
@@ -264,6 +272,8 @@ def test_an_object_that_never_returns_is_announced_and_one_signal_ends_it(object
         "aibo-sim: waiting for OPEN-R object Spin (entry 7): no answer for 0.2 s of wall time (simulated time stays "
         "at t = 0.056 s)" in err
     )
+    # its prompt (no newline yet) was on the console and in the log as it printed it
+    assert (tmp_path / "out" / "console.log").read_text().endswith("Spin: spinning> ")
 
 
 def test_runs_are_deterministic(objects, tmp_path):
@@ -402,8 +412,10 @@ def test_the_speaker_plays_sound_vectors_one_after_the_other_into_a_wav_file(obj
     )
     result = run_stick(stick, 0.5, tmp_path / "out")
     readies = result.lines("SoundProbe")
-    assert readies[:3] == ["ready 1 refs 1 1", "ready 2 refs 1 2", "ready 3 refs 2 1"]  # a vector played at each
-    assert len(readies) == 11  # the boot's, then one after each of the ten vectors
+    # The boot's ready before DoStart, which fills both regions (as Sony's SoundPlay); then after
+    # each vector the region it played is free again (SoundPlay takes it, and had none without).
+    assert readies[:3] == ["ready 1 refs 1 1 before start", "ready 2 refs 1 2", "ready 3 refs 2 1"]
+    assert len(readies) == 11 and "no free region" not in readies  # the boot's, then one after each of ten
     with wave.open(str(tmp_path / "out" / "speaker.wav")) as sound:
         assert (sound.getframerate(), sound.getnchannels(), sound.getsampwidth()) == (16000, 1, 2)
         samples = np.frombuffer(sound.readframes(sound.getnframes()), "<i2").astype(int)

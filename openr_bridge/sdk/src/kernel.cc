@@ -39,7 +39,8 @@ MemoryRegionID nextRegion = 1;
 char* placement = NULL;               /* where the next region goes (PlaceNextRegion) */
 
 int consoleFd = 1, logFd = -1;
-std::map<Object*, std::string> partialLines;
+bool lineOpen = false;       /* the console's last line is not ended yet (a prompt) */
+Object* lineObject = NULL;   /* whose it is */
 longword frameNumber = 0;
 std::string records;
 volatile longword* statusArea = NULL;
@@ -222,29 +223,33 @@ void SetConsole(int stdoutFd, int logFileFd) {
     logFd = logFileFd;
 }
 
+/* Text an object prints, on the console and in the log at once (a prompt without its newline
+ * too, as a terminal shows it), each line stamped with the time and the object's name; a line
+ * left open by another object is ended first. */
 void Print(const char* text) {
     Object* object = current;
-    std::string& partial = partialLines[object];
-    partial += text;
-    size_t end;
-    while ((end = partial.find('\n')) != std::string::npos) {
-        char stamp[32];
-        snprintf(stamp, sizeof stamp, "[%9.3f s] ", Seconds());
-        std::string line = stamp + (object ? object->name : std::string("system")) + ": " + partial.substr(0, end + 1);
-        WriteAll(consoleFd, line);
-        WriteAll(logFd, line);
-        partial.erase(0, end + 1);
+    if (lineOpen && lineObject != object) FlushConsole();
+    std::string out;
+    for (const char* c = text; *c; c++) {
+        if (!lineOpen) {
+            char stamp[32];
+            snprintf(stamp, sizeof stamp, "[%9.3f s] ", Seconds());
+            out += stamp + (object ? object->name : std::string("system")) + ": ";
+            lineOpen = true;
+            lineObject = object;
+        }
+        out += *c;
+        if (*c == '\n') lineOpen = false;
     }
+    WriteAll(consoleFd, out);
+    WriteAll(logFd, out);
 }
 
 void FlushConsole() {
-    Object* caller = current;
-    for (std::map<Object*, std::string>::iterator it = partialLines.begin(); it != partialLines.end(); ++it) {
-        if (it->second.empty()) continue;
-        current = it->first;
-        Print("\n");
-    }
-    current = caller;
+    if (!lineOpen) return;
+    lineOpen = false;
+    WriteAll(consoleFd, "\n");
+    WriteAll(logFd, "\n");
 }
 
 longword FrameNumber() { return frameNumber; }

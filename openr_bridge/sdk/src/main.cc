@@ -206,7 +206,14 @@ void ConnectAndStart(const std::string& payload) {
         std::string subject = connect.String(), observer = connect.String();
         if (Connect(subject, observer) != oSUCCESS) Fail("cannot connect " + subject + " to " + observer);
     }
-    Boot(oreasonBOOT, oentrySTART, Objects());
+    /* The robot's own objects start first, and their observers' ready events reach the programs'
+     * subjects before the programs start, as on the robot: Sony's MovingHead7 checks IsReady() in
+     * DoStart for it, and SoundPlay, which fills both speaker buffers in DoStart, needs it. */
+    std::vector<Object*> system, programs;
+    for (size_t i = 0; i < Objects().size(); i++) (Objects()[i]->system ? system : programs).push_back(Objects()[i]);
+    Boot(oreasonBOOT, oentrySTART, system);
+    Deliver(MESSAGES_PER_FRAME);
+    Boot(oreasonBOOT, oentrySTART, programs);
     Deliver(MESSAGES_PER_FRAME);
     Answer(AIBO_OPENR_REPLY_FRAME_DONE, TakeRecords());
 }

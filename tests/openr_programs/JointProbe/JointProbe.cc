@@ -6,7 +6,7 @@
 
 static const char* const PAN = "PRM:/r1/c1/c2-Joint2:12";
 
-JointProbe::JointProbe() : pan(oprimitiveID_UNDEF), sent(0), sensorIndex(-1) {}
+JointProbe::JointProbe() : pan(oprimitiveID_UNDEF), started(false), sent(0), sensorIndex(-1) {}
 
 OStatus JointProbe::DoInit(const OSystemEvent&) {
     NEW_ALL_SUBJECT_AND_OBSERVER;
@@ -43,6 +43,7 @@ OStatus JointProbe::DoStart(const OSystemEvent&) {
     Send(0);
     Send(1);
     subject[sbjMove]->NotifyObservers();
+    started = true;
     ASSERT_READY_TO_ALL_OBSERVER;
     return oSUCCESS;
 }
@@ -62,6 +63,10 @@ void JointProbe::Send(int vector) {
 }
 
 void JointProbe::Ready(const OReadyEvent& event) {
+    if (!started) {  // the effector's ready at boot, before DoStart (as Sony's samples expect it)
+        OSYSPRINT(("ready before start\n"));
+        return;
+    }
     OSYSPRINT(("ready %s refs %d %d\n", event.IsAssert() ? "assert" : "deassert", region[0]->NumberOfReference(),
                region[1]->NumberOfReference()));
     if (sent < VECTORS) {

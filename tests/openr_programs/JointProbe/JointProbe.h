@@ -28,6 +28,7 @@ private:
     static const int FRAMES = 4;
     OPrimitiveID pan;
     RCRegion*    region[2];
+    bool         started;
     int          sent;
     int          sensorIndex;
 };

@@ -29,23 +29,32 @@ OStatus SoundProbe::DoInit(const OSystemEvent&) {
 }
 
 OStatus SoundProbe::DoStart(const OSystemEvent&) {
+    Send();
+    Send();
+    subject[sbjSpeaker]->NotifyObservers();
+    started = true;
     return oSUCCESS;
 }
 
 void SoundProbe::Send() {
     RCRegion* free = region[0]->NumberOfReference() == 1 ? region[0] : region[1];
-    if (free->NumberOfReference() != 1 || sent == VECTORS) return;
+    if (sent == VECTORS) return;
+    if (free->NumberOfReference() != 1) {  // where Sony's SoundPlay would crash (a NULL region)
+        OSYSPRINT(("no free region\n"));
+        return;
+    }
     sword* samples = (sword*)((OSoundVectorData*)free->Base())->GetData(0);
     for (int k = 0; k < SAMPLES; k++) samples[k] = (sword)(10000 * sin(2 * M_PI * 1000 * (sent * SAMPLES + k) / 16000.0));
     subject[sbjSpeaker]->SetData(free);
     sent++;
 }
 
-// The speaker's first ready comes at boot (the tone starts at t = 0), then one after each vector.
+// The speaker's first ready comes at boot, before DoStart; then one after each vector.
 void SoundProbe::Ready(const OReadyEvent&) {
     readies++;
-    OSYSPRINT(("ready %d refs %d %d\n", readies, region[0]->NumberOfReference(), region[1]->NumberOfReference()));
-    Send();
+    OSYSPRINT(("ready %d refs %d %d%s\n", readies, region[0]->NumberOfReference(), region[1]->NumberOfReference(),
+               started ? "" : " before start"));
+    if (!started) return;
     Send();
     subject[sbjSpeaker]->NotifyObservers();
 }

@@ -1,5 +1,6 @@
 // SoundProbe: plays a 1 kHz tone through the speaker, ten 32 ms vectors of 16 kHz 16-bit samples
-// from two regions, from t = 0 (aibo-sim's runtime tests read the recorded sound).
+// from two regions, from t = 0 (aibo-sim's runtime tests read the recorded sound). As Sony's
+// SoundPlay: both regions filled in DoStart, then on each ready the one the speaker gave back.
 #ifndef SoundProbe_h_DEFINED
 #define SoundProbe_h_DEFINED
 
@@ -10,7 +11,7 @@
 
 class SoundProbe : public OObject {
 public:
-    SoundProbe() : sent(0), readies(0) {}
+    SoundProbe() : started(false), sent(0), readies(0) {}
     OSubject*  subject[numOfSubject];
     OObserver* observer[numOfObserver];
     virtual OStatus DoInit(const OSystemEvent& event);
@@ -24,6 +25,7 @@ private:
     static const int SAMPLES = 512;  // 32 ms at 16 kHz
     OPrimitiveID speaker;
     RCRegion*    region[2];
+    bool         started;
     int          sent;
     int          readies;
 };

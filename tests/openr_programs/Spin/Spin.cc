@@ -16,6 +16,7 @@ OStatus Spin::DoStart(const OSystemEvent&) {
 
 void Spin::NotifySensor(const ONotifyEvent& event) {
     OSYSPRINT(("sensor vector %d\n", ++vectors));
+    if (vectors == 2) OSYSPRINT(("spinning> "));  // a prompt, as a program waiting for its console
     for (volatile int i = 0; vectors == 2; i++) {
     }
     observer[event.ObsIndex()]->AssertReady();
