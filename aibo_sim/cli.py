@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import io
 import json
 import os
 import select
@@ -483,6 +484,9 @@ def main(argv: list[str] | None = None) -> int:
     # it called sys.exit with a status other than 0); 2 bad input (one line naming it); 3 the
     # physics diverged; 130 interrupted (Ctrl-C); 141 standard output closed by its reader (`| head`);
     # 143 terminated (SIGTERM).
+    for stream in (sys.stdout, sys.stderr):  # text a terminal's encoding lacks (a motion's latin-1 name) escaped
+        if isinstance(stream, io.TextIOWrapper):
+            stream.reconfigure(errors="backslashreplace")
     args = build_parser().parse_args(argv)
     try:
         with _SignalsStopCleanly():

@@ -578,3 +578,17 @@ def test_play_escapes_a_locator_that_is_not_a_joint(tmp_path):
     with pytest.raises(MtnError) as info:
         play_motion(path)
     assert str(info.value) == f"{tmp_path}/b\\x1bd.mtn: no joint for locator(s) BOGUS\\x1b[31mRED"
+
+
+def test_info_escapes_what_the_terminals_encoding_lacks(tmp_path):
+    """A motion's latin-1 name on an ASCII terminal: shown escaped, not a codec error and exit 2."""
+    path = tmp_path / "cafe.mtn"
+    write_mtn(Motion.from_poses("caf\xe9", None, [[0.0] * len(ers7.JOINTS)], []), path)
+    done = subprocess.run(
+        [sys.executable, "-m", "aibo_sim.cli", "mtn", "info", str(path)],
+        capture_output=True,
+        env={**os.environ, "PYTHONIOENCODING": "ascii"},
+        timeout=60,
+    )
+    assert (done.returncode, done.stderr) == (0, b"")
+    assert done.stdout.splitlines()[0] == rb"name:        caf\xe9"
