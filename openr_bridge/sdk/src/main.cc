@@ -122,6 +122,15 @@ void Crashed(int signal) {
     raise(signal);
 }
 
+/* The robot's own objects (system) or the memory stick's, in their order. */
+std::vector<Object*> ObjectsOf(bool system) {
+    std::vector<Object*> chosen;
+    for (size_t i = 0; i < Objects().size(); i++) {
+        if (Objects()[i]->system == system) chosen.push_back(Objects()[i]);
+    }
+    return chosen;
+}
+
 void Boot(OReason reason, Selector selector, const std::vector<Object*>& order) {
     OBootParam boot(omemorystickWRITABLE);
     OShutdownParam shutdown(true);
@@ -152,18 +161,15 @@ std::string LoadObjects(Reader& setup) {
             object->name = file.substr(0, file.find('.'));
         }
     }
-    std::string services;
-    const std::vector<Object*>& objects = Objects();
-    longword users = 0;
-    for (size_t i = 0; i < objects.size(); i++) users += !objects[i]->system;
-    services.append((const char*)&users, 4);
-    Boot(oreasonBOOT, oentryINIT, objects);
-    for (size_t i = 0; i < objects.size(); i++) {
-        if (objects[i]->system) continue;
-        AppendString(&services, objects[i]->name);
-        longword n = (longword)objects[i]->services.size();
+    Boot(oreasonBOOT, oentryINIT, Objects());
+    const std::vector<Object*> programs = ObjectsOf(false);
+    longword loaded = (longword)programs.size();
+    std::string services((const char*)&loaded, 4);
+    for (size_t i = 0; i < programs.size(); i++) {
+        AppendString(&services, programs[i]->name);
+        longword n = (longword)programs[i]->services.size();
         services.append((const char*)&n, 4);
-        for (longword k = 0; k < n; k++) AppendString(&services, objects[i]->services[k].first);
+        for (longword k = 0; k < n; k++) AppendString(&services, programs[i]->services[k].first);
     }
     return services;
 }
@@ -209,11 +215,9 @@ void ConnectAndStart(const std::string& payload) {
     /* The robot's own objects start first, and their observers' ready events reach the programs'
      * subjects before the programs start, as on the robot: Sony's MovingHead7 checks IsReady() in
      * DoStart for it, and SoundPlay, which fills both speaker buffers in DoStart, needs it. */
-    std::vector<Object*> system, programs;
-    for (size_t i = 0; i < Objects().size(); i++) (Objects()[i]->system ? system : programs).push_back(Objects()[i]);
-    Boot(oreasonBOOT, oentrySTART, system);
+    Boot(oreasonBOOT, oentrySTART, ObjectsOf(true));
     Deliver(MESSAGES_PER_FRAME);
-    Boot(oreasonBOOT, oentrySTART, programs);
+    Boot(oreasonBOOT, oentrySTART, ObjectsOf(false));
     Deliver(MESSAGES_PER_FRAME);
     Answer(AIBO_OPENR_REPLY_FRAME_DONE, TakeRecords());
 }
@@ -324,11 +328,7 @@ int main() {
             longword number = stop.U32();
             CatchUp(stop, sensors);
             SetFrameNumber(number);
-            std::vector<Object*> users;
-            for (size_t i = 0; i < Objects().size(); i++) {
-                if (!Objects()[i]->system) users.push_back(Objects()[i]);
-            }
-            Boot(oreasonSHUTDOWN, oentrySTOP, users);
+            Boot(oreasonSHUTDOWN, oentrySTOP, ObjectsOf(false));
             Deliver(MESSAGES_PER_FRAME);
             FlushConsole();
             Answer(AIBO_OPENR_REPLY_FRAME_DONE, TakeRecords());
