@@ -21,6 +21,8 @@ workers (spawned: guard a script's top level with ``if __name__ == "__main__":``
 steps them in threads of this process instead.
 """
 
+from functools import partial
+
 import gymnasium
 
 HEAD_TRACK_BALL, REACH_BALL, MATCH_VS_SCRIPTED = (
@@ -43,16 +45,9 @@ def _hybrid_vector_env(env_id: str, num_envs: int, **kwargs):
 
 # make_vec's vector entry points, named as "module:function" strings so that a spec serialises
 # (EnvSpec.to_json, as datasets record it) where a callable would not.
-def head_track_ball_vector(num_envs: int, **kwargs):
-    return _hybrid_vector_env(HEAD_TRACK_BALL, num_envs, **kwargs)
-
-
-def reach_ball_vector(num_envs: int, **kwargs):
-    return _hybrid_vector_env(REACH_BALL, num_envs, **kwargs)
-
-
-def match_vs_scripted_vector(num_envs: int, **kwargs):
-    return _hybrid_vector_env(MATCH_VS_SCRIPTED, num_envs, **kwargs)
+head_track_ball_vector = partial(_hybrid_vector_env, HEAD_TRACK_BALL)
+reach_ball_vector = partial(_hybrid_vector_env, REACH_BALL)
+match_vs_scripted_vector = partial(_hybrid_vector_env, MATCH_VS_SCRIPTED)
 
 
 def register_envs() -> None:
