@@ -379,7 +379,7 @@ def build_parser() -> argparse.ArgumentParser:
     play.add_argument(
         "--no-ball", action="store_true", help="no ball in the scene: the default, unless --ball places one"
     )
-    add_world_options(play)  # the camera options too, so that one option set works with every command
+    add_world_options(play, ball_default="no ball")  # the camera options too: one option set for every command
     play.set_defaults(handler=_mtn_play)
 
     openr = commands.add_parser("openr", help="real OPEN-R programs: the host OPEN-R SDK").add_subparsers(

@@ -24,7 +24,8 @@ from .cbind import compile_controller, controller_sources, is_c_controller
 from .config import CameraConfig, ParameterError, WorldConfig
 from .files import make_folder, write_file_atomic
 from .openr.host import MemoryStickRun
-from .placement import check_robots_apart, make_out_folder
+from .placement import make_out_folder, place_match
+from .render import check_rendering
 from .robot import Robot, SimulationEnd
 from .runner import (
     CONSOLE_FILE,
@@ -187,14 +188,14 @@ def run_match(
             f"--robots: {', '.join(missing)} has no controller: name one in the robots file or run's CONTROLLER"
         )
     sim = Simulation(scene, seed=seed, camera=camera, ball_type=ball_type, robots=robots)
-    world, compiled, out = sim.world, {}, out and make_out_folder(out)
+    world, compiled = sim.world, {}
     players: list[_Player] = []
     try:
-        if ball is not None:
-            sim.place_ball(*ball)
-        check_robots_apart(sim)
+        place_match(sim, ball)
+        check_rendering(sim.model)
         for robot in world.robots:
             players.append(_player(robot, robot.spec.controller or controller_path, compiled))
+        out = out and make_out_folder(out)
         for player in players:
             folder = out / robot_folder(player.robot.index) if out else None
             if player.kind == MEMORY_STICK:

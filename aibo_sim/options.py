@@ -48,10 +48,17 @@ def error_line(message) -> str:
 
 class ArgumentParser(argparse.ArgumentParser):
     """argparse's parser, except that a usage error is one line on stderr (exit status 2):
-    ``aibo-sim run: error: argument --ball: 'nan' is not a finite number (see aibo-sim run --help)``."""
+    ``aibo-sim run: error: argument --ball: 'nan' is not a finite number (see aibo-sim run --help)``,
+    and an argument no parser knows is named by the command it was given to (``aibo-sim render``)."""
 
     def error(self, message: str):
         self.exit(2, f"{self.prog}: error: {error_line(message)} (see {self.prog} --help)\n")
+
+    def parse_known_args(self, args=None, namespace=None):
+        namespace, extras = super().parse_known_args(args, namespace)
+        if extras:  # a subcommand's parser reports them itself; argparse's root would name only itself
+            self.error(f"unrecognized arguments: {' '.join(extras)}")
+        return namespace, extras
 
 
 def finite_float(text: str) -> float:
@@ -87,9 +94,10 @@ def seed_number(text: str) -> int:
     return value
 
 
-def add_world_options(parser: argparse.ArgumentParser, camera: bool = True) -> None:
+def add_world_options(parser: argparse.ArgumentParser, camera: bool = True, ball_default: str = "the scene's") -> None:
     """--scene, --pose, --ball, --seed and (with ``camera``) the camera options; see
-    ``world_options`` and ``camera_options`` for what they become."""
+    ``world_options`` and ``camera_options`` for what they become. ``ball_default`` says where
+    the ball is without --ball."""
     parser.add_argument(
         "--scene", type=path_text, metavar="FILE", help="MJCF scene file (default: the RoboCup 2005 field)"
     )
@@ -105,7 +113,7 @@ def add_world_options(parser: argparse.ArgumentParser, camera: bool = True) -> N
         type=finite_float,
         nargs=2,
         metavar=("X", "Y"),
-        help="ball position on the field (m); default: the scene's",
+        help=f"ball position on the field (m); default: {ball_default}",
     )
     parser.add_argument(
         "--ball-type",

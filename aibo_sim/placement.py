@@ -83,12 +83,29 @@ def place(sim, pose: tuple[float, float, float] | None = None, ball: tuple[float
                 )
 
 
-def check_robots_apart(sim) -> None:
-    """A ValueError when a robot of ``sim``'s world starts inside something (a wall, a goal,
-    another robot) deeper than ``PLACEMENT_OVERLAP_M``, naming where that robot was described
-    (``RobotSpec.given``: the robots file's line, or the ``--robot`` argument)."""
-    given = {robot.spec.name: robot.spec.given for robot in sim.world.robots}
+def place_match(sim, ball: tuple[float, float] | None = None) -> None:
+    """Put the ball of a match's world at ``ball`` (x, y) when given, then check that nothing
+    starts inside something else deeper than ``PLACEMENT_OVERLAP_M``: a ``ParameterError`` naming
+    ``ball`` for the ball placed so, a ValueError naming where a robot was described
+    (``RobotSpec.given``: the robots file's line, or the ``--robot`` argument) for a robot."""
+    text = " ".join(f"{v:g}" for v in ball) if ball is not None else None
+    if ball is not None:
+        try:
+            sim.place_ball(*ball)
+        except ModelError as exc:
+            raise ParameterError.at("ball", text, str(exc)) from None
+    robots = sim.world.robots
+    names = {"the robot": robots[0].spec.name} if len(robots) == 1 else {}  # Simulation.overlaps' name for it
+    given = {robot.spec.name: robot.spec.given for robot in robots}
     for first, second, depth in sim.overlaps(PLACEMENT_OVERLAP_M):
-        if first != second:
-            where = given.get(first) or given.get(second) or "--robots"
-            raise ValueError(f"{where}: {first} starts inside {second} ({depth * 100:.1f} cm deep)")
+        first, second = names.get(first, first), names.get(second, second)
+        if first == second:
+            continue
+        if ball is not None and "the ball" in (first, second):
+            other = second if first == "the ball" else first
+            raise ParameterError.at("ball", text, f"the ball would overlap {other} by {depth * 100:.1f} cm")
+        robot, other = (first, second) if first in given else (second, first)
+        reason = f"{robot} starts inside {other} ({depth * 100:.1f} cm deep)"
+        if robot not in given:  # the scene's own start
+            raise ParameterError.at("scene", sim.scene, reason)
+        raise ValueError(f"{given[robot] or '--robots'}: {reason}")

@@ -593,3 +593,9 @@ class Renderer:
             self.close()
         except Exception:  # interpreter shutdown: GL may already be gone
             pass
+
+
+def check_rendering(model: mujoco.MjModel) -> None:
+    """RenderingUnavailable now, before a command writes anything, where ``model`` cannot be
+    rendered (no OpenGL context: ``MUJOCO_GL=glfw`` without a display)."""
+    Renderer(model, 1, 1).close()

@@ -34,7 +34,7 @@ from .config import CameraConfig, WorldConfig
 from .files import FolderLock, SymlinkRefused, make_folder, png, read_file, write_file_atomic
 from .openr.host import MemoryStickRun, OpenRObjectCrashed
 from .placement import make_out_folder, out_path, place
-from .render import RenderingUnavailable
+from .render import RenderingUnavailable, check_rendering
 from .robot import Robot, SimulationEnd
 from .sim import FRAME_MS, Simulation, SimulationDiverged, models_dir
 
@@ -432,6 +432,7 @@ def run_controller(
     writer = None
     try:
         place(sim, world.pose, world.ball)
+        check_rendering(sim.model)
         out = out and out_path(out)
         folder = Path(workdir).resolve() if workdir is not None else out
         if stick is None:
@@ -528,9 +529,9 @@ def run_controller(
 
 
 def _memory_stick(path: Path, backend: str | None, mtn_mode: str | None, memory_stick) -> MemoryStick | None:
-    """The memory stick ``path`` names (``memory_stick_folder``), loaded (a ConfigError naming the
-    file and line of a problem), or None for a controller; ValueError for a controller's option
-    given with a stick."""
+    """The memory stick ``path`` names (``memory_stick_folder``), loaded and its objects read (a
+    ConfigError naming the file and line of a problem), or None for a controller; ValueError for
+    a controller's option given with a stick."""
     folder = memory_stick_folder(path)
     if folder is None:
         return None
@@ -539,7 +540,9 @@ def _memory_stick(path: Path, backend: str | None, mtn_mode: str | None, memory_
             raise ValueError(
                 f"{option} applies to controllers: {folder} is a memory stick, whose OPEN-R objects run as on the robot"
             )
-    return load_memory_stick(folder)
+    stick = load_memory_stick(folder)
+    stick.check_objects()
+    return stick
 
 
 def _run_memory_stick(path: Path, run: MemoryStickRun) -> None:

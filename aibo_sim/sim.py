@@ -109,7 +109,7 @@ def load_model(
                 if spec.material("pink_ball") is None:  # the generated field has it; other scenes may not
                     spec.add_material(name="pink_ball", rgba=COLOURS["pink_ball"], specular=SPECULAR["pink_ball"])
                 geom.material = "pink_ball"
-            if match:
+            if match and spec.body("body") is not None:  # without the robot: check_robot's error
                 add_robots(spec, robots)
             model = spec.compile()
         scene_light(model)  # its custom numerics in range

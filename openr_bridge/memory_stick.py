@@ -50,6 +50,12 @@ class MemoryStick:
         """The stick's ``OPEN-R/MW/CONF/OBJECT.CFG`` (any letter case)."""
         return find_in_stick(self.root, "OBJECT.CFG")
 
+    def check_objects(self) -> None:
+        """Read every object (``read_object``): a ConfigError naming the OBJECT.CFG line of one
+        that is missing or not built for this machine, before a run writes anything."""
+        for stick_object in self.objects:
+            read_object(stick_object, self.object_cfg)
+
 
 def is_memory_stick(folder) -> bool:
     """Whether ``folder`` holds ``OPEN-R/MW/CONF/OBJECT.CFG`` (any case)."""

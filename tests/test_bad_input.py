@@ -97,24 +97,35 @@ def test_an_empty_path_is_refused_not_read_as_the_current_folder(tmp_path, monke
         ["run", str(ROOT / "controllers" / "ball_tracker.py"), "--duration", "0.1"],
         ["render", "--settle", "0"],
         ["dump", str(SCRIPTED), "--steps", "2"],
+        ["run", str(ROOT / "controllers" / "ball_tracker.py"), "--duration", "0.1", "--robot", "red:1"],
     ],
 )
 def test_glfw_without_a_display_is_rendering_unavailable_not_the_controllers_fault(
     tmp_path, monkeypatch, capsys, command
 ):
     """GLFW makes no window without a display and only warns: one line naming MUJOCO_GL, exit 2
-    (a run was reported as its controller raising MuJoCo's FatalError); run.json says failed; a
-    dump checks before it makes its folder."""
+    (a run was reported as its controller raising MuJoCo's FatalError), checked before the
+    output folder is made (a run wrote a run.json that said failed); a match too."""
     monkeypatch.setenv("MUJOCO_GL", "glfw")
     for variable in ("DISPLAY", "WAYLAND_DISPLAY"):
         monkeypatch.delenv(variable, raising=False)
     assert main(command + ["--out", str(tmp_path / "out")]) == 2
     one_error_line(capsys, "MUJOCO_GL=glfw: cannot create an OpenGL context", "DISPLAY")
-    if command[0] == "run":
-        run = json.loads((tmp_path / "out" / "run.json").read_text())
-        assert run["status"] == "failed" and "MUJOCO_GL=glfw" in run["error"]
-    if command[0] == "dump":
-        assert not (tmp_path / "out").exists()
+    assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("match", [[], ["--robot", "red:1:0,0,0:{stick}"]], ids=["alone", "match"])
+@pytest.mark.parametrize("command", ["run", "dump"])
+def test_a_stick_whose_object_is_not_built_is_refused_before_any_folder(tmp_path, capsys, command, match):
+    """Its OBJECT.CFG line named, exit 2, no folder (a run made its folder and run.json first)."""
+    stick = tmp_path / "MS"
+    (stick / "OPEN-R" / "MW" / "CONF").mkdir(parents=True)
+    (stick / "OPEN-R" / "MW" / "CONF" / "OBJECT.CFG").write_text("/MS/OPEN-R/MW/OBJS/NOPE.BIN\n")
+    length = ["--duration", "0.1"] if command == "run" else ["--steps", "2"]
+    robots = [argument.format(stick=stick) for argument in match]
+    assert main([command, str(stick), *robots, *length, "--out", str(tmp_path / "out")]) == 2
+    one_error_line(capsys, "OBJECT.CFG:1: cannot read /MS/OPEN-R/MW/OBJS/NOPE.BIN", "not built?")
+    assert not (tmp_path / "out").exists()
 
 
 # ----------------------------------------------------------------------------- scenes

@@ -166,6 +166,23 @@ def test_bad_values_exit_2_with_one_line_naming_the_option(command, bad, option,
     assert f"argument {option}" in lines[0] and "error" in lines[0] and "Traceback" not in captured.err
 
 
+@pytest.mark.parametrize("command", COMMANDS)
+def test_an_unknown_option_is_named_with_its_command(command, capsys):
+    with pytest.raises(SystemExit) as exit_info:
+        main(COMMANDS[command] + ["--no-such-option", "1"])
+    assert exit_info.value.code == 2
+    assert capsys.readouterr().err == (
+        f"aibo-sim {command}: error: unrecognized arguments: --no-such-option 1 (see aibo-sim {command} --help)\n"
+    )
+
+
+def test_each_commands_help_gives_its_own_ball_default():
+    """mtn play plays without a ball unless --ball places one; the others keep the scene's."""
+    for name, parser in _command_parsers().items():
+        (ball,) = [action for action in parser._actions if "--ball" in action.option_strings]
+        assert ball.help.endswith("default: no ball" if name == "mtn play" else "default: the scene's"), name
+
+
 def test_runtime_bad_input_exits_2_with_one_line(tmp_path, capsys):
     assert main(["mtn", "play", "SIT.MTN", "--scene", str(ROBOT_ONLY), "--ball", "0", "0"]) == 2
     assert "no body named 'ball'" in capsys.readouterr().err

@@ -202,7 +202,8 @@ def test_the_same_seed_gives_the_same_files_and_resume_completes_a_robots_dump(m
         (["--robot", "red:1", "--pose", "0", "0", "0"], "--pose applies to"),
         (["--robot", "red:1", "--backend", "openr"], "--backend applies to"),
         (["--robot", "red:1", "--formats", "seg,coco"], "coco annotates the rgb files"),
-        (["--robot", "red:1:0,0,0", "--ball", "0.1", "0.06"], "--ball 0.1 0.06: the ball would overlap the robot"),
+        (["--robot", "red:1:0,0,0", "--ball", "0.1", "0.06"], "--ball 0.1 0.06: the ball would overlap red 1"),
+        (["--robot", "red:1:2.95,0,0"], "--robot red:1:2.95,0,0: red 1 starts inside wall_skyblue"),
     ],
 )
 def test_a_bad_match_dump_is_refused_with_one_line(tmp_path, capsys, monkeypatch, arguments, message):

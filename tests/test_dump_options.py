@@ -92,6 +92,16 @@ def test_controller_options_with_env_are_refused(tmp_path, capsys, option):
     assert not out.exists()
 
 
+@pytest.mark.parametrize("option", [["--ball", "1", "0"], ["--pose", "0", "0", "0"], ["--ball-type", "pink"]])
+def test_placement_options_with_env_are_refused(tmp_path, capsys, option):
+    """An environment places its robot and its own ball: a pink ball asked for is refused, not
+    recorded in meta.json over frames of the orange one."""
+    out = tmp_path / "dump"
+    assert main(["dump", "--env", ENV, "--steps", "2", "--out", str(out), *option]) == 2
+    assert capsys.readouterr().err.startswith("aibo-sim: error: --ball, --ball-type and --pose apply to controller")
+    assert not out.exists()
+
+
 @pytest.mark.slow
 def test_each_shard_runs_its_controller_in_its_own_folder(writer, tmp_path):
     out = tmp_path / "dump"

@@ -244,12 +244,34 @@ def test_run_robots_file_on_the_command_line(tmp_path, capsys):
         (["--robot", "red:1", "--pose", "0", "0", "0"], "--pose applies to a run of one robot: with --robot, each"),
         (["--robot", "red:1", "--robot", "blue:1", "--view-robot", "2"], "--view-robot applies to --view in a match"),
         (["--view-robot", "1"], "--view-robot applies to --view in a match"),
+        (["--robot", "red:1:2.95,0,0"], "--robot red:1:2.95,0,0: red 1 starts inside wall_skyblue"),
+        (["--robot", "red:1:0,0,0", "--ball", "0.05", "0.07"], "--ball 0.05 0.07: the ball would overlap red 1 by"),
+        (["--robot", "red:1::missing.py"], "missing.py: no such controller file"),
     ],
 )
-def test_bad_robots_exit_2_with_one_line(arguments, message, capsys):
-    assert main(["run", str(TRACKER), "--duration", "0.1", *arguments]) == 2
+def test_bad_robots_exit_2_with_one_line_and_no_folder(arguments, message, tmp_path, capsys):
+    out = tmp_path / "out"
+    assert main(["run", str(TRACKER), "--duration", "0.1", "--out", str(out), *arguments]) == 2
     error = capsys.readouterr().err
     assert message in error and error.count("\n") == 1
+    assert not out.exists()
+
+
+@pytest.mark.parametrize("command", ["run", "dump"])
+def test_a_match_scene_without_the_robot_or_ball_is_one_line_and_no_folder(command, tmp_path, capsys):
+    empty = tmp_path / "empty.xml"
+    empty.write_text("<mujoco><worldbody/></mujoco>")
+    no_ball = ROOT / "models" / "ers7.xml"  # the robot alone: no ball to place
+    length = ["--duration", "0.1"] if command == "run" else ["--steps", "2"]
+    for scene, ball, message in (
+        (empty, [], f"{empty}: no ERS-7 robot in this scene"),
+        (no_ball, ["--ball", "1", "0"], "--ball 1 0: this scene has no body named 'ball' to place"),
+    ):
+        arguments = [command, str(TRACKER), "--robot", "red:1:0,0,0", "--scene", str(scene), *ball, *length]
+        assert main([*arguments, "--out", str(tmp_path / "out")]) == 2
+        error = capsys.readouterr().err
+        assert message in error and error.count("\n") == 1
+        assert not (tmp_path / "out").exists()
 
 
 def test_a_robot_placed_inside_a_goal_is_named_by_its_robots_files_line(tmp_path, capsys):

@@ -5,7 +5,8 @@ Usage::
     aibo-sim dump (CONTROLLER | --env ENV_ID [--policy random|scripted|zero]) --out DIR
     aibo-sim dump [CONTROLLER] (--robots FILE | --robot TEAM:NUMBER[:X,Y,YAW_DEG][:CONTROLLER] ...) --out DIR
                   [--duration S | --steps N] [--backend sim|openr] [--mtn-mode openr|webots]
-                  [--memory-stick DIR] [--scene FILE] [--pose X Y YAW_DEG] [--ball X Y] [--seed N]
+                  [--memory-stick DIR] [--scene FILE] [--pose X Y YAW_DEG] [--ball X Y]
+                  [--ball-type robocup|pink] [--seed N]
                   [--camera-profile ers7|ideal] [--camera-wb W] [--camera-gain G] [--camera-shutter S]
                   [--formats rgb,yuv444,yuv420,annex,openr,bands,luma,depth,seg,robots,mp4,coco | all]
                   [--camera-full] [--resume] [--workers N] [--engine local|ray] [--ray-address ADDR]

@@ -27,8 +27,8 @@ from ..camera import camera_profile as resolve_profile
 from ..config import CameraConfig, WorldConfig, is_seed, start_values
 from ..files import make_folder
 from ..match import robot_folder, run_match
-from ..placement import check_robots_apart, place
-from ..render import Renderer
+from ..placement import place_match
+from ..render import check_rendering
 from ..robot import SimulationEnd
 from ..runner import MEMORY_STICK, Progress
 from ..sim import Simulation, load_model
@@ -97,8 +97,7 @@ def _check_places(scene, robots, ball, ball_type: str) -> None:
     checks them again, as it does for a run)."""
     sim = Simulation(scene, camera=CameraConfig("ideal"), ball_type=ball_type, robots=robots)
     try:
-        place(sim, None, ball)  # a ParameterError naming the ball
-        check_robots_apart(sim)
+        place_match(sim, ball)
     finally:
         sim.close()
 
@@ -139,7 +138,7 @@ def dump_match(
         raise ValueError(f"--seed must be a whole number from 0 to 2**64 - 1, not {seed!r}")
     profile, settings = resolve_profile(camera_profile), camera_settings or CameraSettings()
     model = load_model(scene, ball_type=ball_type, robots=robots)
-    Renderer(model, 1, 1).close()  # no OpenGL context: refused here
+    check_rendering(model)
     ball = start_values("ball", ball, 2)
     _check_places(scene, robots, ball, ball_type)
     hashes = {path: controller_sha256(Path(path)) for path in dict.fromkeys(r.controller for r in robots)}

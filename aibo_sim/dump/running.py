@@ -15,7 +15,7 @@ import numpy as np
 import openr_bridge
 from openr_bridge import FRAME_RATE_HZ
 from openr_bridge.config import find_in_stick
-from openr_bridge.memory_stick import load_memory_stick, memory_stick_folder, read_object
+from openr_bridge.memory_stick import load_memory_stick, memory_stick_folder
 
 from ..camera import CameraProfile, CameraSettings, camera_size, describe_camera, scene_light
 from ..camera import camera_profile as resolve_profile  # dump's argument of that name shadows it
@@ -24,7 +24,7 @@ from ..config import CameraConfig, WorldConfig, start_values
 from ..files import make_folder
 from ..mtn import MODES as MTN_MODES
 from ..placement import check_place, out_path
-from ..render import Renderer
+from ..render import check_rendering
 from ..robot import BACKENDS, SimulationEnd, check_memory_stick
 from ..runner import MEMORY_STICK, Progress, check_python_controller, run_controller
 from ..sim import ModelError, ball_joint, is_seed, load_model
@@ -302,8 +302,7 @@ def controller_sha256(path: Path) -> str:
     if memory_stick_folder(path) is not None:
         stick = load_memory_stick(memory_stick_folder(path))
         files = [stick.object_cfg, *(o.file for o in stick.objects)]
-        for stick_object in stick.objects:
-            read_object(stick_object, stick.object_cfg)
+        stick.check_objects()
         for name in ("CONNECT.CFG", "DESIGNDB.CFG"):
             with contextlib.suppress(openr_bridge.ConfigError):
                 files.append(find_in_stick(stick.root, name))
@@ -429,9 +428,10 @@ def dump(
             raise ValueError(f"--engine ray needs Ray, which is not installed: {RAY_INSTALL}") from None
     if env is not None and camera_full:
         raise ValueError("--camera-full applies to controller dumps; environments render their own layer")
-    if env is not None and (ball is not None or pose is not None):
+    if env is not None and (ball is not None or pose is not None or ball_type != "robocup"):
         raise ValueError(
-            "--ball and --pose apply to controller dumps; environments place the robot and ball themselves"
+            "--ball, --ball-type and --pose apply to controller dumps; environments place the robot and "
+            "their own ball themselves"
         )
     if env is not None and (mtn_mode is not None or memory_stick is not None):
         raise ValueError("--mtn-mode and --memory-stick apply to controller dumps, not to --env")
@@ -445,7 +445,7 @@ def dump(
     if env is not None:
         _check_env(env)
     model = load_model(scene, ball_type=ball_type)
-    Renderer(model, 1, 1).close()  # no OpenGL context (MUJOCO_GL=glfw without a display): refused here
+    check_rendering(model)
     try:
         ball_joint(model)
         placeable_ball = True
