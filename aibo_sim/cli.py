@@ -147,7 +147,7 @@ def _render(args) -> int:
         description = {"camera": sim.camera.describe(), "frame": frame_metadata(sim, 0)}
         third = Renderer(sim.model, 640, 480, quality="high")
         try:
-            images["tracking.png"] = third.render(sim.data, "tracking")
+            images["tracking.png"] = third.render(sim.camera.exposure_data(), "tracking")  # the same instant
         finally:
             third.close()
     finally:

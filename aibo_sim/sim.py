@@ -593,9 +593,9 @@ class Simulation:
         qpos, dof = self.model.jnt_qposadr[joint], self.model.jnt_dofadr[joint]
         return self.data.qpos[qpos : qpos + 7], self.data.qvel[dof : dof + 6]
 
-    def ball_position(self) -> np.ndarray | None:
-        """The ball's centre, or None in a scene without a ball."""
-        return self.data.xpos[self.world.ball_body].copy() if self.has_ball else None
+    def ball_position(self, data: mujoco.MjData | None = None) -> np.ndarray | None:
+        """The ball's centre (in ``data``, default the live state), or None in a scene without a ball."""
+        return (self.data if data is None else data).xpos[self.world.ball_body].copy() if self.has_ball else None
 
     def overlaps(self, depth: float) -> list[tuple[str, str, float]]:
         """Pairs that penetrate each other deeper than ``depth`` metres in the current state
@@ -662,9 +662,10 @@ class Simulation:
 
     # ---------------------------------------------------------------- readings
 
-    def joint_positions(self) -> np.ndarray:
-        """Joint angles in radians, in ``ers7.JOINTS`` order (a copy)."""
-        return self.data.qpos[self._joint_qpos]  # indexing copies
+    def joint_positions(self, data: mujoco.MjData | None = None) -> np.ndarray:
+        """Joint angles in radians (in ``data``, default the live state), in ``ers7.JOINTS`` order
+        (a copy)."""
+        return (self.data if data is None else data).qpos[self._joint_qpos]  # indexing copies
 
     def sensor(self, name: str) -> np.ndarray:
         """The MuJoCo sensor ``name``'s reading, a view of ``data.sensordata``."""

@@ -249,6 +249,30 @@ def test_segmentation_depth_and_ball_pixel_agree_with_the_picture(full_dump):
 
 
 @pytest.mark.parametrize("profile", ["ideal", "ers7"])
+def test_a_frames_record_is_of_the_instant_its_frame_was_exposed(profile):
+    """time_s, joints and the ball of a frames.jsonl record are those of the frame's exposure, as
+    its camera pose, picture and labels are, though the record is written one or more joint
+    frames later (a dump's frame 0 said 8 ms and the joints of then)."""
+    sim = Simulation(camera=CameraConfig(profile))
+    try:
+        sim.servos.set_target(slice(None), sim.servos.high)  # every joint moves through the frames
+        exposed = {0: (0.0, sim.joint_positions())}
+        moved = 0
+        for _ in range(20):
+            sim.step_frame()
+            exposed.setdefault(sim.camera_frame_index(), (sim.time_ms / 1000, sim.joint_positions()))
+            record, frame = dump_formats.frame_metadata(sim, 0), sim.camera.frame()
+            time_s, joints = exposed[frame.index]
+            assert record["time_s"] == time_s and record["frame_number"] * 0.008 == pytest.approx(time_s)
+            assert list(record["joints"].values()) == joints.tolist()
+            assert record["camera"]["position"] == sim.camera.exposure_data().cam_xpos[sim.camera.camera_id].tolist()
+            moved += not np.array_equal(joints, sim.joint_positions())
+        assert moved >= 10  # most records are written after their exposure
+    finally:
+        sim.close()
+
+
+@pytest.mark.parametrize("profile", ["ideal", "ers7"])
 def test_ball_behind_a_beacon_is_not_visible(profile):
     sim = Simulation(camera=CameraConfig(profile))
     heading = math.atan2(1.95, 1.35)  # towards the sky-blue left beacon

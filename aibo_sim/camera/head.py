@@ -401,17 +401,19 @@ class HeadCamera:
 
     # ---------------------------------------------------------------- labels
 
-    def _exposure_data(self) -> mujoco.MjData:
+    def exposure_data(self) -> mujoco.MjData:
+        """The state the current frame is exposed in (the live one until the next joint frame):
+        what its labels and its frames.jsonl record are made from."""
         return self._exposures[0].data
 
     def depth(self) -> np.ndarray:
         """Metres along the optical axis at each pixel of the current frame, float32 (h, w)."""
-        depth = self._render(self._exposure_data(), "depth")
+        depth = self._render(self.exposure_data(), "depth")
         return depth if self._remap is None else self._lens_remap(depth, cv2.INTER_NEAREST)
 
     def segmentation(self) -> np.ndarray:
         """Geom id at each pixel of the current frame, int32 (h, w); -1 where nothing is drawn."""
-        ids = self._render(self._exposure_data(), "segmentation")
+        ids = self._render(self.exposure_data(), "segmentation")
         if self._remap is None:
             return ids
         return self._lens_remap(ids.astype(np.float32), cv2.INTER_NEAREST).astype(np.int32)

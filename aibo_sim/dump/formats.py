@@ -18,7 +18,7 @@ from ..ers7 import JOINTS
 from ..field import LABEL_TEAMS, SEGMENTATION_CLASSES
 from ..files import open_file
 from ..render import geom_groups
-from ..sim import Simulation, robot_prefix
+from ..sim import FRAME_MS, Simulation, robot_prefix
 from ..team import MAX_ROBOTS, RobotSpec
 
 FORMATS = ("rgb", "yuv444", "yuv420", "annex", "openr", "bands", "luma", "depth", "seg", "robots", "mp4", "coco")
@@ -252,14 +252,15 @@ def frame_files(layouts: dict, index: int):
 
 def ball_in_image(sim: Simulation) -> dict | None:
     """The ball centre's pixel in the current frame (x right, y down, through the lens; None
-    behind the camera), visibility, distance; None in a scene without a ball.
+    behind the camera), visibility, distance, in the state the frame was exposed in; None in a
+    scene without a ball.
 
     Visible: in front of the camera, projected inside the image, and the line of sight to
     the centre hits the ball first (the geoms the head camera draws: its geom groups, and in a
     match the other robots whole, ``camera.own_geoms``).
     """
-    camera, model, data = sim.camera, sim.model, sim.data
-    frame, ball = camera.frame(), sim.ball_position()
+    camera, model, data = sim.camera, sim.model, sim.camera.exposure_data()
+    frame, ball = camera.frame(), sim.ball_position(data)
     if ball is None:
         return None
     offset = ball - frame.position
@@ -287,11 +288,12 @@ def ball_in_image(sim: Simulation) -> dict | None:
 
 
 def frame_metadata(sim: Simulation, index: int) -> dict:
-    """A frames.jsonl record: time, OPEN-R counters, camera pose and settings, joints (rad), the ball."""
+    """A frames.jsonl record: time, OPEN-R counters, camera pose and settings, joints (rad), the
+    ball, each as the frame was exposed (``frame_number``'s 8 ms tick: its ``time_s``)."""
     frame = sim.camera.frame()
     return {
         "index": index,
-        "time_s": sim.time_ms / 1000,
+        "time_s": frame.frame_number * FRAME_MS / 1000,
         "frame_number": frame.frame_number,  # 8 ms ticks, the message's frameNumber
         "field_counter": frame.index,
         "camera": {
@@ -299,7 +301,7 @@ def frame_metadata(sim: Simulation, index: int) -> dict:
             "xmat": frame.xmat.reshape(-1).tolist(),
             **frame.settings.as_dict(),
         },
-        "joints": dict(zip((j.name for j in JOINTS), sim.joint_positions().tolist())),
+        "joints": dict(zip((j.name for j in JOINTS), sim.joint_positions(sim.camera.exposure_data()).tolist())),
         "ball": ball_in_image(sim),
     }
 
