@@ -79,9 +79,10 @@ def make_folder(path) -> Path:
     return path
 
 
-def _create(temp: Path) -> int:
+def create_file(temp: Path) -> int:
     """A new file at ``temp``, opened for writing; a regular file already there (the temporary
-    file of a writer that was killed) is replaced, a link refused."""
+    file of a writer that was killed, an earlier run's log) is replaced, never written through
+    (a hard link to another file stays as it was), a symbolic link refused."""
     flags = os.O_WRONLY | os.O_CREAT | os.O_EXCL
     try:
         return open_file(temp, flags)
@@ -108,7 +109,7 @@ def write_files_atomic(files: dict[Path, bytes], temps: dict[Path, Path] | None 
     try:
         for path, data in files.items():
             created.append(temps[path])  # before it exists: a signal right after it is made still finds it
-            fd = _create(temps[path])
+            fd = create_file(temps[path])
             with open(fd, "wb") as file:
                 file.write(data)
         for path in files:
@@ -163,6 +164,9 @@ class FolderLock:
             raise error(str(exc)) from None
         except OSError as exc:
             raise error(f"cannot lock {self.path}: {exc.strerror or exc}") from exc
+        if os.fstat(fd).st_nlink > 1:  # another file's name too: its content is not ours to write
+            os.close(fd)
+            raise error(f"{self.path} is a hard link to another file: refusing to write it; remove it")
         deadline = time.monotonic() + wait_s
         while True:
             try:

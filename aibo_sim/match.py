@@ -258,14 +258,22 @@ def run_match(
             sys.path.remove(path)
         progress_bar.close()
         summary = _summary(sim, players, seed, scene, ball, ball_type, time.perf_counter() - start, interrupted)
-        if out is not None:
-            _write_summaries(out, players, summary)
-        for player in players:
-            if player.writer is not None:
-                player.writer.lock.release()
-        sim.close()
+        try:
+            if out is not None:
+                _write_summaries(out, players, summary)
+        except OSError:
+            if not any(player.writer is not None and player.writer.error is not None for player in players):
+                raise  # else the full disk refused run.json too: the frame's error is reported below
+        finally:
+            for player in players:
+                if player.writer is not None:
+                    player.writer.lock.release()
+            sim.close()
     if world.lockstep.failure is not None:
         raise world.lockstep.failure
+    unwritten = [p.error for p in players if p.writer is not None and p.error is not None and p.error is p.writer.error]
+    if unwritten:
+        raise unwritten[0]  # "cannot write ...": the disk's fault, not a controller's
     failed = [p for p in players if p.error is not None]
     if failed:
         raise ControllerFailed("; ".join(f"{p.robot.spec.name}: {p.error}" for p in failed))
@@ -288,6 +296,8 @@ def _play(player: _Player, lockstep: Lockstep) -> None:
     except BaseException as error:
         player.error = error
     finally:
+        if player.writer is not None and player.writer.error is not None:
+            player.error = player.writer.error  # a frame it could not write ended its run
         lockstep.leave(player.robot)
         player.robot.camera.close()  # its OpenGL context is current in this thread only
 

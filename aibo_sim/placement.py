@@ -19,11 +19,14 @@ PLACEMENT_OVERLAP_M = 0.005  # a placed robot or ball sunk deeper than this into
 
 
 def out_path(path) -> Path:
-    """The output folder ``out`` resolved: it may be a link to a folder, not a link to nothing (aibo-sim
-    makes no folder through a link it did not make); a ``ParameterError`` naming it."""
+    """The output folder ``out`` resolved: it, or a folder above it, may be a link to a folder,
+    not a link to nothing (aibo-sim makes no folder through a link it did not make); a
+    ``ParameterError`` naming it."""
     path = Path(path)
-    if path.is_symlink() and not path.exists():
-        raise ParameterError.at("out", path, f"a link to {os.readlink(path)}, which does not exist")
+    for link in (path, *path.parents):
+        if link.is_symlink() and not link.exists():
+            where = "" if link == path else f" (its folder {link})"
+            raise ParameterError.at("out", path, f"a link{where} to {os.readlink(link)}, which does not exist")
     return path.resolve()
 
 

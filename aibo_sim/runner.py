@@ -42,9 +42,11 @@ from .sim import FRAME_MS, Simulation, SimulationDiverged, models_dir
 def interrupt_behind(error: Exception) -> KeyboardInterrupt | None:
     """The Ctrl-C or SIGTERM (``cli.Terminated``) that ``error`` stands for: a signal's exception
     raised while a compiled function returns (numba's, a C extension's) reaches the caller as
-    the cause of a SystemError ("returned a result with an exception set")."""
-    cause = error.__cause__
-    return cause if isinstance(error, SystemError) and isinstance(cause, KeyboardInterrupt) else None
+    the cause of a SystemError ("returned a result with an exception set"), or of a chain of
+    them (a compiled function inside another)."""
+    while isinstance(error, SystemError):
+        error = error.__cause__
+    return error if isinstance(error, KeyboardInterrupt) else None
 
 
 class ControllerFailed(RuntimeError):
@@ -516,9 +518,10 @@ def run_controller(
             writer.write_run_json(
                 {"controller": done.pop("controller"), "backend": done.pop("backend"), "status": "done", **done}
             )
-    except (ControllerFailed, SimulationDiverged, RenderingUnavailable, KeyboardInterrupt) as failure:
+    except (ControllerFailed, SimulationDiverged, RenderingUnavailable, KeyboardInterrupt, OSError) as failure:
         if writer is not None:  # the frames so far stay, and run.json says how the run ended
-            record_end("interrupted" if isinstance(failure, KeyboardInterrupt) else "failed", failure)
+            with contextlib.suppress(OSError):  # a full disk may refuse this too: run.json says "incomplete"
+                record_end("interrupted" if isinstance(failure, KeyboardInterrupt) else "failed", failure)
         raise
     finally:
         progress_bar.close()
@@ -546,9 +549,12 @@ def _memory_stick(path: Path, backend: str | None, mtn_mode: str | None, memory_
 
 
 def _run_memory_stick(path: Path, run: MemoryStickRun) -> None:
-    """Run a memory stick's objects; an object that crashed is ControllerFailed."""
+    """Run a memory stick's objects; an object that crashed is ControllerFailed. A frame that
+    could not be written, or a match stopped, ends the run (SimulationEnd) as its end does."""
     try:
         run.run()
+    except SimulationEnd:
+        pass  # the writer's error, or the match's interruption, is reported by the caller
     except OpenRObjectCrashed as error:
         raise ControllerFailed(f"memory stick {path.name}: {error}") from error
 

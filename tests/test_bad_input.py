@@ -541,9 +541,16 @@ def test_any_command_reads_a_signal_behind_a_compiled_functions_system_error_as_
                 "CPUDispatcher(<function develop>) returned a result with an exception set"
             ) from interrupt
 
-    monkeypatch.setattr(cli, "_render", stopped_inside_numba)
-    assert main(["render"]) == 143
-    assert capsys.readouterr().err.strip() == "aibo-sim: terminated (SIGTERM)"
+    def stopped_two_compiled_functions_deep(args):  # numba's error chain: one SystemError a function
+        try:
+            stopped_inside_numba(args)
+        except SystemError as inner:
+            raise SystemError("CPUDispatcher(<function smear_taps>) returned a result with an exception set") from inner
+
+    for render in (stopped_inside_numba, stopped_two_compiled_functions_deep):
+        monkeypatch.setattr(cli, "_render", render)
+        assert main(["render"]) == 143
+        assert capsys.readouterr().err.strip() == "aibo-sim: terminated (SIGTERM)"
 
     def broken(args):
         raise SystemError("a SystemError of its own")

@@ -1,7 +1,9 @@
 """Memory sticks on the command line: aibo-sim run and dump with the run family's options, exit
 statuses and run.json, aibo-sim openr sdk, aibo-sim build-ms."""
 
+import errno
 import json
+import os
 import signal
 import subprocess
 import sys
@@ -11,6 +13,7 @@ from pathlib import Path
 import pytest
 from openr_support import build_programs, make_stick
 
+from aibo_sim import runner
 from aibo_sim.cli import main
 from aibo_sim.dump import load_dump
 
@@ -147,6 +150,27 @@ def test_one_sigterm_ends_a_stick_run_with_143_and_an_honest_run_json(objects, t
     assert "aibo-sim: terminated (SIGTERM)" in run.stderr.read()
     record = json.loads((out / "run.json").read_text())
     assert record["status"] == "interrupted" and record["camera_frames"] == len(list((out / "frames").glob("*.png")))
+
+
+def test_a_full_disk_ends_a_stick_run_with_exit_2_and_run_json_failed(objects, tmp_path, monkeypatch, capsys):
+    """The frame writer ends the run (SimulationEnd) as in a controller's: it reached the caller
+    as a bare traceback; in a match it was a failure with an empty error."""
+    real = runner.write_file_atomic
+
+    def full_from_frame_3(path, *args, **kwargs):
+        if path.name.endswith(".png") and int(path.stem) >= 3:
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(path))
+        return real(path, *args, **kwargs)
+
+    monkeypatch.setattr(runner, "write_file_atomic", full_from_frame_3)
+    stick = make_stick(tmp_path / "ms", objects, ["JPROBE"], JOINT_PROBE)
+    for match in ([], ["--robot", f"red:1:0,0,0:{stick}"]):
+        out = tmp_path / f"out{len(match)}"
+        assert main(["run", str(stick), *match, "--duration", "1", "--out", str(out)]) == 2
+        error = capsys.readouterr().err
+        assert error.startswith("aibo-sim: error: ") and error.count("\n") == 1 and "No space left" in error
+        record = json.loads(((out / "robot1") if match else out).joinpath("run.json").read_text())
+        assert record["status"] == "failed" and "No space left" in record["error"]
 
 
 def test_dump_of_a_stick_records_frames_and_resumes(objects, tmp_path, capsys):

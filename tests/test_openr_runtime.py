@@ -1,6 +1,7 @@
 """The host OPEN-R runtime's semantics, with OPEN-R objects of our own (tests/openr_programs),
 built by the host SDK with Sony-style Makefiles and run on the simulated ERS-7."""
 
+import os
 import signal
 import struct
 import subprocess
@@ -13,12 +14,15 @@ from openr_support import build_programs, make, make_stick, run_stick
 
 import openr_bridge
 from aibo_sim import ers7
+from aibo_sim.files import SymlinkRefused
 from aibo_sim.openr import host
-from aibo_sim.openr.host import OpenRObjectCrashed
+from aibo_sim.openr.host import MemoryStickRun, OpenRObjectCrashed
 from aibo_sim.openr.sdk import sdk_root
+from aibo_sim.sim import Simulation
 from openr_bridge import ConfigError, host_protocol
 from openr_bridge.cdt import OCdtVectorData, orange_ball_cdt, pink_ball_cdt
 from openr_bridge.config import parse_stub_cfg
+from openr_bridge.memory_stick import load_memory_stick
 from openr_bridge.stubgen import generate
 
 pytestmark = pytest.mark.slow  # heavy: run by CI and by python -m pytest -m slow
@@ -213,6 +217,28 @@ def test_files_are_the_memory_stick_and_the_runs_folder(objects, tmp_path):
     assert (data / "UNCLOSED.TXT").read_text() == "written when the object's process ends\n"  # never closed
     assert (out / "here.txt").read_text() == "in the run's folder\n"
     assert not list(tmp_path.rglob("escape.txt")) and not list(tmp_path.rglob("longer_name.txt"))
+
+
+def test_an_object_opens_no_file_through_a_symbolic_link(objects, tmp_path):
+    """Links planted in --out and on the stick (a FAT stick has none) lead nowhere: the object's
+    open is refused and logged, what they point to untouched."""
+    stick = make_stick(tmp_path / "ms", objects, ["FPROBE"])
+    out, victim = tmp_path / "out", tmp_path / "victim.txt"
+    victim.write_text("theirs\n")
+    out.mkdir()
+    (out / "here.txt").symlink_to(victim)
+    data = stick / "OPEN-R" / "MW" / "DATA" / "P"
+    data.mkdir(parents=True, exist_ok=True)
+    (data / "PROBE.TXT").symlink_to(victim)
+    lines = run_stick(stick, 1.0, out).lines("FileProbe")
+    for path in ("here.txt", "/ms/open-r/mw/data/p/probe.txt"):
+        assert f"write {path}: refused (errno 13)" in lines
+        assert (
+            f"[ERROR] refused to open {path}: a symbolic link (followed by no object: a FAT memory stick has none)"
+            in lines
+        )
+    assert "read /MS/OPEN-R/MW/DATA/P/PROBE.TXT: refused (errno 13)" in lines
+    assert victim.read_text() == "theirs\n"
 
 
 def test_colour_tables_fill_the_cdt_layer_of_the_next_frames(objects, tmp_path):
@@ -410,7 +436,15 @@ def test_the_speaker_plays_sound_vectors_one_after_the_other_into_a_wav_file(obj
         ["SPROBE"],
         "SoundProbe.Speaker.OSoundVectorData.S OVirtualRobotAudioComm.Speaker.OSoundVectorData.O\n",
     )
-    result = run_stick(stick, 0.5, tmp_path / "out")
+    out, victims = tmp_path / "out", [tmp_path / "victim.wav", tmp_path / "victim.log"]
+    out.mkdir()
+    for victim in victims:
+        victim.write_bytes(b"theirs")
+    (out / "speaker.wav").symlink_to(victims[0])  # links planted where the run writes: neither followed
+    os.link(victims[1], out / "console.log")
+    result = run_stick(stick, 0.5, out)
+    assert [victim.read_bytes() for victim in victims] == [b"theirs", b"theirs"]
+    assert not (out / "speaker.wav").is_symlink() and (out / "console.log").stat().st_nlink == 1
     readies = result.lines("SoundProbe")
     # The boot's ready before DoStart, which fills both regions (as Sony's SoundPlay); then after
     # each vector the region it played is free again (SoundPlay takes it, and had none without).
@@ -421,6 +455,18 @@ def test_the_speaker_plays_sound_vectors_one_after_the_other_into_a_wav_file(obj
         samples = np.frombuffer(sound.readframes(sound.getnframes()), "<i2").astype(int)
     tone = np.trunc(10000 * np.sin(2 * np.pi * 1000 * np.arange(5120) / 16000)).astype(int)
     assert len(samples) == 5120 and np.abs(samples - tone).max() <= 1  # from t = 0, without a gap
+
+
+def test_a_link_at_the_console_log_is_refused_before_the_run(objects, tmp_path):
+    stick = make_stick(tmp_path / "ms", objects, ["JPROBE"], JOINT_PROBE)
+    (tmp_path / "console.log").symlink_to(tmp_path / "victim")
+    sim = Simulation()
+    try:
+        with pytest.raises(SymlinkRefused, match="console.log is a symbolic link"):
+            MemoryStickRun(sim, load_memory_stick(stick), tmp_path, log_path=tmp_path / "console.log")
+    finally:
+        sim.close()
+    assert not (tmp_path / "victim").exists()
 
 
 def test_foretold_frames_change_nothing_but_the_number_of_messages(objects, tmp_path):

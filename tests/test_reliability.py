@@ -4,6 +4,8 @@ start more dump workers than memory holds, break on a controller thread that rea
 and the smaller promises (a scene that starts the robot in a wall, wait notices for Python
 controllers, a closed socket, memory after closing envs, long arguments, run.json's status)."""
 
+import errno
+import fnmatch
 import json
 import os
 import re
@@ -16,6 +18,7 @@ from pathlib import Path
 
 import pytest
 
+from aibo_sim import runner
 from aibo_sim.cbind import serve
 from aibo_sim.cli import main
 from aibo_sim.config import CameraConfig
@@ -148,6 +151,7 @@ def test_a_link_planted_where_aibo_sim_writes_is_refused_naming_it(tmp_path, cap
         ["run", str(SCRIPTED), "--duration", "0.1"],
         ["run", str(SCRIPTED), "--duration", "0.1", "--robot", "red:1", "--robot", "blue:1"],
         ["dump", str(SCRIPTED), "--steps", "2", "--formats", "rgb"],
+        ["dump", str(SCRIPTED), "--steps", "2", "--formats", "rgb", "--robot", "red:1", "--robot", "blue:1"],
         ["render", "--settle", "0"],
         ["build-ms", str(ROOT / "controllers" / "ball_tracker_c")],
     ],
@@ -157,20 +161,75 @@ def test_an_out_that_is_a_link_to_nothing_is_refused_and_nothing_made_through_it
     out.symlink_to(target)
     assert main(command + ["--out", str(out)]) == 2
     one_error_line(capsys, f"--out {out}: a link to {target}, which does not exist")
+    assert main(command + ["--out", str(out / "inside")]) == 2  # a folder above it
+    one_error_line(capsys, f"--out {out / 'inside'}: a link (its folder {out}) to {target}, which does not exist")
     assert not (tmp_path / "missing").exists()
+
+
+def test_a_hard_link_in_place_of_a_lock_is_refused_and_left_as_it_was(tmp_path, capsys):
+    out, victim = tmp_path / "out", tmp_path / "victim"
+    out.mkdir()
+    victim.write_bytes(VICTIM)
+    os.link(victim, out / ".run.lock")
+    assert main(["run", str(SCRIPTED), "--duration", "0.1", "--out", str(out)]) == 2
+    one_error_line(capsys, f"{out / '.run.lock'} is a hard link to another file: refusing to write it")
+    assert victim.read_bytes() == VICTIM
+
+
+def no_space_after(calls: int, write, names: str = "*"):
+    """``write`` (a file writer) that fails as a full disk does after ``calls`` calls for files
+    whose names match ``names``."""
+    count = iter(range(calls))
+
+    def failing(path, *args, **kwargs):
+        if fnmatch.fnmatch(Path(path).name, names) and next(count, None) is None:
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(path))
+        return write(path, *args, **kwargs)
+
+    return failing
+
+
+def test_a_full_disk_in_a_match_is_exit_2_and_each_run_json_says_so(tmp_path, monkeypatch, capsys):
+    """A frame that could not be written ended its robot's run as its end does: the match said
+    done, exit 0."""
+    monkeypatch.setattr(runner, "write_file_atomic", no_space_after(5, runner.write_file_atomic, "*.png"))
+    out = tmp_path / "out"
+    args = ["run", str(SCRIPTED), "--robot", "red:1", "--robot", "blue:1", "--duration", "0.5", "--out", str(out)]
+    assert main(args) == 2
+    error = capsys.readouterr().err
+    assert error.startswith("aibo-sim: error: ") and "No space left on device" in error and error.count("\n") == 1
+    match = json.loads((out / "run.json").read_text())
+    assert match["status"] == "failed" and "No space left on device" in str(match["robots"])
+    assert "failed" in [json.loads((out / f"robot{k}" / "run.json").read_text())["status"] for k in (1, 2)]
+    assert main(args) == 2 and "No space left" in capsys.readouterr().err  # the folders' locks were released
+
+
+def test_a_build_ms_that_fails_leaves_no_half_project(tmp_path, monkeypatch, capsys):
+    """Whole or nothing, the error naming the project (not the source file being copied)."""
+    from aibo_sim.openr import build_ms
+
+    monkeypatch.setattr(build_ms.shutil, "copyfile", no_space_after(3, shutil.copyfile))
+    out = tmp_path / "project"
+    assert main(["build-ms", str(ROOT / "controllers" / "ball_tracker_c"), "--out", str(out)]) == 2
+    assert capsys.readouterr().err == f"aibo-sim: error: cannot write {out}: No space left on device\n"
+    assert sorted(tmp_path.iterdir()) == []
+    monkeypatch.undo()
+    out.mkdir()  # an empty folder given: the project goes there
+    assert main(["build-ms", str(ROOT / "controllers" / "ball_tracker_c"), "--out", str(out)]) == 0
+    assert (out / "MS" / "OPEN-R" / "MW" / "CONF" / "OBJECT.CFG").is_file() and sorted(tmp_path.iterdir()) == [out]
 
 
 def test_a_signal_right_after_a_temporary_file_is_made_leaves_none(tmp_path, monkeypatch):
     """Ctrl-C or SIGTERM lands between bytecodes, here just after the temporary file was made."""
     from aibo_sim import files
 
-    create = files._create
+    create = files.create_file
 
     def create_then_interrupt(temp):
         os.close(create(temp))
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(files, "_create", create_then_interrupt)
+    monkeypatch.setattr(files, "create_file", create_then_interrupt)
     with pytest.raises(KeyboardInterrupt):
         files.write_file_atomic(tmp_path / "frame.png", b"picture")
     assert list(tmp_path.iterdir()) == []

@@ -27,7 +27,7 @@ from ..camera import camera_profile as resolve_profile
 from ..config import CameraConfig, WorldConfig, is_seed, start_values
 from ..files import make_folder
 from ..match import robot_folder, run_match
-from ..placement import place_match
+from ..placement import out_path, place_match
 from ..render import check_rendering
 from ..robot import SimulationEnd
 from ..runner import MEMORY_STICK, Progress
@@ -142,7 +142,7 @@ def dump_match(
     ball = start_values("ball", ball, 2)
     _check_places(scene, robots, ball, ball_type)
     hashes = {path: controller_sha256(Path(path)) for path in dict.fromkeys(r.controller for r in robots)}
-    out = Path(out).resolve()
+    out = out_path(out)
     recorded = world_parameters(frames, scene, seed, ball, ball_type, formats, camera_full, profile, settings, model)
     match = {"controller": controller and str(Path(controller).resolve()), "robots": [r.as_dict() for r in robots]}
     shards = [robot_folder(k) for k in range(len(robots))]

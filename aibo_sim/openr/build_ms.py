@@ -31,6 +31,7 @@ Bad input is a ``BuildMsError`` (a ValueError), one line naming the argument.
 
 from __future__ import annotations
 
+import os
 import re
 import shutil
 from pathlib import Path
@@ -322,7 +323,22 @@ def build_ms(controller, out_dir) -> Path:
     motions = _motions(main, sources)
     out = _check_out(out_dir)
     table = device_table()
+    out.parent.mkdir(parents=True, exist_ok=True)
+    building = out.parent / f".{out.name}.building-{os.getpid()}"
+    shutil.rmtree(building, ignore_errors=True)  # left by a build of this process id that was killed
+    try:
+        building.mkdir()
+        _write_project(building, files, sources, motions, table)
+        os.replace(building, out)  # whole or not at all, onto a new or empty folder
+    except OSError as exc:
+        raise OSError(f"cannot write {out}: {exc.strerror or exc}") from None
+    finally:
+        shutil.rmtree(building, ignore_errors=True)
+    return out
 
+
+def _write_project(out: Path, files, sources, motions: dict, table: str) -> None:
+    """The project's files in ``out``: the wrapper object with the controller, the stick."""
     project = out / "Controller"
     (project / "controller").mkdir(parents=True)
     for item in sorted(WRAPPER.iterdir()):
@@ -344,4 +360,3 @@ def build_ms(controller, out_dir) -> Path:
         target = out.joinpath("MS", *place)
         target.parent.mkdir(parents=True, exist_ok=True)
         shutil.copyfile(source, target)
-    return out

@@ -41,6 +41,7 @@ frames, far on odd), the battery (``BATTERY``, draining 1 % a minute from 100 %)
 
 from __future__ import annotations
 
+import io
 import mmap
 import os
 import signal
@@ -63,6 +64,7 @@ from openr_bridge.memory_stick import MemoryStick, read_object
 
 from .. import ers7
 from ..cbind.child import Child
+from ..files import SymlinkRefused, create_file, write_file_atomic
 from ..sim import ACCEL_RANGE, FRAME_MS, IR_NOISE, Simulation
 from .sdk import sdk_root
 
@@ -234,6 +236,8 @@ class MemoryStickRun:
     ):
         self.sim, self.stick, self.workdir = sim, stick, Path(workdir)
         self.log_path, self.sound_path = log_path, sound_path
+        if log_path is not None and os.path.islink(log_path):  # refused before a run prepares its folder
+            raise SymlinkRefused.at(log_path)
         self.frame_listeners, self.camera_listeners = [], []
         self.end_ms: int | None = None
         self.lookahead = protocol.LOOKAHEAD_FRAMES  # frames an answer may foretell (0: a message every frame)
@@ -283,11 +287,7 @@ class MemoryStickRun:
 
     def _serve(self, libraries, shared: Path) -> None:
         ours, theirs = socket.socketpair()
-        log = (
-            None
-            if self.log_path is None
-            else os.open(self.log_path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC | os.O_NOFOLLOW, 0o644)
-        )
+        log = None if self.log_path is None else create_file(self.log_path)
         environment = {
             **os.environ,
             "AIBO_OPENR_FD": str(theirs.fileno()),
@@ -595,11 +595,13 @@ class MemoryStickRun:
         track = np.zeros(end, "<i2")
         for start, samples in self._sound.items():
             track[start : start + len(samples)] = samples
-        with wave.open(str(self.sound_path), "wb") as out:
+        data = io.BytesIO()
+        with wave.open(data, "wb") as out:
             out.setnchannels(1)
             out.setsampwidth(2)
             out.setframerate(protocol.SPEAKER_RATE)
             out.writeframes(track.tobytes())
+        write_file_atomic(self.sound_path, data.getvalue())  # whole; a link there replaced, never followed
 
     # ---------------------------------------------------------------- messages
 

@@ -3,14 +3,16 @@
  * mounted at /MS, FAT with 8.3 names in upper case (a program may spell them in any case). Here
  * /MS/... is the memory-stick folder: each name is found ignoring case, a new file or folder is
  * made in upper case and must be an 8.3 name. A relative path is the run's working folder
- * (aibo-sim's --out), as for any aibo-sim controller. Any other path, and one that climbs out of
- * its folder with "..", is refused (errno EACCES) and logged, never opened.
+ * (aibo-sim's --out), as for any aibo-sim controller. Any other path, one that climbs out of
+ * its folder with "..", and one through a symbolic link in either folder (a FAT stick has none;
+ * one planted in --out could lead anywhere) is refused (errno EACCES) and logged, never opened.
  *
  * interpose.c puts the C library's file calls through this for the objects' code only (the
  * runtime's own files are opened as they are).
  */
 #include <dirent.h>
 #include <errno.h>
+#include <sys/stat.h>
 #include <OPENR/OSyslog.h>
 #include "host.h"
 
@@ -110,6 +112,11 @@ std::string MapPath(const char* path, bool create, std::string* error) {
             }
         }
         mapped += "/" + name;
+        struct stat status;
+        if (lstat(mapped.c_str(), &status) == 0 && S_ISLNK(status.st_mode)) {
+            *error = "a symbolic link (followed by no object: a FAT memory stick has none)";
+            return "";
+        }
     }
     return mapped;
 }
