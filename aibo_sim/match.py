@@ -212,9 +212,12 @@ def run_match(
                 listeners = player.program.camera_source.listeners
             if folder is not None:
                 make_folder(folder)
-                player.writer = FrameWriter(folder, controller=player.path, backend=player.kind)
+                player.writer = FrameWriter(folder, controller=player.path, backend=player.kind, prepare=False)
                 listeners.append(player.writer)
             player.program.end_ms = int(round(duration * 1000))
+        for player in players:  # every robot's folder checked and locked: now each is cleared
+            if player.writer is not None:
+                player.writer.prepare()
     except BaseException:
         for player in players:
             if player.writer is not None:

@@ -138,13 +138,24 @@ class FrameWriter:
     ``run.json`` then says ``"failed"`` with that error, where the disk still takes it.
     """
 
-    def __init__(self, directory: Path, controller: Path | None = None, backend: str | None = None):
+    def __init__(
+        self, directory: Path, controller: Path | None = None, backend: str | None = None, prepare: bool = True
+    ):
+        """``prepare=False``: the folder checked and locked only; ``prepare()`` then clears it
+        (a match checks every robot's folder before it changes any)."""
         self.out, self.directory = make_out_folder(directory), directory / "frames"
         self.error: OSError | None = None
+        self._marker = {"controller": controller and str(controller), "backend": backend, "status": "incomplete"}
         self._check()  # before the lock file is made: a folder refused is left as it was
         self.lock = FolderLock(directory, LOCK_FILE, "run", "wait for it to end or stop it, or choose another --out")
+        if prepare:
+            self.prepare()
+
+    def prepare(self) -> None:
+        """Remove an earlier run's frames and write run.json saying "incomplete"; the lock is
+        released if that fails."""
         try:
-            self._prepare({"controller": controller and str(controller), "backend": backend, "status": "incomplete"})
+            self._prepare(self._marker)
         except BaseException:
             self.lock.release()
             raise

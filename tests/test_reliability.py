@@ -166,6 +166,20 @@ def test_an_out_that_is_a_link_to_nothing_is_refused_and_nothing_made_through_it
     assert not (tmp_path / "missing").exists()
 
 
+def test_a_match_refused_at_a_later_robots_folder_leaves_the_earlier_ones_as_they_were(tmp_path, capsys):
+    out, elsewhere = tmp_path / "out", tmp_path / "elsewhere"
+    args = ["run", str(SCRIPTED), "--robot", "red:1", "--robot", "blue:1", "--duration", "0.1", "--out", str(out)]
+    assert main(args) == 0
+    before = {p: p.read_bytes() for p in (out / "robot1").rglob("*") if p.is_file() and p.name != ".run.lock"}
+    shutil.rmtree(out / "robot2")
+    elsewhere.mkdir()
+    (out / "robot2").symlink_to(elsewhere)
+    assert main(args) == 2
+    one_error_line(capsys, f"{out / 'robot2'} is a symbolic link: refusing to follow it")
+    assert {p: p.read_bytes() for p in (out / "robot1").rglob("*") if p.is_file() and p.name != ".run.lock"} == before
+    assert list(elsewhere.iterdir()) == []
+
+
 def test_a_hard_link_in_place_of_a_lock_is_refused_and_left_as_it_was(tmp_path, capsys):
     out, victim = tmp_path / "out", tmp_path / "victim"
     out.mkdir()
