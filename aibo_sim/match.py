@@ -261,11 +261,12 @@ def run_match(
             sys.path.remove(path)
         progress_bar.close()
         summary = _summary(sim, players, seed, scene, ball, ball_type, time.perf_counter() - start, interrupted)
+        unwritten = [p.writer.error for p in players if p.writer is not None and p.writer.error is not None]
         try:
             if out is not None:
                 _write_summaries(out, players, summary)
         except OSError:
-            if not any(player.writer is not None and player.writer.error is not None for player in players):
+            if not unwritten:
                 raise  # else the full disk refused run.json too: the frame's error is reported below
         finally:
             for player in players:
@@ -274,7 +275,6 @@ def run_match(
             sim.close()
     if world.lockstep.failure is not None:
         raise world.lockstep.failure
-    unwritten = [p.error for p in players if p.writer is not None and p.error is not None and p.error is p.writer.error]
     if unwritten:
         raise unwritten[0]  # "cannot write ...": the disk's fault, not a controller's
     failed = [p for p in players if p.error is not None]

@@ -51,24 +51,30 @@ def check_place(
         sim.close()
 
 
+def _given(values) -> str:
+    """Numbers as the command line gave them (``--ball 0.6 0.25``)."""
+    return " ".join(f"{v:g}" for v in values)
+
+
+def _place_ball(sim, ball: tuple[float, float] | None) -> None:
+    """The ball at ``ball`` when given; a ``ParameterError`` naming ``ball`` where it cannot go."""
+    if ball is not None:
+        try:
+            sim.place_ball(*ball)
+        except ModelError as exc:
+            raise ParameterError.at("ball", _given(ball), str(exc)) from None
+
+
 def place(sim, pose: tuple[float, float, float] | None = None, ball: tuple[float, float] | None = None) -> None:
     """Put the robot at ``pose`` (x, y in metres, yaw in degrees) and the ball at ``ball`` (x, y),
     each when given; the scene's start otherwise. ``ParameterError`` naming ``ball`` when the
     scene's ball cannot be placed, and naming the parameter when what it placed would sink more
     than ``PLACEMENT_OVERLAP_M`` into something (a wall, a goal, the robot or the ball), which the
     first step would fling apart; naming ``scene`` when the scene's own start does."""
-
-    def given(values) -> str:
-        return " ".join(f"{v:g}" for v in values)
-
     if pose is not None:
         x, y, yaw_deg = pose
         sim.place_robot(x, y, math.radians(yaw_deg))
-    if ball is not None:
-        try:
-            sim.place_ball(*ball)
-        except ModelError as exc:
-            raise ParameterError.at("ball", given(ball), str(exc)) from None
+    _place_ball(sim, ball)
     placed = {"the robot": ("pose", pose), "the ball": ("ball", ball)}
     for first, second, depth in sim.overlaps(PLACEMENT_OVERLAP_M):
         pairs = ((first, second), (second, first))
@@ -76,7 +82,7 @@ def place(sim, pose: tuple[float, float, float] | None = None, ball: tuple[float
             parameter, values = placed.get(subject, (None, None))
             if values is not None:
                 raise ParameterError.at(
-                    parameter, given(values), f"{subject} would overlap {other} by {depth * 100:.1f} cm"
+                    parameter, _given(values), f"{subject} would overlap {other} by {depth * 100:.1f} cm"
                 )
         for subject, other in pairs:
             if subject in placed and subject != other:
@@ -91,12 +97,7 @@ def place_match(sim, ball: tuple[float, float] | None = None) -> None:
     starts inside something else deeper than ``PLACEMENT_OVERLAP_M``: a ``ParameterError`` naming
     ``ball`` for the ball placed so, a ValueError naming where a robot was described
     (``RobotSpec.given``: the robots file's line, or the ``--robot`` argument) for a robot."""
-    text = " ".join(f"{v:g}" for v in ball) if ball is not None else None
-    if ball is not None:
-        try:
-            sim.place_ball(*ball)
-        except ModelError as exc:
-            raise ParameterError.at("ball", text, str(exc)) from None
+    _place_ball(sim, ball)
     robots = sim.world.robots
     names = {"the robot": robots[0].spec.name} if len(robots) == 1 else {}  # Simulation.overlaps' name for it
     given = {robot.spec.name: robot.spec.given for robot in robots}
@@ -106,7 +107,7 @@ def place_match(sim, ball: tuple[float, float] | None = None) -> None:
             continue
         if ball is not None and "the ball" in (first, second):
             other = second if first == "the ball" else first
-            raise ParameterError.at("ball", text, f"the ball would overlap {other} by {depth * 100:.1f} cm")
+            raise ParameterError.at("ball", _given(ball), f"the ball would overlap {other} by {depth * 100:.1f} cm")
         robot, other = (first, second) if first in given else (second, first)
         reason = f"{robot} starts inside {other} ({depth * 100:.1f} cm deep)"
         if robot not in given:  # the scene's own start
