@@ -124,25 +124,33 @@ ACCELEROMETER_ALIASES = ("PRM:/a2-Sensor:a2", "PRM:/a3-Sensor:a3")
 
 @dataclass(frozen=True)
 class Led:
-    """An LED: MJCF geom name, OPEN-R locator, colour when lit (RGB 0..1)."""
+    """An LED: MJCF geom name, OPEN-R locator, colour when lit (RGB 0..1), and for a face light its
+    colour on the B face (OPEN-R's ``oled3_MODE_B``; Model Information for ERS-7, 3.1.1)."""
 
     name: str
     locator: str
     colour: tuple[float, float, float]
+    colour_b: tuple[float, float, float] | None = None
 
 
 LED_OFF_RGBA = (0.15, 0.15, 0.16, 1.0)
-_WHITE, _RED, _BLUE = (1.0, 1.0, 1.0), (1.0, 0.1, 0.1), (0.2, 0.4, 1.0)
+_WHITE, _RED, _GREEN, _BLUE = (1.0, 1.0, 1.0), (1.0, 0.1, 0.1), (0.1, 1.0, 0.2), (0.2, 0.4, 1.0)
 LEDS: tuple[Led, ...] = (
     Led("led_head_colour", "PRM:/r1/c1/c2/c3/l1-LED2:l1", (1.0, 0.6, 0.1)),
     Led("led_head_white", "PRM:/r1/c1/c2/c3/l2-LED2:l2", _WHITE),
     Led("led_mode_r", "PRM:/r1/c1/c2/c3/l3-LED2:l3", _RED),
-    Led("led_mode_g", "PRM:/r1/c1/c2/c3/l4-LED2:l4", (0.1, 1.0, 0.2)),
+    Led("led_mode_g", "PRM:/r1/c1/c2/c3/l4-LED2:l4", _GREEN),
     Led("led_mode_b", "PRM:/r1/c1/c2/c3/l5-LED2:l5", _BLUE),
     Led("led_wireless", "PRM:/r1/c1/c2/c3/l6-LED2:l6", _BLUE),
-    # Face lights 1-12 white (mode A), 13-14 red (mode A).
+    # Face lights 1-12 white and 13-14 red on the A face; on the B face 1-5 green, 6-12 white,
+    # 13-14 blue (where B3, B4 and B13 sit apart from A's, the same geom shows them).
     *(
-        Led(f"led_face_{i + 1}", f"PRM:/r1/c1/c2/c3/l{c}-LED3:l{c}", _RED if i >= 12 else _WHITE)
+        Led(
+            f"led_face_{i + 1}",
+            f"PRM:/r1/c1/c2/c3/l{c}-LED3:l{c}",
+            _RED if i >= 12 else _WHITE,
+            _BLUE if i >= 12 else _GREEN if i < 5 else _WHITE,
+        )
         for i, c in enumerate("abcdefghijklmn")
     ),
     Led("led_back_front_colour", "PRM:/lu-LED3:lu", _BLUE),

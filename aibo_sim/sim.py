@@ -161,7 +161,7 @@ def check_robot(model: mujoco.MjModel, path, keyframe: str = "stand") -> None:
 MAX_PLACEMENT = 1e6  # metres (or radians of yaw): beyond this a placement is a typo, as on the command line
 
 
-def _placement(function: str, **values) -> list[float]:
+def placement_values(function: str, **values) -> list[float]:
     """The values as floats; ValueError naming the argument when one is not a finite number of
     magnitude at most MAX_PLACEMENT."""
     numbers = []
@@ -557,7 +557,7 @@ class Simulation:
         """Put the robot at (x, y) on the field heading ``yaw`` (rad), keeping its height and pitch.
         Each must be a finite number of magnitude at most ``MAX_PLACEMENT`` (else ValueError
         naming it, nothing moved): MuJoCo would otherwise silently reset the whole state."""
-        x, y, yaw = _placement("place_robot", x=x, y=y, yaw=yaw)
+        x, y, yaw = placement_values("place_robot", x=x, y=y, yaw=yaw)
         root = self._root_qpos
         qpos = self.data.qpos
         pitch_quat = qpos[root + 3 : root + 7].copy()
@@ -579,7 +579,7 @@ class Simulation:
     def place_ball(self, x: float, y: float) -> None:
         """Put the ball at rest on the carpet at (x, y); finite numbers of magnitude at most
         ``MAX_PLACEMENT`` metres, as for ``place_robot``."""
-        x, y = _placement("place_ball", x=x, y=y)
+        x, y = placement_values("place_ball", x=x, y=y)
         position, velocity = self.ball_state()
         position[:] = (x, y, self.model.geom("ball").size[0], 1, 0, 0, 0)
         velocity[:] = 0
@@ -716,9 +716,11 @@ class Simulation:
 
     # ---------------------------------------------------------------- LEDs
 
-    def set_led(self, name: str, level: float) -> None:
-        """Light an LED geom at ``level`` in 0..1 of its colour (0: the unlit material)."""
-        off, lit = np.array(LED_OFF_RGBA), np.array([*LED_BY_NAME[name].colour, 1.0])
+    def set_led(self, name: str, level: float, face_b: bool = False) -> None:
+        """Light an LED geom at ``level`` in 0..1 of its colour (0: the unlit material); ``face_b``:
+        a face light's B-face colour."""
+        led = LED_BY_NAME[name]
+        off, lit = np.array(LED_OFF_RGBA), np.array([*(led.colour_b if face_b and led.colour_b else led.colour), 1.0])
         self.model.geom_rgba[self.model.geom(self.prefix + name).id] = off + level * (lit - off)
 
     def close(self) -> None:

@@ -161,6 +161,9 @@ def test_effector_plays_each_vector_and_asks_for_the_next_after_its_last_frame(o
         "ready assert refs 1 1",
     ]
     assert "no free region" not in lines
+    # Sony's manual: a disabled gain reads as zeros with oGAIN_DISABLED; no key is ovrsynckeyUNDEF
+    assert "gain before enabled 4108: 0 0 0 0 0 0" in lines
+    assert "cancel undefined sync key 4107" in lines
     # Set-points: vector v's frame k is 10 + 4v + k degrees, one frame each, without a gap; then held.
     set_points = np.round(np.degrees([command for _, command in result.frames]), 6)
     expected = [10 + 4 * (k // 4) + k % 4 for k in range(24)] + [33] * (len(set_points) - 24)
@@ -245,7 +248,8 @@ def test_colour_tables_fill_the_cdt_layer_of_the_next_frames(objects, tmp_path):
     stick = make_stick(tmp_path / "ms", objects, ["CDTPROBE"], f"{IMAGE} CdtProbe.Image.OFbkImageVectorData.O\n")
     result = run_stick(stick, 0.1, tmp_path / "out")
     lines = result.lines("CdtProbe")
-    assert lines[0] == "SetCdtVectorData 0"
+    # oINVALID_ARG for a channel the ERS-7 lacks and for a channel given twice; the first tables stay
+    assert lines[:3] == ["SetCdtVectorData 0", "channel 7 4", "channel 0 twice 4"]
     # The same frames, encoded here with the same tables: the C layer the object read is ours.
     tables = OCdtVectorData.of(pink_ball_cdt(), orange_ball_cdt())
     expected = []
@@ -262,8 +266,55 @@ def test_colour_tables_fill_the_cdt_layer_of_the_next_frames(objects, tmp_path):
             f"{c.ColorFrequency(openr_bridge.ocdtCHANNEL1)} "
             f"Y(10,20) {message.band(0, openr_bridge.ofbkimageBAND_Y)[20, 10]}"
         )
-    assert lines[1:4] == expected
+    assert lines[3:6] == expected
     assert int(expected[0].split()[11]) > 50  # the orange ball is in view: the table finds it
+
+
+TALKER = (
+    f"{SENSOR} Talker.Sensor.OSensorFrameVectorData.O\n{SENSOR} Listener.Sensor.OSensorFrameVectorData.O\n"
+    + "".join(f"Talker.Count.int.S Listener.{name}.int.O\n" for name in ("Newest", "Skip", "Pair"))
+)
+
+
+def test_observers_get_data_as_their_buffer_settings_say(objects, tmp_path):
+    stick = make_stick(tmp_path / "ms", objects, ["TALKER", "LISTENER"], TALKER)
+    result = run_stick(stick, 0.6, tmp_path / "out")
+    assert result.lines("Talker")[:12] == [f"sent {n}" for n in range(1, 13)]  # one each 32 ms
+    heard = result.lines("Listener")
+
+    def got(name):
+        return [line.split(":")[1].split() for line in heard if line.startswith(name)]
+
+    # Sony's default (one unit held): asking again every 4th vector, the newest value, none stale
+    assert got("newest") == [["1"], ["4"], ["8"], ["12"]]
+    assert got("skip") == [[str(n)] for n in range(1, 13, 2)]  # SetSkip(1): one in two
+    assert got("pair") == [[str(n), str(n + 1)] for n in range(1, 13, 2)]  # min 2: two units a notification
+    assert all(" data 2 notify 2:" in line for line in heard if line.startswith("pair"))
+    # at the end: every object's DoStop, then every object's DoDestroy
+    assert [line for line in result.console.splitlines() if line.endswith(("stop", "destroy"))] == [
+        "[    0.600 s] Talker: stop",
+        "[    0.600 s] Listener: stop",
+        "[    0.600 s] Talker: destroy",
+        "[    0.600 s] Listener: destroy",
+    ]
+
+
+def test_a_signal_ends_a_run_after_its_objects_stop(objects, tmp_path):
+    stick = make_stick(tmp_path / "ms", objects, ["TALKER", "LISTENER"], TALKER)
+
+    def interrupt_at_200_ms(run):
+        if run.time_ms == 200:
+            signal.raise_signal(signal.SIGINT)
+
+    with pytest.raises(KeyboardInterrupt):
+        run_stick(stick, 5.0, tmp_path / "out", interrupt_at_200_ms)
+    console = (tmp_path / "out" / "console.log").read_text().splitlines()
+    assert console[-4:] == [
+        "[    0.200 s] Talker: stop",
+        "[    0.200 s] Listener: stop",
+        "[    0.200 s] Talker: destroy",
+        "[    0.200 s] Listener: destroy",
+    ]
 
 
 def test_a_crashing_object_is_named_with_the_signal_and_the_time(objects, tmp_path):
@@ -410,9 +461,10 @@ def test_sensor_vector_values_are_the_simulators_state(objects, tmp_path):
     assert angles[4] == round(result.frames[3] * 1e6)  # the state after frame 3 is frame 4's
 
 
-def test_power_status_and_its_observers(objects, tmp_path):
+def test_power_status_its_observers_and_the_face_lights(objects, tmp_path):
     stick = make_stick(tmp_path / "ms", objects, ["PPROBE"])
-    lines = run_stick(stick, 0.1, tmp_path / "out").lines("PowerProbe")
+    result = run_stick(stick, 0.1, tmp_path / "out")
+    lines = result.lines("PowerProbe")
     battery = host.BATTERY
     status = (
         f"robot 0x{battery['robotStatus']:08x} battery 0x{battery['batteryStatus']:04x} capacity "
@@ -427,6 +479,14 @@ def test_power_status_and_its_observers(objects, tmp_path):
         f"notified {powered}",
         "unobserve 0",
     ]
+    # the face lights it lit: the B face's colours where it asked for B (Model Information 3.1.1)
+    model = result.run.sim.model
+    for name, colour in (
+        ("led_face_1", ers7.LED_BY_NAME["led_mode_g"].colour),
+        ("led_face_14", (0.2, 0.4, 1.0)),
+        ("led_face_13", (1.0, 0.1, 0.1)),
+    ):
+        assert np.allclose(model.geom(name).rgba, [*colour, 1.0]), name
 
 
 def test_the_speaker_plays_sound_vectors_one_after_the_other_into_a_wav_file(objects, tmp_path):

@@ -80,6 +80,7 @@ SYSTEM_SERVICES = {
     ),
 }
 SPIN_S = 0.005  # how long _reply polls before it blocks
+OLED3_MODE_B = 1  # OPEN-R's oled3_MODE_B: a face light shows its B face
 STANDARD_PSHIFT = 0x0E  # Sony's fixed PSHIFT (Model Information 2.2): the P register's scale
 TOUCH_AD_PER_NEWTON, TOUCH_AD_MAX = 100, 80  # UNCONFIRMED, see the module docstring
 # The battery at the start (UNCONFIRMED): status bits, capacity %, temperature (0.01 C),
@@ -311,14 +312,15 @@ class MemoryStickRun:
                     if child.pending is not None:
                         break
                     self._frame()
-                if child.pending is None:
-                    self._send(
-                        protocol.MESSAGES["STOP"],
-                        _U32.pack(openr_frame_number(self.sim.frame)) + self._stepped_frames(),
-                    )
-                    self._apply(self._reply(protocol.REPLIES["FRAME_DONE"]))
-                    # The runtime's own exit then flushes the files its objects left open.
-                    child.wait(None, protocol.WAIT_NOTICE_S, self._waiting)
+                # After a signal too: the objects' DoStop and DoDestroy run, as at the end of a run
+                # (a runtime silent for the grace period after the signal is stopped by ``child``).
+                self._send(
+                    protocol.MESSAGES["STOP"],
+                    _U32.pack(openr_frame_number(self.sim.frame)) + self._stepped_frames(),
+                )
+                self._apply(self._reply(protocol.REPLIES["FRAME_DONE"]))
+                # The runtime's own exit then flushes the files its objects left open.
+                child.wait(None, protocol.WAIT_NOTICE_S, self._waiting)
         finally:
             theirs.close()
             if log is not None:
@@ -548,8 +550,8 @@ class MemoryStickRun:
     def _apply_record(self, kind: int, data: bytes) -> None:
         """A record other than a set-point."""
         if kind == protocol.RECORDS["LED"]:
-            primitive, intensity, _ = struct.unpack("<3i", data)
-            self.sim.set_led(self._led_of[primitive], min(max(intensity, 0), 255) / 255)
+            primitive, intensity, mode = struct.unpack("<3i", data)
+            self.sim.set_led(self._led_of[primitive], min(max(intensity, 0), 255) / 255, face_b=mode == OLED3_MODE_B)
         elif kind == protocol.RECORDS["MOTOR_POWER"]:
             self._powered = bool(struct.unpack("<i", data)[0])
             self._apply_gains()

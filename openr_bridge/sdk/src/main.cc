@@ -330,6 +330,8 @@ int main() {
             SetFrameNumber(number);
             Boot(oreasonSHUTDOWN, oentrySTOP, ObjectsOf(false));
             Deliver(MESSAGES_PER_FRAME);
+            Boot(oreasonSHUTDOWN, oentryDESTROY, ObjectsOf(false));  /* "after DoStop() is called on all objects" */
+            Deliver(MESSAGES_PER_FRAME);
             FlushConsole();
             Answer(AIBO_OPENR_REPLY_FRAME_DONE, TakeRecords());
             return 0;

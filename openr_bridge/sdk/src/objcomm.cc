@@ -2,10 +2,16 @@
  * objcomm.cc: OObject, RCRegion, OSubject and OObserver over the runtime's mailbox.
  *
  * Connection (at boot): the system sends the observer's Connect entry the subject's Control
- * entry; the observer calls it with its Notify entry, and the subject answers with its Ready
- * entry. Data: SetData() queues a region for each observer (one reference each);
- * NotifyObservers() sends GetNotifyUnitSize() regions to each observer that asserted ready;
- * the observer's next AssertReady() gives them back (the references are removed).
+ * entry; the observer calls it with its Notify entry and its buffer parameters (skip, min, max),
+ * and the subject answers with its Ready entry. Data come in units of GetNotifyUnitSize()
+ * SetData() calls. SetData() queues a region for each observer (one reference each), except in
+ * the units its `skip` leaves out; a queue holds the newest `max` units (and no more than
+ * SetBufferSize() regions), the oldest dropped. NotifyObservers(), and an observer's
+ * AssertReady(), send the oldest `min` units to an observer that is ready and has them; the
+ * observer's next AssertReady() gives them back (the references are removed).
+ *
+ * Where Sony's manual is silent (UNCONFIRMED): a notification carries `min` units (not all
+ * that are held), and skipping counts units per observer from its connection.
  */
 #include <OPENR/OObject.h>
 #include <OPENR/OSubject.h>
@@ -103,14 +109,40 @@ ObserverConstIterator OSubject::FindObserver(const ObserverID& id) const {
     return observers_.end();
 }
 
+/* The regions an observer's queue holds at most: its `max` units, within SetBufferSize(). */
+size_t OSubject::Capacity(const _OObserverInfo* info) const {
+    size_t units = info->d_max * notifyUnitSize_ <= maxBufferSize_ ? info->d_max : maxBufferSize_ / notifyUnitSize_;
+    return (units ? units : 1) * notifyUnitSize_;
+}
+
 void OSubject::Queue(_OObserverInfo* info, RCRegion* region) {
+    if (info->n_data++ % notifyUnitSize_ == 0) {  /* a new unit: kept, or skipped */
+        info->taking = info->skip_counter == 0;
+        info->skip_counter = info->taking ? info->d_skip : info->skip_counter - 1;
+    }
+    if (!info->taking) return;
     region->AddReference();
     info->queue.push_back(region);
-    if (info->queue.size() > maxBufferSize_) {
-        info->queue.front()->RemoveReference();
-        info->queue.pop_front();
-        info->dropped++;
+    while (info->queue.size() > Capacity(info)) {  /* the oldest unit makes room */
+        for (size_t k = 0; k < notifyUnitSize_ && !info->queue.empty(); k++) {
+            info->queue.front()->RemoveReference();
+            info->queue.pop_front();
+            info->dropped++;
+        }
     }
+}
+
+/* The regions a notification carries: `min` units, as far as the queue and a message hold them. */
+size_t OSubject::NotifySize(const _OObserverInfo* info) const {
+    size_t size = info->d_min * notifyUnitSize_, capacity = Capacity(info);
+    if (size > capacity) size = capacity;
+    size_t most = MAX_NUM_DATA - MAX_NUM_DATA % notifyUnitSize_;
+    return size < most ? size : most;  /* SetNotifyUnitSize keeps a unit within MAX_NUM_DATA */
+}
+
+/* Whether an observer is ready and its queue holds a notification's data. */
+bool OSubject::Due(const _OObserverInfo* info) const {
+    return info->ready_flag > 0 && !info->queue.empty() && info->queue.size() >= NotifySize(info);
 }
 
 OStatus OSubject::SetData(const OObserverInfo& info, RCRegion* region) {
@@ -160,13 +192,14 @@ OStatus OSubject::SetData(const void* buf, size_t size) {
 void OSubject::Send(_OObserverInfo* info) {
     ONotifyMessage message;
     message.subjectID = myID_;
-    while (!info->queue.empty() && (size_t)message.numOfData < notifyUnitSize_) {
+    size_t count = NotifySize(info);
+    while (!info->queue.empty() && (size_t)message.numOfData < count && message.numOfData < MAX_NUM_DATA) {
         RCRegion* region = info->queue.front();
         info->queue.pop_front();
         info->sent.push_back(region);
         message.data[message.numOfData++] = region;
     }
-    message.numOfNotify = 1;
+    message.numOfNotify = (int)(message.numOfData / notifyUnitSize_);
     info->ready_flag = 0;
     host::Send(info->id, &message, sizeof message);
 }
@@ -183,7 +216,7 @@ void OSubject::Clear(_OObserverInfo* info) { GiveBack(info->queue); }
 OStatus OSubject::NotifyObserver(const OObserverInfo& observer) {
     _OObserverInfo* info = observer.impl_;
     if (info == NULL) return oINVALID_ARG;
-    if (info->ready_flag > 0 && !info->queue.empty()) {
+    if (Due(info)) {
         Send(info);
     } else if (info->ready_flag < 0) {
         Clear(info);
@@ -202,7 +235,7 @@ OStatus OSubject::NotifyObservers() {
 }
 
 size_t OSubject::RemainBuffer(const OObserverInfo& observer) const {
-    return maxBufferSize_ - observer.impl_->queue.size();
+    return Capacity(observer.impl_) - observer.impl_->queue.size();
 }
 
 size_t OSubject::RemainBuffer(const ObserverID& id) const {
@@ -246,7 +279,7 @@ OStatus OSubject::ControlHandler(const OControlMessage& msg, OStatus status) {
     ObserverIterator found = observers_.begin();
     while (found != observers_.end() && !(found->impl_->id == msg.observerID)) ++found;
     if (status == oSUCCESS && adding && found == observers_.end()) {
-        observers_.push_back(OObserverInfo(new _OObserverInfo(msg.observerID)));
+        observers_.push_back(OObserverInfo(new _OObserverInfo(msg.observerID, msg.d_skip, msg.d_min, msg.d_max)));
     } else if (status == oSUCCESS && removing && found != observers_.end()) {
         Clear(found->impl_);
         GiveBack(found->impl_->sent);
@@ -266,7 +299,7 @@ OStatus OSubject::ReadyHandler(const OReadyMessage& msg) {
         GiveBack(info->sent);
         if (msg.command == objcommCMD_ASSERT_READY) {
             info->ready_flag = 1;
-            if (!info->queue.empty()) Send(info);
+            if (Due(info)) Send(info);
         } else if (msg.command == objcommCMD_DEASSERT_READY) {
             info->ready_flag = -1;
             Clear(info);
@@ -299,7 +332,7 @@ int OSubject::IsAnyReady() const {
 
 /* OObserver */
 
-OObserver::OObserver() : skip_(0) {}
+OObserver::OObserver() : skip_(0), min_(1), max_(1) {}
 OObserver::~OObserver() {}
 
 OStatus OObserver::SetNotifyEntry(const OServiceEntry& entry) {
@@ -313,6 +346,9 @@ OStatus OObserver::ConnectHandler(const OConnectMessage& msg, OStatus status) {
     OControlMessage control;
     control.command = objcommCMD_ADDOBSERVER_V22;
     control.observerID = myID_;
+    control.d_skip = skip_;
+    control.d_min = min_;
+    control.d_max = max_;
     memcpy(control.subName, msg.subName, sizeof control.subName);
     OControlReplyMessage reply;
     if (host::Call(msg.subjectID, &control, &reply, sizeof reply) != oSUCCESS) return oFAIL;

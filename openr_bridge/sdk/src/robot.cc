@@ -301,6 +301,7 @@ public:
         }
         observer[0] = new OObserver();
         observer[0]->SetNotifyEntry(OServiceEntry(myOID_, 9));
+        observer[0]->SetBufCtrlParam(0, 1, MAX_NUM_DATA + 1);  /* a program's primed vectors wait their turn */
         RegisterServiceEntry(OServiceEntry(myOID_, 8), "OVirtualRobotComm.Effector.OCommandVectorData.O");
         return oSUCCESS;
     }
@@ -336,6 +337,7 @@ public:
         RegisterServiceEntry(OServiceEntry(myOID_, 4), "OVirtualRobotAudioComm.Mic.OSoundVectorData.S");
         observer[0] = new OObserver();
         observer[0]->SetNotifyEntry(OServiceEntry(myOID_, 7));
+        observer[0]->SetBufCtrlParam(0, 1, MAX_NUM_DATA + 1);  /* as the effector's */
         RegisterServiceEntry(OServiceEntry(myOID_, 6), "OVirtualRobotAudioComm.Speaker.OSoundVectorData.O");
         return oSUCCESS;
     }
@@ -1023,26 +1025,33 @@ OStatus OPENR::RegisterDefaultJointGain(OPrimitiveID id, word pg, word ig, word 
 
 OStatus OPENR::SetDefaultJointGain(OPrimitiveID id) { return ForJoints(id, SetDefault); }
 
-static OStatus CopyGain(OPrimitiveID id, const word* values, word* pg, word* ig, word* dg, word* ps, word* is,
+/* The six gain registers into pg..ds, or zeros with `status` when it is not oSUCCESS (Sony's manual). */
+static OStatus CopyGain(OStatus status, const word* values, word* pg, word* ig, word* dg, word* ps, word* is,
                         word* ds) {
     word* out[6] = {pg, ig, dg, ps, is, ds};
     for (int k = 0; k < 6; k++) {
         if (out[k] == NULL) return oINVALID_ARG;
-        *out[k] = values[k];
     }
-    (void)id;
-    return oSUCCESS;
+    for (int k = 0; k < 6; k++) *out[k] = status == oSUCCESS ? values[k] : 0;
+    return status;
 }
 
 OStatus OPENR::GetJointGain(OPrimitiveID id, word* pg, word* ig, word* dg, word* ps, word* is, word* ds) {
-    if (!Valid(id) || primitives[id].type != oprimitiveJOINT2) return oINVALID_PRIMITIVE_ID;
-    return CopyGain(id, gains[(int)id].values, pg, ig, dg, ps, is, ds);
+    static const word none[6] = {0, 0, 0, 0, 0, 0};
+    if (!Valid(id) || primitives[id].type != oprimitiveJOINT2) {
+        return CopyGain(oINVALID_PRIMITIVE_ID, none, pg, ig, dg, ps, is, ds);
+    }
+    const Gain& gain = gains[(int)id];
+    return CopyGain(gain.enabled ? oSUCCESS : oGAIN_DISABLED, gain.values, pg, ig, dg, ps, is, ds);
 }
 
 OStatus OPENR::GetDefaultJointGain(OPrimitiveID id, word* pg, word* ig, word* dg, word* ps, word* is, word* ds) {
-    if (!Valid(id) || primitives[id].type != oprimitiveJOINT2) return oINVALID_PRIMITIVE_ID;
-    if (!gains[(int)id].hasDefault) return oNOT_REGISTERED;
-    return CopyGain(id, gains[(int)id].defaults, pg, ig, dg, ps, is, ds);
+    static const word none[6] = {0, 0, 0, 0, 0, 0};
+    if (!Valid(id) || primitives[id].type != oprimitiveJOINT2) {
+        return CopyGain(oINVALID_PRIMITIVE_ID, none, pg, ig, dg, ps, is, ds);
+    }
+    const Gain& gain = gains[(int)id];
+    return CopyGain(gain.hasDefault ? oSUCCESS : oNOT_REGISTERED, gain.defaults, pg, ig, dg, ps, is, ds);
 }
 
 OStatus OPENR::GetJointValue(OPrimitiveID id, OJointValue* value) {
@@ -1072,7 +1081,7 @@ OStatus OPENR::NewSyncKey(OVRSyncKey* key) {
     return oSUCCESS;
 }
 
-OStatus OPENR::CancelSyncKey(OVRSyncKey) { return oSUCCESS; }
+OStatus OPENR::CancelSyncKey(OVRSyncKey key) { return key == ovrsynckeyUNDEF ? oINVALID_SYNC_KEY : oSUCCESS; }
 
 OStatus OPENR::DivideSyncKey(OVRSyncKey key, OVRSyncKey* key1, OVRSyncKey* key2) {
     if (key == ovrsynckeyUNDEF || key1 == NULL || key2 == NULL) return oINVALID_SYNC_KEY;
@@ -1101,9 +1110,14 @@ OStatus OPENR::SetCdtVectorData(MemoryRegionID memID) {
     OCdtVectorData* cdt = (OCdtVectorData*)RegionBase(memID);
     if (cdt == NULL) return oFAIL;
     if (cdt->vectorInfo.type != odataCDT_VECTOR) return oINVALID_DATA_TYPE;
+    OCdtChannel given = 0;
     for (longword i = 0; i < cdt->vectorInfo.numData && i < (longword)ocdtNUM_CHANNELS; i++) {
         OCdtChannel channel = cdt->info[i].channel;
-        if (channel == ocdtCHANNEL_UNDEF || (channel & (channel - 1)) || channel > ocdtCHANNEL7) return oINVALID_ARG;
+        /* one bit each, channels 0-6 ("In ERS-7, channel 7 is NOT available": Model Information), once each */
+        if (channel == ocdtCHANNEL_UNDEF || (channel & (channel - 1)) || channel >= ocdtCHANNEL7 || (given & channel)) {
+            return oINVALID_ARG;
+        }
+        given |= channel;
         if (cdt->info[i].primitiveID != (OPrimitiveID)cameraIndex) return oINVALID_PRIMITIVE_ID;
     }
     Record(AIBO_OPENR_RECORD_CDT, cdt, sizeof *cdt);

@@ -22,6 +22,10 @@ OStatus CdtProbe::DoInit(const OSystemEvent&) {
     orange->Init(camera, ocdtCHANNEL1);
     for (int s = 5; s < ocdtMAX_Y_SEGMENT; s++) orange->Set(s, 200, 155, 95, 30);
     OSYSPRINT(("SetCdtVectorData %u\n", (unsigned)OPENR::SetCdtVectorData(id)));
+    orange->Init(camera, ocdtCHANNEL7);  // the ERS-7 has channels 0-6
+    OSYSPRINT(("channel 7 %u\n", (unsigned)OPENR::SetCdtVectorData(id)));
+    orange->Init(camera, ocdtCHANNEL0);  // two tables for one channel
+    OSYSPRINT(("channel 0 twice %u\n", (unsigned)OPENR::SetCdtVectorData(id)));
     OPENR::DeleteCdtVectorData(id);
     return oSUCCESS;
 }

@@ -37,6 +37,10 @@ OStatus JointProbe::DoStart(const OSystemEvent&) {
     OSYSPRINT(("mode [%s]\n", mode));
     if (strncmp(mode, "nopower", 7) != 0) OPENR::SetMotorPower(opowerON);
     if (strncmp(mode, "nogain", 6) != 0) {
+        word g[6] = {1, 1, 1, 1, 1, 1};
+        OStatus status = OPENR::GetJointGain(pan, &g[0], &g[1], &g[2], &g[3], &g[4], &g[5]);
+        OSYSPRINT(("gain before enabled %u: %u %u %u %u %u %u\n", (unsigned)status, g[0], g[1], g[2], g[3], g[4], g[5]));
+        OSYSPRINT(("cancel undefined sync key %u\n", (unsigned)OPENR::CancelSyncKey(ovrsynckeyUNDEF)));
         OPENR::EnableJointGain(pan);
         OPENR::SetJointGain(pan, 0x08, 0x02, 0x04, 0x0E, 0x02, 0x0F);
     }

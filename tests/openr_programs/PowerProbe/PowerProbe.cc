@@ -1,5 +1,6 @@
 #include <OPENR/OPENRAPI.h>
 #include <OPENR/OPENRMessages.h>
+#include <OPENR/OPrimitiveControl.h>
 #include <OPENR/OSyslog.h>
 #include "PowerProbe.h"
 #include "entry.h"
@@ -11,7 +12,18 @@ static void Print(const char* what, const OPowerStatus& status) {
                (int)status.current));
 }
 
+// A face light on its A or B face (ControlPrimitive: it stays lit).
+static void Light(const char* locator, OLED3Mode mode) {
+    OPrimitiveID id;
+    OPENR::OpenPrimitive(locator, &id);
+    OPrimitiveControl_LEDCommandValue3 led(255, mode);
+    OPENR::ControlPrimitive(id, oprmreqLED3_SET_COMMAND, &led, sizeof led, 0, 0);
+}
+
 OStatus PowerProbe::DoStart(const OSystemEvent&) {
+    Light("PRM:/r1/c1/c2/c3/la-LED3:la", oled3_MODE_B);  // face light 1: green on the B face
+    Light("PRM:/r1/c1/c2/c3/ln-LED3:ln", oled3_MODE_B);  // 14: blue
+    Light("PRM:/r1/c1/c2/c3/lm-LED3:lm", oled3_MODE_A);  // 13: red on the A face
     OPowerStatus status;
     OPENR::GetPowerStatus(&status);
     Print("status", status);

@@ -1,7 +1,8 @@
 /*
  * OObserver.h: the receiving end of connections. AssertReady() asks every connected subject
  * (or one) for its next data and gives back what it sent last; DeassertReady() refuses data
- * until the next AssertReady().
+ * until the next AssertReady(). SetBufCtrlParam() (before the connection: in DoInit) says how
+ * the subjects buffer data for it; by default they hold only the newest unit.
  */
 #ifndef _OObserver_h_DEFINED
 #define _OObserver_h_DEFINED
@@ -28,8 +29,14 @@ public:
     virtual ~OObserver();
 
     OStatus SetNotifyEntry(const OServiceEntry& entry);
-    void    SetSkip(size_t skip) { skip_ = skip; }
-    void    SetBufCtrlParam(size_t skip, size_t, size_t) { skip_ = skip; }
+    /* How the subjects this observer connects to buffer its data (Level2 Reference Guide): keep
+     * one data unit in `skip` + 1, send `min` units a notification, hold at most `max`. */
+    void    SetSkip(size_t skip) { SetBufCtrlParam(skip, 1, 1); }
+    void    SetBufCtrlParam(size_t skip, size_t min, size_t max) {
+        skip_ = skip;
+        min_ = min;
+        max_ = max;
+    }
 
     /* Called by the stub. */
     OStatus ConnectHandler(const OConnectMessage& msg, OStatus status = oSUCCESS);
@@ -56,7 +63,7 @@ private:
     OStatus SendReady(ObjcommCommand command, const SubjectID& subject);
 
     ObserverID         myID_;
-    size_t             skip_;
+    size_t             skip_, min_, max_;
     list<OSubjectInfo> subjects_;
 };
 

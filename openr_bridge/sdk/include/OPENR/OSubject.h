@@ -72,6 +72,9 @@ private:
     OSubject(const OSubject&);
     OSubject& operator=(const OSubject&);
 
+    size_t Capacity(const _OObserverInfo* info) const;
+    size_t NotifySize(const _OObserverInfo* info) const;
+    bool Due(const _OObserverInfo* info) const;
     void Queue(_OObserverInfo* info, RCRegion* region);
     void Send(_OObserverInfo* info);
     void Clear(_OObserverInfo* info);
