@@ -54,6 +54,8 @@ from .robot import (
     Servo,
     SimulationEnd,
     TouchSensor,
+    short_repr,
+    whole_ms,
 )
 
 
@@ -133,6 +135,8 @@ def _device(tag, kind: type) -> Device:
 
 def robot_live(reset_fn=None) -> None:
     """Register the reset (initialisation) function and call it once."""
+    if reset_fn is not None and not callable(reset_fn):
+        raise TypeError(f"robot_live({short_repr(reset_fn)}): the reset function must be callable (or None)")
     current_robot()
     _state().reset_fn = reset_fn
     if reset_fn is not None:
@@ -143,7 +147,7 @@ def robot_die(exit_fn) -> None:
     """Register a function called when the controller quits (after its run ends, it raised,
     it called ``sys.exit`` or it was interrupted)."""
     if not callable(exit_fn):
-        raise TypeError(f"robot_die({exit_fn!r}): the exit function must be callable")
+        raise TypeError(f"robot_die({short_repr(exit_fn)}): the exit function must be callable")
     _state().die_fns.append(exit_fn)
 
 
@@ -172,6 +176,8 @@ def call_die_functions() -> list[tuple[object, BaseException]]:
 def robot_run(run_fn) -> None:
     """Call ``run_fn(ms)`` until the run ends: ``ms`` is the step just simulated (0 on the
     first call, before any sample), the return value the duration of the next step."""
+    if not callable(run_fn):
+        raise TypeError(f"robot_run({short_repr(run_fn)}): the run function must be callable")
     ms = 0
     while True:
         ms = run_fn(ms)
@@ -211,6 +217,36 @@ def robot_get_time() -> float:
 def robot_get_name() -> str:
     """The robot's name: ``"ERS-7"``."""
     return "ERS-7"
+
+
+def robot_get_mode() -> int:
+    """Where the controller runs, as Webots 5 numbers it: 0 in the simulator (``aibo-sim run``, on
+    either backend); 1, cross-compiled on the robot, is what a memory stick's build (``build-ms``)
+    answers, on the robot and on aibo-sim's OPEN-R runtime alike."""
+    current_robot()
+    return 0
+
+
+def robot_keyboard_enable(ms: int) -> None:
+    """Read the keyboard every ``ms``; runs are headless, so no key is ever pressed.
+
+    :raises DeviceError: ``ms`` is not a positive whole number.
+    """
+    period = whole_ms(ms)
+    if period is None or period <= 0:
+        raise DeviceError(f"robot_keyboard_enable: sampling period must be a positive whole number of ms, not {ms!r}")
+    current_robot()
+
+
+def robot_keyboard_disable() -> None:
+    """Stop reading the keyboard."""
+    current_robot()
+
+
+def robot_keyboard_get_key() -> int:
+    """The key pressed: always 0 (none), as runs are headless."""
+    current_robot()
+    return 0
 
 
 def robot_console_printf(fmt: str, *args) -> None:
@@ -456,8 +492,8 @@ def mtn_get_time(motion) -> int:
 
 
 def mtn_fprint(file, motion) -> None:
-    """Webots' debug dump of a motion: name, creator, design, frames, length, locators (control
-    characters in them escaped)."""
+    """A debug dump of a motion (aibo-sim's layout, not Webots'): name, creator, design, frame
+    time, keyframes, length, locators (control characters in them escaped)."""
     file.write(format_motion_info(motion_info(_motion(motion, "mtn_fprint"))) + "\n")
 
 

@@ -24,6 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from . import ers7
+from .mjcf import MAX_TORQUE
 from .mtn import MODES as MTN_MODES
 from .mtn import Motion, MotionPlayer, MtnError, check_joint, mtn_new
 from .sim import FRAME_MS, Simulation
@@ -49,6 +50,14 @@ def whole_ms(value) -> int | None:
         return int(value)
     value = float(value)
     return int(value) if value.is_integer() else None
+
+
+def finite_number(value, what: str) -> float:
+    """``value`` as a float; DeviceError naming ``what`` unless it is a finite real number (a bool
+    or a string is not one, as they are not in C)."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Real) or not math.isfinite(value):
+        raise DeviceError(f"{what} must be a finite number, not {short_repr(value)}")
+    return float(value)
 
 
 class Device:
@@ -118,10 +127,7 @@ class Servo(Device):
         self._actuator = robot.sim.servos.ctrl.start + self.index  # in the world's model: after the robots before
 
     def _number(self, value, what: str) -> float:
-        number = float(value)
-        if not math.isfinite(number):
-            raise DeviceError(f"{self.locator}: {what} must be a finite number, not {value!r}")
-        return number
+        return finite_number(value, f"{self.locator}: {what}")
 
     def set_position(self, radians: float) -> None:
         """Target angle in radians, clipped to the joint's range."""
@@ -132,18 +138,23 @@ class Servo(Device):
         self.robot.sim.servos.velocity[self.index] = abs(self._number(rad_per_s, "velocity"))
 
     def set_acceleration(self, rad_per_s2: float) -> None:
-        """Acceleration limit; -1 means unlimited, as in Webots."""
+        """Acceleration limit above 0; -1 means unlimited (Webots' range: -1 or (0, inf))."""
         value = self._number(rad_per_s2, "acceleration")
-        self.robot.sim.servos.acceleration[self.index] = math.inf if value < 0 else value
+        if value != -1 and value <= 0:
+            raise DeviceError(f"{self.locator}: acceleration must be -1 (unlimited) or above 0, not {value:g}")
+        self.robot.sim.servos.acceleration[self.index] = math.inf if value == -1 else value
 
     def set_motor_force(self, newton_metres: float) -> None:
-        """Torque limit in N m (the absolute value of ``newton_metres``) of the joint's actuator."""
-        force = abs(self._number(newton_metres, "motor force"))
+        """Torque limit in N m (the absolute value of ``newton_metres``) of the joint's actuator,
+        never above Webots' ``maxForce`` (``mjcf.MAX_TORQUE``), its default."""
+        force = min(abs(self._number(newton_metres, "motor force")), MAX_TORQUE)
         self.robot.sim.model.actuator_forcerange[self._actuator] = (-force, force)
 
     def set_control_p(self, p: float) -> None:
-        """Proportional gain of the joint's position actuator."""
+        """Proportional gain (above 0) of the joint's position actuator."""
         p = self._number(p, "control P")
+        if p <= 0:
+            raise DeviceError(f"{self.locator}: control P must be above 0, not {p:g}")
         model = self.robot.sim.model
         model.actuator_gainprm[self._actuator, 0] = p
         model.actuator_biasprm[self._actuator, 1] = -p
@@ -254,7 +265,7 @@ class Led(Device):
 
     def set(self, value: int) -> None:
         """0 (or less) off, 1 full intensity, 2..255 that intensity out of 255 (above 255: 255)."""
-        value = int(value)
+        value = int(finite_number(value, f"{self.locator}: led value"))
         level = 0.0 if value <= 0 else 1.0 if value == 1 else min(value, 255) / 255
         self.robot.sim.set_led(self.name, level)
 

@@ -58,6 +58,38 @@ def test_sampling_periods_must_be_whole_positive_ms(robot, ms):
         api.servo_enable_position(api.robot_get_device(HEAD_PAN), ms)
 
 
+@pytest.mark.parametrize("value", [None, "0.5", True, math.nan, -math.inf])
+@pytest.mark.parametrize("setter", ["servo_set_position", "servo_set_velocity", "servo_set_motor_force", "led_set"])
+def test_setters_refuse_what_is_not_a_finite_number_naming_the_device(robot, setter, value):
+    tag = api.robot_get_device("PRM:/r1/c1/c2/c3/l1-LED2:l1" if setter == "led_set" else HEAD_PAN)
+    with pytest.raises(DeviceError, match=r"^PRM:/r1/c1/\S+: .* must be a finite number, not "):
+        getattr(api, setter)(tag, value)
+
+
+@pytest.mark.parametrize(
+    ("setter", "value"),
+    [
+        ("servo_set_acceleration", 0),
+        ("servo_set_acceleration", -2.0),
+        ("servo_set_control_p", 0),
+        ("servo_set_control_p", -50),
+    ],
+)
+def test_servo_settings_outside_webots_ranges_are_refused(robot, setter, value):
+    # Webots' Servo node: acceleration -1 (unlimited) or (0, inf); controlP (0, inf)
+    with pytest.raises(DeviceError, match=r"must be .*above 0, not "):
+        getattr(api, setter)(api.robot_get_device(HEAD_PAN), value)
+
+
+def test_motor_force_is_at_most_webots_max_force(robot):
+    pan = api.robot_get_device(HEAD_PAN)
+    actuator = robot.sim.servos.ctrl.start + ers7.JOINT_INDEX["head_pan"]
+    api.servo_set_motor_force(pan, 100)
+    assert list(robot.sim.model.actuator_forcerange[actuator]) == [-5.4542, 5.4542]  # maxForce: also the default
+    api.servo_set_motor_force(pan, -1.5)
+    assert list(robot.sim.model.actuator_forcerange[actuator]) == [-1.5, 1.5]
+
+
 # ----------------------------------------------------------------------------- mtn_play
 
 
@@ -199,3 +231,9 @@ def test_an_environment_keeps_no_stepping_after_close():
         env.step(env.action_space.sample())
     with pytest.raises(gymnasium.error.ClosedEnvironmentError, match="is closed"):
         env.reset(seed=1)
+
+
+@pytest.mark.parametrize("call", ["robot_live", "robot_run", "robot_die"])
+def test_robot_functions_refuse_what_is_not_callable_naming_the_call(robot, call):
+    with pytest.raises(TypeError, match=rf"^{call}\(5\): the \w+ function must be callable"):
+        getattr(api, call)(5)

@@ -114,6 +114,13 @@ static void init(void) {
         fprintf(out, "%d\n", mtn_get_length(mtn_new("Walk_Forward.long.mtn")));
     } else if (is("device error")) {
         robot_get_device("no-such-device");
+    } else if (is("acceleration")) {
+        servo_set_acceleration(robot_get_device("PRM:/r1/c1/c2-Joint2:12"), 0);
+    } else if (is("control p")) {
+        servo_set_control_p(robot_get_device("PRM:/r1/c1/c2-Joint2:12"), -50);
+    } else if (is("mode")) {
+        robot_keyboard_enable(32);
+        fprintf(out, "mode %d key %d\n", robot_get_mode(), robot_keyboard_get_key());
     } else if (is("missing motion")) {
         char name[32];
         sprintf(name, "%s.mtn", "missing");
@@ -397,12 +404,20 @@ def test_a_motion_under_a_long_name_is_found_on_the_stick_by_its_short_name(prob
 
 
 def test_errors_end_the_controller_with_the_python_apis_message(probe, tmp_path):
+    robot = Robot(Simulation(ball=False))
     with pytest.raises(DeviceError) as device:
-        Robot(Simulation(ball=False)).get_device("no-such-device")
+        robot.get_device("no-such-device")
+    pan = robot.get_device("PRM:/r1/c1/c2-Joint2:12")
+    with pytest.raises(DeviceError) as acceleration:
+        pan.set_acceleration(0)
+    with pytest.raises(DeviceError) as control_p:
+        pan.set_control_p(-50)
     with pytest.raises(MtnError) as missing:
         mtn_new("missing.mtn")
     cases = {
         "device error": str(device.value),
+        "acceleration": str(acceleration.value),
+        "control p": str(control_p.value),
         "missing motion": f"mtn_play: MTN is NULL: mtn_new failed ({missing.value})",
         "step": "robot_step(32): not on the robot: an OPEN-R object cannot wait for time to pass inside a call",
     }
@@ -415,6 +430,12 @@ def test_errors_end_the_controller_with_the_python_apis_message(probe, tmp_path)
         assert f"controller error at t = 0.000 s: {message}" in (folder / "console.log").read_text()
         assert (folder / "died.txt").exists() == (scenario == "step")  # the others fail before robot_die
     assert (tmp_path / "missing_motion" / "probe.txt").read_text() == f"{missing.value}\n"
+
+
+def test_a_memory_stick_is_cross_compiled_and_has_no_keyboard(probe, tmp_path, monkeypatch):
+    stick, reference, _, _ = probe_runs(monkeypatch, probe, tmp_path, "mode", frames=8)
+    assert (stick / "probe.txt").read_text() == "mode 1 key 0\n"  # Webots 5's robot_get_mode: 1 on the robot
+    assert (reference / "probe.txt").read_text() == "mode 0 key 0\n"  # 0 in the simulator
 
 
 def test_the_wrappers_structure_sizes_are_checked_when_it_compiles(probe, tmp_path):

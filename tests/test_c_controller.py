@@ -109,7 +109,7 @@ def test_each_c_call_returns_what_the_python_api_returned_in_the_same_run(tmp_pa
             assert value == _as_received(name, result), line
         if name == "robot_step":
             now += int(argument)
-    assert len(lines) == 62 and len(images) == 4
+    assert len(lines) == 64 and len(images) == 4
     assert (tmp_path / "images.bin").read_bytes() == b"".join(i.tobytes() for i in images)
     assert (tmp_path / "fprint.txt").read_text() == returned[0, "mtn_fprint", "mtn"]
     pixel = (
@@ -422,3 +422,31 @@ def test_the_simulators_own_failures_in_a_c_controllers_call_are_not_blamed_on_i
     assert (
         err.startswith("aibo-sim: error: MUJOCO_GL=glfw: cannot create an OpenGL context") and "controller" not in err
     )
+
+
+def test_motions_made_and_deleted_in_a_loop_and_many_held_at_once_run_on(tmp_path, capfd):
+    # Each motion's calls are answered ahead with robot_step: a deleted motion's no longer, and
+    # never more than the controller's answer buffer takes (it asks for the rest itself).
+    body = r"""#include <device/mtn.h>
+int main(void) {
+    static MTN* held[1500];
+    robot_live(0);
+    for (int i = 0; i < 1500; i++) {
+        MTN* m = mtn_new("WALKFWD.MTN");
+        mtn_is_over(m); mtn_get_time(m); mtn_get_length(m);
+        mtn_delete(m);
+        robot_step(8);
+    }
+    for (int i = 0; i < 1500; i++) {
+        held[i] = mtn_new("WALKFWD.MTN");
+        mtn_is_over(held[i]); mtn_get_time(held[i]); mtn_get_length(held[i]);
+    }
+    robot_step(8);
+    int over = 0;
+    for (int i = 0; i < 1500; i++) over += mtn_is_over(held[i]);
+    printf("done %d\n", over);
+    return 0;
+}
+"""
+    run_controller(c_file(tmp_path, "motions.c", body), duration=20)
+    assert "done 1500" in capfd.readouterr().out

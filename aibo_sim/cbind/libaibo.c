@@ -43,7 +43,7 @@ static int channel = -1;
 static unsigned char *images;
 /* Calls without results wait in `outgoing` and go with the next call that has results (one
  * write); `start` is where the call being built begins. Answers arrive in `answer`. */
-static unsigned char outgoing[1 << 16], answer[1 << 16];
+static unsigned char outgoing[1 << 16], answer[AIBO_MAX_ANSWER_BYTES];
 static size_t outgoing_length, start, cursor, answer_end;
 /* The answers robot_step brought ahead: (int32 call, int32 argument, uint32 size, results)... */
 static unsigned char ahead[1 << 16];
@@ -270,7 +270,7 @@ static void ask(enum aibo_op op, int arg) {
     call();
 }
 
-/* A call without results on a tag or a motion (`arg`), with no other argument. */
+/* A call without results on a tag, a motion or a period (`arg`), with no other argument. */
 static void send_tag(enum aibo_op op, int arg) {
     begin(op);
     put_int(arg);
@@ -354,6 +354,25 @@ const char *robot_get_name(void) {
     begin(AIBO_OP_robot_get_name);
     call();
     return get_string(name, sizeof name);
+}
+
+int robot_get_mode(void) {
+    begin(AIBO_OP_robot_get_mode);
+    call();
+    return get_int();
+}
+
+void robot_keyboard_enable(unsigned short ms) { send_tag(AIBO_OP_robot_keyboard_enable, ms); }
+
+void robot_keyboard_disable(void) {
+    begin(AIBO_OP_robot_keyboard_disable);
+    send_call();
+}
+
+int robot_keyboard_get_key(void) {
+    begin(AIBO_OP_robot_keyboard_get_key);
+    call();
+    return get_int();
 }
 
 void robot_console_printf(const char *format, ...) {

@@ -50,7 +50,7 @@ from ..render import RenderingUnavailable
 from ..robot import SimulationEnd
 from ..sim import SimulationDiverged
 from .child import Child
-from .protocol import MAX_IMAGE_BYTES, OPS, PREFETCHED, STATUS
+from .protocol import MAX_ANSWER_BYTES, MAX_IMAGE_BYTES, OPS, PREFETCHED, STATUS
 
 WAIT_NOTICE_S = 10.0
 SPIN_S = 0.002  # how long this process polls for the controller's next call before it sleeps
@@ -66,13 +66,19 @@ class _Motions:
 
     def __init__(self):
         self._by_id: dict[int, object] = {}
+        self._last = 0
 
     def new(self, filename: str) -> int:
         motion = api.mtn_new(filename)
         if motion is None:
             return 0
-        self._by_id[len(self._by_id) + 1] = motion
-        return len(self._by_id)
+        self._last += 1
+        self._by_id[self._last] = motion
+        return self._last
+
+    def delete(self, handle: int) -> None:
+        """``mtn_delete``: the motion stops and its handle is no longer one."""
+        api.mtn_delete(self._by_id.pop(handle, None))
 
     def __getitem__(self, handle: int):
         return self._by_id.get(handle)  # 0 (NULL): None, which the API reports as a failed mtn_new
@@ -99,7 +105,7 @@ def _handlers(image: memoryview) -> dict:
     handlers.update(
         {
             name: on_motion(handlers[name])
-            for name in ("mtn_delete", "mtn_play", "mtn_is_over", "mtn_get_length", "mtn_get_time", "mtn_get_name")
+            for name in ("mtn_play", "mtn_is_over", "mtn_get_length", "mtn_get_time", "mtn_get_name")
         }
     )
     handlers.update(
@@ -107,6 +113,7 @@ def _handlers(image: memoryview) -> dict:
             "robot_console_printf": lambda text: api.robot_console_printf("%s", text),
             "camera_get_image": camera_get_image,
             "mtn_new": motions.new,
+            "mtn_delete": motions.delete,
             "mtn_fprint": mtn_fprint,
             "mtn_get_error": lambda: api.mtn_get_error() or "",
         }
@@ -261,6 +268,10 @@ class _Server:
                 continue
             if call.ahead:
                 self._wanted[number, args] = call
+            elif call.name == "mtn_delete":  # its motion's calls are no longer answered ahead
+                self._wanted = {
+                    k: c for k, c in self._wanted.items() if not (c.name.startswith("mtn_") and k[1] == args)
+                }
             try:
                 result = call.function(*args)
             except SimulationEnd:
@@ -285,13 +296,18 @@ class _Server:
 
 def _with_answers_ahead(answer: bytes, wanted: dict) -> bytes:
     """``robot_step``'s answer followed by the answers of the ``wanted`` calls (``PREFETCHED``) in
-    the state it left; a call that raises is left out (the controller makes it, and gets the error)."""
-    parts = []
+    the state it left, as many as the controller's buffer takes; a call that raises or does not
+    fit is left out (the controller makes it, and gets the error or the answer)."""
+    parts, room = [], MAX_ANSWER_BYTES - len(answer)
     for (number, args), call in wanted.items():
         try:
             results = call.answer(call.function(*args))[8:]
         except Exception:
             continue
-        parts.append(_AHEAD.pack(number, args[0] if args else 0, len(results)) + results)
+        part = _AHEAD.pack(number, args[0] if args else 0, len(results)) + results
+        if len(part) > room:
+            break
+        parts.append(part)
+        room -= len(part)
     payload = answer[4:] + b"".join(parts)
     return _LENGTH.pack(len(payload)) + payload

@@ -232,8 +232,11 @@ void Controller::CameraControl(int tag, const char* function, int value) {
 /* Webots' P gain as Sony's P register (its unit: KP_PER_SONY_P N m/rad), to the nearest. */
 void Controller::SetControlP(int tag, double p) {
     int joint = robot_.JointOf(tag, wrapper::Robot::SERVO);
-    double value = robot_.CheckedNumber(tag, wrapper::Robot::SERVO, "control P", p) / ers7::KP_PER_SONY_P;
-    word gain = value <= 0 ? 0 : value >= 0xFF ? 0xFF : (word)(value + 0.5);
+    if (robot_.CheckedNumber(tag, wrapper::Robot::SERVO, "control P", p) <= 0) {
+        wrapper::Fail("%s: control P must be above 0, not %g", ers7::JOINTS[joint].locator, p);
+    }
+    double value = p / ers7::KP_PER_SONY_P;
+    word gain = value >= 0xFF ? 0xFF : (word)(value + 0.5);
     const ers7::Joint& table = ers7::JOINTS[joint];
     if (IsType(table.locator, "-Joint2:")) {
         OPENR::SetJointGain(ids_[joint], gain, table.i, table.d, ers7::PSHIFT, ers7::ISHIFT, ers7::DSHIFT);

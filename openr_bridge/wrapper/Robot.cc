@@ -344,7 +344,11 @@ void Robot::SetVelocity(int tag, double value) {
 void Robot::SetAcceleration(int tag, double value) {
     int joint = JointOf(tag, SERVO);
     double acceleration = CheckedNumber(tag, SERVO, "acceleration", value);
-    acceleration_[joint] = acceleration < 0 ? HUGE_VAL : acceleration;  /* -1: unlimited, as in Webots */
+    if (acceleration != -1 && acceleration <= 0) {  /* Webots' range: -1 (unlimited) or (0, inf) */
+        Fail("%s: acceleration must be -1 (unlimited) or above 0, not %g", Tagged(tag, SERVO).locator.c_str(),
+             acceleration);
+    }
+    acceleration_[joint] = acceleration == -1 ? HUGE_VAL : acceleration;
 }
 
 void Robot::SetLed(int tag, int value) {

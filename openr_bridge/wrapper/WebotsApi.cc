@@ -52,6 +52,16 @@ const char* robot_get_name(void) {
     return design;
 }
 
+int robot_get_mode(void) { return 1; }  /* Webots 5: cross-compiled, on the robot */
+
+void robot_keyboard_enable(unsigned short ms) {
+    if (ms == 0) wrapper::Fail("robot_keyboard_enable: sampling period must be a positive whole number of ms, not 0");
+}
+
+void robot_keyboard_disable(void) {}
+
+int robot_keyboard_get_key(void) { return 0; }  /* the robot has no keyboard */
+
 void robot_console_printf(const char* format, ...) {
     char text[4096];
     va_list arguments;

@@ -42,6 +42,10 @@ static void reset(void) {
     acc = device("PRM:/a1-Sensor:a1");
     led = device("PRM:/r1/c1/c2/c3/l1-LED2:l1");
     put_text("robot_get_name", "0", robot_get_name());
+    robot_keyboard_enable(64);
+    put_int("robot_get_mode", "0", robot_get_mode());
+    put_int("robot_keyboard_get_key", "0", robot_keyboard_get_key());
+    robot_keyboard_disable();
     servo_enable_position(pan, 32);
     camera_enable(camera, 32);
     distance_sensor_enable(ir, 32);

@@ -22,6 +22,9 @@ static void reset(void) {
     accelerometer = robot_get_device("PRM:/a1-Sensor:a1");
     led = robot_get_device("PRM:/r1/c1/c2/c3/l1-LED2:l1");
     fprintf(out, "name %s tags %d %d %d %d %d %d\n", robot_get_name(), pan, camera, near_ir, paw, accelerometer, led);
+    robot_keyboard_enable(64);
+    fprintf(out, "mode %d key %d\n", robot_get_mode(), robot_keyboard_get_key());
+    robot_keyboard_disable();
     servo_enable_position(pan, 32);
     camera_enable(camera, 32);
     distance_sensor_enable(near_ir, 32);

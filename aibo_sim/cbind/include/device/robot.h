@@ -29,6 +29,13 @@ DeviceTag robot_get_device(const char *name);
 double robot_get_time(void);
 const char *robot_get_name(void);
 void robot_console_printf(const char *format, ...);
+/* 0: in the simulator (aibo-sim run); 1: cross-compiled on the robot (a build-ms memory stick,
+ * on the robot or on aibo-sim's OPEN-R runtime). */
+int robot_get_mode(void);
+/* The keyboard: runs are headless and a robot has none, so robot_keyboard_get_key() is 0 (no key). */
+void robot_keyboard_enable(unsigned short ms);
+void robot_keyboard_disable(void);
+int robot_keyboard_get_key(void);
 
 #ifdef __cplusplus
 }

@@ -1,4 +1,4 @@
-/* Touch sensors: 0 or 1 (paws, chin), pressure for the head and back. */
+/* Touch sensors (paws, chin, head, back): 1.0 when pressed beyond the threshold, else 0.0. */
 #ifndef AIBO_SIM_DEVICE_TOUCH_SENSOR_H
 #define AIBO_SIM_DEVICE_TOUCH_SENSOR_H
 
