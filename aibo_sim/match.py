@@ -16,7 +16,7 @@ import os
 import sys
 import threading
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from . import controller
@@ -130,6 +130,9 @@ class _Player:
     program: object = None
     writer: FrameWriter | None = None
     error: BaseException | None = None
+    # Set when its thread has ended: a join that a signal interrupted may take a live thread for
+    # an ended one (CPython 3.11), so the match waits on this rather than on the thread.
+    ended: threading.Event = field(default_factory=threading.Event)
 
 
 def _player(robot: Simulation, controller_path, compiled: dict) -> _Player:
@@ -240,20 +243,21 @@ def run_match(
     added = list(dict.fromkeys(added))
     sys.path[:0] = added  # modules beside each controller import
     previous = Path.cwd()
-    interrupted = False
+    interrupted, started = False, []
     try:
         if out is not None:
             os.chdir(out)  # the controllers' own files land in --out
-        for thread in threads:
+        for player, thread in zip(players, threads):
             thread.start()
-        for thread in threads:
-            while thread.is_alive():
-                thread.join(0.1)  # wakes for Ctrl-C and SIGTERM
+            started.append(player)
+        for player in started:
+            while not player.ended.wait(0.1):  # wakes for Ctrl-C and SIGTERM
+                pass
     except BaseException:  # Ctrl-C, SIGTERM: every robot stops at its next step
         interrupted = True
         world.lockstep.stop()
-        for thread in threads:
-            thread.join()
+        for player in started:
+            player.ended.wait()
         raise
     finally:
         os.chdir(previous)
@@ -301,8 +305,11 @@ def _play(player: _Player, lockstep: Lockstep) -> None:
     finally:
         if player.writer is not None and player.writer.error is not None:
             player.error = player.writer.error  # a frame it could not write ended its run
-        lockstep.leave(player.robot)
-        player.robot.camera.close()  # its OpenGL context is current in this thread only
+        try:
+            lockstep.leave(player.robot)
+            player.robot.camera.close()  # its OpenGL context is current in this thread only
+        finally:
+            player.ended.set()
 
 
 def _summary(sim, players, seed, scene, ball, ball_type, wall: float, interrupted: bool) -> dict:

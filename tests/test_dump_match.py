@@ -253,3 +253,17 @@ def test_a_write_that_fails_stops_every_robot_and_is_the_error(tmp_path, monkeyp
         dump(out, robots=SPECS, controller=TRACKER, frames=30, formats=("rgb",), camera=CameraConfig("ideal"))
     assert not list(out.rglob(".tmp.*"))
     assert len(load_dump(out / "robot2")) == 3 and len(load_dump(out / "robot1")) < 30  # robot 1 stopped too
+
+
+def test_a_match_envs_dump_names_every_robot_for_its_robot_images(tmp_path):
+    out = tmp_path / "env"
+    assert main(["dump", "--env", "aibo_sim/MatchVsScripted-v0", "--steps", "3", "--formats", "robots",
+                 "--out", str(out)]) == 0  # fmt: skip
+    dump = load_dump(out)
+    teams = instance_teams(dump.meta["robots"])
+    observer = dump.meta["robots"]["observer"]
+    assert len(dump.meta["robots"]["instances"]) == 8 and teams[observer] == LABEL_TEAMS.index("red")
+    seen = set()
+    for frame in dump:
+        seen |= set(np.unique(frame.robots).tolist()) - {0}
+    assert seen and observer not in seen and all(teams[i] in (1, 2) for i in seen)  # every id has its team

@@ -364,3 +364,14 @@ def test_reset_info_describes_the_new_episode():
     _, expected = fresh.reset(seed=2)
     np.testing.assert_array_equal(info["ball_offset"], expected["ball_offset"])
     env.close(), fresh.close()
+
+
+def test_reach_ball_never_starts_reached_nor_with_the_ball_under_the_robot():
+    # With the start spread over +-0.8 m about (0.8, 0), some draws fall on the robot: drawn again.
+    env = gym.make(REACH, randomize={"ball_start": 0.8}, camera=None)
+    try:
+        distances = [env.reset(seed=seed)[1]["ball_distance"] for seed in range(200)]
+    finally:
+        env.close()
+    assert min(distances) >= 0.3 - 0.01  # START_CLEARANCE, as the robot's stance settles
+    assert min(distances) < 0.4  # near ones are kept

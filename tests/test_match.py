@@ -3,6 +3,8 @@
 
 import json
 import math
+import signal
+import threading
 from pathlib import Path
 
 import cv2
@@ -202,6 +204,27 @@ def test_a_failing_controller_fails_the_match_and_the_others_run_to_the_end(tmp_
     match = json.loads((tmp_path / "out" / "run.json").read_text())
     assert match["status"] == "failed" and match["simulated_s"] == pytest.approx(0.4, abs=0.008)
     assert [r["status"] for r in match["robots"]] == ["failed", "done"]
+
+
+def test_ctrl_c_ends_a_match_after_every_robots_controller_has_ended(tmp_path):
+    # The robots' robot_die functions (slow ones) have run when run_match raises: it waited for
+    # every robot's thread, which a join interrupted by the signal would not have done.
+    slow_die = tmp_path / "slow_die.py"
+    slow_die.write_text(
+        "import time\nfrom aibo_sim.controller import *\n"
+        "def die():\n    time.sleep(0.3)\n    open(f'died_{time.monotonic_ns()}', 'w').close()\n"
+        "robot_die(die)\nwhile True:\n    robot_step(8)\n"
+    )
+    robots = [RobotSpec("red", 1, None, str(slow_die)), RobotSpec("blue", 1, None, str(slow_die))]
+    timer = threading.Timer(1.0, signal.pthread_kill, [threading.main_thread().ident, signal.SIGINT])  # as Ctrl-C
+    timer.start()
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            run_match(robots, duration=60, out=tmp_path / "out", progress=False, camera=CameraConfig("ideal"))
+    finally:
+        timer.cancel()
+    assert len(list((tmp_path / "out").glob("died_*"))) == 2
+    assert json.loads((tmp_path / "out" / "run.json").read_text())["status"] == "interrupted"
 
 
 def test_run_robots_file_on_the_command_line(tmp_path, capsys):

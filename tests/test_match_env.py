@@ -158,6 +158,24 @@ def test_truncation_ends_every_agent_and_step_then_needs_a_reset():
         env.reset(seed=0)
 
 
+def test_a_refused_step_or_reset_changes_nothing():
+    env = MatchEnv(STRIKERS, camera=None)
+    try:
+        env.reset(seed=0)
+        env.step({})
+        red = env.robots["red_4"]
+        targets, time_ms = red.servos.target.copy(), env.sim.time_ms
+        with pytest.raises(ValueError, match="finite"):  # blue's action is refused: red's is not given either
+            env.step({"red_4": np.ones(15, np.float32), "blue_4": np.full(15, np.nan, np.float32)})
+        assert np.array_equal(red.servos.target, targets)
+        for ball, message in (((math.nan, 0.0), "x = nan must be a finite number"), ((1, 2, 3), "want two numbers")):
+            with pytest.raises(ValueError, match=message):
+                env.reset(options={"ball": ball})
+            assert env.sim.time_ms == time_ms and env.agents == ["red_4", "blue_4"]  # the match goes on
+    finally:
+        env.close()
+
+
 def test_robots_from_a_team_file_and_bad_arguments(tmp_path):
     path = tmp_path / "robots.toml"
     path.write_text('[[robot]]\nteam = "blue"\nnumber = 2\n\n[[robot]]\nteam = "red"\nnumber = 1\n')

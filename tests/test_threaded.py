@@ -74,7 +74,7 @@ def test_vector_envs_step_as_sync_bit_for_bit_through_autoreset_and_reset_mask(m
 def test_errors_reach_the_caller_and_a_closed_env_refuses():
     envs = ThreadedVectorEnv(HEAD_TRACK, 2)
     envs.reset(seed=0)
-    with pytest.raises(ValueError, match="actions must be finite"):
+    with pytest.raises(ValueError, match="environment 0.s action is not finite"):  # checked before any thread steps
         envs.step(np.full(envs.action_space.shape, np.nan, np.float32))
     with pytest.raises(ValueError, match="reset_mask"):
         envs.reset(options={"reset_mask": np.zeros(2, bool)})

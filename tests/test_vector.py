@@ -137,11 +137,16 @@ def test_hybrid_env_reports_errors_from_either_side_and_refuses_once_a_worker_or
         assert envs.get_attr("randomize") == ({}, {"ball_start": 0.0})
         obs, _ = envs.reset(seed=3)
         assert obs["image"].shape == (2, 80, 104, 3)
-        for row in (0, 1):  # the first environment's error (this process), then a worker's
+        for row in (0, 1):  # refused here, before any environment steps: none is left half-stepped
             bad = zero.copy()
             bad[row, 0] = np.nan
-            with pytest.raises(ValueError, match=r"action\[0\] \(neck_tilt\) is nan: actions must be finite"):
+            with pytest.raises(ValueError, match=rf"^environment {row}'s action is not finite: nan at index 0$"):
                 envs.step(bad)
+        envs.step(zero)
+        # A worker's own error reaches the caller as the environment raised it; that worker has ended.
+        envs.set_attr("randomize", [{}, {"ball_start": -1.0}])  # set_attr checks nothing: its reset raises
+        with pytest.raises(ValueError, match="high - low < 0"):
+            envs.reset(seed=4)
         with pytest.raises(gym.error.ClosedEnvironmentError, match="environment 1's worker process ended"):
             envs.step(zero)
     finally:

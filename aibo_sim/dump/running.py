@@ -28,7 +28,7 @@ from ..render import check_rendering
 from ..robot import BACKENDS, SimulationEnd, check_memory_stick
 from ..runner import MEMORY_STICK, Progress, check_python_controller, run_controller
 from ..sim import ModelError, ball_joint, is_seed, load_model
-from .formats import DEFAULT_FORMATS, FORMATS, DumpError
+from .formats import DEFAULT_FORMATS, FORMATS, DumpError, is_match, robots_meta
 from .shards import dump_sharded, ray_session
 from .writing import CONTROLLER_FILES, DumpSummary, DumpWriter
 
@@ -146,9 +146,17 @@ def _dump_env(parameters: dict, out: Path, resume: bool, **lock) -> DumpWriter:
     steps, seed = parameters["frames"], parameters["seed"]
     progress = Progress(steps / FRAME_RATE_HZ, enabled=parameters.get("progress", True))
     try:
-        sim = env.unwrapped.sim
+        sim = env.unwrapped.sim  # the learner's robot: in a match env, one of several
+        specs = sim.world.robot_specs
         with DumpWriter(
-            out, parameters["formats"], parameters, resume=resume, camera=sim.camera.describe(), model=sim.model, **lock
+            out,
+            parameters["formats"],
+            parameters,
+            resume=resume,
+            camera=sim.camera.describe(),
+            model=sim.model,
+            robots=robots_meta(specs, sim.index + 1) if is_match(specs) else None,
+            **lock,
         ) as writer:
             policy = _policy(parameters["policy"], env.action_space, seed)
             env.reset(seed=seed)

@@ -44,7 +44,7 @@ from ..ers7 import DISTANCE_SENSORS, JOINT_INDEX, JOINTS, TOUCH_SENSORS, joint_i
 from ..motions import BLEND_MS
 from ..mtn import MotionPlayer, read_mtn
 from ..render import Renderer
-from ..sim import ACCEL_RANGE, FRAME_MS, Simulation, models_dir, release_freed_memory
+from ..sim import ACCEL_RANGE, FRAME_MS, Simulation, models_dir, placement_values, release_freed_memory
 from ..team import PLAYERS_PER_TEAM, TEAMS, RobotSpec, check_robots, load_robots
 from .base import HEAD_JOINTS, LAYERS, LEG_JOINTS, RENDER_SIZE, AiboEnv, _ClosedSimulation, check_options
 
@@ -112,8 +112,9 @@ class _Agent:
         self.observation_space = spaces["image"] if self.image_only else gym.spaces.Dict(spaces)
         self._distance_high = spaces["distance_mm"].high.tolist()
 
-    def act(self, action) -> None:
-        self.sim.servos.set_target(self._actuated, self.action_to_targets(action))
+    def act(self, targets) -> None:
+        """Give the servos ``targets`` (from ``action_to_targets``, which checks the action)."""
+        self.sim.servos.set_target(self._actuated, targets)
 
 
 class MatchEnv(pettingzoo.ParallelEnv):
@@ -331,12 +332,17 @@ class MatchEnv(pettingzoo.ParallelEnv):
         :raises gymnasium.error.ClosedEnvironmentError: after ``close``.
         """
         self._check_open("reset")
+        ball = (options or {}).get("ball")
+        if ball is not None:  # checked before anything changes: a refused reset leaves the match as it was
+            what = 'reset(options={"ball": (x, y)})'
+            if isinstance(ball, (str, bytes)) or not hasattr(ball, "__len__") or len(ball) != 2:
+                raise ValueError(f"{what}: want two numbers (m), not {ball!r}")
+            ball = placement_values(what, x=ball[0], y=ball[1])
         if seed is not None or self.np_random is None:
             self.np_random, self.np_random_seed = seeding.np_random(seed)
         self.sim.reset(seed=int(self.np_random.integers(2**63)))
         self._randomize_scene()
         if self.sim.has_ball:
-            ball = (options or {}).get("ball")
             self.sim.place_ball(*(self.ball_start(KICKOFF_BALL) if ball is None else ball))
         mujoco.mj_forward(self.sim.model, self.sim.data)
         self._ball_x = self._ball_progress_x()
@@ -371,8 +377,9 @@ class MatchEnv(pettingzoo.ParallelEnv):
         if extra:
             why = "is done" if extra[0] in self.possible_agents else "is no agent"
             raise ValueError(f"action for {extra[0]!r}, which {why} (agents: {', '.join(self.agents)})")
-        for name, action in actions.items():
-            self._agents[name].act(action)
+        targets = {name: self._agents[name].action_to_targets(action) for name, action in actions.items()}
+        for name, joint_targets in targets.items():  # every action checked before any is given
+            self._agents[name].act(joint_targets)
         self._advance(self.sim.frames_to_camera_frame())
         self._cycles += 1
 

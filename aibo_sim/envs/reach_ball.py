@@ -12,6 +12,7 @@ from .base import HEAD_JOINTS, LEG_JOINTS, AiboEnv
 
 BALL_START = (0.8, 0.0)
 REACH_DISTANCE = 0.2  # m, body centre to ball centre: the ball touches the chest at ~0.17 m
+START_CLEARANCE = 0.3  # m: a randomised start nearer the body is drawn again (not reached, not under it)
 PROGRESS_REWARD = 10.0  # per metre
 
 
@@ -80,7 +81,8 @@ class ReachBallEnv(AiboEnv):
 
     ``AiboEnv``'s (standing on the centre spot facing +X); the ball at rest at (0.8, 0) m
     (``BALL_START``), moved by up to r m in each horizontal direction with
-    ``randomize={"ball_start": r}``.
+    ``randomize={"ball_start": r}`` (drawn again while it falls within 0.3 m of the robot's centre,
+    ``START_CLEARANCE``: an episode never starts reached, nor with the ball under the robot).
 
     ## Episode End
 
@@ -103,7 +105,11 @@ class ReachBallEnv(AiboEnv):
     actuated_joints = LEG_JOINTS + HEAD_JOINTS
 
     def _reset_task(self) -> None:
-        self.sim.place_ball(*self.ball_start(BALL_START))
+        body, _, _ = self.sim.body_pose()
+        start = self.ball_start(BALL_START)
+        while np.linalg.norm(start - body[:2]) < START_CLEARANCE:
+            start = self.ball_start(BALL_START)
+        self.sim.place_ball(*start)
         self._distance = self._ball_distance()
 
     def _ball_distance(self) -> float:

@@ -69,11 +69,20 @@ def values_per_env(name: str, values, num_envs: int) -> list:
 
 
 def check_actions(action_space, actions) -> None:
-    """ValueError unless a batch of Box actions has one row for each environment."""
-    if isinstance(action_space, Box) and np.shape(actions) != action_space.shape:
+    """ValueError unless a batch of Box actions has one row for each environment, all finite
+    (checked before any environment steps: none is left half-stepped, no worker ends)."""
+    if not isinstance(action_space, Box):
+        return
+    if np.shape(actions) != action_space.shape:
         raise ValueError(
             f"actions of shape {np.shape(actions)}: want {action_space.shape}, "
             f"one row for each of the {action_space.shape[0]} environments"
+        )
+    finite = np.isfinite(np.asarray(actions, np.float64))
+    if not finite.all():
+        row, column = np.argwhere(~finite)[0][:2]
+        raise ValueError(
+            f"environment {row}'s action is not finite: {np.asarray(actions)[row, column]} at index {column}"
         )
 
 
