@@ -5,11 +5,13 @@ No MuJoCo here: playback is a pure function of time that yields joint targets.
 
 Decisions where the spec leaves room (also listed in the report that came with this file):
 
-* Version: 1.0, 1.1 and 1.2 are read (Sony's ``MTNFile.cc`` and Webots' reader ignore the
-  field; AIBO MIND's ERS-7 motions, ``DRX-1000``, are 1.1 and 1.2 in the same layout); any
-  other version is an :class:`MtnError`. The writer writes 1.2.
-* Section 0 must be exactly 24 bytes (Sony: "fixed length"; OPEN-R's struct and Webots'
-  reader both hard-code it). Sections 1 and 2 are jumped by ``sectionSize``: slack after the
+* The header fields Sony's ``MTNFile.cc`` never reads are not checked either, so a file another
+  tool wrote plays as it would on the robot: the version (AIBO MIND's ERS-7 motions,
+  ``DRX-1000``, are 1.1 and 1.2 in the same layout; the writer writes 1.2), section 0's size
+  and the section count (section 1 starts at byte 28, after section 0's fixed 24 bytes, as in
+  OPEN-R's struct and Webots' reader), the sections' numbers and section 3's data type. Only
+  the magic ``OMTN`` is checked, so that another file is named as such. Sections 1 and 2 are
+  jumped by ``sectionSize``: slack after the
   parsed strings is skipped (its bytes, normally zero padding, are not kept; the writer emits
   zeros). Section 3 holds ``12 + N*4*(3+J) + 4*(N-1)`` bytes for N keyframes of J joints, and
   they must all be in the file; its size field is not checked (OPEN-R's ``MTNFile`` and Webots
@@ -58,15 +60,14 @@ from openr_bridge.errors import NotRegularFile
 from . import ers7
 
 MAGIC = b"OMTN"
-VERSION = (1, 2)  # what the writer writes
-READ_VERSIONS = ((1, 0), (1, 1), (1, 2))
+VERSION = (1, 2)  # what the writer writes; the reader takes any, as Sony's MTNFile does
 NUM_SECTIONS = 4
-SECTION0_SIZE = 24
+SECTION0_SIZE = 24  # section 1 starts after it, at byte 28, whatever its size field says (MTNFile)
 DEFAULT_FRAME_TIME_MS = 16
 SUBFRAME_MS = FRAME_TICK_MS  # OPEN-R command vectors carry one joint value per 8 ms frame
 MODES = ("openr", "webots")  # MotionPlayer's playback modes
-ERS7_DESIGN = "DRX-1000"  # the robot design an ERS-7 motion names (Sony's MTN-FFORM: "DRX-1000 (ERS-7)")
-OTHER_DESIGNS = {"DRX-900": "ERS-210/220"}  # the others Sony's MTN-FFORM names
+ERS7_DESIGN = "DRX-1000"  # the robot design an ERS-7 motion names (Sony's MoNet: MoNetAgentManager.h)
+OTHER_DESIGNS = {"DRX-900": "ERS-210/220"}  # the other design Sony's MoNet names
 _S32_MIN, _S32_MAX = -(2**31), 2**31 - 1
 MAX_LENGTH_MS = 10 * 60 * 1000
 MAX_JOINT_URAD = round(2 * np.pi * 1e6)
@@ -268,10 +269,9 @@ class _Reader:
         return self.data[offset + 1 : offset + 1 + length].decode("latin-1"), offset + 1 + length
 
     def section_header(self, offset: int, number: int) -> int:
-        """Check section ``number``'s header at ``offset``; return the section's end."""
-        num, size = self.unpack("<II", offset, f"section {number} header")
-        if num != number:
-            raise self.fail(offset, f"section number {num}, expected {number}")
+        """Check section ``number``'s header at ``offset``; return the section's end. Its number
+        field is not read (nor is it by Sony's MTNFile: sections follow from their sizes)."""
+        _, size = self.unpack("<II", offset, f"section {number} header")
         if size < 8:
             raise self.fail(offset + 4, f"section {number} size {size} is less than its 8-byte header")
         if offset + size > len(self.data):
@@ -286,15 +286,10 @@ def parse_mtn(data: bytes, source: str = "<bytes>") -> Motion:
     if r.data[:4] != MAGIC:
         raise r.fail(0, f"wrong magic {r.data[:4]!r} (should be {MAGIC!r})")
 
-    end0 = r.section_header(4, 0)
-    if end0 - 4 != SECTION0_SIZE:
-        raise r.fail(8, f"section 0 size {end0 - 4}, expected {SECTION0_SIZE}")
-    nsec, major, minor, nkey, frame_time, option = r.unpack("<IHHHHI", 12, "section 0")
-    if nsec != NUM_SECTIONS:
-        raise r.fail(12, f"{nsec} sections, expected {NUM_SECTIONS}")
-    if (major, minor) not in READ_VERSIONS:
-        known = ", ".join(f"{a}.{b}" for a, b in READ_VERSIONS)
-        raise r.fail(16, f"version {major}.{minor} not supported (only {known})")
+    # Section 0's size, the section count and the version are not read, as Sony's MTNFile does not:
+    # a file another Sony tool wrote with other values there plays as on the robot.
+    _, _, nkey, frame_time, option = r.unpack("<HHHHI", 16, "section 0")
+    end0 = 4 + SECTION0_SIZE
     if nkey == 0:
         raise r.fail(20, "zero keyframes")
     if frame_time == 0:
@@ -319,9 +314,7 @@ def parse_mtn(data: bytes, source: str = "<bytes>") -> Motion:
             raise r.fail(at, f"duplicate locator {loc!r}")
         locators.append(loc)
 
-    num, size_field, dtype = r.unpack("<III", end2, "section 3 header")  # the size is not checked, as OPEN-R's
-    if num != 3:
-        raise r.fail(end2, f"section number {num}, expected 3")
+    _, size_field, _ = r.unpack("<III", end2, "section 3 header")  # number, size, data type: unread, as by MTNFile
     kf_words = 3 + njoint
     size = 12 + nkey * 4 * kf_words + 4 * (nkey - 1)
     # A wrong joint count shows as nonsense in the keyframes: the size field's count, where it
@@ -332,8 +325,6 @@ def parse_mtn(data: bytes, source: str = "<bytes>") -> Motion:
         if not rest and implied > 3 and implied - 3 != njoint
         else ""
     )
-    if dtype != 0:
-        raise r.fail(end2 + 8, f"data type {dtype}, expected 0")
     r.need(end2, size, f"section 3 ({nkey} keyframes of {njoint} joints{hint})")  # bytes after it are ignored
 
     # Keyframe 0, then (numInterpolate, keyframe) pairs: view as rows of 1 + kf_words s32,

@@ -9,7 +9,6 @@ namespace wrapper {
 namespace {
 
 const char MAGIC[] = "OMTN";
-const unsigned long NUM_SECTIONS = 4;
 const unsigned long SECTION0_SIZE = 24;
 const double MAX_LENGTH_MS = 10 * 60 * 1000;
 const slongword MAX_JOINT_URAD = 6283185;   /* round(2 pi 1e6): a full turn */
@@ -92,11 +91,11 @@ public:
                                    (unsigned long)size, where, (unsigned long)end));
     }
 
-    /* Checks section `number`'s header at `offset`; its end in `end`. */
+    /* Checks section `number`'s header at `offset` (its number field unread, as by Sony's
+     * MTNFile); its end in `end`. */
     bool Section(size_t offset, unsigned long number, size_t* end) {
         if (!Need(offset, 8, Format("section %lu header", number), data_.size())) return false;
-        unsigned long found = U32(data_, offset), size = U32(data_, offset + 4);
-        if (found != number) return Fail(offset, Format("section number %lu, expected %lu", found, number));
+        unsigned long size = U32(data_, offset + 4);
         if (size < 8) {
             return Fail(offset + 4, Format("section %lu size %lu is less than its 8-byte header", number, size));
         }
@@ -150,24 +149,15 @@ bool ParseMotion(const std::vector<byte>& data, const std::string& source, Motio
     if (ok && std::string((const char*)&data[0], 4) != MAGIC) {
         ok = r.Fail(0, "wrong magic " + Repr(std::string((const char*)&data[0], 4), true) + " (should be b'OMTN')");
     }
-    size_t end0 = 0, end1 = 0, end2 = 0;
-    ok = ok && r.Section(4, 0, &end0);
-    if (ok && end0 - 4 != SECTION0_SIZE) {
-        ok = r.Fail(8, Format("section 0 size %lu, expected %lu", (unsigned long)(end0 - 4), SECTION0_SIZE));
-    }
-    ok = ok && r.Need(12, 16, "section 0", size);
-    unsigned long numSections = 0, major = 0, minor = 0, numKeyframes = 0, frameTime = 0;
+    /* Section 0's size, the section count and the version are not read, as Sony's MTNFile does
+     * not: section 1 starts at byte 28. */
+    size_t end0 = 4 + SECTION0_SIZE, end1 = 0, end2 = 0;
+    ok = ok && r.Need(16, 12, "section 0", size);
+    unsigned long numKeyframes = 0, frameTime = 0;
     if (ok) {
-        numSections = U32(data, 12);
-        major = U16(data, 16);
-        minor = U16(data, 18);
         numKeyframes = U16(data, 20);
         frameTime = U16(data, 22);
-        if (numSections != NUM_SECTIONS) {
-            ok = r.Fail(12, Format("%lu sections, expected %lu", numSections, NUM_SECTIONS));
-        } else if (major != 1 || minor > 2) {
-            ok = r.Fail(16, Format("version %lu.%lu not supported (only 1.0, 1.1, 1.2)", major, minor));
-        } else if (numKeyframes == 0) {
+        if (numKeyframes == 0) {
             ok = r.Fail(20, "zero keyframes");
         } else if (frameTime == 0) {
             ok = r.Fail(22, "frame rate 0 ms");
@@ -201,12 +191,7 @@ bool ParseMotion(const std::vector<byte>& data, const std::string& source, Motio
         *error = r.Error();
         return false;
     }
-    unsigned long number = U32(data, end2), sizeField = U32(data, end2 + 4), dataType = U32(data, end2 + 8);
-    if (number != 3) {
-        r.Fail(end2, Format("section number %lu, expected 3", number));
-        *error = r.Error();
-        return false;
-    }
+    unsigned long sizeField = U32(data, end2 + 4);  /* the number and the data type unread, as by MTNFile */
     const size_t words = 3 + numJoints;
     const size_t section3 = 12 + numKeyframes * 4 * words + 4 * (numKeyframes - 1);
     /* A wrong joint count shows as nonsense in the keyframes: the joints the size field fits,
@@ -218,12 +203,8 @@ bool ParseMotion(const std::vector<byte>& data, const std::string& source, Motio
         hint = Format("; section 3's size field fits %lu joints, section 2 lists %lu", (unsigned long)implied - 3,
                       numJoints);
     }
-    if (dataType != 0) {
-        ok = r.Fail(end2 + 8, Format("data type %lu, expected 0", dataType));
-    } else {
-        ok = r.Need(end2, section3, Format("section 3 (%lu keyframes of %lu joints", numKeyframes, numJoints) + hint
-                                    + ")", size);
-    }
+    ok = r.Need(end2, section3, Format("section 3 (%lu keyframes of %lu joints", numKeyframes, numJoints) + hint + ")",
+                size);
     /* Keyframe 0, then (numInterpolate, keyframe) pairs: row k's word m is at body + (k (1 +
      * words) + m - 1) * 4, row 0 having no numInterpolate. */
     const size_t body = end2 + 12;
