@@ -243,10 +243,22 @@ def _motion_file(name: str) -> Path:
     return find_file(name, [models_dir() / "motions"])
 
 
-def _mtn_info(args) -> int:
-    from .mtn import format_motion_info, motion_info, read_mtn
+def _read_motion(name: str):
+    """The motion ``name`` names: an MTN file, a bundled motion's name, or ``ARCHIVE.ODA:MOTION``,
+    a motion in one of Sony's ODA archives."""
+    from .mtn import read_mtn
 
-    info = motion_info(read_mtn(_motion_file(args.file)))
+    path = _motion_file(name)
+    archive, _, motion = name.rpartition(":")
+    if archive and not path.exists() and _motion_file(archive).exists():
+        return read_mtn(_motion_file(archive), motion)
+    return read_mtn(path)
+
+
+def _mtn_info(args) -> int:
+    from .mtn import format_motion_info, motion_info
+
+    info = motion_info(_read_motion(args.file))
     print(json.dumps(info, indent=2) if args.json else format_motion_info(info))
     return 0
 
@@ -259,7 +271,7 @@ def _mtn_play(args) -> int:
     if args.no_ball and args.ball is not None:
         raise ValueError("--ball and --no-ball exclude each other")
     result = play_motion(
-        _motion_file(args.file),
+        _read_motion(args.file),
         repeat=args.repeat,
         mode=args.mode,
         world=world_config(args),
@@ -361,7 +373,10 @@ def build_parser() -> argparse.ArgumentParser:
     mtn = commands.add_parser("mtn", help="OPEN-R motion files").add_subparsers(dest="mtn_command", required=True)
     info = mtn.add_parser("info", help="print a file's name, creator, design, frames, length, locators")
     info.add_argument(
-        "file", type=path_text, help="an MTN file, or the name of a bundled motion (WALKFWD.MTN, TURNL.MTN, ...)"
+        "file",
+        type=path_text,
+        help="an MTN file, the name of a bundled motion (WALKFWD.MTN, TURNL.MTN, ...), or ARCHIVE.ODA:MOTION, a "
+        "motion in one of Sony's ODA archives (an archive alone lists its motions)",
     )
     info.add_argument("--json", action="store_true")
     info.set_defaults(handler=_mtn_info)
@@ -372,7 +387,7 @@ def build_parser() -> argparse.ArgumentParser:
         "the options of every aibo-sim command; it renders no camera frame and reads no "
         "noisy sensor, so --seed and the camera options leave its report unchanged.",
     )
-    play.add_argument("file", type=path_text, help="an MTN file, or the name of a bundled motion")
+    play.add_argument("file", type=path_text, help="an MTN file, the name of a bundled motion, or ARCHIVE.ODA:MOTION")
     play.add_argument("--repeat", type=int, default=1)
     play.add_argument("--mode", choices=MTN_MODES, default="openr")
     play.add_argument("--json", action="store_true")

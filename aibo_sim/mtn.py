@@ -60,6 +60,7 @@ from openr_bridge.errors import NotRegularFile
 from . import ers7
 
 MAGIC = b"OMTN"
+ODA_MAGIC, ODA_HEADER_SIZE, ODA_ENTRY_SIZE = b"ODAR", 64, 144  # Sony's archives of motions and sounds (ODA.h)
 VERSION = (1, 2)  # what the writer writes; the reader takes any, as Sony's MTNFile does
 NUM_SECTIONS = 4
 SECTION0_SIZE = 24  # section 1 starts after it, at byte 28, whatever its size field says (MTNFile)
@@ -359,16 +360,46 @@ def parse_mtn(data: bytes, source: str = "<bytes>") -> Motion:
     )
 
 
-def read_mtn(path: str | os.PathLike) -> Motion:
-    """Read an MTN file. Malformed content raises :class:`MtnError`, as does a FIFO, device or
+def oda_motions(data: bytes, source: str = "<bytes>") -> dict[str, bytes]:
+    """The motions (``OMTN`` entries) of one of Sony's ODA archives (MoNet's ``MOTION7.ODA``;
+    ``ODA.h``: a 64-byte header ``ODAR``, version, file count; then 144-byte entries: magic, a
+    128-byte NUL-terminated name, offset from the archive's start, size), by name. A table that
+    points outside the archive is an :class:`MtnError` naming the entry's byte."""
+    r = _Reader(bytes(data), source)
+    (magic, _, count) = r.unpack("<4sII", 0, "ODA header")
+    if magic != ODA_MAGIC:
+        raise r.fail(0, f"wrong magic {magic!r} (should be {ODA_MAGIC!r})")
+    motions = {}
+    for index in range(count):
+        at = ODA_HEADER_SIZE + index * ODA_ENTRY_SIZE
+        kind, name, offset, size = r.unpack("<4s128sII", at, f"ODA entry {index}")
+        r.need(offset, size, f"ODA entry {index}'s data (byte {offset}, {size} bytes)")
+        if kind == MAGIC:
+            motions[name.split(b"\0", 1)[0].decode("latin-1")] = r.data[offset : offset + size]
+    return motions
+
+
+def read_mtn(path: str | os.PathLike, motion: str | None = None) -> Motion:
+    """Read an MTN file, or the motion named ``motion`` in one of Sony's ODA archives
+    (:func:`oda_motions`). Malformed content raises :class:`MtnError`, as does a FIFO, device or
     folder in its place (refused at once: opened without blocking, never waited on or read
-    without end); I/O errors are ``OSError``."""
+    without end), an archive without ``motion`` named and a ``motion`` it lacks; I/O errors are
+    ``OSError``."""
     source = os.fspath(path)
     try:
         data = read_regular_file(source)
     except NotRegularFile as error:
         raise MtnError(source, None, str(error)) from None
-    return parse_mtn(data, source)
+    if data[:4] != ODA_MAGIC:
+        if motion is not None:
+            raise MtnError(source, None, f"not an ODA archive: no motion {motion!r} in it")
+        return parse_mtn(data, source)
+    motions = oda_motions(data, source)
+    if motion not in motions:
+        held = ", ".join(printable(name) for name in motions) or "none"
+        why = "an ODA archive: name one of its motions" if motion is None else f"no motion {printable(motion)!r}"
+        raise MtnError(source, None, f"{why} ({source}:NAME); it holds {len(motions)}: {held}")
+    return parse_mtn(motions[motion], f"{source}:{motion}")
 
 
 # ----------------------------------------------------------------------------- writing

@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 
 from aibo_sim import ers7
+from aibo_sim.cli import main
 from aibo_sim.motions import play_motion
 from aibo_sim.mtn import (
     MAX_JOINT_URAD,
@@ -26,6 +27,7 @@ from aibo_sim.mtn import (
     motion_info,
     mtn_get_error,
     mtn_new,
+    oda_motions,
     parse_mtn,
     read_mtn,
     serialize_mtn,
@@ -33,6 +35,9 @@ from aibo_sim.mtn import (
 )
 
 MTN_DIR = Path(__file__).resolve().parents[2] / "shared" / "data" / "mtn"
+SONY_MOTIONS = (  # MoNet's archive of Sony's ERS-7 motions (test data)
+    Path(__file__).resolve().parents[2] / "shared/data/openr-samples/common/MoNet/MS/OPEN-R/MW/DATA/P/ERS-7/MOTION7.ODA"
+)
 JOINT_LOCATORS = tuple(j.locator for j in ers7.JOINTS)
 
 # file -> (name, creator, keyframes, length in ms). Lengths: (N-1) segments x 16 ms (all n = 0).
@@ -603,3 +608,58 @@ def test_info_escapes_what_the_terminals_encoding_lacks(tmp_path):
     )
     assert (done.returncode, done.stderr) == (0, b"")
     assert done.stdout.splitlines()[0] == rb"name:        caf\xe9"
+
+
+# ----------------------------------------------------------------------------- ODA archives
+
+
+def oda(entries: list[tuple[bytes, str, bytes]]) -> bytes:
+    """An ODA archive as Sony's ODA.h lays it out: the header, 144-byte entries, then the data."""
+    table = struct.pack("<4sIII48x", b"ODAR", 0x30000, len(entries), 144)
+    data, offset = b"", 64 + 144 * len(entries)
+    for kind, name, body in entries:
+        table += struct.pack("<4s128sII4x", kind, name.encode(), offset + len(data), len(body))
+        data += body
+    return table + data
+
+
+def test_a_motion_is_read_from_an_oda_archive_by_its_name(tmp_path):
+    archive = tmp_path / "MOTION7.ODA"
+    archive.write_bytes(oda([(b"WAVE", "beep", b"RIFF...."), (b"OMTN", "a_sit#tiny", TINY)]))
+    assert oda_motions(archive.read_bytes()) == {"a_sit#tiny": TINY}  # the sound is not a motion
+    motion = read_mtn(archive, "a_sit#tiny")
+    assert motion == tiny_motion() and motion.source == f"{archive}:a_sit#tiny"
+    with pytest.raises(
+        MtnError, match=r"MOTION7\.ODA: an ODA archive: name one of its motions .*it holds 1: a_sit#tiny$"
+    ):
+        read_mtn(archive)
+    with pytest.raises(MtnError, match=r"no motion 'beep' .*it holds 1: a_sit#tiny$"):
+        read_mtn(archive, "beep")
+    (tmp_path / "tiny.mtn").write_bytes(TINY)
+    with pytest.raises(MtnError, match="not an ODA archive: no motion 'x' in it"):
+        read_mtn(tmp_path / "tiny.mtn", "x")
+    broken = bytearray(archive.read_bytes())
+    struct.pack_into("<I", broken, 64 + 144 + 132, 10_000)  # the motion's offset, beyond the end
+    with pytest.raises(MtnError, match=r"ODA entry 1's data \(byte 10000, 128 bytes\) needs 128 bytes"):
+        oda_motions(bytes(broken), "broken")
+
+
+def test_mtn_info_and_play_take_archive_colon_motion(tmp_path, capsys):
+    archive = tmp_path / "MOTION7.ODA"
+    archive.write_bytes(oda([(b"OMTN", "a_sit#tiny", TINY)]))
+    assert main(["mtn", "info", f"{archive}:a_sit#tiny", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["name"] == tiny_motion().name
+    assert main(["mtn", "info", str(archive)]) == 2
+    assert "an ODA archive: name one of its motions" in capsys.readouterr().err
+
+
+def test_sonys_ers7_motions_in_monets_archive_all_read_and_play():
+    if not SONY_MOTIONS.is_file():
+        pytest.skip(f"Sony's MoNet archive not available: {SONY_MOTIONS}")
+    motions = oda_motions(SONY_MOTIONS.read_bytes(), str(SONY_MOTIONS))
+    assert len(motions) == 12 and "a_walk#walk_sox_fwd" in motions
+    for name in motions:
+        motion = read_mtn(SONY_MOTIONS, name)
+        assert motion.design == "DRX-1000" and motion.frame_time_ms == 16
+        player = MotionPlayer(motion)
+        assert np.array_equal(player.frame(player.num_frames - 1), motion.keyframes[-1])
