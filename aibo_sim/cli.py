@@ -245,14 +245,21 @@ def _motion_file(name: str) -> Path:
 
 def _read_motion(name: str):
     """The motion ``name`` names: an MTN file, a bundled motion's name, or ``ARCHIVE.ODA:MOTION``,
-    a motion in one of Sony's ODA archives."""
-    from .mtn import read_mtn
+    a motion in one of Sony's ODA archives (an archive alone: an error listing its motions)."""
+    from .mtn import ODA_MAGIC, MtnError, read_mtn, read_oda_motion
 
     path = _motion_file(name)
     archive, _, motion = name.rpartition(":")
     if archive and not path.exists() and _motion_file(archive).exists():
-        return read_mtn(_motion_file(archive), motion)
-    return read_mtn(path)
+        return read_oda_motion(_motion_file(archive), motion)
+    try:
+        return read_mtn(path)
+    except MtnError:
+        if path.is_file():
+            with path.open("rb") as file:
+                if file.read(4) == ODA_MAGIC:
+                    return read_oda_motion(path, None)  # raises, naming the archive's motions
+        raise
 
 
 def _mtn_info(args) -> int:

@@ -58,6 +58,8 @@ def _leg_joints() -> list[Joint]:
     return joints
 
 
+MAX_TORQUE = 5.4542  # N m, Webots maxForce for every servo (carried over from the ERS-210)
+
 # Order: Sony's MTN/locator order (11, 12, 13, 14, 15, 16, 21..53, 61, 62).
 # Ears are binary Joint4 flappers on the robot; here they are position joints over 0..15 deg.
 # Ear speed and gains are not published: the tail's are used. Mouth hardware range is

@@ -16,13 +16,12 @@ import numpy as np
 from openr_bridge import FULL_HEIGHT, FULL_WIDTH, HORIZONTAL_FOV_DEG, VERTICAL_FOV_DEG
 
 from . import field as F
-from .ers7 import HEAD_CAMERA, JOINT_BY_NAME, JOINTS, LED_OFF_RGBA, LEGS, SENSORS
+from .ers7 import HEAD_CAMERA, JOINT_BY_NAME, JOINTS, LED_OFF_RGBA, LEGS, MAX_TORQUE, SENSORS
 from .sim import models_dir
 
 CAMERA_FOCAL = 0.00327  # m (Sony: f = 3.27 mm)
 PAW_RADIUS = 0.01172  # Tekkotsu BallOfFootRadius; Webots uses 0.017 (see models/README.md)
 PAW_TOUCH_RADIUS = 0.015  # Webots touch sphere
-MAX_TORQUE = 5.4542  # N m, Webots maxForce for every servo (carried over from the ERS-210)
 SHIN_COLLISION_REACH, SHIN_COLLISION_RADIUS = 0.7, 0.0145  # shin capsule: knee to 70 % of the way to the paw
 TIMESTEP = 0.002  # s: four physics steps per 8 ms OPEN-R joint frame (models/README.md, "Conventions": the timestep)
 

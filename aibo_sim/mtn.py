@@ -363,8 +363,9 @@ def parse_mtn(data: bytes, source: str = "<bytes>") -> Motion:
 def oda_motions(data: bytes, source: str = "<bytes>") -> dict[str, bytes]:
     """The motions (``OMTN`` entries) of one of Sony's ODA archives (MoNet's ``MOTION7.ODA``;
     ``ODA.h``: a 64-byte header ``ODAR``, version, file count; then 144-byte entries: magic, a
-    128-byte NUL-terminated name, offset from the archive's start, size), by name. A table that
-    points outside the archive is an :class:`MtnError` naming the entry's byte."""
+    128-byte NUL-terminated name, offset from the archive's start, size), by name; of two
+    entries with one name, the first (as ``ODA::Find``). An entry whose data lies outside the
+    archive is an :class:`MtnError` naming the entry and the data's byte."""
     r = _Reader(bytes(data), source)
     (magic, _, count) = r.unpack("<4sII", 0, "ODA header")
     if magic != ODA_MAGIC:
@@ -375,25 +376,33 @@ def oda_motions(data: bytes, source: str = "<bytes>") -> dict[str, bytes]:
         kind, name, offset, size = r.unpack("<4s128sII", at, f"ODA entry {index}")
         r.need(offset, size, f"ODA entry {index}'s data (byte {offset}, {size} bytes)")
         if kind == MAGIC:
-            motions[name.split(b"\0", 1)[0].decode("latin-1")] = r.data[offset : offset + size]
+            motions.setdefault(name.split(b"\0", 1)[0].decode("latin-1"), r.data[offset : offset + size])
     return motions
 
 
-def read_mtn(path: str | os.PathLike, motion: str | None = None) -> Motion:
-    """Read an MTN file, or the motion named ``motion`` in one of Sony's ODA archives
-    (:func:`oda_motions`). Malformed content raises :class:`MtnError`, as does a FIFO, device or
-    folder in its place (refused at once: opened without blocking, never waited on or read
-    without end), an archive without ``motion`` named and a ``motion`` it lacks; I/O errors are
-    ``OSError``."""
-    source = os.fspath(path)
+def _read_file(source: str) -> bytes:
     try:
-        data = read_regular_file(source)
+        return read_regular_file(source)
     except NotRegularFile as error:
         raise MtnError(source, None, str(error)) from None
+
+
+def read_mtn(path: str | os.PathLike) -> Motion:
+    """Read an MTN file. Malformed content raises :class:`MtnError`, as does a FIFO, device or
+    folder in its place (refused at once: opened without blocking, never waited on or read
+    without end); I/O errors are ``OSError``."""
+    source = os.fspath(path)
+    return parse_mtn(_read_file(source), source)
+
+
+def read_oda_motion(path: str | os.PathLike, motion: str | None) -> Motion:
+    """The motion named ``motion`` in one of Sony's ODA archives (:func:`oda_motions`), its
+    source ``ARCHIVE:MOTION``; an :class:`MtnError` listing the archive's motions when ``motion``
+    is None or not among them, and one for a file that is no archive."""
+    source = os.fspath(path)
+    data = _read_file(source)
     if data[:4] != ODA_MAGIC:
-        if motion is not None:
-            raise MtnError(source, None, f"not an ODA archive: no motion {motion!r} in it")
-        return parse_mtn(data, source)
+        raise MtnError(source, 0, f"not an ODA archive (magic {data[:4]!r}, not {ODA_MAGIC!r})")
     motions = oda_motions(data, source)
     if motion not in motions:
         held = ", ".join(printable(name) for name in motions) or "none"

@@ -24,7 +24,6 @@ from pathlib import Path
 import numpy as np
 
 from . import ers7
-from .mjcf import MAX_TORQUE
 from .mtn import MODES as MTN_MODES
 from .mtn import Motion, MotionPlayer, MtnError, check_joint, mtn_new
 from .sim import FRAME_MS, Simulation
@@ -146,8 +145,8 @@ class Servo(Device):
 
     def set_motor_force(self, newton_metres: float) -> None:
         """Torque limit in N m (the absolute value of ``newton_metres``) of the joint's actuator,
-        never above Webots' ``maxForce`` (``mjcf.MAX_TORQUE``), its default."""
-        force = min(abs(self._number(newton_metres, "motor force")), MAX_TORQUE)
+        never above Webots' ``maxForce`` (``ers7.MAX_TORQUE``), its default."""
+        force = min(abs(self._number(newton_metres, "motor force")), ers7.MAX_TORQUE)
         self.robot.sim.model.actuator_forcerange[self._actuator] = (-force, force)
 
     def set_control_p(self, p: float) -> None:

@@ -206,6 +206,19 @@ def test_a_failing_controller_fails_the_match_and_the_others_run_to_the_end(tmp_
     assert [r["status"] for r in match["robots"]] == ["failed", "done"]
 
 
+def ctrl_c_at(seconds: float):
+    """A frame listener that sends SIGINT to the main thread, as Ctrl-C does, once the match is
+    ``seconds`` in (so that it lands while the match waits for its robots, not during its setup)."""
+    sent = []
+
+    def listener(program):
+        if program.time_ms >= seconds * 1000 and not sent:
+            sent.append(True)
+            signal.pthread_kill(threading.main_thread().ident, signal.SIGINT)
+
+    return listener
+
+
 def test_ctrl_c_ends_a_match_after_every_robots_controller_has_ended(tmp_path):
     # The robots' robot_die functions (slow ones) have run when run_match raises: it waited for
     # every robot's thread, which a join interrupted by the signal would not have done.
@@ -216,13 +229,15 @@ def test_ctrl_c_ends_a_match_after_every_robots_controller_has_ended(tmp_path):
         "robot_die(die)\nwhile True:\n    robot_step(8)\n"
     )
     robots = [RobotSpec("red", 1, None, str(slow_die)), RobotSpec("blue", 1, None, str(slow_die))]
-    timer = threading.Timer(1.0, signal.pthread_kill, [threading.main_thread().ident, signal.SIGINT])  # as Ctrl-C
-    timer.start()
-    try:
-        with pytest.raises(KeyboardInterrupt):
-            run_match(robots, duration=60, out=tmp_path / "out", progress=False, camera=CameraConfig("ideal"))
-    finally:
-        timer.cancel()
+    with pytest.raises(KeyboardInterrupt):
+        run_match(
+            robots,
+            duration=60,
+            out=tmp_path / "out",
+            progress=False,
+            camera=CameraConfig("ideal"),
+            frame_listeners=[ctrl_c_at(0.2)],
+        )
     assert len(list((tmp_path / "out").glob("died_*"))) == 2
     assert json.loads((tmp_path / "out" / "run.json").read_text())["status"] == "interrupted"
 

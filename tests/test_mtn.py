@@ -30,6 +30,7 @@ from aibo_sim.mtn import (
     oda_motions,
     parse_mtn,
     read_mtn,
+    read_oda_motion,
     serialize_mtn,
     write_mtn,
 )
@@ -627,17 +628,20 @@ def test_a_motion_is_read_from_an_oda_archive_by_its_name(tmp_path):
     archive = tmp_path / "MOTION7.ODA"
     archive.write_bytes(oda([(b"WAVE", "beep", b"RIFF...."), (b"OMTN", "a_sit#tiny", TINY)]))
     assert oda_motions(archive.read_bytes()) == {"a_sit#tiny": TINY}  # the sound is not a motion
-    motion = read_mtn(archive, "a_sit#tiny")
+    motion = read_oda_motion(archive, "a_sit#tiny")
     assert motion == tiny_motion() and motion.source == f"{archive}:a_sit#tiny"
     with pytest.raises(
         MtnError, match=r"MOTION7\.ODA: an ODA archive: name one of its motions .*it holds 1: a_sit#tiny$"
     ):
-        read_mtn(archive)
+        read_oda_motion(archive, None)
     with pytest.raises(MtnError, match=r"no motion 'beep' .*it holds 1: a_sit#tiny$"):
-        read_mtn(archive, "beep")
+        read_oda_motion(archive, "beep")
+    # Webots' mtn_new and read_mtn read MTN files only, as the memory stick's reader does
+    with pytest.raises(MtnError, match=r"byte 0 \(0x0\): wrong magic b'ODAR' \(should be b'OMTN'\)$"):
+        read_mtn(archive)
     (tmp_path / "tiny.mtn").write_bytes(TINY)
-    with pytest.raises(MtnError, match="not an ODA archive: no motion 'x' in it"):
-        read_mtn(tmp_path / "tiny.mtn", "x")
+    with pytest.raises(MtnError, match=r"not an ODA archive \(magic b'OMTN', not b'ODAR'\)"):
+        read_oda_motion(tmp_path / "tiny.mtn", "x")
     broken = bytearray(archive.read_bytes())
     struct.pack_into("<I", broken, 64 + 144 + 132, 10_000)  # the motion's offset, beyond the end
     with pytest.raises(MtnError, match=r"ODA entry 1's data \(byte 10000, 128 bytes\) needs 128 bytes"):
@@ -659,7 +663,7 @@ def test_sonys_ers7_motions_in_monets_archive_all_read_and_play():
     motions = oda_motions(SONY_MOTIONS.read_bytes(), str(SONY_MOTIONS))
     assert len(motions) == 12 and "a_walk#walk_sox_fwd" in motions
     for name in motions:
-        motion = read_mtn(SONY_MOTIONS, name)
+        motion = read_oda_motion(SONY_MOTIONS, name)
         assert motion.design == "DRX-1000" and motion.frame_time_ms == 16
         player = MotionPlayer(motion)
         assert np.array_equal(player.frame(player.num_frames - 1), motion.keyframes[-1])

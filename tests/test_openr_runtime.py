@@ -11,14 +11,17 @@ import wave
 import numpy as np
 import pytest
 from openr_support import build_programs, make, make_stick, run_stick
+from test_match import ROOT, ctrl_c_at
 
 import openr_bridge
 from aibo_sim import ers7
 from aibo_sim.files import SymlinkRefused
+from aibo_sim.match import run_match
 from aibo_sim.openr import host
 from aibo_sim.openr.host import MemoryStickRun, OpenRObjectCrashed
 from aibo_sim.openr.sdk import sdk_root
 from aibo_sim.sim import Simulation
+from aibo_sim.team import RobotSpec
 from openr_bridge import ConfigError, host_protocol
 from openr_bridge.cdt import OCdtVectorData, orange_ball_cdt, pink_ball_cdt
 from openr_bridge.config import parse_stub_cfg
@@ -314,6 +317,23 @@ def test_a_signal_ends_a_run_after_its_objects_stop(objects, tmp_path):
         "[    0.200 s] Listener: stop",
         "[    0.200 s] Talker: destroy",
         "[    0.200 s] Listener: destroy",
+    ]
+
+
+def test_a_memory_stick_in_a_match_stops_its_objects_after_ctrl_c(objects, tmp_path):
+    stick = make_stick(tmp_path / "ms", objects, ["TALKER", "LISTENER"], TALKER)
+    robots = [
+        RobotSpec("red", 1, None, str(stick)),
+        RobotSpec("blue", 1, None, str(ROOT / "controllers" / "ball_tracker.py")),
+    ]
+    with pytest.raises(KeyboardInterrupt):
+        run_match(robots, duration=60, out=tmp_path / "out", progress=False, frame_listeners=[ctrl_c_at(0.2)])
+    console = (tmp_path / "out" / "robot1" / "console.log").read_text().splitlines()
+    assert [line.split("] ", 1)[1] for line in console[-4:]] == [
+        "Talker: stop",
+        "Listener: stop",
+        "Talker: destroy",
+        "Listener: destroy",
     ]
 
 

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import openr_bridge
-from aibo_sim import robot
+from aibo_sim import ers7
 from aibo_sim.cli import main
 from aibo_sim.config import CameraConfig, WorldConfig
 from aibo_sim.dump import annex_yuv
@@ -136,7 +136,7 @@ def test_cli_bad_input_exits_2_with_a_clear_message(tmp_path, capsys):
 
 
 def test_physics_divergence_is_a_clear_error(tmp_path, capsys, monkeypatch):
-    monkeypatch.setattr(robot, "MAX_TORQUE", 1e12)  # a servo's force is capped at Webots' maxForce: lift the cap
+    monkeypatch.setattr(ers7, "MAX_TORQUE", 1e12)  # a servo's force is capped at Webots' maxForce: lift the cap
     wild = tmp_path / "wild.py"
     wild.write_text(
         "from aibo_sim.controller import *\n"

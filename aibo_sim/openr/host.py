@@ -65,6 +65,7 @@ from openr_bridge.memory_stick import MemoryStick, read_object
 from .. import ers7
 from ..cbind.child import Child
 from ..files import SymlinkRefused, create_file, write_file_atomic
+from ..robot import SimulationEnd
 from ..sim import ACCEL_RANGE, FRAME_MS, IR_NOISE, Simulation
 from .sdk import sdk_root
 
@@ -308,12 +309,17 @@ class MemoryStickRun:
                 self._channel, self._child, self._buffer = ours, child, bytearray()
                 self._foretold, self._stepped = [], []  # lookahead: records to come, frames stepped
                 self._start(libraries)
-                while not self.shutdown and (self.end_ms is None or self.time_ms < self.end_ms):
-                    if child.pending is not None:
-                        break
-                    self._frame()
-                # After a signal too: the objects' DoStop and DoDestroy run, as at the end of a run
-                # (a runtime silent for the grace period after the signal is stopped by ``child``).
+                ended = None
+                try:
+                    while not self.shutdown and (self.end_ms is None or self.time_ms < self.end_ms):
+                        if child.pending is not None:
+                            break
+                        self._frame()
+                except SimulationEnd as end:  # a match's stop, a frame its writer could not write
+                    ended = end
+                # After a signal or SimulationEnd too (the runtime is between messages then): the
+                # objects' DoStop and DoDestroy run, as at the end of a run (a runtime silent for
+                # the grace period after a signal is stopped by ``child``).
                 self._send(
                     protocol.MESSAGES["STOP"],
                     _U32.pack(openr_frame_number(self.sim.frame)) + self._stepped_frames(),
@@ -321,6 +327,8 @@ class MemoryStickRun:
                 self._apply(self._reply(protocol.REPLIES["FRAME_DONE"]))
                 # The runtime's own exit then flushes the files its objects left open.
                 child.wait(None, protocol.WAIT_NOTICE_S, self._waiting)
+                if ended is not None:
+                    raise ended
         finally:
             theirs.close()
             if log is not None:

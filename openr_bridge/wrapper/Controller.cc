@@ -229,14 +229,14 @@ void Controller::CameraControl(int tag, const char* function, int value) {
     }
 }
 
-/* Webots' P gain as Sony's P register (its unit: KP_PER_SONY_P N m/rad), to the nearest. */
+/* Webots' P gain as Sony's P register (its unit: KP_PER_SONY_P N m/rad), to the nearest (at least 1). */
 void Controller::SetControlP(int tag, double p) {
     int joint = robot_.JointOf(tag, wrapper::Robot::SERVO);
     if (robot_.CheckedNumber(tag, wrapper::Robot::SERVO, "control P", p) <= 0) {
         wrapper::Fail("%s: control P must be above 0, not %g", ers7::JOINTS[joint].locator, p);
     }
     double value = p / ers7::KP_PER_SONY_P;
-    word gain = value >= 0xFF ? 0xFF : (word)(value + 0.5);
+    word gain = value >= 0xFF ? 0xFF : value < 1 ? 1 : (word)(value + 0.5);
     const ers7::Joint& table = ers7::JOINTS[joint];
     if (IsType(table.locator, "-Joint2:")) {
         OPENR::SetJointGain(ids_[joint], gain, table.i, table.d, ers7::PSHIFT, ers7::ISHIFT, ers7::DSHIFT);

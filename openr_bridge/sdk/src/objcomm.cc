@@ -235,7 +235,8 @@ OStatus OSubject::NotifyObservers() {
 }
 
 size_t OSubject::RemainBuffer(const OObserverInfo& observer) const {
-    return Capacity(observer.impl_) - observer.impl_->queue.size();
+    size_t capacity = Capacity(observer.impl_), held = observer.impl_->queue.size();
+    return held < capacity ? capacity - held : 0;  /* held beyond it after SetBufferSize shrank */
 }
 
 size_t OSubject::RemainBuffer(const ObserverID& id) const {
