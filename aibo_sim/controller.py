@@ -54,8 +54,8 @@ from .robot import (
     Servo,
     SimulationEnd,
     TouchSensor,
+    sampling_period,
     short_repr,
-    whole_ms,
 )
 
 
@@ -232,9 +232,7 @@ def robot_keyboard_enable(ms: int) -> None:
 
     :raises DeviceError: ``ms`` is not a positive whole number.
     """
-    period = whole_ms(ms)
-    if period is None or period <= 0:
-        raise DeviceError(f"robot_keyboard_enable: sampling period must be a positive whole number of ms, not {ms!r}")
+    sampling_period(ms, "robot_keyboard_enable")
     current_robot()
 
 

@@ -51,6 +51,15 @@ def whole_ms(value) -> int | None:
     return int(value) if value.is_integer() else None
 
 
+def sampling_period(ms, what: str) -> int:
+    """``ms`` as a whole number of milliseconds; DeviceError naming ``what`` (a device, a call)
+    unless it is a positive whole number."""
+    period = whole_ms(ms)
+    if period is None or period <= 0:
+        raise DeviceError(f"{what}: sampling period must be a positive whole number of ms, not {ms!r}")
+    return period
+
+
 def finite_number(value, what: str) -> float:
     """``value`` as a float; DeviceError naming ``what`` unless it is a finite real number (a bool
     or a string is not one, as they are not in C)."""
@@ -76,10 +85,7 @@ class Device:
 
         :raises DeviceError: ``ms`` is not a positive whole number.
         """
-        period = whole_ms(ms)
-        if period is None or period <= 0:
-            raise DeviceError(f"{self.locator}: sampling period must be a positive whole number of ms, not {ms!r}")
-        ms = period
+        ms = sampling_period(ms, self.locator)
         self.period, self._value = ms, None
         self._next_sample_ms = self.robot.time_ms + ms
         self.robot.enabled_devices[self.locator] = self

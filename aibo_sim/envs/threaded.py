@@ -78,12 +78,10 @@ def check_actions(action_space, actions) -> None:
             f"actions of shape {np.shape(actions)}: want {action_space.shape}, "
             f"one row for each of the {action_space.shape[0]} environments"
         )
-    finite = np.isfinite(np.asarray(actions, np.float64))
-    if not finite.all():
-        row, column = np.argwhere(~finite)[0][:2]
-        raise ValueError(
-            f"environment {row}'s action is not finite: {np.asarray(actions)[row, column]} at index {column}"
-        )
+    values = np.asarray(actions, np.float64)
+    if not np.isfinite(values).all():
+        row, column = np.argwhere(~np.isfinite(values))[0][:2]
+        raise ValueError(f"environment {row}'s action is not finite: {values[row, column]} at index {column}")
 
 
 class _EnvThread(threading.Thread):
