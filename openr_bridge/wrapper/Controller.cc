@@ -3,6 +3,7 @@
  * frame clock driven by the effector, sensor vectors and images in, command vectors out.
  */
 #include <stdarg.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <OPENR/OPENRAPI.h>

@@ -4,8 +4,10 @@
  * On the ERS-7 (MIPS, 32-bit) Sony declares longword as `unsigned long` and size_t as
  * `unsigned int`, both 32 bits. On a 64-bit host `long` is 64 bits, so the host types are
  * fixed-width: every OPEN-R structure keeps the robot's byte layout (see ODataFormats.h).
- * Sony's headers also made malloc, atoi, printf, strcpy and friends visible to code that
- * never included <stdlib.h>, <stdio.h> or <string.h>; so does this one.
+ * On Sony's SDK, malloc, atoi, printf, strcpy and friends were visible to code that never
+ * included <stdlib.h>, <stdio.h> or <string.h>: Sony's headers include <string.h>, <stdio.h>
+ * (ODebug.h) and <string> (core_macro2.h), and gcc 3.3's <string> brought in the rest. Today's
+ * C++ headers do not, so this one does (tests/test_sony_sdk.py checks our wrapper without it).
  */
 #ifndef _Types_h_DEFINED
 #define _Types_h_DEFINED

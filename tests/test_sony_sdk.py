@@ -1,0 +1,96 @@
+"""Our host SDK and build-ms projects against Sony's own OPEN-R SDK, where one is installed.
+
+Sony's SDK is not ours to ship: these run where ``OPENRSDK_ROOT`` (the variable Sony's Makefiles
+read; default ``/usr/local/OPEN_R_SDK``) holds it, with its perl ``OPEN_R/bin/stubgen2`` and its
+headers, and are skipped elsewhere. Its libraries and MIPS compiler are not needed: the sources
+are checked with this machine's compiler at 32 bits (the robot's sizes), syntax only.
+"""
+
+import os
+import re
+import shutil
+import subprocess
+from pathlib import Path
+
+import pytest
+from openr_support import SAMPLES
+
+from aibo_sim.openr.build_ms import WRAPPER, build_ms
+from aibo_sim.openr.sdk import sdk_root
+
+SONY = Path(os.environ.get("OPENRSDK_ROOT", "/usr/local/OPEN_R_SDK")) / "OPEN_R"
+ROOT = Path(__file__).resolve().parents[1]
+PROGRAMS = ROOT / "tests" / "openr_programs"
+
+pytestmark = pytest.mark.skipif(
+    not (SONY / "bin" / "stubgen2").is_file() or not (SONY / "include" / "OPENR" / "OObject.h").is_file(),
+    reason=f"Sony's OPEN-R SDK is not at {SONY.parent} (set OPENRSDK_ROOT)",
+)
+
+
+def stubgen(tool: list[str], stub_cfg: Path, folder: Path) -> dict[str, str]:
+    """Run a stubgen2 on a copy of stub_cfg in folder: the files it writes, by name."""
+    folder.mkdir(parents=True)
+    shutil.copy(stub_cfg, folder / "stub.cfg")
+    subprocess.run([*tool, "stub.cfg"], cwd=folder, check=True, capture_output=True)
+    return {p.name: p.read_text() for p in folder.iterdir() if p.name != "stub.cfg"}
+
+
+def declarations(header: str) -> str:
+    """A header's code without comments, whitespace or a list's trailing comma."""
+    return re.sub(r",}", "}", re.sub(r"\s+", "", re.sub(r"//[^\n]*", "", header)))
+
+
+@pytest.mark.parametrize(
+    "stub_cfg",
+    [WRAPPER / "stub.cfg", *sorted(PROGRAMS.glob("*/stub.cfg")), *sorted(SAMPLES.rglob("stub.cfg"))],
+    ids=lambda path: path.parent.name,  # Sony's samples where the test data has them
+)
+def test_our_stubgen2_declares_what_sonys_declares(stub_cfg, tmp_path):
+    ours = stubgen([str(Path(sdk_root()) / "OPEN_R" / "bin" / "stubgen2")], stub_cfg, tmp_path / "ours")
+    sonys = stubgen(["perl", str(SONY / "bin" / "stubgen2")], stub_cfg, tmp_path / "sony")
+    assert sorted(ours) == sorted(sonys)
+    for header in ("def.h", "entry.h"):  # the selectors and service names the objects compile with
+        assert declarations(ours[header]) == declarations(sonys[header]), header
+
+
+def thirty_two_bit_flags(tmp_path: Path) -> list[str]:
+    """g++ flags for 32-bit syntax checks: -m32, plus the 64-bit include folders (and an empty
+    gnu/stubs-32.h) where the 32-bit C and C++ headers are not installed."""
+    probe = tmp_path / "probe.cc"
+    probe.write_text("#include <vector>\n#include <stdio.h>\n")
+    if subprocess.run(["g++", "-m32", "-fsyntax-only", str(probe)], capture_output=True).returncode == 0:
+        return ["-m32"]
+    listing = subprocess.run(["g++", "-xc++", "-E", "-v", "/dev/null"], capture_output=True, text=True).stderr
+    folders = listing.split("search starts here:")[-1].split("End of search list.")[0].split()
+    (tmp_path / "stubs" / "gnu").mkdir(parents=True)
+    (tmp_path / "stubs" / "gnu" / "stubs-32.h").write_text("")
+    return ["-m32", f"-I{tmp_path / 'stubs'}", *(f"-idirafter{folder}" for folder in folders)]
+
+
+def test_a_build_ms_project_compiles_against_sonys_headers_at_the_robots_sizes(tmp_path):
+    """The wrapper and a C controller, with Sony's stubgen2 and headers in place of ours: every
+    structure-size check of the wrapper holds, and nothing leans on what only our headers declare."""
+    controller = build_ms(ROOT / "controllers" / "ball_tracker_c", tmp_path / "project") / "Controller"
+    subprocess.run(
+        ["perl", str(SONY / "bin" / "stubgen2"), "stub.cfg"], cwd=controller, check=True, capture_output=True
+    )
+    flags = [
+        *thirty_two_bit_flags(tmp_path),
+        "-fsyntax-only",
+        "-Wall",
+        "-Werror",
+        f"-I{controller}",
+        f"-I{controller / 'include'}",
+    ]
+    flags += [f"-I{SONY / 'include' / 'R4000'}", f"-I{SONY / 'include'}"]
+    sources = sorted(controller.glob("*.cc")) + sorted((controller / "controller").glob("*.c"))
+    assert {p.name for p in sources} >= {"ControllerStub.cc", "Controller.cc", "Robot.cc", "Mtn.cc", "WebotsApi.cc"}
+    for source in sources:
+        compiler = (
+            ["g++", "-std=gnu++98"]
+            if source.suffix == ".cc"
+            else ["gcc", "-std=gnu99", "-Dmain=aibo_controller_main_c"]
+        )
+        result = subprocess.run([*compiler, *flags, source.name], cwd=source.parent, capture_output=True, text=True)
+        assert result.returncode == 0, f"{source.name}:\n{result.stderr}"
