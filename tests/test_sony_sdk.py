@@ -2,8 +2,10 @@
 
 Sony's SDK is not ours to ship: these run where ``OPENRSDK_ROOT`` (the variable Sony's Makefiles
 read; default ``/usr/local/OPEN_R_SDK``) holds it, with its perl ``OPEN_R/bin/stubgen2`` and its
-headers, and are skipped elsewhere. Its libraries and MIPS compiler are not needed: the sources
-are checked with this machine's compiler at 32 bits (the robot's sizes), syntax only.
+headers, and are skipped elsewhere. Where it has its MIPS compiler (``bin/mipsel-linux-g++``, gcc 3.3),
+a project's objects are built with it by the project's own Makefile; without, the sources are
+checked with this machine's compiler at 32 bits (the robot's sizes), syntax only. Sony's libraries
+are not needed: nothing here links.
 """
 
 import os
@@ -15,10 +17,11 @@ from pathlib import Path
 import pytest
 from openr_support import SAMPLES
 
-from aibo_sim.openr.build_ms import WRAPPER, build_ms
+from aibo_sim.openr.build_ms import WRAPPER, WRAPPER_OBJECTS, build_ms
 from aibo_sim.openr.sdk import sdk_root
 
 SONY = Path(os.environ.get("OPENRSDK_ROOT", "/usr/local/OPEN_R_SDK")) / "OPEN_R"
+SONY_CXX = SONY.parent / "bin" / "mipsel-linux-g++"
 ROOT = Path(__file__).resolve().parents[1]
 PROGRAMS = ROOT / "tests" / "openr_programs"
 
@@ -94,3 +97,25 @@ def test_a_build_ms_project_compiles_against_sonys_headers_at_the_robots_sizes(t
         )
         result = subprocess.run([*compiler, *flags, source.name], cwd=source.parent, capture_output=True, text=True)
         assert result.returncode == 0, f"{source.name}:\n{result.stderr}"
+
+
+@pytest.mark.skipif(not SONY_CXX.is_file(), reason=f"no MIPS compiler at {SONY_CXX}")
+def test_a_build_ms_project_makes_its_mips_objects_with_sonys_compiler(tmp_path):
+    """The robot build up to mkbin's link: the project's Makefile, Sony's stubgen2, headers and gcc."""
+    controller = build_ms(ROOT / "controllers" / "ball_tracker_c", tmp_path / "project") / "Controller"
+    objects = [*WRAPPER_OBJECTS, *(f"controller/{p.name}.o" for p in sorted((controller / "controller").glob("*.c")))]
+    result = subprocess.run(
+        ["make", f"OPENRSDK_ROOT={SONY.parent}", *objects], cwd=controller, capture_output=True, text=True
+    )
+    assert result.returncode == 0, result.stderr
+    assert "warning" not in result.stderr, result.stderr  # -Wall, as the host build
+    for name in objects:
+        header = (controller / name).read_bytes()[:20]
+        # ELF, 32-bit, little-endian, relocatable, machine 8: MIPS
+        assert (header[:4], header[4], header[5], header[16:18], header[18:20]) == (
+            b"\x7fELF",
+            1,
+            1,
+            b"\x01\x00",
+            b"\x08\x00",
+        ), name
