@@ -189,3 +189,29 @@ def test_build_ms_bad_input_exits_2(tmp_path, capsys):
         capsys.readouterr().err.strip() == f"aibo-sim: error: controller {tmp_path / 'nothing.c'}: no such file "
         "or folder"
     )
+
+
+def test_console_input_comes_from_standard_input_and_its_end_ends_the_object(objects, tmp_path):
+    """gets() reads standard input. On the robot it waits for the console's next line; a program
+    asking again (as Sony's PIDControl7 does) spun here once input ended, writing its prompt to the
+    console and console.log without end: now the object is ended, as a crash (exit 1)."""
+    stick = make_stick(tmp_path / "ms", objects, ["ASKER"])
+    command = [sys.executable, "-m", "aibo_sim.cli", "run", str(stick), "--duration", "0.1"]
+    answered = subprocess.run(
+        [*command, "--out", str(tmp_path / "answered")],
+        cwd=ROOT,
+        input="n\ny\n",
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert answered.returncode == 0, answered.stderr
+    prompts = [line.split(" Asker: ", 1)[1] for line in answered.stdout.splitlines() if " Asker: " in line]
+    assert prompts == ["go on? (y/n) go on? (y/n) going on"]
+    ended = subprocess.run(
+        [*command, "--out", str(tmp_path / "ended")], cwd=ROOT, input="n\n", capture_output=True, text=True, timeout=300
+    )
+    assert ended.returncode == 1
+    assert "aibo-sim: gets(): the console's input (standard input) has ended" in ended.stderr
+    assert "OPEN-R object Asker (entry 1) crashed (SIGABRT" in ended.stderr
+    assert (tmp_path / "ended" / "console.log").read_text().count("go on?") == 2

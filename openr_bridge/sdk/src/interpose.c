@@ -2,7 +2,8 @@
  * interpose.c: the C library's file calls, as objects see them. libOPENR defines them, so an
  * object's calls (and the C++ library's, on its behalf) come here first; each maps its path with
  * aibo_openr_object_path (msfs.cc: /MS is the memory stick, a relative path the run's folder,
- * anything else refused) and calls the C library's own. gets() reads the run's console input.
+ * anything else refused) and calls the C library's own. gets() reads the run's console input
+ * (standard input), and ends the object (abort) at its end.
  * printf, vprintf, puts and putchar (what compilers turn a printf into) of an object write to its
  * console, as OSYSPRINT does: stamped with the simulated time and its name, into console.log too
  * (not a putchar of the source, which glibc inlines into the stream's buffer, nor std::cout).
@@ -149,7 +150,13 @@ char* gets(char* line) {
     int c;
     char* end = line;
     while ((c = getchar()) != EOF && c != '\n') *end++ = (char)c;
-    if (c == EOF && end == line) return NULL;
+    if (c == EOF && end == line) {
+        /* The robot's console waits for the next line, and programs written for it ask again or
+         * go on with a line they did not get: once standard input has ended, the object ends. */
+        fputs("aibo-sim: gets(): the console's input (standard input) has ended: give what the "
+              "program asks on standard input\n", stderr);
+        abort();
+    }
     *end = 0;
     return line;
 }
