@@ -15,7 +15,7 @@ import subprocess
 from pathlib import Path
 
 import pytest
-from openr_support import SAMPLES
+from openr_support import PROGRAMS, SAMPLES
 
 from aibo_sim.openr.build_ms import WRAPPER, WRAPPER_OBJECTS, build_ms
 from aibo_sim.openr.sdk import sdk_root
@@ -23,7 +23,6 @@ from aibo_sim.openr.sdk import sdk_root
 SONY = Path(os.environ.get("OPENRSDK_ROOT", "/usr/local/OPEN_R_SDK")) / "OPEN_R"
 SONY_CXX = SONY.parent / "bin" / "mipsel-linux-g++"
 ROOT = Path(__file__).resolve().parents[1]
-PROGRAMS = ROOT / "tests" / "openr_programs"
 
 pytestmark = pytest.mark.skipif(
     not (SONY / "bin" / "stubgen2").is_file() or not (SONY / "include" / "OPENR" / "OObject.h").is_file(),
