@@ -251,6 +251,16 @@ def test_abort_exit_status_and_api_errors_end_the_run_as_in_python(tmp_path):
             assert failed.value.exit_status == 3
 
 
+def test_what_a_c_controller_printed_before_an_api_error_is_not_lost(tmp_path, capfd):
+    """Its standard output, a file or a pipe here (CI, tee), is block-buffered: it was lost when
+    the error ended the controller, where the Python controller's print showed."""
+    body = 'int main(void) { robot_live(0); robot_step(8); printf("before the error\\n");\n'
+    body += "  servo_set_position(42, 0.1); robot_step(8); return 0; }\n"
+    with pytest.raises(ControllerFailed, match="invalid device tag 42"):
+        run_controller(c_file(tmp_path, "printed.c", body), duration=1)
+    assert "before the error\n" in capfd.readouterr().out
+
+
 @pytest.mark.slow
 def test_a_controller_that_computes_long_is_announced_as_such(tmp_path, monkeypatch, capsys):
     monkeypatch.setattr(cbind.serve, "WAIT_NOTICE_S", 0.2)

@@ -207,6 +207,7 @@ static size_t read_answer(size_t have, size_t need) {
  * robot_die function that steps past the end just goes on). */
 static void call(void) {
     end_call();
+    fflush(stdout); /* what the controller printed shows even if this call's error ends it */
     flush_calls();
     size_t have = read_answer(0, 4);
     uint32_t size;
@@ -415,9 +416,21 @@ unsigned char *camera_get_image(DeviceTag c) {
     return copy;
 }
 
-unsigned short camera_get_width(DeviceTag c) { return (unsigned short)get_tag_int(AIBO_OP_camera_get_width, c); }
-unsigned short camera_get_height(DeviceTag c) { return (unsigned short)get_tag_int(AIBO_OP_camera_get_height, c); }
-float camera_get_fov(DeviceTag c) { return (float)get_tag_double(AIBO_OP_camera_get_fov, c); }
+/* A camera's size and field of view are fixed for the run: asked once per tag, not at every call
+ * (a pixel loop's bounds would cost a round trip each). */
+#define CAMERA_CONSTANT(type, name, getter)                            \
+    type camera_get_##name(DeviceTag c) {                              \
+        static DeviceTag asked;                                        \
+        static type value;                                             \
+        if (c != asked || c == 0) {                                    \
+            value = (type)getter(AIBO_OP_camera_get_##name, c);        \
+            asked = c;                                                 \
+        }                                                              \
+        return value;                                                  \
+    }
+CAMERA_CONSTANT(unsigned short, width, get_tag_int)
+CAMERA_CONSTANT(unsigned short, height, get_tag_int)
+CAMERA_CONSTANT(float, fov, get_tag_double)
 void camera_set_white_balance(DeviceTag c, int v) { send_tag_int(AIBO_OP_camera_set_white_balance, c, v); }
 void camera_set_gain(DeviceTag c, int v) { send_tag_int(AIBO_OP_camera_set_gain, c, v); }
 void camera_set_shutter_speed(DeviceTag c, int v) { send_tag_int(AIBO_OP_camera_set_shutter_speed, c, v); }
