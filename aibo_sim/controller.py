@@ -450,9 +450,10 @@ def led_set(tag, value: int) -> None:
 #
 # An MTN argument is what mtn_new returned: None (a failed mtn_new) raises MtnError quoting
 # mtn_get_error(), anything else that is not a motion raises MtnError naming the function and
-# the argument. mtn_new itself returns None on any failure, a file name that is not a str or
-# path included, with the reason in mtn_get_error() (names cut to 200 characters, control
-# characters escaped). mtn_play on a motion that is playing restarts it from its start.
+# the argument, and a motion that mtn_delete deleted raises MtnError saying so. mtn_new itself
+# returns None on any failure, a file name that is not a str or path included, with the reason
+# in mtn_get_error() (names cut to 200 characters, control characters escaped). mtn_play on a
+# motion that is playing restarts it from its start.
 
 
 def mtn_new(filename: str):
@@ -464,9 +465,10 @@ def mtn_new(filename: str):
 
 
 def mtn_delete(motion) -> None:
-    """Stop ``motion`` if it plays; ``mtn_delete(None)`` does nothing, as in Webots."""
+    """Stop ``motion`` and delete it: a call on it after that raises MtnError (in Webots' C API
+    it would read freed memory); ``mtn_delete(None)`` does nothing, as in Webots."""
     if motion is not None:
-        current_robot().mtn_stop(_motion(motion, "mtn_delete"))
+        current_robot().mtn_delete(motion)
 
 
 def mtn_play(motion) -> None:
@@ -475,7 +477,7 @@ def mtn_play(motion) -> None:
 
 
 def mtn_is_over(motion) -> bool:
-    """Whether ``motion`` is not playing (never started, ended or deleted)."""
+    """Whether ``motion`` is not playing (never started, or ended)."""
     return current_robot().mtn_is_over(_motion(motion, "mtn_is_over"))
 
 
@@ -505,7 +507,7 @@ def _motion(motion, function: str = "mtn") -> Motion:
         raise MtnError(
             None, None, f"{function}: MTN is NULL: mtn_new failed (" + (mtn_get_error() or "no error recorded") + ")"
         )
-    return Robot._motion(function, motion)  # MtnError naming the function and the argument unless a motion
+    return current_robot()._motion(function, motion)  # MtnError unless a motion (not deleted)
 
 
 __all__ = (

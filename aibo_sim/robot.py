@@ -18,6 +18,7 @@ import difflib
 import math
 import numbers
 import os
+import weakref
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -313,6 +314,11 @@ def check_memory_stick(backend: str, memory_stick) -> None:
         )
 
 
+def deleted_motion_error(function: str) -> MtnError:
+    """The error of a call on a motion that ``mtn_delete`` deleted (Python's or C's)."""
+    return MtnError(None, None, f"{function}: this MTN was deleted by mtn_delete (mtn_new makes a new one)")
+
+
 class Robot:
     """A simulated ERS-7 seen through the controller API, on one backend."""
 
@@ -346,6 +352,7 @@ class Robot:
         for led in ers7.LEDS:
             self.devices[led.locator] = Led(self, led.locator, led.name)
         self.playing: list[_Playing] = []
+        self.deleted_motions: weakref.WeakValueDictionary[int, Motion] = weakref.WeakValueDictionary()  # by id()
         self.enabled_devices: dict[str, Device] = {}  # sampled after every frame, in enabling order
         self.end_ms: int | None = None
         self.frame_listeners = []  # called with (robot) after every 8 ms frame
@@ -410,22 +417,25 @@ class Robot:
         self.playing = [p for p in self.playing if p.motion is not motion]
         self.playing.append(_Playing(motion, player, ers7.joint_indices(motion.locators), self.time_ms))
 
-    def mtn_stop(self, motion) -> None:
-        """Take ``motion`` off the play list (``mtn_delete``)."""
+    def mtn_delete(self, motion) -> None:
+        """Stop ``motion``; it is no MTN any more: using it again raises (Webots' C API would
+        read freed memory)."""
         motion = self._motion("mtn_delete", motion)
         self.playing = [p for p in self.playing if p.motion is not motion]
+        self.deleted_motions[id(motion)] = motion
 
-    @staticmethod
-    def _motion(function: str, motion) -> Motion:
+    def _motion(self, function: str, motion) -> Motion:
         if not isinstance(motion, Motion):
             raise MtnError(None, None, f"{function}({short_repr(motion)}): not an MTN (use the value mtn_new returned)")
+        if self.deleted_motions.get(id(motion)) is motion:
+            raise deleted_motion_error(function)
         return motion
 
     def _playing(self, motion) -> _Playing | None:
         return next((p for p in self.playing if p.motion is motion), None)
 
     def mtn_is_over(self, motion) -> bool:
-        """Whether ``motion`` is not playing (never started, ended or stopped)."""
+        """Whether ``motion`` is not playing (never started, or ended)."""
         return self._playing(self._motion("mtn_is_over", motion)) is None
 
     def mtn_get_time(self, motion) -> int:

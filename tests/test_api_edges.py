@@ -134,8 +134,24 @@ def test_other_motions_keep_playing_beside_a_restarted_one(robot):
     api.mtn_play(first)
     assert [p.motion for p in robot.playing] == [second, first]
     api.mtn_delete(first)
-    assert api.mtn_is_over(first) and not api.mtn_is_over(second)
+    assert [p.motion for p in robot.playing] == [second] and not api.mtn_is_over(second)
     api.mtn_delete(None)  # as in Webots: nothing
+
+
+@pytest.mark.parametrize(
+    "function", ["mtn_is_over", "mtn_play", "mtn_get_time", "mtn_get_length", "mtn_get_name", "mtn_delete"]
+)
+def test_a_deleted_motion_is_no_mtn_any_more(robot, function):
+    motion = ramp("deleted")
+    api.mtn_play(motion)
+    api.mtn_delete(motion)
+    assert robot.playing == []
+    with pytest.raises(
+        MtnError, match=rf"^{function}: this MTN was deleted by mtn_delete \(mtn_new makes a new one\)$"
+    ):
+        getattr(api, function)(motion)
+    api.mtn_play(ramp("another"))  # other motions play on
+    assert len(robot.playing) == 1
 
 
 # ----------------------------------------------------------------------------- arguments

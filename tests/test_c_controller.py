@@ -434,6 +434,35 @@ def test_the_simulators_own_failures_in_a_c_controllers_call_are_not_blamed_on_i
     )
 
 
+@pytest.mark.parametrize(
+    "use, error",
+    [
+        ("mtn_play(m)", "mtn_play: this MTN was deleted by mtn_delete"),
+        ('printf("%d\\n", mtn_is_over(m))', "mtn_is_over: this MTN was deleted by mtn_delete"),
+        ("mtn_delete(m)", "mtn_delete: this MTN was deleted by mtn_delete"),
+        ("mtn_play((MTN *)&m)", r"mtn_play\(0x[0-9a-f]+\): not an MTN"),
+    ],
+)
+def test_a_call_on_a_deleted_motion_is_an_error_that_says_so(tmp_path, use, error):
+    # Webots' C API would read freed memory; mtn_is_over's answer robot_step brought ahead too
+    # is not used once the motion is deleted.
+    body = f"""#include <device/mtn.h>
+int main(void) {{
+    robot_live(0);
+    MTN* m = mtn_new("WALKFWD.MTN");
+    mtn_play(m);
+    robot_step(8);
+    mtn_is_over(m);
+    mtn_delete(m);
+    {use};
+    robot_step(8);
+    return 0;
+}}
+"""
+    with pytest.raises(ControllerFailed, match=error):
+        run_controller(c_file(tmp_path, "deleted.c", body), duration=1)
+
+
 def test_motions_made_and_deleted_in_a_loop_and_many_held_at_once_run_on(tmp_path, capfd):
     # Each motion's calls are answered ahead with robot_step: a deleted motion's no longer, and
     # never more than the controller's answer buffer takes (it asks for the rest itself).

@@ -51,10 +51,6 @@ static size_t ahead_length;
 static void (*die_functions[MAX_DIE_FUNCTIONS])(void);
 static int die_count, exiting;
 
-struct MTN {
-    int id;
-};
-
 static void fail(const char *what) {
     fprintf(stderr, "aibo-sim C binding: %s: %s\n", what, strerror(errno));
     _exit(70);
@@ -457,24 +453,18 @@ void led_set(DeviceTag l, int value) { send_tag_int(AIBO_OP_led_set, l, value); 
 
 /* ---- MTN */
 
-static int mtn_id(MTN *mtn) { return mtn ? mtn->id : 0; }
+/* An MTN pointer is the simulator's number for the motion, never dereferenced: it stays
+   recognisable after mtn_delete, so a call on a deleted motion gets an error saying so. */
+static int mtn_id(MTN *mtn) { return (int)(intptr_t)mtn; }
 
 MTN *mtn_new(const char *filename) {
     begin(AIBO_OP_mtn_new);
     put_string(filename);
     call();
-    int id = get_int();
-    if (!id) return NULL;
-    MTN *mtn = malloc(sizeof *mtn);
-    if (!mtn) fail("malloc");
-    mtn->id = id;
-    return mtn;
+    return (MTN *)(intptr_t)get_int();
 }
 
-void mtn_delete(MTN *mtn) {
-    send_tag(AIBO_OP_mtn_delete, mtn_id(mtn));
-    free(mtn);
-}
+void mtn_delete(MTN *mtn) { send_tag(AIBO_OP_mtn_delete, mtn_id(mtn)); }
 
 void mtn_play(MTN *mtn) { send_tag(AIBO_OP_mtn_play, mtn_id(mtn)); }
 

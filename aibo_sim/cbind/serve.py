@@ -46,8 +46,9 @@ from pathlib import Path
 import numpy as np
 
 from .. import controller as api
+from ..mtn import MtnError
 from ..render import RenderingUnavailable
-from ..robot import SimulationEnd
+from ..robot import SimulationEnd, deleted_motion_error
 from ..sim import SimulationDiverged
 from .child import Child
 from .protocol import MAX_ANSWER_BYTES, MAX_IMAGE_BYTES, OPS, PREFETCHED, STATUS
@@ -62,7 +63,8 @@ class CControllerError(RuntimeError):
 
 
 class _Motions:
-    """The MTN handles a controller holds: numbers 1, 2, ... for what ``mtn_new`` returned."""
+    """The MTN handles a controller holds: numbers 1, 2, ... for what ``mtn_new`` returned (never
+    reused: a number up to the last one made that is not held was deleted)."""
 
     def __init__(self):
         self._by_id: dict[int, object] = {}
@@ -78,10 +80,17 @@ class _Motions:
 
     def delete(self, handle: int) -> None:
         """``mtn_delete``: the motion stops and its handle is no longer one."""
-        api.mtn_delete(self._by_id.pop(handle, None))
+        api.mtn_delete(self.get(handle, "mtn_delete"))
+        self._by_id.pop(handle, None)
 
-    def __getitem__(self, handle: int):
-        return self._by_id.get(handle)  # 0 (NULL): None, which the API reports as a failed mtn_new
+    def get(self, handle: int, function: str):
+        """The motion of ``handle``: None for 0 (NULL: a failed ``mtn_new``, which the API reports
+        as such); MtnError for a deleted one or a number ``mtn_new`` did not return."""
+        if handle == 0 or handle in self._by_id:
+            return self._by_id.get(handle)
+        if 0 < handle <= self._last:
+            raise deleted_motion_error(function)
+        raise MtnError(None, None, f"{function}({handle:#x}): not an MTN (use the value mtn_new returned)")
 
 
 def _handlers(image: memoryview) -> dict:
@@ -95,16 +104,17 @@ def _handlers(image: memoryview) -> dict:
 
     def mtn_fprint(handle):
         text = io.StringIO()
-        api.mtn_fprint(text, motions[handle])
+        api.mtn_fprint(text, motions.get(handle, "mtn_fprint"))
         return text.getvalue()
 
-    def on_motion(function):
-        return lambda handle: function(motions[handle])
+    def on_motion(name):
+        function = getattr(api, name)
+        return lambda handle: function(motions.get(handle, name))
 
     handlers = {name: getattr(api, name) for name, _, _ in OPS if hasattr(api, name)}
     handlers.update(
         {
-            name: on_motion(handlers[name])
+            name: on_motion(name)
             for name in ("mtn_play", "mtn_is_over", "mtn_get_length", "mtn_get_time", "mtn_get_name")
         }
     )

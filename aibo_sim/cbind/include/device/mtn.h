@@ -13,7 +13,7 @@ extern "C" {
 typedef struct MTN MTN;
 
 MTN *mtn_new(const char *filename);
-void mtn_delete(MTN *mtn);          /* stops it if it plays; NULL does nothing */
+void mtn_delete(MTN *mtn);          /* stops it; NULL does nothing; a call on it after is an error */
 void mtn_play(MTN *mtn);            /* from its start, again from its start if it plays */
 int mtn_is_over(MTN *mtn);
 int mtn_get_length(MTN *mtn);       /* ms */
