@@ -644,7 +644,7 @@ def _run_controller_program(
                     f"controller {path.name} exited with {call}({status}) {where}{die_report}", exit_status=error.code
                 ) from error
             if isinstance(error, CControllerError):
-                raise ControllerFailed(f"controller {path.name}: {error} {where}") from error
+                raise ControllerFailed(f"controller {path.name} {where}: {error}") from error
             if error is not None:
                 raise ControllerFailed(
                     f"controller {path.name} raised {where}:\n" + controller_traceback(error) + die_report

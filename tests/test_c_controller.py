@@ -209,7 +209,7 @@ def test_a_crash_is_exit_1_with_the_signal_and_time_and_keeps_run_json_and_frame
     out = tmp_path / "out"
     assert main(["run", str(source), "--out", str(out)]) == 1
     assert (
-        "controller crash.c: crashed (SIGSEGV: Segmentation fault) at simulated t = 0.096 s" in capsys.readouterr().err
+        "controller crash.c at simulated t = 0.096 s: crashed (SIGSEGV: Segmentation fault)" in capsys.readouterr().err
     )
     run = json.loads((out / "run.json").read_text())
     assert run["status"] == "failed" and run["simulated_s"] == 0.096 and run["camera_frames"] == 3

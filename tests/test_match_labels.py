@@ -270,7 +270,10 @@ def test_a_lone_robots_labels_are_those_before_matches():
             assert by_model.detect(sim) == detections
             assert [{k: v for k, v in d.items() if k != "segmentation"} for d in detections] == fields
             assert hashlib.sha256(json.dumps(detections).encode()).hexdigest() == digest
-            assert ball_in_image(sim) == ball
+            seen = ball_in_image(sim)  # floats from MuJoCo's arithmetic: the last bit may differ by CPU
+            assert seen["visible"] == ball["visible"]
+            assert seen["pixel"] == pytest.approx(ball["pixel"], rel=1e-12, abs=1e-9)
+            assert seen["distance_m"] == pytest.approx(ball["distance_m"], rel=1e-12)
             instances, teams = robot_labels(sim)
             assert not instances.any() and not teams.any()
     finally:
