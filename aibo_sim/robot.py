@@ -403,7 +403,7 @@ class Robot:
     def mtn_new(self, path: str | Path):
         """Load a motion, resolving relative names in the search folders; MtnError if not found
         (also for a name that is not a str or path, naming it)."""
-        if not isinstance(path, (str, os.PathLike)):
+        if not isinstance(path, (str, os.PathLike)) or not os.fspath(path):
             return mtn_new(path)  # raises the MtnError naming the argument, remembered for mtn_get_error
         return mtn_new(find_file(path, self.search_dirs), ers7.all_locators())
 

@@ -183,6 +183,7 @@ def test_a_null_mtn_quotes_the_mtn_new_error(robot):
         (None, "mtn_new(None): the file name must be a str or a path, not NoneType"),
         (42, "mtn_new(42): the file name must be a str or a path, not int"),
         ("x" * 5000, "File not found: xxxx"),
+        ("", "File not found: "),  # as Webots says it; not the folder "." that "" names as a path
     ],
 )
 def test_mtn_new_of_what_is_not_a_file_name_returns_none_with_the_reason(robot, argument, words):
