@@ -385,8 +385,8 @@ def test_a_c_controller_that_closes_its_socket_is_not_reported_as_exit_70(tmp_pa
         run_controller(source, duration=1)
     message = str(failed.value)
     assert re.fullmatch(
-        r"controller closes\.c: closed its connection to the simulator \(descriptor \d+, AIBO_SIM_FD\), "
-        r"then made a call at simulated t = 0\.008 s",
+        r"controller closes\.c at simulated t = 0\.008 s: closed its connection to the simulator "
+        r"\(descriptor \d+, AIBO_SIM_FD\), then made a call",
         message,
     ), message
     assert failed.value.exit_status is None
