@@ -37,6 +37,7 @@ EXIT_TERMINATED = 128 + signal.SIGTERM  # 143, as a shell reports a process that
 def _match_robots(args):
     """The robots of ``--robots FILE`` or the repeated ``--robot``, or None for one robot;
     ValueError naming the option that cannot go with them."""
+    from .match import refuse_single_robot_options
     from .team import check_robots, load_robots, parse_robot
 
     if args.robots is None and not args.robot:
@@ -45,18 +46,8 @@ def _match_robots(args):
         return None
     if args.robots is not None and args.robot:
         raise ValueError("--robots and --robot: give the robots one way, not both")
-    for option, value in (
-        ("--pose", args.pose),
-        ("--backend", args.backend),
-        ("--mtn-mode", args.mtn_mode),
-        ("--memory-stick", args.memory_stick),
-    ):
-        if value is not None:
-            given = "--robots" if args.robots is not None else "--robot"
-            raise ValueError(
-                f"{option} applies to a run of one robot: with {given}, each robot's pose and controller "
-                "come from its entry"
-            )
+    values = {"--pose": args.pose, "--backend": args.backend, "--mtn-mode": args.mtn_mode}
+    refuse_single_robot_options("run", {**values, "--memory-stick": args.memory_stick})
     if args.robots is not None:
         return load_robots(args.robots)
     return check_robots([parse_robot(text) for text in args.robot], "--robot")
@@ -82,11 +73,12 @@ def _run_match(args, robots) -> int:
     finally:
         if viewer is not None:
             viewer.close()
-    frames = sum(robot["camera_frames"] for robot in summary["robots"])
+    frames, count = sum(robot["camera_frames"] for robot in summary["robots"]), len(summary["robots"])
+    folders = "robot1" if count == 1 else f"robot1..{count}"
     print(
-        f"ran a match of {len(summary['robots'])} robots: {summary['simulated_s']:.2f} s simulated in "
+        f"ran a match of {count} robot{'s' * (count > 1)}: {summary['simulated_s']:.2f} s simulated in "
         f"{summary['wall_s']:.2f} s (real-time factor {summary['real_time_factor']:.1f}), {frames} camera frames "
-        "written" + (f" to {args.out}/robot1..{len(summary['robots'])}" if args.out else "")
+        "written" + (f" to {args.out}/{folders}" if args.out else "")
     )
     return 0
 

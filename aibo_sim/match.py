@@ -10,9 +10,11 @@ robots' list, from 1), the match's ``run.json`` to ``out``.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
 import os
+import re
 import sys
 import threading
 import time
@@ -39,15 +41,46 @@ from .runner import (
     _run_controller_program,
     _run_memory_stick,
     check_python_controller,
+    earlier_run,
     motion_dirs,
 )
 from .sim import Simulation, SimulationDiverged
-from .team import check_robots
+from .team import check_controllers, check_robots
+
+# The options of a run of one robot that a match refuses, and why.
+SINGLE_ROBOT_OPTIONS = {
+    "--pose": "each robot's pose comes from its entry",
+    "--backend": "Python and C controllers run on the sim backend, a memory stick on its OPEN-R runtime",
+    "--mtn-mode": "motions play as OPEN-R plays them (the openr mode)",
+    "--memory-stick": "a robot runs a memory stick when its entry names the stick's folder as its controller",
+}
+
+
+def refuse_single_robot_options(command: str, values: dict) -> None:
+    """ValueError, saying why, for the first of ``SINGLE_ROBOT_OPTIONS`` given a value (``command``:
+    ``run`` or ``dump``)."""
+    for option, value in values.items():
+        if value is not None:
+            raise ValueError(
+                f"{option} applies to a {command} of one robot: in a match, {SINGLE_ROBOT_OPTIONS[option]}"
+            )
 
 
 def robot_folder(index: int) -> str:
     """The folder of robot ``index`` (from 0) in a match's ``--out``: ``robot1``, ``robot2``, ..."""
     return f"robot{index + 1}"
+
+
+@contextlib.contextmanager
+def controller_named_as_given(spec):
+    """A missing controller file or a syntax error in it, raised inside, prefixed with where
+    ``spec`` was given (``robots.toml:5: red 2: ...``, ``--robot red:2::ctl.py: red 2: ...``)."""
+    try:
+        yield
+    except (FileNotFoundError, ValueError) as exc:
+        if type(exc) not in (FileNotFoundError, ValueError) or not (spec.given and spec.controller):
+            raise
+        raise type(exc)(f"{spec.given}: {spec.name}: {exc}") from None
 
 
 class Lockstep:
@@ -185,11 +218,7 @@ def run_match(
     scene, seed, ball, ball_type = world.scene, world.seed, world.ball, world.ball_type
     if not (isinstance(duration, (int, float)) and math.isfinite(duration) and duration > 0):
         raise ValueError(f"--duration must be a positive number of seconds, not {duration!r}")
-    missing = [robot.name for robot in robots if robot.controller is None and controller_path is None]
-    if missing:
-        raise ValueError(
-            f"--robots: {', '.join(missing)} has no controller: name one in the robots file or run's CONTROLLER"
-        )
+    check_controllers(robots, controller_path, "run")
     sim = Simulation(scene, seed=seed, camera=camera, ball_type=ball_type, robots=robots)
     world, compiled = sim.world, {}
     players: list[_Player] = []
@@ -197,8 +226,11 @@ def run_match(
         place_match(sim, ball)
         check_rendering(sim.model)
         for robot in world.robots:
-            players.append(_player(robot, robot.spec.controller or controller_path, compiled))
+            with controller_named_as_given(robot.spec):
+                players.append(_player(robot, robot.spec.controller or controller_path, compiled))
         out = out and make_out_folder(out)
+        if out:
+            _check_match_folder(out, len(players))
         for player in players:
             folder = out / robot_folder(player.robot.index) if out else None
             if player.kind == MEMORY_STICK:
@@ -221,6 +253,9 @@ def run_match(
         for player in players:  # every robot's folder checked and locked: now each is cleared
             if player.writer is not None:
                 player.writer.prepare()
+        if out:
+            match_json = {"match": True, "status": "incomplete", "robots": [p.robot.spec.as_dict() for p in players]}
+            write_file_atomic(out / RUN_FILE, (json.dumps(match_json, indent=2) + "\n").encode())
     except BaseException:
         for player in players:
             if player.writer is not None:
@@ -310,6 +345,29 @@ def _play(player: _Player, lockstep: Lockstep) -> None:
             player.robot.camera.close()  # its OpenGL context is current in this thread only
         finally:
             player.ended.set()
+
+
+def _check_match_folder(out: Path, robots: int) -> None:
+    """OSError when ``out`` holds what would lie mixed with this match's files: a run of one robot
+    (its frames), or an earlier match's robot folders beyond this match's ``robots``."""
+    previous = earlier_run(out)
+    if previous is not None and previous.get("match") is not True:
+        raise OSError(
+            f"{out} holds a run of one robot ({RUN_FILE} and its frames): a match would leave them beside "
+            "its robots' folders; choose another --out"
+        )
+    extra = sorted(
+        number
+        for name in os.listdir(out)
+        if re.fullmatch(r"robot[1-9][0-9]*", name) and (number := int(name[5:])) > robots
+    )
+    if extra:
+        more = f" and {len(extra) - 1} more" if len(extra) > 1 else ""
+        has = f"{robots} robot{'s' * (robots > 1)}"
+        raise OSError(
+            f"{out} holds an earlier match's {robot_folder(extra[0] - 1)}{more} (this match has {has}): its "
+            "files would lie beside this match's; remove it or choose another --out"
+        )
 
 
 def _summary(sim, players, seed, scene, ball, ball_type, wall: float, interrupted: bool) -> dict:

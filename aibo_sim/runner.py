@@ -117,6 +117,23 @@ def check_python_controller(path: Path) -> None:
         raise ValueError(f"{path}{line}: {type(exc).__name__}: {exc.msg}{code}") from None
 
 
+def earlier_run(out: Path) -> dict | None:
+    """``out``'s run.json of an earlier run (of one robot, or a match's: ``"match": true``); None
+    when there is none; OSError when it is not an aibo-sim run's (refused, never replaced)."""
+    run_json = out / RUN_FILE
+    if not (run_json.exists() or run_json.is_symlink()):
+        return None
+    try:
+        previous = json.loads(read_file(run_json))
+    except SymlinkRefused:
+        raise
+    except (OSError, ValueError):
+        previous = None
+    if isinstance(previous, dict) and (previous.get("match") is True or {"controller", "backend"} <= previous.keys()):
+        return previous
+    raise OSError(f"{run_json} is not an aibo-sim run's run.json: refusing to replace it; choose another --out")
+
+
 class FrameWriter:
     """Writes each camera frame the controller's camera captured as ``frames/NNNNNN.png``
     in ``run --out``, atomically (see ``write_file_atomic``), and ``run.json``.
@@ -162,28 +179,23 @@ class FrameWriter:
 
     def _check(self) -> list[str]:
         """The names in an earlier run's ``frames/``; OSError when the folder is not one to reuse."""
-        run_json, frames = self.out / RUN_FILE, self.directory
+        frames = self.directory
         if frames.is_symlink():
             raise SymlinkRefused.at(frames)
-        earlier_run = run_json.exists() or run_json.is_symlink()
-        if earlier_run:
-            try:
-                previous = json.loads(read_file(run_json))
-            except SymlinkRefused:
-                raise
-            except (OSError, ValueError):
-                previous = None
-            if not (isinstance(previous, dict) and {"controller", "backend"} <= previous.keys()):
-                raise OSError(
-                    f"{run_json} is not an aibo-sim run's run.json: refusing to replace it; choose another --out"
-                )
+        previous = earlier_run(self.out)
+        if previous is not None and previous.get("match") is True:
+            raise OSError(
+                f"{self.out} holds a match's {RUN_FILE} and robot folders: a run of one robot would leave "
+                "them beside its frames; choose another --out"
+            )
+        earlier = previous is not None
         try:
             names = os.listdir(frames)
         except FileNotFoundError:
             names = []
         except OSError as exc:
             raise OSError(f"cannot use {frames} for the frames: {exc.strerror or exc}") from exc
-        if names and not earlier_run:
+        if names and not earlier:
             raise OSError(
                 f"{frames} holds files but {self.out} holds no aibo-sim run ({RUN_FILE}): refusing to mix "
                 "them with this run's frames; choose another --out"

@@ -284,6 +284,18 @@ def load_robots(path: str | Path) -> tuple[RobotSpec, ...]:
     return check_robots(robots, str(path))
 
 
+def check_controllers(robots: Sequence[RobotSpec], controller, command: str) -> None:
+    """TeamError naming, where it was given, the first robot without a controller when the
+    command (``run``, ``dump``) has no CONTROLLER of its own for it."""
+    missing = [robot for robot in robots if robot.controller is None] if controller is None else []
+    if missing:
+        first, more = missing[0], f" (and {len(missing) - 1} more)" if len(missing) > 1 else ""
+        raise TeamError(
+            f"{first.given or '--robots'}: {first.name} has no controller{more}: name one in its entry "
+            f"or give {command}'s CONTROLLER"
+        )
+
+
 def parse_robot(text: str) -> RobotSpec:
     """The robot of ``--robot TEAM:NUMBER[:X,Y,YAW][:CONTROLLER]`` (``red:2``, ``blue:1:2.4,0,3.1416``,
     ``red:4:-0.6,0,0:controllers/ball_tracker.py``, ``red:3::ctl.py``: an empty pose is the kickoff

@@ -279,12 +279,15 @@ def test_run_robots_file_on_the_command_line(tmp_path, capsys):
             "--robot blue:1:0.25,0,0: blue 1 starts inside red 1",
         ),
         (["--robot", "red:1:0,0,1e300"], "--robot red:1:0,0,1e300: pose 0,0,1e+300: yaw out of range"),
-        (["--robot", "red:1", "--pose", "0", "0", "0"], "--pose applies to a run of one robot: with --robot, each"),
+        (
+            ["--robot", "red:1", "--pose", "0", "0", "0"],
+            "--pose applies to a run of one robot: in a match, each robot's pose comes from its entry",
+        ),
         (["--robot", "red:1", "--robot", "blue:1", "--view-robot", "2"], "--view-robot applies to --view in a match"),
         (["--view-robot", "1"], "--view-robot applies to --view in a match"),
         (["--robot", "red:1:2.95,0,0"], "--robot red:1:2.95,0,0: red 1 starts inside wall_skyblue"),
         (["--robot", "red:1:0,0,0", "--ball", "0.05", "0.07"], "--ball 0.05 0.07: the ball would overlap red 1 by"),
-        (["--robot", "red:1::missing.py"], "missing.py: no such controller file"),
+        (["--robot", "red:1::missing.py"], "error: --robot red:1::missing.py: red 1: /"),
     ],
 )
 def test_bad_robots_exit_2_with_one_line_and_no_folder(arguments, message, tmp_path, capsys):
@@ -293,6 +296,61 @@ def test_bad_robots_exit_2_with_one_line_and_no_folder(arguments, message, tmp_p
     error = capsys.readouterr().err
     assert message in error and error.count("\n") == 1
     assert not out.exists()
+
+
+@pytest.mark.parametrize("command", ["run", "dump"])
+def test_a_robot_without_a_controller_is_named_where_it_was_given(command, tmp_path, capsys):
+    robots = tmp_path / "robots.toml"
+    robots.write_text(
+        '[[robot]]\nteam = "red"\nnumber = 2\ncontroller = "ctl.py"\n\n[[robot]]\nteam = "blue"\nnumber = 1\n'
+    )
+    (tmp_path / "ctl.py").write_text("x = (\n")
+    out = ["--out", str(tmp_path / "out")]
+    cases = [
+        (["--robot", "red:2"], f"--robot red:2: red 2 has no controller: name one in its entry or give {command}'s"),
+        (["--robots", str(robots)], f"{robots}:6: blue 1 has no controller"),
+        (["--robots", str(robots), str(TRACKER)], f"{robots}:1: red 2: {tmp_path / 'ctl.py'}, line 1: SyntaxError"),
+    ]
+    for arguments, message in cases:
+        assert main([command, *arguments, *out]) == 2
+        error = capsys.readouterr().err
+        assert error.startswith("aibo-sim: error: " + message) and error.count("\n") == 1, error
+        assert not (tmp_path / "out").exists()
+
+
+def test_a_match_never_leaves_another_runs_files_beside_its_own(tmp_path, capsys):
+    out = tmp_path / "out"
+    match = ["--camera-profile", "ideal", "--duration", "0.05", "--out", str(out)]
+    three = ["--robot", "red:4", "--robot", "blue:1", "--robot", "blue:2"]
+    assert main(["run", str(TRACKER), *three, *match]) == 0
+    assert main(["run", str(TRACKER), "--robot", "red:4", *match]) == 2
+    assert capsys.readouterr().err.endswith(
+        f"{out} holds an earlier match's robot2 and 1 more (this match has 1 robot): its files would lie beside "
+        "this match's; remove it or choose another --out\n"
+    )
+    assert main(["run", str(TRACKER), *match]) == 2
+    assert "holds a match's run.json and robot folders: a run of one robot would leave them" in capsys.readouterr().err
+    assert main(["run", str(TRACKER), *three, *match]) == 0  # the same match again: replaced
+    assert json.loads((out / "run.json").read_text())["status"] == "done"
+    single = tmp_path / "single"
+    assert main(["run", str(TRACKER), "--camera-profile", "ideal", "--duration", "0.05", "--out", str(single)]) == 0
+    assert main(["run", str(TRACKER), "--robot", "red:4", *match[:-1], str(single)]) == 2
+    assert "holds a run of one robot (run.json and its frames): a match would leave" in capsys.readouterr().err
+    assert not (single / "robot1").exists()
+
+
+def test_a_match_says_it_is_incomplete_in_its_run_json_while_it_runs(tmp_path):
+    seen = []
+    out = tmp_path / "out"
+    robots = [RobotSpec("red", 1, None, str(TRACKER)), RobotSpec("blue", 1, None, str(TRACKER))]
+    listener = lambda program: seen or seen.append(json.loads((out / "run.json").read_text()))  # noqa: E731
+    run_match(robots, duration=0.05, out=out, progress=False, camera=CameraConfig("ideal"), frame_listeners=[listener])
+    assert seen[0] == {
+        "match": True,
+        "status": "incomplete",
+        "robots": [r.as_dict() for r in check_robots(robots, "t")],
+    }
+    assert json.loads((out / "run.json").read_text())["status"] == "done"
 
 
 @pytest.mark.parametrize("command", ["run", "dump"])

@@ -26,13 +26,13 @@ from ..camera import CameraSettings, camera_size, describe_camera, scene_light
 from ..camera import camera_profile as resolve_profile
 from ..config import CameraConfig, WorldConfig, is_seed, start_values
 from ..files import make_folder
-from ..match import robot_folder, run_match
+from ..match import controller_named_as_given, refuse_single_robot_options, robot_folder, run_match
 from ..placement import out_path, place_match
 from ..render import check_rendering
 from ..robot import SimulationEnd
 from ..runner import MEMORY_STICK, Progress
 from ..sim import Simulation, load_model
-from ..team import check_robots
+from ..team import check_controllers, check_robots
 from .coco import coco_bytes
 from .formats import DUMP_FORMAT, robots_meta
 from .running import _CameraFrames, check_formats, controller_sha256, recorded_parameters, world_parameters
@@ -67,28 +67,15 @@ def _refuse(env, workers, pose, backend, mtn_mode, memory_stick, policy, engine,
         )
     if engine != "local" or ray_address is not None:
         raise ValueError("--engine and --ray-address apply to --workers shards: a match's dump runs in one process")
-    for option, value in (
-        ("--pose", pose),
-        ("--backend", backend),
-        ("--mtn-mode", mtn_mode),
-        ("--memory-stick", memory_stick),
-    ):
-        if value is not None:
-            raise ValueError(
-                f"{option} applies to a dump of one robot: with --robots or --robot, each robot's pose and "
-                "controller come from its entry"
-            )
+    values = {"--pose": pose, "--backend": backend, "--mtn-mode": mtn_mode, "--memory-stick": memory_stick}
+    refuse_single_robot_options("dump", values)
     if policy is not None:
         raise ValueError("--policy applies to --env dumps: a controller chooses its own actions")
 
 
 def _controllers(robots, controller) -> tuple:
     """``robots`` with each one's controller resolved (the dump's ``controller`` where it names none)."""
-    missing = [robot.name for robot in robots if robot.controller is None and controller is None]
-    if missing:
-        raise ValueError(
-            f"--robots: {', '.join(missing)} has no controller: name one in the robots file or dump's CONTROLLER"
-        )
+    check_controllers(robots, controller, "dump")
     return tuple(replace(r, controller=str(Path(r.controller or controller).resolve())) for r in robots)
 
 
@@ -141,7 +128,11 @@ def dump_match(
     check_rendering(model)
     ball = start_values("ball", ball, 2)
     _check_places(scene, robots, ball, ball_type)
-    hashes = {path: controller_sha256(Path(path)) for path in dict.fromkeys(r.controller for r in robots)}
+    hashes = {}
+    for robot in robots:
+        if robot.controller not in hashes:
+            with controller_named_as_given(robot):
+                hashes[robot.controller] = controller_sha256(Path(robot.controller))
     out = out_path(out)
     recorded = world_parameters(frames, scene, seed, ball, ball_type, formats, camera_full, profile, settings, model)
     match = {"controller": controller and str(Path(controller).resolve()), "robots": [r.as_dict() for r in robots]}
