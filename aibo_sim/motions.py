@@ -9,6 +9,7 @@ Z up, origin midway between the four J1 axes. Angles are radians with Sony's sig
 
 from __future__ import annotations
 
+import argparse
 import math
 import os
 from dataclasses import dataclass, replace
@@ -401,9 +402,14 @@ def _play(sim: Simulation, motion: Motion, player: MotionPlayer, repeat: int, mo
     }
 
 
-def main() -> None:
+def main(argv=None) -> None:
     """Write the bundled motion files into the models folder's ``motions/``."""
-    for path in generate_motion_files(models_dir() / "motions"):
+    folder = models_dir() / "motions"
+    argparse.ArgumentParser(
+        prog="python -m aibo_sim.motions",
+        description=f"Write the bundled motion files (WALKFWD.MTN, STAND.MTN, ...) into {folder}, replacing them.",
+    ).parse_args(argv)
+    for path in generate_motion_files(folder):
         print(f"wrote {path}")
 
 

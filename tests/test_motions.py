@@ -67,6 +67,13 @@ def test_shipped_files_are_what_the_generator_writes(tmp_path):
         )
 
 
+def test_the_generators_help_writes_nothing(capsys, monkeypatch):
+    monkeypatch.setattr(motions, "generate_motion_files", lambda folder: pytest.fail(f"wrote into {folder}"))
+    with pytest.raises(SystemExit) as exited:
+        motions.main(["--help"])
+    assert exited.value.code == 0 and "Write the bundled motion files" in capsys.readouterr().out
+
+
 @pytest.mark.parametrize("file", sorted(SHIPPED))
 def test_shipped_files_parse(file):
     name, keyframes, length_ms, interpolate = SHIPPED[file]
