@@ -165,7 +165,8 @@ def test_a_refused_step_or_reset_changes_nothing():
         env.step({})
         red = env.robots["red_4"]
         targets, time_ms = red.servos.target.copy(), env.sim.time_ms
-        with pytest.raises(ValueError, match="finite"):  # blue's action is refused: red's is not given either
+        # blue's action is refused, naming blue: red's is not given either
+        with pytest.raises(ValueError, match=r"^blue_4's action\[0\] \(lf_j1\) is nan: actions must be finite$"):
             env.step({"red_4": np.ones(15, np.float32), "blue_4": np.full(15, np.nan, np.float32)})
         assert np.array_equal(red.servos.target, targets)
         for ball, message in (((math.nan, 0.0), "x = nan must be a finite number"), ((1, 2, 3), "want two numbers")):
@@ -194,6 +195,10 @@ def test_robots_from_a_team_file_and_bad_arguments(tmp_path):
             MatchEnv(**bad)
     with pytest.raises(ValueError, match="learner 'red_3'"):
         ScriptedOpponentsEnv(learner="red_3", robots=STRIKERS)
+    with pytest.raises(
+        TypeError, match=r"^scripted\['blue_4'\] is 3, not a factory called with the robot's Simulation"
+    ):
+        MatchEnv(STRIKERS, scripted={"blue_4": 3})
 
 
 def test_render_shows_the_field():

@@ -44,6 +44,7 @@ from ..ers7 import DISTANCE_SENSORS, JOINT_INDEX, JOINTS, TOUCH_SENSORS, joint_i
 from ..motions import BLEND_MS
 from ..mtn import MotionPlayer, read_mtn
 from ..render import Renderer
+from ..robot import short_repr
 from ..sim import ACCEL_RANGE, FRAME_MS, Simulation, models_dir, placement_values, release_freed_memory
 from ..team import PLAYERS_PER_TEAM, TEAMS, RobotSpec, check_robots, load_robots
 from .base import HEAD_JOINTS, LAYERS, LEG_JOINTS, RENDER_SIZE, AiboEnv, _ClosedSimulation, check_options
@@ -275,6 +276,12 @@ class MatchEnv(pettingzoo.ParallelEnv):
         unknown = [name for name in scripted if name not in names]
         if unknown:
             raise ValueError(f"scripted: no robot {unknown[0]!r} in this match (robots: {', '.join(names)})")
+        for name, make in scripted.items():
+            if not callable(make):
+                raise TypeError(
+                    f"scripted[{name!r}] is {short_repr(make)}, not a factory called with the robot's "
+                    "Simulation (such as BallChaser)"
+                )
         self.sim = Simulation(
             scene,
             robots=specs,
@@ -377,7 +384,12 @@ class MatchEnv(pettingzoo.ParallelEnv):
         if extra:
             why = "is done" if extra[0] in self.possible_agents else "is no agent"
             raise ValueError(f"action for {extra[0]!r}, which {why} (agents: {', '.join(self.agents)})")
-        targets = {name: self._agents[name].action_to_targets(action) for name, action in actions.items()}
+        targets = {}
+        for name, action in actions.items():
+            try:
+                targets[name] = self._agents[name].action_to_targets(action)
+            except ValueError as exc:
+                raise ValueError(f"{name}'s {exc}") from None
         for name, joint_targets in targets.items():  # every action checked before any is given
             self._agents[name].act(joint_targets)
         self._advance(self.sim.frames_to_camera_frame())
