@@ -101,6 +101,11 @@ def current_robot() -> Robot:
     global last_call_s
     robot = _state().robot
     if robot is None:
+        if _match:
+            raise RuntimeError(
+                f"no robot in thread {threading.current_thread().name!r}: in a match, a controller's API calls "
+                "must come from the thread that runs it"
+            )
         raise RuntimeError("no robot: run the controller with `aibo-sim run CONTROLLER`")
     last_call_s = time.monotonic()
     return robot

@@ -414,3 +414,19 @@ def test_every_kind_of_controller_plays_in_one_match(tmp_path):
     assert [r["status"] for r in summary["robots"]] == ["done"] * 3
     assert [r["camera_frames"] for r in summary["robots"]] == [30, 30, 30]
     assert (tmp_path / "out" / "robot1" / "console.log").is_file()
+
+
+def test_an_api_call_from_another_thread_of_a_match_controller_says_why_it_has_no_robot(tmp_path):
+    controller = tmp_path / "threaded.py"
+    controller.write_text(
+        "import threading\nfrom aibo_sim.controller import *\nerrors = []\n"
+        "def read():\n    try:\n        robot_get_time()\n"
+        "    except RuntimeError as exc:\n        errors.append(str(exc))\n"
+        "reader = threading.Thread(target=read, name='reader')\nreader.start()\nreader.join()\n"
+        "open('error.txt', 'w').write(errors[0])\nrobot_step(8)\n"
+    )
+    robots = [RobotSpec("red", 1, None, str(controller)), RobotSpec("blue", 1, None, str(TRACKER))]
+    run_match(robots, duration=0.05, out=tmp_path / "out", progress=False, camera=CameraConfig("ideal"))
+    assert (tmp_path / "out" / "error.txt").read_text() == (
+        "no robot in thread 'reader': in a match, a controller's API calls must come from the thread that runs it"
+    )
