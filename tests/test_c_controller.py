@@ -169,6 +169,25 @@ def test_a_second_run_compiles_nothing_and_a_changed_source_compiles_again(tmp_p
     assert cbind.compile_controller(source) != first
 
 
+def test_a_changed_header_of_the_controllers_own_compiles_again(tmp_path, capfd):
+    # Included with quotes from the controller's folder, and from there from a folder beside it.
+    folder, shared = tmp_path / "hdr", tmp_path / "inc"
+    folder.mkdir()
+    shared.mkdir()
+    (folder / "hdr.c").write_text(
+        '#include <stdio.h>\n#include <device/robot.h>\n#include "val.h"\n'
+        'int main(void) { robot_live(0); printf("VAL=%d\\n", VAL); robot_step(8); return 0; }\n'
+    )
+    (folder / "val.h").write_text('#include "../inc/deep.h"\n#define VAL (DEEP + 1)\n')
+    (shared / "deep.h").write_text("#define DEEP 1\n")
+    first = cbind.compile_controller(folder)
+    assert cbind.compile_controller(folder) == first
+    (shared / "deep.h").write_text("#define DEEP 41\n")
+    assert cbind.compile_controller(folder) != first
+    run_controller(folder, duration=0.05)
+    assert "VAL=42" in capfd.readouterr().out
+
+
 def test_a_compile_error_is_exit_2_with_the_compilers_file_and_line(tmp_path, capsys):
     source = c_file(tmp_path, "broken.c", "int main(void) {\n    robot_live(0)\n    return 0;\n}\n")
     assert main(["run", str(source)]) == 2

@@ -1,15 +1,18 @@
 """Compiling a C or C++ controller against the Webots-era headers, into a cache.
 
 The executable lands in ``$XDG_CACHE_HOME/aibo-sim/c/<key>/`` (``~/.cache`` without it), the
-key a hash of everything that goes into it: the sources' names and bytes, the headers,
-``libaibo.c``, the call table, the flags and the compilers' versions. A second run of unchanged
-sources compiles nothing. ``CC`` and ``CXX`` choose the compilers (default ``cc`` and ``c++``).
+key a hash of everything that goes into it: the sources' names and bytes, the headers they
+include with quotes (found from the including file's folder, as the compiler finds them), the
+binding's headers, ``libaibo.c``, the call table, the flags and the compilers' versions. A second
+run of unchanged sources and headers compiles nothing. ``CC`` and ``CXX`` choose the compilers
+(default ``cc`` and ``c++``).
 """
 
 from __future__ import annotations
 
 import hashlib
 import os
+import re
 import shutil
 import subprocess
 import tempfile
@@ -25,6 +28,7 @@ LIBRARY = PACKAGE / "libaibo.c"
 # -ffp-contract=off: no fused multiply-add, so that a controller's double arithmetic rounds as
 # the source (and Python) says, on every machine.
 FLAGS = ("-O2", "-ffp-contract=off")
+QUOTED_INCLUDE = re.compile(rb'^[ \t]*#[ \t]*include[ \t]*"([^"\n]+)"', re.MULTILINE)
 INSTALL_HINT = {
     "cc": "a C compiler (Debian/Ubuntu: apt-get install gcc)",
     "c++": "a C++ compiler (Debian/Ubuntu: apt-get install g++)",
@@ -57,6 +61,21 @@ def controller_sources(path: str | os.PathLike) -> tuple[Path, list[Path]]:
     if not path.is_file():
         raise FileNotFoundError(f"{path}: no such controller file")
     return path, [path]
+
+
+def local_headers(sources: list[Path]) -> list[Path]:
+    """The headers that ``sources`` include with quotes, and those include in turn, found from the
+    including file's folder (every ``#include "..."`` line, whatever the conditions around it)."""
+    found: dict[Path, None] = {}
+    pending = list(sources)
+    while pending:
+        including = pending.pop()
+        for name in QUOTED_INCLUDE.findall(including.read_bytes()):
+            header = (including.parent / os.fsdecode(name)).resolve()
+            if header not in found and header not in sources and header.is_file():
+                found[header] = None
+                pending.append(header)
+    return sorted(found)
 
 
 def _compiler(kind: str) -> str:
@@ -99,6 +118,9 @@ def compile_controller(path: str | os.PathLike) -> Path:
         digest.update(b"\0")
     for source in sources:
         digest.update(source.name.encode() + b"\0" + source.read_bytes() + b"\0")
+    for included in local_headers(sources):
+        name = os.path.relpath(included, main.parent)  # the controller copied elsewhere keeps its key
+        digest.update(name.encode() + b"\0" + included.read_bytes() + b"\0")
     folder = _cache_root() / digest.hexdigest()[:32]
     executable = folder / main.stem
     if executable.is_file():
