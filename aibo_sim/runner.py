@@ -580,6 +580,8 @@ def _run_memory_stick(path: Path, run: MemoryStickRun) -> None:
         pass  # the writer's error, or the match's interruption, is reported by the caller
     except OpenRObjectCrashed as error:
         raise ControllerFailed(f"memory stick {path.name}: {error}") from error
+    if run.controller_error is not None:  # the wrapper's controller failed: the robot shut down
+        raise ControllerFailed(f"memory stick {path.name}: {run.controller_error}")
 
 
 def _run_as_main(path: Path) -> None:

@@ -66,7 +66,9 @@ state 0/1); ``LED`` primitive, intensity 0..255, mode (0 A, 1 B); ``MOTOR_POWER`
 ``GAIN`` primitive, enabled, P, I, D, P shift, I shift, D shift; ``CAMERA`` request,
 value; ``CDT`` an ``OCdtVectorData`` (1344 bytes); ``SOUND`` start sample (at 16 kHz), then
 16-bit samples; ``SHUTDOWN`` none; ``NEXT_FRAME`` none (the records after it are the next
-frame's, foretold: see Lookahead); ``IMAGE_SLOT`` the shared memory's area for the next image.
+frame's, foretold: see Lookahead); ``IMAGE_SLOT`` the shared memory's area for the next image;
+``CONTROLLER_FAILED`` the wrapper's error message (UTF-8): its controller failed (an aibo-sim
+extension, ``aibo_sim_controller_failed``, which the wrapper calls where the runtime has it).
 """
 
 import struct
@@ -87,6 +89,7 @@ RECORDS = {
     "SHUTDOWN": 8,
     "NEXT_FRAME": 9,
     "IMAGE_SLOT": 10,
+    "CONTROLLER_FAILED": 11,
 }
 FRAME_FLAGS = {"IMAGE": 1, "POWER": 2, "RAW_IMAGE": 4}
 # What each sensor vector entry holds (the runtime gives each its ODataType).

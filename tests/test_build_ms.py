@@ -18,6 +18,7 @@ What the memory stick does differently, and what these tests hold it to:
 
 import fnmatch
 import functools
+import json
 import shutil
 import struct
 import subprocess
@@ -27,6 +28,7 @@ import numpy as np
 import pytest
 
 from aibo_sim import ers7, runner
+from aibo_sim.cli import main
 from aibo_sim.config import WorldConfig
 from aibo_sim.mtn import Motion, MtnError, mtn_new, serialize_mtn
 from aibo_sim.openr.build_ms import WRAPPER, BuildMsError, build_ms, short_name
@@ -186,7 +188,7 @@ class Recorder:
             self.frames[index] = sim.camera.frame().rgb.copy()
 
 
-def run_stick(project: Path, frames: int, workdir: Path, ball=None) -> tuple[Recorder, Simulation]:
+def run_stick(project: Path, frames: int, workdir: Path, ball=None) -> tuple[Recorder, Simulation, MemoryStickRun]:
     workdir.mkdir(exist_ok=True)
     sim = Simulation()
     place(sim, None, ball)
@@ -195,7 +197,7 @@ def run_stick(project: Path, frames: int, workdir: Path, ball=None) -> tuple[Rec
     record = Recorder()
     run.frame_listeners.append(lambda r: record(r.sim))
     run.run()
-    return record, sim
+    return record, sim, run
 
 
 def run_reference(monkeypatch, controller: Path, frames: int, out: Path, ball=None, workdir=None) -> Recorder:
@@ -229,7 +231,7 @@ def test_annex_i_as_a_memory_stick_runs_as_on_the_openr_backend_bit_for_bit(tmp_
     assert stick_walk.read_bytes() == WALK.read_bytes()
 
     frames = 684  # 15 plays of 320 ms at 16 ms steps, then images: a multiple of 4
-    stick, _ = run_stick(tmp_path / "project", frames, tmp_path / "stick")
+    stick, _, _ = run_stick(tmp_path / "project", frames, tmp_path / "stick")
     reference = run_reference(monkeypatch, controller, frames - 1, tmp_path / "reference")
     assert len(stick.qpos) == frames and len(reference.qpos) == frames - 1
     assert np.array_equal(np.array(stick.qpos[:-1]), np.array(reference.qpos))
@@ -245,7 +247,7 @@ def test_annex_i_as_a_memory_stick_runs_as_on_the_openr_backend_bit_for_bit(tmp_
 def test_ball_tracker_c_as_a_memory_stick_follows_the_openr_backend_within_a_micro_radian_drift(tmp_path, monkeypatch):
     assert build(TRACKER, tmp_path / "project") == []
     frames = 500
-    stick, _ = run_stick(tmp_path / "project", frames, tmp_path / "stick", ball=BALL)
+    stick, _, _ = run_stick(tmp_path / "project", frames, tmp_path / "stick", ball=BALL)
     reference = run_reference(monkeypatch, TRACKER, frames - 1, tmp_path / "reference", ball=BALL)
     head = [ers7.JOINT_INDEX[name] for name in ("neck_tilt", "head_pan", "head_tilt")]
     ctrl_stick, ctrl_reference = np.array(stick.ctrl[:-1])[:, head], np.array(reference.ctrl)[:, head]
@@ -342,7 +344,7 @@ def probe_runs(monkeypatch, probe, tmp_path, scenario: str, frames: int = 128):
             else ers7.all_locators()
         )
         (folder / "locators.txt").write_text("".join(locator + "\n" for locator in locators))
-    _, sim = run_stick(project, frames, folders[0])
+    _, sim, _ = run_stick(project, frames, folders[0])
     reference = run_reference(monkeypatch, controller, frames - 1, tmp_path / "out", workdir=folders[1])
     return (*folders, sim, reference.sim)
 
@@ -441,11 +443,19 @@ def test_errors_end_the_controller_with_the_python_apis_message(probe, tmp_path)
         folder = tmp_path / scenario.replace(" ", "_")
         folder.mkdir()
         (folder / "scenario.txt").write_text(scenario + "\n")
-        _, sim = run_stick(probe[1], 64, folder)
+        _, sim, run = run_stick(probe[1], 64, folder)
         assert sim.time_ms == 0  # shut down before the first frame
         assert f"controller error at t = 0.000 s: {message}" in (folder / "console.log").read_text()
+        assert run.controller_error.startswith(f"controller error at t = 0.000 s: {message}")  # the run failed
         assert (folder / "died.txt").exists() == (scenario == "step")  # the others fail before robot_die
     assert (tmp_path / "missing_motion" / "probe.txt").read_text() == f"{missing.value}\n"
+    out = tmp_path / "cli"  # the command: exit 1 and run.json "failed", as for a Python controller's error
+    out.mkdir()
+    (out / "scenario.txt").write_text("control p\n")
+    assert main(["run", str(probe[1]), "--duration", "0.1", "--out", str(out)]) == 1
+    run_json = json.loads((out / "run.json").read_text())
+    assert run_json["status"] == "failed"
+    assert run_json["error"] == f"memory stick MS: controller error at t = 0.000 s: {control_p.value}"
 
 
 def test_a_memory_stick_is_cross_compiled_and_has_no_keyboard(probe, tmp_path, monkeypatch):

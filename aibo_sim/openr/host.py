@@ -244,6 +244,7 @@ class MemoryStickRun:
         self.end_ms: int | None = None
         self.lookahead = protocol.LOOKAHEAD_FRAMES  # frames an answer may foretell (0: a message every frame)
         self.shutdown = False
+        self.controller_error: str | None = None  # the wrapper's, when its controller failed
         self.object_names: list[str] = []
         self._sensors = SensorFrame(sim)
         self._locators = primitives()
@@ -581,6 +582,8 @@ class MemoryStickRun:
             self._sound[start] = np.frombuffer(data, "<i2", offset=4).copy()
         elif kind == protocol.RECORDS["SHUTDOWN"]:
             self.shutdown = True
+        elif kind == protocol.RECORDS["CONTROLLER_FAILED"]:
+            self.controller_error = self.controller_error or bytes(data).decode("utf-8", "replace")
         elif kind == protocol.RECORDS["IMAGE_SLOT"]:
             self._image_slot = _U32.unpack(data)[0]
 

@@ -19,6 +19,8 @@
 extern "C" int aibo_controller_main_c(int, char**) __attribute__((weak));
 int aibo_controller_main_cc() __attribute__((weak));
 int aibo_controller_main_cc(int, char**) __attribute__((weak));
+/* aibo-sim's host runtime: told that the controller failed (the robot has none: null there). */
+extern "C" void aibo_sim_controller_failed(const char* message) __attribute__((weak));
 
 /* The robot's sizes of the OPEN-R structures read and written here (the host SDK's headers
  * keep them on a 64-bit machine too); a negative array size stops the compiler otherwise. */
@@ -188,7 +190,10 @@ bool Controller::Protected(void (*call)(void*), void* argument) {
 }
 
 void Controller::Fail(const char* message) {
-    OSYSPRINT(("controller error at t = %.3f s: %s\n", robot_.TimeMs() / 1000.0, message));
+    char text[1024];
+    snprintf(text, sizeof text, "controller error at t = %.3f s: %s", robot_.TimeMs() / 1000.0, message);
+    OSYSPRINT(("%s\n", text));
+    if (aibo_sim_controller_failed != 0) aibo_sim_controller_failed(text);
     if (state_ == RUNNING) End(true);
     if (failJump_ == 0) abort();  /* not called from the controller's code: a bug of the wrapper */
     longjmp(*failJump_, 1);

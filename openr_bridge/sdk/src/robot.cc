@@ -24,6 +24,7 @@
  */
 #include <deque>
 #include <stdint.h>
+#include <string.h>
 #include <math.h>
 #include <OPENR/OObject.h>
 #include <OPENR/OSubject.h>
@@ -719,6 +720,12 @@ void PlayFrame() {
 void StopRun() {
     stopped = true;
     Record(AIBO_OPENR_RECORD_SHUTDOWN, "", 0);
+}
+
+/* aibo-sim's extension for the wrapper object (which declares it weak: the robot has none): its
+ * controller failed, so the run does too, not only the robot's shutdown that follows. */
+extern "C" void aibo_sim_controller_failed(const char* message) {
+    Record(AIBO_OPENR_RECORD_CONTROLLER_FAILED, message, strlen(message));
 }
 
 std::vector<std::string> Lookahead(longword frame, size_t limit) {
