@@ -541,7 +541,14 @@ def run_controller(
             writer.write_run_json(
                 {"controller": done.pop("controller"), "backend": done.pop("backend"), "status": "done", **done}
             )
-    except (ControllerFailed, SimulationDiverged, RenderingUnavailable, KeyboardInterrupt, OSError) as failure:
+    except (
+        ControllerFailed,
+        SimulationDiverged,
+        RenderingUnavailable,
+        KeyboardInterrupt,
+        OSError,
+        openr_bridge.ConfigError,  # a connection the objects' services refuse, found as they start
+    ) as failure:
         if writer is not None:  # the frames so far stay, and run.json says how the run ended
             with contextlib.suppress(OSError):  # a full disk may refuse this too: run.json says "incomplete"
                 record_end("interrupted" if isinstance(failure, KeyboardInterrupt) else "failed", failure)

@@ -121,12 +121,16 @@ def test_a_controllers_options_are_refused_with_a_stick(objects, tmp_path, capsy
 
 def test_a_bad_connect_cfg_exits_2_naming_its_line(objects, tmp_path, capsys):
     stick = make_stick(tmp_path / "ms", objects, ["JPROBE"], JOINT_PROBE + "Nobody.X.Y.S JointProbe.Z.Y.O\n")
-    assert main(["run", str(stick), "--duration", "0.1"]) == 2
+    out = tmp_path / "out"
+    assert main(["run", str(stick), "--duration", "0.1", "--out", str(out)]) == 2
     err = capsys.readouterr().err
-    assert err.startswith(
-        f"aibo-sim: error: {stick}/OPEN-R/MW/CONF/CONNECT.CFG:3: no object named 'Nobody' "
+    message = (
+        f"{stick}/OPEN-R/MW/CONF/CONNECT.CFG:3: no object named 'Nobody' "
         "registers Nobody.X.Y.S (the objects: JointProbe, OVirtualRobotAudioComm, OVirtualRobotComm"
     )
+    assert err.startswith(f"aibo-sim: error: {message}")
+    run_json = json.loads((out / "run.json").read_text())  # found as the objects start: the run failed
+    assert run_json["status"] == "failed" and run_json["error"].startswith(message)
 
 
 def test_one_sigterm_ends_a_stick_run_with_143_and_an_honest_run_json(objects, tmp_path):
