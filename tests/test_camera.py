@@ -399,7 +399,7 @@ def test_settings_and_profiles_reject_bad_values():
         CameraSettings(gain="max")
     with pytest.raises(ValueError, match="profile must be one of"):
         Simulation(camera=CameraConfig("fisheye"))
-    with pytest.raises(ValueError, match="not finite"):
+    with pytest.raises(ValueError, match="sensitivity must be a finite number > 0, not nan"):
         CameraProfile("x", sensitivity=float("nan"))
     with pytest.raises(ValueError, match="finite"):
         RobotColour(gain=(1.0, float("inf"), 1.0))
@@ -841,3 +841,21 @@ def test_exposure_scales_linear_light_through_the_gamma(gain, shutter, factor):
         ycrcb = sensor.expose(np.full((height + 4, width + 4, 4), code, np.uint8), (0.0, 0.0), 0, 0)
         y = profile.black_level + (profile.white_level - profile.black_level) / 255 * expected
         assert np.all(ycrcb[..., 0] == math.floor(y + 0.5)) and np.all(ycrcb[..., 1:] == 128), (code, y)
+
+
+@pytest.mark.parametrize(
+    "option, message",
+    [
+        ({"lens": "bogus"}, "lens must be one of tekkotsu, sony, pinhole, not 'bogus'"),
+        ({"noise_sigma": (1.0, 2.0)}, r"noise_sigma must be 3 finite numbers, not \(1.0, 2.0\)"),
+        ({"noise_sigma": (1.0, -2.0, 1.0)}, "noise_sigma must be 3 numbers >= 0"),
+        ({"chroma_gain": (1.0, math.nan)}, "chroma_gain must be 2 finite numbers"),
+        ({"readout_ms": -1.0}, "readout_ms must be a finite number >= 0, not -1.0"),
+        ({"sensitivity": 0.0}, "sensitivity must be a finite number > 0, not 0.0"),
+        ({"white_level": 300.0}, r"the levels must be 0 <= y_floor <= black_level < white_level <= 255"),
+        ({"latency_frames": 1.5}, "latency_frames must be a whole number >= 0, not 1.5"),
+    ],
+)
+def test_a_profile_option_out_of_range_is_named(option, message):
+    with pytest.raises(ValueError, match=rf"^camera profile 'ers7': {message}"):
+        PROFILES["ers7"].with_options(**option)

@@ -56,7 +56,7 @@ import numpy as np
 
 from openr_bridge import CAMERA_DEFAULTS, CAMERA_SETTINGS, LAYER_SIZE
 
-from .lens import Warp
+from .lens import LENSES, Warp
 
 GAIN_STEPS = {"low": -1, "mid": 0, "high": 1}  # -6, 0, +6 dB: each step doubles the signal
 SHUTTER_S = {"slow": 1 / 50, "mid": 1 / 100, "fast": 1 / 200}
@@ -215,27 +215,35 @@ class CameraProfile:
     robot: RobotColour = field(default_factory=RobotColour)
 
     def __post_init__(self):
-        numbers = (
-            self.sensitivity,
-            self.black_level,
-            self.y_floor,
-            self.white_level,
-            *self.chroma_gain,
-            *self.noise_sigma,
-            self.softness_px,
-            self.readout_ms,
-        )
-        if (
-            not all(math.isfinite(v) for v in numbers)
-            or self.sensitivity <= 0
-            or min(self.noise_sigma) < 0
-            or self.softness_px < 0
-            or self.readout_ms < 0
-            or not 0 <= self.y_floor <= self.black_level < self.white_level <= 255
-        ):
-            raise ValueError(f"camera profile {self.name!r}: parameters out of range or not finite")
-        if not isinstance(self.latency_frames, int) or self.latency_frames < 0:
-            raise ValueError(f"camera profile {self.name!r}: latency_frames must be a whole number >= 0")
+        """ValueError naming the first parameter that is not one this model takes."""
+
+        def finite(value) -> bool:
+            return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+
+        def bad(parameter: str, wanted: str):
+            value = getattr(self, parameter)
+            raise ValueError(f"camera profile {self.name!r}: {parameter} must be {wanted}, not {value!r}")
+
+        if self.lens not in LENSES:
+            bad("lens", "one of " + ", ".join(LENSES))
+        for parameter, count in (("chroma_gain", 2), ("noise_sigma", 3)):
+            value = getattr(self, parameter)
+            if not (isinstance(value, (tuple, list)) and len(value) == count and all(map(finite, value))):
+                bad(parameter, f"{count} finite numbers")
+        if min(self.noise_sigma) < 0:
+            bad("noise_sigma", "3 numbers >= 0")
+        for parameter, low, above in (("sensitivity", 0, True), ("softness_px", 0, False), ("readout_ms", 0, False)):
+            value = getattr(self, parameter)
+            if not (finite(value) and (value > low if above else value >= low)):
+                bad(parameter, f"a finite number {'>' if above else '>='} {low}")
+        levels = (self.y_floor, self.black_level, self.white_level)
+        if not (all(map(finite, levels)) and 0 <= self.y_floor <= self.black_level < self.white_level <= 255):
+            raise ValueError(
+                f"camera profile {self.name!r}: the levels must be 0 <= y_floor <= black_level < white_level <= 255, "
+                f"not {levels}"
+            )
+        if not isinstance(self.latency_frames, int) or isinstance(self.latency_frames, bool) or self.latency_frames < 0:
+            bad("latency_frames", "a whole number >= 0")
 
     def with_options(self, **options) -> CameraProfile:
         """A copy with ``options`` (field names) replaced; ValueError for values out of range."""
