@@ -215,6 +215,11 @@ def test_no_compiler_is_exit_2_naming_it_and_how_to_install_it(tmp_path, monkeyp
         "aibo-sim: error: no compiler 'no-such-cc' found: this controller needs a C "
         "compiler (Debian/Ubuntu: apt-get install gcc), or set CC\n"
     )
+    monkeypatch.setenv("CC", "cc -Wall")  # flags in CC: the compiler is there, the variable is not one
+    assert main(["run", str(source)]) == 2
+    assert capsys.readouterr().err == (
+        "aibo-sim: error: CC='cc -Wall': set CC to the compiler alone ('cc'): aibo-sim gives it its flags\n"
+    )
 
 
 def test_a_crash_is_exit_1_with_the_signal_and_time_and_keeps_run_json_and_frames(tmp_path, capsys):

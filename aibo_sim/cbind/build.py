@@ -78,13 +78,19 @@ def local_headers(sources: list[Path]) -> list[Path]:
     return sorted(found)
 
 
-def _compiler(kind: str) -> str:
-    """The path of the C (``cc``) or C++ (``c++``) compiler; CompileError naming it when missing."""
+def _compiler(kind: str, needed_by: str = "this controller") -> str:
+    """The path of the C (``cc``) or C++ (``c++``) compiler; CompileError naming it when missing
+    (``needed_by`` says what needs it)."""
     variable = "CC" if kind == "cc" else "CXX"
     name = os.environ.get(variable) or kind
     found = shutil.which(name)
     if found is None:
-        raise CompileError(f"no compiler {name!r} found: this controller needs {INSTALL_HINT[kind]}, or set {variable}")
+        words = name.split()
+        if len(words) > 1 and shutil.which(words[0]):
+            raise CompileError(
+                f"{variable}={name!r}: set {variable} to the compiler alone ({words[0]!r}): aibo-sim gives it its flags"
+            )
+        raise CompileError(f"no compiler {name!r} found: {needed_by} needs {INSTALL_HINT[kind]}, or set {variable}")
     return found
 
 

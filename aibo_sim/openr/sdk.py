@@ -94,7 +94,7 @@ def _cache_root() -> Path:
 def sdk_root() -> Path:
     """The SDK's folder, made if it is not in the cache; CompileError when the host compiler is
     missing or refuses the library (a bug of ours: the message is the compiler's)."""
-    cxx, cc = _compiler("c++"), _compiler("cc")
+    cxx, cc = _compiler("c++", "the host OPEN-R SDK"), _compiler("cc", "the host OPEN-R SDK")
     root = _cache_root() / _key(cxx, cc)
     if (root / "OPEN_R" / "bin" / "openr-host").is_file():
         return root
