@@ -101,8 +101,12 @@ def check_python_controller(path: Path) -> None:
     the file and line of a syntax error (bad input, found before anything is run or written)."""
     if not path.is_file():
         main_files = " or ".join(path.name + suffix for suffix in C_SUFFIXES)
+        stick = next((memory_stick_folder(p) for p in path.resolve().parents if memory_stick_folder(p)), None)
         what = (
-            f"a folder with no {main_files} (a C or C++ controller folder holds its main file under the folder's name)"
+            f"a folder inside the memory stick {stick}: run the stick's folder"
+            if path.is_dir() and stick is not None
+            else f"a folder with no {main_files} (a C or C++ controller folder holds its main file under the "
+            "folder's name) and no memory stick (MS/OPEN-R/MW/CONF/OBJECT.CFG)"
             if path.is_dir()
             else "not a regular file"
             if path.exists()

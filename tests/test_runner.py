@@ -116,7 +116,17 @@ def test_a_syntax_error_is_bad_input_found_before_anything_runs(tmp_path, capsys
         )
     assert sorted(p.name for p in tmp_path.iterdir()) == ["syntax.py"]  # no folder made
     assert main(["run", str(tmp_path)]) == 2
-    assert f"{tmp_path}: a folder with no {tmp_path.name}.c or {tmp_path.name}.cc or" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert f"{tmp_path}: a folder with no {tmp_path.name}.c or {tmp_path.name}.cc or" in err
+    assert err.rstrip().endswith("and no memory stick (MS/OPEN-R/MW/CONF/OBJECT.CFG)")
+    conf = tmp_path / "program" / "MS" / "OPEN-R" / "MW" / "CONF"
+    conf.mkdir(parents=True)
+    (conf / "OBJECT.CFG").write_text("/MS/OPEN-R/MW/OBJS/X.BIN\n")
+    assert main(["run", str(conf.parents[1])]) == 2  # a folder of the stick, not the program's or the stick's
+    assert capsys.readouterr().err == (
+        f"aibo-sim: error: {conf.parents[1]}: a folder inside the memory stick {conf.parents[2]}: "
+        "run the stick's folder\n"
+    )
 
 
 def test_cli_bad_input_exits_2_with_a_clear_message(tmp_path, capsys):
