@@ -90,6 +90,11 @@ class OpenRSystem:
         if name.object in known:
             services = sorted(key for key in self._gates if key.startswith(name.object + "."))
             problem = f"{name.object} has no service {_cut(name)} (it has {', '.join(services)})"
+            if name.object == "Controller":  # the report's wrapper, modelled here for its camera alone
+                problem += (
+                    "; this model of the wrapper takes the camera's image only: a stick built by "
+                    "aibo-sim build-ms runs as itself (aibo-sim run ITS_FOLDER)"
+                )
         else:
             problem = f"unknown object {_cut(repr(name.object))} (known: {', '.join(known)})"
             problem += "".join(

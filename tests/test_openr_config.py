@@ -132,6 +132,7 @@ def test_unknown_objects_and_services():
     with pytest.raises(ConfigError, match="Controller has no service Controller.Camera") as caught:
         OpenRSystem(parse_connect_cfg(CAMERA_LINE.replace("Controller.Image", "Controller.Camera")))
     assert str(caught.value).startswith("CONNECT.CFG:1:")
+    assert str(caught.value).endswith("a stick built by aibo-sim build-ms runs as itself (aibo-sim run ITS_FOLDER)")
 
 
 def write(path, text):
