@@ -55,17 +55,18 @@ class ParameterError(ValueError):
 
 def start_values(name: str, values, count: int) -> tuple[float, ...] | None:
     """``values`` (a pose or ball position given to a function, not through argparse) as a tuple
-    of ``count`` finite floats, or None; a ValueError naming the parameter ``name`` otherwise."""
+    of ``count`` finite floats, or None; a ``ParameterError`` naming the parameter ``name`` otherwise."""
     if values is None:
         return None
     try:
         numbers = tuple(float(v) for v in values)
     except (TypeError, ValueError):
-        raise ValueError(f"{name} must be {count} numbers, not {values!r}") from None
+        raise ParameterError.at(name, repr(values), f"must be {count} numbers") from None
+    shown = " ".join(map(str, numbers))
     if len(numbers) != count or not all(math.isfinite(v) for v in numbers):
-        raise ValueError(f"{name} must be {count} finite numbers, not {' '.join(map(str, numbers))}")
+        raise ParameterError.at(name, shown, f"must be {count} finite numbers")
     if any(abs(v) > MAX_MAGNITUDE for v in numbers):
-        raise ValueError(f"{name} {' '.join(map(str, numbers))}: out of range (at most {MAX_MAGNITUDE:g} in magnitude)")
+        raise ParameterError.at(name, shown, f"out of range (at most {MAX_MAGNITUDE:g} in magnitude)")
     return numbers
 
 

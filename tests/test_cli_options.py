@@ -194,12 +194,13 @@ def test_runtime_bad_input_exits_2_with_one_line(tmp_path, capsys):
 
 
 def test_the_world_config_refuses_non_finite_pose_and_ball_naming_them():
-    with pytest.raises(ValueError, match="^pose must be 3 finite numbers, not 0.0 nan 0.0$"):
+    with pytest.raises(ParameterError, match="^pose 0.0 nan 0.0: must be 3 finite numbers$"):
         WorldConfig(pose=(0.0, math.nan, 0.0))
-    with pytest.raises(ValueError, match="^ball must be 2 finite numbers, not inf 0.0$"):
+    with pytest.raises(ParameterError, match="^ball inf 0.0: must be 2 finite numbers$"):
         WorldConfig(ball=(math.inf, 0.0))
-    with pytest.raises(ValueError, match="^pose must be 3 finite numbers, not 1.0 2.0$"):
+    with pytest.raises(ParameterError, match="^pose 1.0 2.0: must be 3 finite numbers$") as caught:
         WorldConfig(pose=(1.0, 2.0))
+    assert error_line(caught.value) == "--pose 1.0 2.0: must be 3 finite numbers"
     with pytest.raises(ParameterError, match="^seed -1: must be a whole number") as caught:
         WorldConfig(seed=-1)
     assert error_line(caught.value).startswith("--seed -1: ")
@@ -240,7 +241,7 @@ def test_the_library_names_parameters_and_the_command_line_its_options(tmp_path)
     assert error_line(_in_shard(error, tmp_path / "shard_1")) == (
         "shard_1: --scene pose.xml: the robot starts inside a wall; place it with --pose"
     )
-    with pytest.raises(ValueError, match="^ball must be 2 finite numbers, not nan 0.0$"):
+    with pytest.raises(ParameterError, match="^ball nan 0.0: must be 2 finite numbers$"):
         motions.play_motion(motions.motions()["STAND.MTN"], world=WorldConfig(ball=(math.nan, 0.0)))
 
 
