@@ -438,7 +438,8 @@ class Simulation:
     ``robots`` (``team.RobotSpec``s; default one robot, the scene's own) puts several robots on
     the field: this object is robot 1, ``world.robots`` lists them all, each a ``Simulation``
     of its own robot (servos, sensors, LEDs, camera and noise streams) sharing the world (model,
-    data, time, ball): stepping any of them steps the world.
+    data, time, ball): stepping any of them steps the world. They are checked as
+    ``team.check_robots`` does (a TeamError names the robot: a duplicate, a pose off the carpet).
 
     ``command_latency_frames``: 8 ms frames between a set-point and the servo acting on it. On
     the robot, OPEN-R plays joint commands from a queue of 4-frame command vectors, so a
@@ -457,12 +458,12 @@ class Simulation:
         command_latency_frames: int = 0,
         robots=None,
     ):
-        from .team import DEFAULT_ROBOTS
+        from .team import DEFAULT_ROBOTS, check_robots
 
         World(
             self,
             scene,
-            DEFAULT_ROBOTS if robots is None else robots,
+            DEFAULT_ROBOTS if robots is None else check_robots(robots, "robots"),
             seed=seed,
             keyframe=keyframe,
             camera=camera or CameraConfig(),

@@ -430,3 +430,17 @@ def test_an_api_call_from_another_thread_of_a_match_controller_says_why_it_has_n
     assert (tmp_path / "out" / "error.txt").read_text() == (
         "no robot in thread 'reader': in a match, a controller's API calls must come from the thread that runs it"
     )
+
+
+@pytest.mark.parametrize(
+    "robots, message",
+    [
+        ([], "^robots: no robots$"),
+        ([RobotSpec("red", 4), RobotSpec("red", 4)], "red 4 is also robot 1"),
+        ([RobotSpec("red", 4, (9.0, 0.0, 0.0))], "pose 9,0,0 is off the carpet"),
+        ([RobotSpec("green", 4)], "unknown team 'green'"),
+    ],
+)
+def test_a_simulation_checks_its_robots(robots, message):
+    with pytest.raises(ValueError, match=message):
+        Simulation(camera=CameraConfig("ideal"), robots=robots)
