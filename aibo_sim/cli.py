@@ -239,11 +239,17 @@ def _read_motion(name: str):
     """The motion ``name`` names: an MTN file, a bundled motion's name, or ``ARCHIVE.ODA:MOTION``,
     a motion in one of Sony's ODA archives (an archive alone: an error listing its motions)."""
     from .mtn import ODA_MAGIC, MtnError, read_mtn, read_oda_motion
+    from .sim import models_dir
 
     path = _motion_file(name)
     archive, _, motion = name.rpartition(":")
-    if archive and not path.exists() and _motion_file(archive).exists():
-        return read_oda_motion(_motion_file(archive), motion)
+    if not (path.exists() or path.is_symlink()):
+        if archive and _motion_file(archive).exists():
+            return read_oda_motion(_motion_file(archive), motion)
+        if archive:
+            raise FileNotFoundError(f"{archive}: no such ODA archive (in {name!r})")
+        bundled = ", ".join(sorted(p.name for p in (models_dir() / "motions").glob("*.MTN")))
+        raise FileNotFoundError(f"{name}: no such motion file, nor a bundled motion ({bundled})")
     try:
         return read_mtn(path)
     except MtnError:

@@ -17,7 +17,7 @@ from aibo_sim import ers7
 from aibo_sim.cli import main
 from aibo_sim.mtn import Motion, MtnError, write_mtn
 from aibo_sim.robot import DeviceError, Robot
-from aibo_sim.sim import Simulation
+from aibo_sim.sim import Simulation, models_dir
 
 LF_J1 = "PRM:/r2/c1-Joint2:21"
 HEAD_PAN = "PRM:/r1/c1/c2-Joint2:12"
@@ -224,6 +224,17 @@ def test_control_characters_in_mtn_strings_are_escaped_when_printed(robot, tmp_p
     assert main(["mtn", "info", str(path), "--json"]) == 0
     out = capsys.readouterr().out
     assert json.loads(out)["name"] == EVIL and "\x1b" not in out  # JSON escapes them itself
+
+
+@pytest.mark.parametrize("command", ["info", "play"])
+def test_a_missing_motion_on_the_command_line_lists_the_bundled_ones(command, tmp_path, capsys):
+    bundled = ", ".join(sorted(p.name for p in (models_dir() / "motions").glob("*.MTN")))
+    assert "SIT.MTN" in bundled
+    assert main(["mtn", command, "SIT"]) == 2
+    assert capsys.readouterr().err == f"aibo-sim: error: SIT: no such motion file, nor a bundled motion ({bundled})\n"
+    archive = tmp_path / "NOSUCH.ODA"
+    assert main(["mtn", command, f"{archive}:WALK"]) == 2
+    assert capsys.readouterr().err == f"aibo-sim: error: {archive}: no such ODA archive (in '{archive}:WALK')\n"
 
 
 def test_a_missing_device_with_control_characters_is_escaped_in_the_error(robot, tmp_path):
