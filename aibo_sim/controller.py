@@ -29,6 +29,7 @@ import time
 
 import numpy as np
 
+from openr_bridge.errors import ImageAccessError
 from openr_bridge.ers7_camera import (
     ocamparamGAIN_HIGH,
     ocamparamGAIN_LOW,
@@ -522,5 +523,5 @@ __all__ = (
         if name.split("_")[0] in {"robot", "servo", "camera", "distance", "touch", "accelerometer", "led", "mtn"}
     ]
     + [name for name in dir() if name.startswith(("CAMERA_", "ocamparam"))]
-    + ["SimulationEnd", "DeviceError"]
+    + ["SimulationEnd", "DeviceError", "MtnError", "ImageAccessError"]
 )

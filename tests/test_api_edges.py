@@ -226,6 +226,15 @@ def test_control_characters_in_mtn_strings_are_escaped_when_printed(robot, tmp_p
     assert json.loads(out)["name"] == EVIL and "\x1b" not in out  # JSON escapes them itself
 
 
+def test_the_star_import_gives_the_errors_the_api_raises():
+    namespace = {}
+    exec("from aibo_sim.controller import *", namespace)  # as a controller imports the API
+    for name in ("DeviceError", "MtnError", "ImageAccessError", "SimulationEnd"):
+        assert namespace[name] is getattr(api, name)
+    with pytest.raises(namespace["ImageAccessError"]):
+        api.camera_image_get_red(bytes(208 * 160 * 3), 208, 208, 0)
+
+
 @pytest.mark.parametrize("command", ["info", "play"])
 def test_a_missing_motion_on_the_command_line_lists_the_bundled_ones(command, tmp_path, capsys):
     bundled = ", ".join(sorted(p.name for p in (models_dir() / "motions").glob("*.MTN")))
