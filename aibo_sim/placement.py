@@ -14,6 +14,7 @@ from pathlib import Path
 
 from .config import CameraConfig, ParameterError
 from .sim import ModelError, Simulation
+from .team import off_the_carpet
 
 PLACEMENT_OVERLAP_M = 0.005  # a placed robot or ball sunk deeper than this into something is an error
 
@@ -73,6 +74,9 @@ def place(sim, pose: tuple[float, float, float] | None = None, ball: tuple[float
     first step would fling apart; naming ``scene`` when the scene's own start does."""
     if pose is not None:
         x, y, yaw_deg = pose
+        problem = off_the_carpet(x, y) if sim.scene is None else None  # a scene of one's own may be larger
+        if problem is not None:
+            raise ParameterError.at("pose", _given(pose), f"{problem} of the default field")
         sim.place_robot(x, y, math.radians(yaw_deg))
     _place_ball(sim, ball)
     placed = {"the robot": ("pose", pose), "the ball": ("ball", ball)}

@@ -118,9 +118,15 @@ def _pose_problem(pose: Sequence[float]) -> str | None:
         return f"pose {_show(pose)} is not finite numbers"
     if abs(pose[2]) > MAX_MAGNITUDE:
         return f"pose {_show(pose)}: yaw out of range (at most {MAX_MAGNITUDE:g} degrees in magnitude, as --pose)"
-    for axis, value, limit in (("x", pose[0], POSE_LIMITS[0]), ("y", pose[1], POSE_LIMITS[1])):
+    problem = off_the_carpet(pose[0], pose[1])
+    return None if problem is None else f"pose {_show(pose)} is {problem}"
+
+
+def off_the_carpet(x: float, y: float) -> str | None:
+    """``off the carpet (|x| <= 3 m)`` when (x, y) lies beyond the field's carpet, else None."""
+    for axis, value, limit in (("x", x, POSE_LIMITS[0]), ("y", y, POSE_LIMITS[1])):
         if abs(value) > limit:
-            return f"pose {_show(pose)} is off the carpet (|{axis}| <= {limit:g} m)"
+            return f"off the carpet (|{axis}| <= {limit:g} m)"
     return None
 
 
