@@ -371,7 +371,8 @@ class Robot:
             return self.devices[name]
         except (KeyError, TypeError):
             near = difflib.get_close_matches(str(name), list(self.devices), n=3, cutoff=0.5)
-            hint = f"; nearest: {', '.join(near)}" if near else ""
+            example = next(iter(self.devices))
+            hint = f"; nearest: {', '.join(near)}" if near else f"; devices are OPEN-R locators, such as {example}"
             raise DeviceError(f"no device named {name!r} on the ERS-7{hint}") from None
 
     def step(self, ms: int) -> None:

@@ -28,6 +28,9 @@ def test_unknown_device_lists_the_nearest_names(robot):
     with pytest.raises(DeviceError, match=r"nearest: PRM:/r2/c1-Joint2:21"):
         api.robot_get_device("PRM:/r2/c1-Joint2:2l")
     assert api.robot_get_device(LF_J1) == api.robot_get_device(LF_J1) > 0
+    for nothing_like_a_locator in ("", None, "head"):  # no name near: what names look like
+        with pytest.raises(DeviceError, match=r"; devices are OPEN-R locators, such as PRM:/r1/c1-Joint2:11$"):
+            api.robot_get_device(nothing_like_a_locator)
 
 
 def test_tags_are_checked(robot):
