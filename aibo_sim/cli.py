@@ -120,6 +120,16 @@ def _run(args) -> int:
         f"in {summary.wall_s:.2f} s (real-time factor {summary.real_time_factor:.1f}), "
         f"{summary.camera_frames} camera frames written" + (f" to {args.out}" if args.out else "")
     )
+    if summary.simulated_s < args.duration - 1e-6:  # not an error: said, as a forgotten robot_run goes unseen
+        ended, why = (
+            ("its objects shut the robot down", "")
+            if summary.backend == MEMORY_STICK
+            else ("the controller ended", " (a controller steps with robot_step, or with robot_run's function)")
+        )
+        print(
+            f"aibo-sim: note: {ended} at t = {summary.simulated_s:.3f} s, before --duration {args.duration:g} s{why}",
+            file=sys.stderr,
+        )
     return 0
 
 
@@ -394,7 +404,14 @@ def build_parser() -> argparse.ArgumentParser:
     )
     play.add_argument("file", type=path_text, help="an MTN file, the name of a bundled motion, or ARCHIVE.ODA:MOTION")
     play.add_argument("--repeat", type=int, default=1)
-    play.add_argument("--mode", choices=MTN_MODES, default="openr")
+    play.add_argument(
+        "--mtn-mode",
+        "--mode",
+        dest="mode",
+        choices=MTN_MODES,
+        default="openr",
+        help="how the motion plays, as run's --mtn-mode (--mode: its earlier name)",
+    )
     play.add_argument("--json", action="store_true")
     play.add_argument(
         "--no-ball", action="store_true", help="no ball in the scene: the default, unless --ball places one"

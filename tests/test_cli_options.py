@@ -398,3 +398,13 @@ def test_a_dumps_and_a_renders_records_read_back_as_configs(tmp_path):
     assert main(["render", "--out", str(tmp_path / "render"), "--settle", "0", *flags]) == 0
     recorded = json.loads((tmp_path / "render" / "head_camera.json").read_text())
     assert CameraConfig.from_dict(recorded["camera"]) == CameraConfig("ideal", True, camera.settings)
+
+
+def test_mtn_play_takes_runs_mtn_mode_option(capsys):
+    reports = []
+    for option in ("--mtn-mode", "--mode"):  # run's and dump's name, and mtn play's earlier one
+        assert main(["mtn", "play", "STAND.MTN", option, "webots", "--json"]) == 0
+        reports.append(json.loads(capsys.readouterr().out))
+    assert main(["mtn", "play", "STAND.MTN", "--json"]) == 0
+    openr = json.loads(capsys.readouterr().out)
+    assert reports[0] == reports[1] and reports[0]["duration_s"] != openr["duration_s"]

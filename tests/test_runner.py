@@ -242,3 +242,16 @@ def test_run_json_describes_the_pictures_the_backend_serves(tmp_path):
     assert (full["width"], full["height"], served["width"], served["height"]) == (416, 320, 208, 160)
     assert frame.shape == (160, 208, 3) and served["fx"] == pytest.approx(full["fx"] / 2, abs=1e-3)
     assert json.loads((tmp_path / "openr" / "run.json").read_text())["camera"] == served
+
+
+def test_a_controller_that_ends_before_the_duration_is_said_to_have_ended(tmp_path, capsys):
+    forgot = tmp_path / "forgot.py"  # robot_run(run) left out: nothing steps
+    forgot.write_text("from aibo_sim.controller import *\ndef run(ms):\n    return 32\n")
+    assert main(["run", str(forgot), "--duration", "1", "--camera-profile", "ideal"]) == 0
+    assert capsys.readouterr().err == (
+        "aibo-sim: note: the controller ended at t = 0.000 s, before --duration 1 s "
+        "(a controller steps with robot_step, or with robot_run's function)\n"
+    )
+    forgot.write_text(forgot.read_text() + "robot_run(run)\n")
+    assert main(["run", str(forgot), "--duration", "1", "--camera-profile", "ideal"]) == 0
+    assert capsys.readouterr().err == ""
