@@ -11,6 +11,7 @@ import select
 import signal
 import sys
 import threading
+import time
 from pathlib import Path
 
 import numpy as np
@@ -444,6 +445,9 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 STOP_GRACE_S = 10.0  # after a signal, the time a command has to stop cleanly (robot_die, run.json, temporary files)
+# The same signal again within this is the one stop, sent twice: `timeout` and `kill -- -PGID`
+# send it to the process and to its process group.
+DUPLICATE_SIGNAL_S = 0.25
 
 
 class Terminated(KeyboardInterrupt):
@@ -456,11 +460,13 @@ class Terminated(KeyboardInterrupt):
 class _SignalsStopCleanly:
     """While a command runs in the main thread, Ctrl-C raises KeyboardInterrupt and SIGTERM
     ``Terminated``. A command still running ``STOP_GRACE_S`` after the first (a controller that
-    catches it and goes on), or a second signal, ends the process at once with the signal's status."""
+    catches it and goes on), or a second signal (not the first's duplicate: ``DUPLICATE_SIGNAL_S``),
+    ends the process at once with the signal's status."""
 
     def __init__(self):
         self._deadline: threading.Timer | None = None
         self._previous: dict[int, object] = {}
+        self._first = (0, 0.0)  # the first signal's number and time.monotonic()
 
     def __enter__(self) -> None:
         if threading.current_thread() is threading.main_thread():
@@ -478,7 +484,10 @@ class _SignalsStopCleanly:
         terminated = number == signal.SIGTERM
         status, name = (EXIT_TERMINATED, "terminated (SIGTERM)") if terminated else (EXIT_INTERRUPTED, "interrupted")
         if self._deadline is not None:
+            if self._first[0] == number and time.monotonic() - self._first[1] < DUPLICATE_SIGNAL_S:
+                return  # the first one, sent to the process and to its group
             _stop_now(status, f"{name} again: stopped at once")
+        self._first = (number, time.monotonic())
         self._deadline = threading.Timer(
             STOP_GRACE_S, _stop_now, (status, f"{name}, and still running {STOP_GRACE_S:g} s later: stopped at once")
         )

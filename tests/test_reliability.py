@@ -581,3 +581,48 @@ def test_the_docs_output_folders_are_ignored_by_git():
         ["git", "check-ignore", *(f"{f}/x" for f in sorted(folders))], cwd=ROOT, capture_output=True, text=True
     ).stdout.split()
     assert sorted(ignored) == sorted(f"{f}/x" for f in folders)
+
+
+@pytest.mark.parametrize("robots", [[], ["--robot", "red:1", "--robot", "blue:1"]], ids=["one robot", "a match"])
+@pytest.mark.parametrize("signal_name, status", [("SIGTERM", 143), ("SIGINT", 130)])
+def test_a_signal_sent_to_the_process_and_to_its_group_is_one_stop(tmp_path, robots, signal_name, status):
+    # `timeout` and `kill -- -PGID` send it twice, a moment apart: the run stops cleanly once, not
+    # "again: stopped at once" with run.json left "incomplete".
+    ctl = tmp_path / "ctl.py"
+    ctl.write_text(
+        "import os, signal, threading, time\nfrom aibo_sim.controller import *\n"
+        "def twice():\n"
+        f"    os.kill(os.getpid(), signal.{signal_name})\n"
+        "    time.sleep(0.05)\n"
+        f"    os.kill(os.getpid(), signal.{signal_name})\n"
+        "robot_die(lambda: time.sleep(0.3))  # still stopping when the second one comes\n"
+        "robot_step(16)\n"
+        "try:  # the first robot here sends it\n"
+        "    os.close(os.open('signalled', os.O_CREAT | os.O_EXCL))\n"
+        "    threading.Thread(target=twice).start()\n"
+        "except FileExistsError:\n"
+        "    pass\n"
+        "while True:\n    robot_step(8)\n"
+    )
+    out = tmp_path / "out"
+    command = [sys.executable, "-m", "aibo_sim.cli", "run", str(ctl), *robots, "--camera-profile", "ideal"]
+    ended = subprocess.run([*command, "--duration", "30", "--out", str(out)], capture_output=True, text=True, cwd=ROOT)
+    assert ended.returncode == status and "again" not in ended.stderr, ended.stderr
+    assert json.loads((out / "run.json").read_text())["status"] == "interrupted"
+
+
+@needs_cc
+def test_a_signal_sent_twice_to_a_c_controllers_run_is_one_stop(tmp_path):
+    source = tmp_path / "twice.c"
+    source.write_text(
+        "#include <signal.h>\n#include <unistd.h>\n#include <device/robot.h>\n"
+        "static void die(void) { usleep(300000); }\n"
+        "int main(void) {\n  robot_live(0); robot_die(die); robot_step(16);\n"
+        "  kill(getppid(), SIGTERM); usleep(50000); kill(getppid(), SIGTERM);\n"
+        "  for (;;) robot_step(8);\n}\n"
+    )
+    out = tmp_path / "out"
+    command = [sys.executable, "-m", "aibo_sim.cli", "run", str(source), "--duration", "30", "--out", str(out)]
+    ended = subprocess.run(command, capture_output=True, text=True, cwd=ROOT)
+    assert ended.returncode == 143 and "again" not in ended.stderr, ended.stderr
+    assert json.loads((out / "run.json").read_text())["status"] == "interrupted"
