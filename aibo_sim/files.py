@@ -53,6 +53,17 @@ def open_file(path, flags: int, mode: int = 0o666) -> int:
         raise
 
 
+class HardLinkRefused(OSError):
+    """A file aibo-sim would write in place that has another name too: its content is not ours."""
+
+
+def refuse_hard_link(fd: int, path) -> None:
+    """HardLinkRefused, ``fd`` closed, when the file open at ``fd`` has another name too."""
+    if os.fstat(fd).st_nlink > 1:
+        os.close(fd)
+        raise HardLinkRefused(f"{path} is a hard link to another file: refusing to write it; remove it")
+
+
 def read_file(path) -> bytes:
     """The bytes of the regular file at ``path``: a link is ``SymlinkRefused``; a FIFO, device or
     folder an OSError saying what it is, at once (opened without blocking)."""
@@ -164,9 +175,10 @@ class FolderLock:
             raise error(str(exc)) from None
         except OSError as exc:
             raise error(f"cannot lock {self.path}: {exc.strerror or exc}") from exc
-        if os.fstat(fd).st_nlink > 1:  # another file's name too: its content is not ours to write
-            os.close(fd)
-            raise error(f"{self.path} is a hard link to another file: refusing to write it; remove it")
+        try:
+            refuse_hard_link(fd, self.path)
+        except OSError as exc:
+            raise error(str(exc)) from None
         deadline = time.monotonic() + wait_s
         while True:
             try:

@@ -180,6 +180,20 @@ def test_a_match_refused_at_a_later_robots_folder_leaves_the_earlier_ones_as_the
     assert list(elsewhere.iterdir()) == []
 
 
+@pytest.mark.parametrize("partial", [False, True], ids=["whole lines", "a partial last line"])
+def test_a_hard_link_in_place_of_a_dumps_frames_jsonl_is_refused_on_resume(tmp_path, capsys, partial):
+    out, victim = tmp_path / "out", tmp_path / "victim.jsonl"
+    assert main(["dump", str(SCRIPTED), "--out", str(out), "--steps", "4", "--formats", "rgb"]) == 0
+    lines = (out / "frames.jsonl").read_bytes()
+    victim.write_bytes(lines[: lines.index(b"\n") + 1] + (b'{"index": 1' if partial else b""))
+    before = victim.read_bytes()
+    (out / "frames.jsonl").unlink()
+    os.link(victim, out / "frames.jsonl")
+    assert main(["dump", str(SCRIPTED), "--out", str(out), "--steps", "4", "--formats", "rgb", "--resume"]) == 2
+    one_error_line(capsys, f"{out / 'frames.jsonl'} is a hard link to another file: refusing to write it")
+    assert victim.read_bytes() == before
+
+
 def test_a_hard_link_in_place_of_a_lock_is_refused_and_left_as_it_was(tmp_path, capsys):
     out, victim = tmp_path / "out", tmp_path / "victim"
     out.mkdir()

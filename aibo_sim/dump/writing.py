@@ -19,7 +19,16 @@ from openr_bridge import FRAME_RATE_HZ
 
 from .. import files
 from ..field import SEGMENTATION_CLASSES
-from ..files import SymlinkRefused, make_folder, open_file, png, read_file, write_file_atomic
+from ..files import (
+    HardLinkRefused,
+    SymlinkRefused,
+    make_folder,
+    open_file,
+    png,
+    read_file,
+    refuse_hard_link,
+    write_file_atomic,
+)
 from ..sim import Simulation
 from .coco import Objects, coco_bytes
 from .formats import (
@@ -54,7 +63,7 @@ OWN_TOP_FILES = frozenset({LOCK_NAME, TEMP_PREFIX + META, TEMP_PREFIX + VIDEO, T
 def dump_error(exc: OSError, message: str | None = None) -> DumpError:
     """``exc`` as a DumpError: ``message`` (default, and for a refused link, its own words); a
     full disk's says how to go on."""
-    message = str(exc) if message is None or isinstance(exc, SymlinkRefused) else message
+    message = str(exc) if message is None or isinstance(exc, (SymlinkRefused, HardLinkRefused)) else message
     if exc.errno == errno.ENOSPC:
         message += "; free some space, then continue the dump with --resume"
     return DumpError(message)
@@ -159,6 +168,7 @@ def _frames_on_disk(out: Path, layouts: dict, limit: int, truncate: bool) -> tup
     if partial and truncate:
         try:
             fd = open_file(lines_path, os.O_WRONLY)
+            refuse_hard_link(fd, lines_path)
             try:
                 os.ftruncate(fd, len(complete_lines))
             finally:
@@ -323,7 +333,9 @@ class DumpWriter:
     def _open(path: Path, flags: int) -> int:
         """``path`` created (or opened) for writing with ``flags``, never through a link; DumpError."""
         try:
-            return open_file(path, os.O_WRONLY | os.O_CREAT | flags)
+            fd = open_file(path, os.O_WRONLY | os.O_CREAT | flags)
+            refuse_hard_link(fd, path)
+            return fd
         except OSError as exc:
             raise dump_error(exc, f"cannot write {path}: {exc.strerror or exc}") from exc
 
