@@ -267,3 +267,13 @@ def test_a_match_envs_dump_names_every_robot_for_its_robot_images(tmp_path):
     for frame in dump:
         seen |= set(np.unique(frame.robots).tolist()) - {0}
     assert seen and observer not in seen and all(teams[i] in (1, 2) for i in seen)  # every id has its team
+
+
+def test_a_match_dump_resumed_as_a_one_robot_dump_names_what_differs(tmp_path, capsys):
+    out = tmp_path / "dump"
+    common = [str(TRACKER), "--out", str(out), "--steps", "2", "--formats", "rgb", "--camera-profile", "ideal"]
+    assert main(["dump", *common, "--robot", "red:1", "--robot", "blue:1"]) == 0
+    capsys.readouterr()
+    assert main(["dump", *common, "--resume"]) == 2
+    err = capsys.readouterr().err  # not "the controller file changed": a match's meta records no one hash
+    assert "cannot resume, the dump was made with other parameters (" in err and "robots" in err, err

@@ -231,8 +231,9 @@ def prepare_folder(
             parameters = meta["parameters"]
             if (
                 "controller_sha256" in parameters
+                and "controller_sha256" in previous  # a match's dump records each robot's elsewhere
                 and parameters.get("controller") == previous.get("controller")
-                and previous.get("controller_sha256") != parameters["controller_sha256"]
+                and previous["controller_sha256"] != parameters["controller_sha256"]
             ):
                 raise DumpError(
                     f"{meta_path}: cannot resume, the controller file {parameters['controller']} changed "
