@@ -252,6 +252,12 @@ def test_a_controller_that_ends_before_the_duration_is_said_to_have_ended(tmp_pa
         "aibo-sim: note: the controller ended at t = 0.000 s, before --duration 1 s "
         "(a controller steps with robot_step, or with robot_run's function)\n"
     )
+    out = ["--out", str(tmp_path / "dump"), "--steps", "5", "--formats", "rgb", "--camera-profile", "ideal"]
+    assert main(["dump", str(forgot), *out]) == 0
+    assert capsys.readouterr().err == (
+        "aibo-sim: note: the dump holds 0 of the 5 frames asked: its controller ended first "
+        "(a controller steps with robot_step, or with robot_run's function)\n"
+    )
     forgot.write_text(forgot.read_text() + "robot_run(run)\n")
     assert main(["run", str(forgot), "--duration", "1", "--camera-profile", "ideal"]) == 0
     assert capsys.readouterr().err == ""

@@ -54,14 +54,21 @@ def _dump_command(args) -> int:
         robots=robots,
     )
     repaired = f", {summary.repaired_frames} with missing or damaged files rewritten" if summary.repaired_frames else ""
-    frames = f"{summary.frames} frame{'s' * (summary.frames != 1)}"
+    shown = f"{summary.frames} frame{'s' * (summary.frames != 1)}"
     if robots is not None:
-        frames += f" of {len(robots)} robot{'s' * (len(robots) != 1)}"
+        shown += f" of {len(robots)} robot{'s' * (len(robots) != 1)}"
     print(
-        f"dumped {frames} to {summary.out} ({summary.new_frames} written now{repaired}) in "
+        f"dumped {shown} to {summary.out} ({summary.new_frames} written now{repaired}) in "
         f"{summary.wall_s:.1f} s: {summary.frames_per_s:.1f} frames/s, "
         f"{summary.bytes_written / 1e6 / max(summary.wall_s, 1e-9):.2f} MB/s"
     )
+    asked = frames * (len(robots) if robots is not None else 1)
+    if summary.frames < asked:  # not an error: said, as a forgotten robot_run goes unseen
+        print(
+            f"aibo-sim: note: the dump holds {summary.frames} of the {asked} frames asked: "
+            "its controller ended first (a controller steps with robot_step, or with robot_run's function)",
+            file=sys.stderr,
+        )
     return 0
 
 
