@@ -279,7 +279,8 @@ int Robot::GetDevice(const char* name) {
         tags_.push_back(named_[n]);
         return (int)tags_.size();
     }
-    Fail("no device named '%s' on the ERS-7", name ? name : "(NULL)");
+    Fail("no device named '%s' on the ERS-7; devices are OPEN-R locators, such as %s", name ? name : "(NULL)",
+         names_[0].c_str());
 }
 
 Robot::Device& Robot::Tagged(int tag, Kind kind) {
