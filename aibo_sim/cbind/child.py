@@ -155,6 +155,15 @@ class Child:
         if number is not None and not isinstance(error, KeyboardInterrupt):
             signal.raise_signal(number)  # under the handler it had before: as if it came now
 
+    def exits_within(self, seconds: float) -> bool:
+        """Whether the child exits within ``seconds`` (left unreaped: ``stop`` reaps it)."""
+        deadline = time.monotonic() + seconds
+        while not self._exited():
+            if time.monotonic() >= deadline:
+                return False
+            time.sleep(0.005)
+        return True
+
     def _exited(self) -> bool:
         """Whether the child has exited; left unreaped, so that its pid, its group's id, stays its own."""
         try:

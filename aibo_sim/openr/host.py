@@ -81,6 +81,7 @@ SYSTEM_SERVICES = {
     ),
 }
 SPIN_S = 0.005  # how long _reply polls before it blocks
+CRASH_EXIT_S = 5.0  # how long a runtime that reported a crash has to die of its signal (a core dump may take long)
 OLED3_MODE_B = 1  # OPEN-R's oled3_MODE_B: a face light shows its B face
 STANDARD_PSHIFT = 0x0E  # Sony's fixed PSHIFT (Model Information 2.2): the P register's scale
 TOUCH_AD_PER_NEWTON, TOUCH_AD_MAX = 100, 80  # UNCONFIRMED, see the module docstring
@@ -665,9 +666,11 @@ class MemoryStickRun:
 
     def _gone(self) -> None:
         """The runtime has exited (or must be stopped): raise what ended it."""
+        crashed = getattr(self, "_crashed", None)
+        if crashed is not None:  # it said so, then raises the signal again: its death is on its way
+            self._child.exits_within(CRASH_EXIT_S)
         status = self._child.stop()
         where = f"at simulated t = {self.time_ms / 1000:.3f} s"
-        crashed = getattr(self, "_crashed", None)
         if status is not None and status < 0:
             name = signal.Signals(-status).name
             what = f"OPEN-R object {crashed}" if crashed else "the OPEN-R runtime"
