@@ -47,8 +47,15 @@ def _match_robots(args):
         return None
     if args.robots is not None and args.robot:
         raise ValueError("--robots and --robot: give the robots one way, not both")
-    values = {"--pose": args.pose, "--backend": args.backend, "--mtn-mode": args.mtn_mode}
-    refuse_single_robot_options("run", {**values, "--memory-stick": args.memory_stick})
+    refuse_single_robot_options(
+        "run",
+        {
+            "--pose": args.pose,
+            "--backend": args.backend,
+            "--mtn-mode": args.mtn_mode,
+            "--memory-stick": args.memory_stick,
+        },
+    )
     if args.robots is not None:
         return load_robots(args.robots)
     return check_robots([parse_robot(text) for text in args.robot], "--robot")

@@ -101,10 +101,10 @@ def check_python_controller(path: Path) -> None:
     the file and line of a syntax error (bad input, found before anything is run or written)."""
     if not path.is_file():
         main_files = " or ".join(path.name + suffix for suffix in C_SUFFIXES)
-        stick = next((memory_stick_folder(p) for p in path.resolve().parents if memory_stick_folder(p)), None)
+        stick = next(filter(None, map(memory_stick_folder, path.resolve().parents)), None) if path.is_dir() else None
         what = (
             f"a folder inside the memory stick {stick}: run the stick's folder"
-            if path.is_dir() and stick is not None
+            if stick is not None
             else f"a folder with no {main_files} (a C or C++ controller folder holds its main file under the "
             "folder's name) and no memory stick (MS/OPEN-R/MW/CONF/OBJECT.CFG)"
             if path.is_dir()
@@ -192,14 +192,13 @@ class FrameWriter:
                 f"{self.out} holds a match's {RUN_FILE} and robot folders: a run of one robot would leave "
                 "them beside its frames; choose another --out"
             )
-        earlier = previous is not None
         try:
             names = os.listdir(frames)
         except FileNotFoundError:
             names = []
         except OSError as exc:
             raise OSError(f"cannot use {frames} for the frames: {exc.strerror or exc}") from exc
-        if names and not earlier:
+        if names and previous is None:
             raise OSError(
                 f"{frames} holds files but {self.out} holds no aibo-sim run ({RUN_FILE}): refusing to mix "
                 "them with this run's frames; choose another --out"

@@ -190,7 +190,7 @@ bool Controller::Protected(void (*call)(void*), void* argument) {
 }
 
 void Controller::Fail(const char* message) {
-    char text[1024];
+    char text[1024 + 64];  /* wrapper::Fail's message whole, and the time before it */
     snprintf(text, sizeof text, "controller error at t = %.3f s: %s", robot_.TimeMs() / 1000.0, message);
     OSYSPRINT(("%s\n", text));
     if (aibo_sim_controller_failed != 0) aibo_sim_controller_failed(text);
