@@ -8,6 +8,7 @@ simulated time reaches the next multiple of 1/30 s.
 from __future__ import annotations
 
 import ctypes
+import logging
 import math
 import os
 import threading
@@ -49,6 +50,18 @@ def release_freed_memory() -> None:
     process that closed simulations (their models, buffers, renderers) would not fall."""
     if _malloc_trim is not None:
         _malloc_trim(0)
+
+
+def _log_mujoco_warning(text: str) -> None:
+    """MuJoCo's warnings (a diverging state, a full contact buffer) go to the logger
+    ``aibo_sim.mujoco`` (stderr unless configured). MuJoCo's own handler appends them to
+    MUJOCO_LOG.TXT in the working directory, through any link found there, and prints them
+    on standard output."""
+    logging.getLogger("aibo_sim.mujoco").warning("MuJoCo: %s", text)
+
+
+if mujoco.get_mju_user_warning() is None:
+    mujoco.set_mju_user_warning(_log_mujoco_warning)
 
 
 def ball_joint(model: mujoco.MjModel) -> int:

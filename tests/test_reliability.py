@@ -295,6 +295,27 @@ def test_load_dump_reads_no_file_outside_the_dump(tmp_path):
         load_dump(out)
 
 
+def test_mujocos_warnings_go_to_the_log_not_through_a_link_in_the_working_folder(tmp_path, monkeypatch, caplog, capfd):
+    """MuJoCo's own handler appends its warnings to MUJOCO_LOG.TXT in the working folder (through
+    a link found there) and prints them on stdout; aibo-sim logs them instead."""
+    import numpy as np
+
+    from aibo_sim.sim import Simulation, SimulationDiverged
+
+    victim = tmp_path / "victim"
+    _plant(tmp_path / "MUJOCO_LOG.TXT", victim)
+    monkeypatch.chdir(tmp_path)
+    sim = Simulation()
+    sim.data.qpos[0] = np.nan
+    with pytest.raises(SimulationDiverged):
+        sim.step_frame()
+    sim.close()
+    assert victim.read_bytes() == VICTIM and capfd.readouterr().out == ""
+    assert [r.getMessage() for r in caplog.records if r.name == "aibo_sim.mujoco"] == [
+        "MuJoCo: Nan, Inf or huge value in QPOS at DOF 0. The simulation is unstable. Time = 0.0000."
+    ]
+
+
 # ---------------------------------------------------------------- 2. one signal ends any controller
 
 SPINNER = r"""#include <stdio.h>
