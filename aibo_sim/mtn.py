@@ -34,7 +34,8 @@ Decisions where the spec leaves room (also listed in the report that came with t
 * OPEN-R playback (``MTN.cc``) hard-codes 16 ms frames: ``2n+2`` sub-frames of 8 ms per
   segment. Here a segment has ``(n+1)*frame_time_ms/8`` sub-frames, which is the same for
   16 ms and scales otherwise; a frame time that is not a multiple of 8 ms cannot be played in
-  this mode (an :class:`MtnError` naming the file). ``MTN.cc`` never sends the final keyframe
+  this mode, and :func:`mtn_new` refuses it there (an :class:`MtnError` naming the file; Webots'
+  ``mtn_play`` has no way to fail). ``MTN.cc`` never sends the final keyframe
   itself (it stops once the last segment is done); this player appends it as one last
   sub-frame, so a motion ends exactly on its final pose at ``t = length_ms``.
 * Joint values are held in int64; OPEN-R's 32-bit ``value1 - value0`` could overflow for
@@ -289,6 +290,7 @@ def parse_mtn(data: bytes, source: str = "<bytes>") -> Motion:
 
     # Section 0's size, the section count and the version are not read, as Sony's MTNFile does not:
     # a file another Sony tool wrote with other values there plays as on the robot.
+    r.need(4, SECTION0_SIZE, "section 0")
     _, _, nkey, frame_time, option = r.unpack("<HHHHI", 16, "section 0")
     end0 = 4 + SECTION0_SIZE
     if nkey == 0:
@@ -505,11 +507,8 @@ class MotionPlayer:
         if mode not in MODES:
             raise ValueError(f"mode must be 'openr' or 'webots', not {mode!r}")
         self.motion, self.mode = motion, mode
+        check_playable(motion, mode)
         if mode == "openr":
-            if motion.frame_time_ms % SUBFRAME_MS:
-                raise MtnError(
-                    motion.source, None, f"frame time {motion.frame_time_ms} ms is not a multiple of {SUBFRAME_MS} ms"
-                )
             self._subframes = (motion.interpolate + 1) * (motion.frame_time_ms // SUBFRAME_MS)
             self._start = np.concatenate(([0], np.cumsum(self._subframes)))  # segment k starts at _start[k]
             kf = motion.keyframes
@@ -600,9 +599,19 @@ class MotionPlayer:
 _last_error = ""
 
 
-def mtn_new(path: str | os.PathLike, available_locators: Iterable[str] | None = None) -> Motion:
+def check_playable(motion: Motion, mode: str) -> None:
+    """MtnError naming the file where ``mode`` cannot play ``motion``: OPEN-R's 8 ms frames need a
+    frame time that is a whole number of them."""
+    if mode == "openr" and motion.frame_time_ms % SUBFRAME_MS:
+        raise MtnError(
+            motion.source, None, f"frame time {motion.frame_time_ms} ms is not a multiple of {SUBFRAME_MS} ms"
+        )
+
+
+def mtn_new(path: str | os.PathLike, available_locators: Iterable[str] | None = None, mode: str = "openr") -> Motion:
     """Webots ``mtn_new``: read ``path`` and check every locator names a device of the robot
-    (default: ``ers7.all_locators()``) and is a joint. Failures raise :class:`MtnError` and are remembered for
+    (default: ``ers7.all_locators()``) and is a joint, and that ``mode`` can play it
+    (:func:`check_playable`). Failures raise :class:`MtnError` and are remembered for
     :func:`mtn_get_error`; Webots' own texts are used ("File not found: <path>",
     "Missing device in model: <locator>", without Webots' trailing newline), with the path or
     locator as :func:`printable` shows it (a path cut to ``NAME_LIMIT`` characters). A
@@ -632,6 +641,7 @@ def mtn_new(path: str | os.PathLike, available_locators: Iterable[str] | None = 
                     + (f" ({other})" if (other := another_robot(motion)) else ""),
                 )
             check_joint(loc)
+        check_playable(motion, mode)
     except MtnError as exc:
         _last_error = str(exc)
         raise

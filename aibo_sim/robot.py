@@ -406,7 +406,7 @@ class Robot:
         (also for a name that is not a str or path, naming it)."""
         if not isinstance(path, (str, os.PathLike)) or not os.fspath(path):
             return mtn_new(path)  # raises the MtnError naming the argument, remembered for mtn_get_error
-        return mtn_new(find_file(path, self.search_dirs), ers7.all_locators())
+        return mtn_new(find_file(path, self.search_dirs), ers7.all_locators(), self.mtn_mode)
 
     def mtn_play(self, motion) -> None:
         """Start ``motion``; one that is already playing restarts from its start (a motion has one

@@ -107,8 +107,8 @@ static void init(void) {
         fprintf(out, "%d %s\n", mtn_get_length(walk), mtn_get_name(walk));
     } else if (is("bad motions")) {
         static const char *const names[] = {"bad1.mtn", "bad2.mtn", "bad3.mtn", "bad4.mtn", "bad5.mtn", "bad6.mtn",
-                                            "bad7.mtn"};
-        for (int i = 0; i < 7; i++) fprintf(out, "%s\n", mtn_new(names[i]) ? "loaded" : mtn_get_error());
+                                            "bad7.mtn", "bad8.mtn", "bad9.mtn"};
+        for (int i = 0; i < 9; i++) fprintf(out, "%s\n", mtn_new(names[i]) ? "loaded" : mtn_get_error());
     } else if (is("leds")) {
         led_set(robot_get_device("PRM:/r1/c1/c2/c3/l2-LED2:l2"), 1);
         led_set(robot_get_device("PRM:/r1/c1/c2/c3/la-LED3:la"), 128);
@@ -323,6 +323,8 @@ def probe(tmp_path_factory):
         serialize_mtn(Motion.from_poses("sit", ["PRM:/r2/c1-Joint2:j1"], [[0]], [], design="DRX-900")),
         too_long(),
         odd_header(walk),
+        walk[:22] + (20).to_bytes(2, "little") + walk[24:],  # 20 ms frames: not whole 8 ms frames
+        walk[:20],
     ]
     for number, data in enumerate(bad, start=1):
         (controller / f"bad{number}.mtn").write_bytes(data)
@@ -393,6 +395,14 @@ def test_malformed_motions_are_refused_with_the_python_readers_messages(probe, t
     assert errors[0][5].split(": ", 1)[1] == errors[1][5].split(": ", 1)[1]
     assert errors[0][5].endswith("(it passes them in segment 1 -> 2 of 2: numInterpolate 19000 of 16 ms frames)")
     assert errors[0][6] == errors[1][6] == "loaded"  # fields Sony's reader ignores are ignored
+    assert (
+        errors[0][7].split(": ", 1)[1] == errors[1][7].split(": ", 1)[1] == "frame time 20 ms is not a multiple of 8 ms"
+    )  # refused by mtn_new, as an error mtn_get_error gives, not at mtn_play
+    assert (
+        errors[0][8].split(": ", 1)[1]
+        == errors[1][8].split(": ", 1)[1]
+        == "byte 4 (0x4): truncated: section 0 needs 24 bytes, the file ends at byte 20"
+    )
 
 
 def test_leds_end_lit_as_on_the_openr_backend(probe, tmp_path, monkeypatch):

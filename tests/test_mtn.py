@@ -171,6 +171,7 @@ def _patch(data: bytes, offset: int, fmt: str, value) -> bytes:
 BAD_TINY = {
     "wrong magic": (b"OMTX" + TINY[4:], 0),
     "truncated magic": (TINY[:3], 0),
+    "section 0 cut short": (TINY[:20], 4),
     "zero keyframes": (_patch(TINY, 20, "<H", 0), 20),
     "frame rate 0": (_patch(TINY, 22, "<H", 0), 22),
     "section 1 overruns file": (_patch(TINY, 32, "<I", 0x1000), 32),
@@ -502,6 +503,17 @@ def test_mtn_new_checks_devices(tmp_path):
     with pytest.raises(MtnError, match="^File not found: "):
         mtn_new(tmp_path / "nope.mtn")
     assert mtn_get_error().startswith("File not found: ")
+
+
+def test_mtn_new_refuses_frames_openr_cannot_play_where_webots_plays_them(tmp_path):
+    """OPEN-R plays 8 ms frames: 20 ms keyframes are refused by mtn_new (mtn_get_error says why),
+    not later by mtn_play, which cannot fail in Webots' API; Webots' own player takes them."""
+    path = tmp_path / "odd frame.mtn"
+    write_mtn(Motion.from_poses("odd", None, np.zeros((2, len(ers7.JOINTS))), 20, frame_time_ms=20), path)
+    with pytest.raises(MtnError) as info:
+        mtn_new(path)
+    assert str(info.value) == f"{path}: frame time 20 ms is not a multiple of 8 ms" == mtn_get_error()
+    assert mtn_new(path, mode="webots").frame_time_ms == 20
 
 
 def test_a_motion_for_another_robot_says_so(tmp_path):

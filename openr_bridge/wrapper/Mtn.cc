@@ -152,7 +152,7 @@ bool ParseMotion(const std::vector<byte>& data, const std::string& source, Motio
     /* Section 0's size, the section count and the version are not read, as Sony's MTNFile does
      * not: section 1 starts at byte 28. */
     size_t end0 = 4 + SECTION0_SIZE, end1 = 0, end2 = 0;
-    ok = ok && r.Need(16, 12, "section 0", size);
+    ok = ok && r.Need(4, SECTION0_SIZE, "section 0", size);
     unsigned long numKeyframes = 0, frameTime = 0;
     if (ok) {
         numKeyframes = U16(data, 20);

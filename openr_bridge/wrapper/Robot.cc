@@ -432,6 +432,12 @@ MTN* Robot::NewMotion(const char* filename) {
                 error = "Not a joint: " + Printable(locator, 0) + " (a motion moves joints only)";
             }
         }
+        if (error.empty() && mtn->motion.frameTimeMs % SUBFRAME_MS != 0) {
+            char frames[96];
+            snprintf(frames, sizeof frames, ": frame time %d ms is not a multiple of %d ms", mtn->motion.frameTimeMs,
+                     SUBFRAME_MS);
+            error = Printable(mtn->motion.source, 200) + frames;
+        }
     }
     if (!error.empty()) {
         mtnError_ = error;
@@ -453,10 +459,6 @@ MTN* Robot::CheckMotion(MTN* mtn, const char* function) {
 
 void Robot::PlayMotion(MTN* mtn) {
     CheckMotion(mtn, "mtn_play");
-    if (mtn->motion.frameTimeMs % SUBFRAME_MS != 0) {
-        Fail("%s: frame time %d ms is not a multiple of %d ms", Printable(mtn->motion.source, 200).c_str(),
-             mtn->motion.frameTimeMs, SUBFRAME_MS);
-    }
     mtn->motion.Prepare();
     StopMotion(mtn);
     mtn->playing = true;
