@@ -136,15 +136,24 @@ def test_saturated_colours_keep_30_to_60_percent_of_their_chroma_in_the_corners(
     assert 0.3 <= kept <= 0.6
 
 
-def test_noise_per_channel_in_the_measured_bands_and_rising_with_gain(tmp_path):
+def layer_h(frame) -> np.ndarray:
+    """Layer H's Y, Cr and Cb of a frame's OPEN-R message, (160, 208, 3)."""
+    return np.dstack([frame.message.band(openr_bridge.ofbkimageLAYER_H, band) for band in (0, 1, 2)])
+
+
+@pytest.mark.parametrize("full", [False, True])
+def test_noise_per_channel_in_the_measured_bands_and_rising_with_gain(tmp_path, full):
+    """The measured sigmas are layer H's, whatever size the camera renders (a 416 x 320 picture
+    reaches layer H as its 2 x 2 means)."""
     sigmas = {}
     for gain in ("low", "mid", "high"):
         sim = Simulation(
-            target_scene(tmp_path, wall(0.5)), camera=CameraConfig(settings=CameraSettings(gain=gain, shutter="fast"))
+            target_scene(tmp_path, wall(0.5)),
+            camera=CameraConfig(full=full, settings=CameraSettings(gain=gain, shutter="fast")),
         )
         stack = []
         for _ in range(20):
-            stack.append(sim.camera.frame().ycrcb[60:100, 84:124].astype(float))
+            stack.append(layer_h(sim.camera.frame())[60:100, 84:124].astype(float))
             sim.step_frames(sim.frames_to_camera_frame())
         sigmas[gain] = np.std(np.array(stack), axis=0).mean(axis=(0, 1))  # temporal sigma per pixel, averaged
         sim.close()

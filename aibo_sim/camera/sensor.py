@@ -32,7 +32,8 @@ Then, per frame:
    columns at each tabulated radius from the channel's own ring centre (within 0.6 levels of
    every entry), linear in r between the radii;
 5. per-robot colour: ``v' = pivot + gain (v - pivot) + offset`` per channel (section 4);
-6. noise: Gaussian, sigma per channel at MID gain times sqrt(gain factor) (section 4), from
+6. noise: Gaussian, sigma per channel at MID gain times sqrt(gain factor) (section 4; per
+   layer-H pixel: a 416 x 320 picture's pixels draw twice the sigma, its 2 x 2 means the measured one), from
    a fixed pool of normal numbers (bytes, in steps of sigma / ``NOISE_STEPS``) at an offset
    drawn from (seed, frame index): the same frame of the same seed gets the same noise
    whoever asks and in whatever order;
@@ -450,7 +451,10 @@ class Sensor:
             np.ascontiguousarray(values, np.float32)
             for values in (gain * curve, gain * slope, gain * (intercept - pivot) + pivot + offset)
         )
-        sigma = np.asarray(p.noise_sigma) * math.sqrt(2.0 ** GAIN_STEPS[settings.gain])
+        # Sigma is measured on layer H: a larger picture (416 x 320, --camera-full) draws each pixel's
+        # noise stronger by its side's ratio, so that layer H, its 2 x 2 means, reads the same.
+        pixels_per_h_pixel = self.width / LAYER_SIZE[0][0]
+        sigma = np.asarray(p.noise_sigma) * math.sqrt(2.0 ** GAIN_STEPS[settings.gain]) * pixels_per_h_pixel
         self._noise_scale = (sigma / NOISE_STEPS).astype(np.float32)
         self._y_floor = np.float32(p.y_floor)
 
