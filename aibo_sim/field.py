@@ -53,9 +53,11 @@ COLOURS = {
     "orange": (1.0, 0.45, 0.05, 1.0),
     "pink_ball": (1.0, 0.2, 0.85, 1.0),
 }
-# The league's team uniforms (red, dark blue), on the robots of a match: albedos chosen,
-# UNCONFIRMED (no measured frames of them).
-UNIFORM_COLOURS = {"red": (0.75, 0.06, 0.06, 1.0), "blue": (0.05, 0.1, 0.5, 1.0)}
+# The league's team uniforms (red, dark blue), on the robots of a match: albedos fitted as the
+# field's, so that the ers7 camera at FL / HIGH / FAST, facing a uniform, reads the ten robots'
+# mean of rUNSWift's red (47, 178, 113) and blue (21, 127, 130) targets (specs/ers7-camera.md
+# section 5): the dark blue reads near the black level.
+UNIFORM_COLOURS = {"red": (0.385, 0.0, 0.02, 1.0), "blue": (0.0, 0.008, 0.032, 1.0)}
 SPECULAR = {"orange": 0.1, "pink_ball": 0.1}  # the plastic balls; carpet and paint are matte (0)
 
 

@@ -5,7 +5,6 @@ within the spread of the per-robot centre-patch means that ten real robots measu
 
 import csv
 import math
-import statistics
 from pathlib import Path
 
 import mujoco
@@ -16,6 +15,7 @@ from aibo_sim.camera import CameraSettings, scene_light
 from aibo_sim.camera.sensor import ROBOT_GAIN_SIGMA, ROBOT_OFFSET_SIGMA, ROBOT_PIVOT
 from aibo_sim.config import CameraConfig
 from aibo_sim.sim import Simulation
+from aibo_sim.team import RobotSpec
 
 ROOT = Path(__file__).resolve().parents[1]
 ROBOT_MEANS = ROOT.parent / "shared" / "data" / "ers7-camera" / "runswift2005_day1_robot_means.csv"
@@ -40,6 +40,16 @@ VIEWS = {
     ),
     "white_wall": ("white", (0.5, 1.4, math.pi / 2), ("wall_left", (0.5, -0.01, 0)), -5, "wall"),
 }
+# The team uniforms, on robots 35 cm in front of robot 1 and behind it, their left flank towards it.
+UNIFORM_ROBOTS = (
+    RobotSpec("red", 1, (0, 0, 0)),
+    RobotSpec("red", 2, (0.35, 0, 90)),
+    RobotSpec("blue", 1, (-0.35, 0, -90)),
+)
+UNIFORM_VIEWS = {
+    "red_uniform": ("red", (0.0, 0.0, 0.0), ("robot2/uniform_left", (0, 0, 0)), -10, "robot2/uniform_left"),
+    "blue_uniform": ("blue", (0.0, 0.0, math.pi), ("robot3/uniform_left", (0, 0, 0)), -10, "robot3/uniform_left"),
+}
 
 
 def look_at(sim: Simulation, point: np.ndarray, neck_deg: float) -> None:
@@ -61,11 +71,16 @@ def look_at(sim: Simulation, point: np.ndarray, neck_deg: float) -> None:
 
 @pytest.fixture(scope="module")
 def measured() -> dict[str, np.ndarray]:
-    """Per view: the mean Y, Cr, Cb of the 11 x 11 centre patch over frames of four noise seeds."""
-    sim = Simulation(camera=CameraConfig("ers7", settings=CameraSettings("fl", "high", "fast")))
+    """Per view (the field's and the uniforms'): the mean Y, Cr, Cb of the 11 x 11 centre patch
+    over frames of four noise seeds."""
+    return centre_means({}, VIEWS) | centre_means({"robots": UNIFORM_ROBOTS}, UNIFORM_VIEWS)
+
+
+def centre_means(world: dict, views: dict) -> dict[str, np.ndarray]:
+    sim = Simulation(camera=CameraConfig("ers7", settings=CameraSettings("fl", "high", "fast")), **world)
     try:
         means = {}
-        for view, (_, pose, (geom, offset), neck, shown) in VIEWS.items():
+        for view, (_, pose, (geom, offset), neck, shown) in views.items():
             patches = []
             for seed in SEEDS:
                 sim.reset(seed)
@@ -82,21 +97,25 @@ def measured() -> dict[str, np.ndarray]:
         sim.close()
 
 
-def robot_rows() -> list[dict]:
+def robot_means() -> dict[str, dict[str, list[float]]]:
+    """The data's centre-patch means, robot -> target -> [Y, Cr, Cb] (a row missing one is left out)."""
     if not ROBOT_MEANS.exists():
         pytest.skip(f"{ROBOT_MEANS} is not here")
-    with ROBOT_MEANS.open(newline="") as f:
-        return list(csv.DictReader(f))
+    by_robot: dict[str, dict[str, list[float]]] = {}
+    with ROBOT_MEANS.open(newline="", encoding="utf-8-sig") as f:
+        for row in csv.DictReader(f):
+            values = [(row.get(f"{c}_mean") or "").strip() for c in CHANNELS]
+            if all(values):
+                by_robot.setdefault(row["robot"], {})[row["target"]] = [float(v) for v in values]
+    return by_robot
 
 
 def test_robot_colour_spread_is_the_robots_linear_maps():
     """``RobotColour``'s sigmas are those of the per-robot lines (gain about the pivot, offset)
-    that map the robots' average of each target to that robot's means, fitted per channel."""
-    rows = robot_rows()
-    targets = sorted({row["target"] for row in rows})
-    by_robot: dict[str, dict[str, list[float]]] = {}
-    for row in rows:
-        by_robot.setdefault(row["robot"], {})[row["target"]] = [float(row[f"{c}_mean"]) for c in CHANNELS]
+    that map the robots' average of each target to that robot's means, fitted per channel (over
+    the targets every robot measured)."""
+    by_robot = robot_means()
+    targets = sorted(set.intersection(*(set(robot) for robot in by_robot.values())))
     means = np.array([[robot[t] for t in targets] for robot in by_robot.values()])  # robots, targets, channels
     average = means.mean(axis=0)
     for c, channel in enumerate(CHANNELS):
@@ -110,20 +129,20 @@ def test_robot_colour_spread_is_the_robots_linear_maps():
 def robot_spread() -> dict[str, list[tuple[float, float]]]:
     """Per target of the data: (low, high) per channel, the mean over the robots +- 2 sample
     standard deviations of the robots' means."""
-    rows = robot_rows()
+    by_robot = robot_means()
     spread = {}
-    for target in {row["target"] for row in rows}:
-        spread[target] = []
-        for channel in CHANNELS:
-            values = [float(row[f"{channel}_mean"]) for row in rows if row["target"] == target]
-            mean, sigma = statistics.mean(values), statistics.stdev(values)
-            spread[target].append((mean - 2 * sigma, mean + 2 * sigma))
+    for target in {t for robot in by_robot.values() for t in robot}:
+        values = np.array([robot[target] for robot in by_robot.values() if target in robot])
+        mean, sigma = values.mean(axis=0), values.std(axis=0, ddof=1)
+        spread[target] = list(zip(mean - 2 * sigma, mean + 2 * sigma))
     return spread
 
 
-@pytest.mark.parametrize("view, channel", [(view, channel) for view in VIEWS for channel in CHANNELS])
+@pytest.mark.parametrize(
+    "view, channel", [(view, channel) for view in {**VIEWS, **UNIFORM_VIEWS} for channel in CHANNELS]
+)
 def test_field_colours_within_the_spread_of_real_robots(measured, view, channel):
-    low, high = robot_spread()[VIEWS[view][0]][CHANNELS.index(channel)]
+    low, high = robot_spread()[{**VIEWS, **UNIFORM_VIEWS}[view][0]][CHANNELS.index(channel)]
     value = measured[view][CHANNELS.index(channel)]
     assert low <= value <= high, f"{view} {channel} {value:.1f} outside the robots' {low:.1f}..{high:.1f}"
 
