@@ -207,14 +207,20 @@ def _side_by_side(args) -> np.ndarray:
     import openr_bridge
 
     pictures = []
-    if args.side_by_side:  # a real layer-H frame as Tekkotsu's EasyTrain stores it: R, G, B = Y, Cb, Cr
+    if args.side_by_side:  # a real frame as Tekkotsu's EasyTrain stores it: R, G, B = Y, Cb, Cr
         if not Path(args.side_by_side).is_file():
             what = "not a regular file" if Path(args.side_by_side).exists() else "no such file"
             raise FileNotFoundError(f"--side-by-side {args.side_by_side}: {what}")
-        real = cv2.imread(args.side_by_side, cv2.IMREAD_COLOR)
-        if real is None or real.shape != (*LAYER_SIZE[0][::-1], 3):
-            raise ValueError(f"--side-by-side {args.side_by_side}: not a 208x160 EasyTrain PNG (R, G, B = Y, Cb, Cr)")
-        cr, cb, y = cv2.split(real)
+        real = cv2.imread(args.side_by_side, cv2.IMREAD_UNCHANGED)
+        sizes = (*LAYER_SIZE[:3], (FULL_WIDTH, FULL_HEIGHT))  # layers H, M, L; the full picture
+        found = None if real is None else (real.shape[1], real.shape[0], real.shape[2] if real.ndim == 3 else 1)
+        if found is None or found[:2] not in sizes or found[2] not in (3, 4):
+            raise ValueError(
+                f"--side-by-side {args.side_by_side}: not an EasyTrain frame ("
+                + ("unreadable" if found is None else "{}x{}, {} channel(s)".format(*found))
+                + f"): a colour PNG (R, G, B = Y, Cb, Cr) of {', '.join(f'{w}x{h}' for w, h in sizes)}"
+            )
+        cr, cb, y = cv2.split(cv2.imread(args.side_by_side, cv2.IMREAD_COLOR))
         pictures.append(openr_bridge.ycrcb_to_rgb(y, cr, cb))  # as the wrapper's camera_get_image shows it
     for profile in ("ers7", "ideal"):
         sim = _settled_simulation(args, profile)

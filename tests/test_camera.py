@@ -632,6 +632,9 @@ def test_render_side_by_side_shows_both_profiles_and_a_real_frame(tmp_path):
     assert main(["render", "--out", str(tmp_path), "--settle", "0", "--side-by-side", str(tmp_path / "real.png")]) == 0
     three = cv2.imread(str(tmp_path / "side_by_side.png"))
     assert three.shape == (320, 1248, 3) and np.all(three[:, :416] == 90)
+    cv2.imwrite(str(tmp_path / "real.png"), fake[::2, ::2])  # layer M's size: shown at 416x320 too
+    assert main(["render", "--out", str(tmp_path), "--settle", "0", "--side-by-side", str(tmp_path / "real.png")]) == 0
+    assert np.array_equal(cv2.imread(str(tmp_path / "side_by_side.png")), three)
     assert main(["render", "--out", str(tmp_path), "--side-by-side", str(tmp_path / "missing.png")]) == 2
 
 
