@@ -35,10 +35,11 @@ def knock_over(robot) -> None:
 
 
 def team_pixels(image: np.ndarray, team: str) -> int:
-    """Pixels of the team's uniform colour (dark blue or red; not the sky-blue goal nor the orange ball)."""
+    """Pixels of the team's uniform colour (dark blue, near black as the real ones read, or red; not
+    the sky-blue goal nor the orange ball)."""
     r, g, b = (image[..., i].astype(int) for i in range(3))
     if team == "blue":
-        return int(((b > 3 * g) & (b > 3 * r) & (b > 40)).sum())
+        return int(((b > 2 * g) & (b > 2 * r) & (b >= 4)).sum())
     return int(((r > 3 * g) & (r > 3 * b) & (r > 60)).sum())
 
 
