@@ -19,6 +19,11 @@ from pathlib import Path
 from .config import ConfigError, Connection, _quote, design_lines, find_in_stick, parse_connect_cfg, read_config
 
 ELF_MAGIC = b"\x7fELF"
+
+
+def _elf_kind(header: bytes) -> bytes:
+    """An ELF file's magic, class (32 or 64 bits), byte order and machine (e_machine)."""
+    return header[:6] + header[18:20]
 GZIP_MAGIC = b"\x1f\x8b"
 
 
@@ -142,7 +147,9 @@ def read_object(stick_object: StickObject, config: Path) -> bytes:
             raise ConfigError(
                 f"{stick_object.ms_path} is a damaged gzip file: {error}", config, stick_object.line
             ) from None
-    if data[:4] != ELF_MAGIC:
+    with open("/proc/self/exe", "rb") as interpreter:  # this process's executable
+        this_machine = _elf_kind(interpreter.read(20))
+    if _elf_kind(data[:20]) != this_machine:  # not ELF, or a robot's MIPS ELF32
         raise ConfigError(
             f"{stick_object.ms_path} is not an object built for this machine (a Sony SDK build for the "
             "robot? rebuild with OPENRSDK_ROOT=$(aibo-sim openr sdk))",

@@ -1,6 +1,7 @@
 """The host OPEN-R runtime's semantics, with OPEN-R objects of our own (tests/openr_programs),
 built by the host SDK with Sony-style Makefiles and run on the simulated ERS-7."""
 
+import gzip
 import os
 import signal
 import struct
@@ -419,6 +420,15 @@ def test_an_object_that_is_not_built_for_this_machine_is_refused(objects, tmp_pa
         ConfigError,
         match=r"OBJECT\.CFG:1: cannot read /MS/OPEN-R/MW/OBJS/JPROBE\.BIN: No such file .*"
         r"\(not built\? run make install",
+    ):
+        run_stick(stick, 0.1, tmp_path / "out")
+    # What Sony's SDK builds for the robot: a 32-bit little-endian MIPS ELF (e_machine 8), gzipped.
+    mips = b"\x7fELF\x01\x01\x01" + bytes(11) + (8).to_bytes(2, "little") + bytes(32)
+    (stick / "OPEN-R" / "MW" / "OBJS" / "JPROBE.BIN").write_bytes(gzip.compress(mips))
+    with pytest.raises(
+        ConfigError,
+        match=r"OBJECT\.CFG:1: /MS/OPEN-R/MW/OBJS/JPROBE\.BIN is not an object built for this machine "
+        r"\(a Sony SDK build for the robot\? rebuild with OPENRSDK_ROOT=\$\(aibo-sim openr sdk\)\)$",
     ):
         run_stick(stick, 0.1, tmp_path / "out")
 
