@@ -704,7 +704,8 @@ def test_an_out_that_is_a_file_and_a_missing_side_by_side_frame_are_named(tmp_pa
 
 @pytest.mark.parametrize("shape", [(160, 208), (100, 200, 3)])
 def test_a_side_by_side_frame_of_no_layers_size_or_grey_is_refused_naming_both(tmp_path, capsys, shape):
-    """Grey would be read as Y = Cr = Cb, wrong colours without a word; a frame is one of the layers or the full picture."""
+    """Grey would be read as Y = Cr = Cb, wrong colours without a word; a frame is one of the
+    layers or the full picture."""
     import cv2
     import numpy as np
 
@@ -714,7 +715,8 @@ def test_a_side_by_side_frame_of_no_layers_size_or_grey_is_refused_naming_both(t
     found = f"{shape[1]}x{shape[0]}, {shape[2] if len(shape) == 3 else 1} channel(s)"
     one_error_line(
         capsys,
-        f"--side-by-side {real}: not an EasyTrain frame ({found}): a colour PNG (R, G, B = Y, Cb, Cr) of 208x160, 104x80, 52x40, 416x320",
+        f"--side-by-side {real}: not an EasyTrain frame ({found}): "
+        "a colour PNG (R, G, B = Y, Cb, Cr) of 208x160, 104x80, 52x40, 416x320",
     )
     assert not (tmp_path / "out").exists()
 
