@@ -18,13 +18,12 @@ from pathlib import Path
 
 from .config import ConfigError, Connection, _quote, design_lines, find_in_stick, parse_connect_cfg, read_config
 
-ELF_MAGIC = b"\x7fELF"
+GZIP_MAGIC = b"\x1f\x8b"
 
 
 def _elf_kind(header: bytes) -> bytes:
     """An ELF file's magic, class (32 or 64 bits), byte order and machine (e_machine)."""
     return header[:6] + header[18:20]
-GZIP_MAGIC = b"\x1f\x8b"
 
 
 @dataclass(frozen=True)
