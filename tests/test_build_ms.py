@@ -546,12 +546,15 @@ def test_bad_input_is_refused_naming_the_argument(tmp_path):
         (TRACKER, tmp_path / "notes.txt", r"^--out .*notes\.txt: exists and is not a folder$"),
         (TRACKER, "", r"^--out is empty"),
         (walker, tmp_path / "o5", r"^controller .*walker\.c opens 'nowhere\.mtn', which is neither in"),
+        (TRACKER, tmp_path / "my stick", r"^--out .*my stick: make cannot build in a folder whose path has ' ' "),
+        (TRACKER, tmp_path / "a(b)" / "o7", r"^--out .*o7: make cannot build in a folder whose path has '\(' "),
     ]
     for controller, out, message in cases:
         with pytest.raises(BuildMsError, match=message) as error:
             build_ms(controller, out)
         assert "\n" not in str(error.value)
-    assert not any((tmp_path / f"o{k}").exists() for k in range(1, 6)) and len(list((tmp_path / "full").iterdir())) == 1
+    assert not any((tmp_path / f"o{k}").exists() for k in range(1, 6)) and not (tmp_path / "my stick").exists()
+    assert not (tmp_path / "a(b)").exists() and len(list((tmp_path / "full").iterdir())) == 1
     shutil.copy(WALK, tmp_path / "nowhere.mtn")
     with pytest.raises(BuildMsError, match=r"opens '/MS/OPEN-R/LONGFOLDER/X\.MTN': /MS/\.\.\. names must be 8\.3"):
         build_ms(walker, tmp_path / "o6")

@@ -62,6 +62,7 @@ CONNECTIONS = (
 # The controller's main() under another name, as the wrapper calls it (Controller.cc).
 MAIN = {".c": "aibo_controller_main_c", ".cc": "aibo_controller_main_cc", ".cpp": "aibo_controller_main_cc"}
 _SAFE_NAME = re.compile(r"[A-Za-z0-9_.+-]+")
+_UNSAFE_IN_MAKE = re.compile(r"[\s'\"`$&|;<>()*?\[\]#~!{}\\]")  # in a folder's path: make and sh split or read it
 _LITERAL = re.compile(r'//[^\n]*|/\*.*?\*/|"((?:[^"\\\n]|\\.)*)"|\'(?:[^\'\\\n]|\\.)*\'', re.S)
 
 
@@ -290,6 +291,12 @@ def _check_out(out_dir) -> Path:
         raise BuildMsError(f"--out {out_dir}: exists and is not a folder")
     if out.is_dir() and any(out.iterdir()):
         raise BuildMsError(f"--out {out_dir}: the folder exists and is not empty: give a new or empty one")
+    unsafe = _UNSAFE_IN_MAKE.search(str(out.resolve()))  # the Makefiles' $(shell pwd), as Sony's own
+    if unsafe:
+        raise BuildMsError(
+            f"--out {out_dir}: make cannot build in a folder whose path has {unsafe.group()!r} "
+            "(a space or a character the shell reads): choose another"
+        )
     return out
 
 
