@@ -339,6 +339,16 @@ def test_a_crashing_object_is_named_with_the_signal_and_the_time(objects, tmp_pa
         run_stick(stick, 1.0, tmp_path / "out")
 
 
+def test_an_object_that_calls_exit_is_named(objects, tmp_path, monkeypatch):
+    monkeypatch.setenv("CRASH_HOW", "exit")
+    stick = make_stick(tmp_path / "ms", objects, ["CRASH"], f"{SENSOR} Crash.Sensor.OSensorFrameVectorData.O\n")
+    with pytest.raises(
+        OpenRObjectCrashed,
+        match=r"^the OPEN-R runtime exited with status 3 in OPEN-R object Crash \(entry 7\) at simulated t = 0\.088 s$",
+    ):
+        run_stick(stick, 1.0, tmp_path / "out")
+
+
 def test_an_object_that_never_returns_is_announced_and_one_signal_ends_it(objects, tmp_path, monkeypatch, capfd):
     monkeypatch.setattr(host_protocol, "WAIT_NOTICE_S", 0.2)
     stick = make_stick(tmp_path / "ms", objects, ["SPIN"], f"{SENSOR} Spin.Sensor.OSensorFrameVectorData.O\n")
@@ -363,6 +373,20 @@ def test_an_object_that_never_returns_is_announced_and_one_signal_ends_it(object
     )
     # its prompt (no newline yet) was on the console and in the log as it printed it
     assert (tmp_path / "out" / "console.log").read_text().endswith("Spin: spinning> ")
+
+    # In DoInit, before the objects have told their names: named by its file.
+    monkeypatch.setenv("CRASH_HOW", "init")
+    stick = make_stick(tmp_path / "ms2", objects, ["CRASH"], f"{SENSOR} Crash.Sensor.OSensorFrameVectorData.O\n")
+    timer = threading.Timer(0.1, signal.raise_signal, [signal.SIGINT])  # started by the patched announcement
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            run_stick(stick, 5.0, tmp_path / "out2")
+    finally:
+        timer.cancel()
+    assert (
+        "aibo-sim: waiting for OPEN-R object /MS/OPEN-R/MW/OBJS/CRASH.BIN (entry 0): no answer"
+        in capfd.readouterr().err
+    )
 
 
 def test_runs_are_deterministic(objects, tmp_path):

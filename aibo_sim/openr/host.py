@@ -246,7 +246,7 @@ class MemoryStickRun:
         self.lookahead = protocol.LOOKAHEAD_FRAMES  # frames an answer may foretell (0: a message every frame)
         self.shutdown = False
         self.controller_error: str | None = None  # the wrapper's, when its controller failed
-        self.object_names: list[str] = []
+        self.object_names: list[str] = []  # the objects' own names, in OBJECT.CFG's order
         self._sensors = SensorFrame(sim)
         self._locators = primitives()
         self._joint_of = {self._locators.index(j.locator): i for i, j in enumerate(ers7.JOINTS)}
@@ -337,6 +337,7 @@ class MemoryStickRun:
                 os.close(log)
 
     def _start(self, libraries) -> None:
+        self.object_names = [o.ms_path for _, o in libraries]  # their files until the runtime tells their names
         locators = self._locators
         setup = b"".join(
             [
@@ -378,6 +379,7 @@ class MemoryStickRun:
         """Each registered service's object, from the SERVICES reply (plus the system's)."""
         services = {name: system for system, names in SYSTEM_SERVICES.items() for name in names}
         count, offset = struct.unpack_from("<I", payload)[0], 4
+        self.object_names = []
         for _ in range(count):
             name, offset = protocol.unpack_string(payload, offset)
             self.object_names.append(name)
@@ -675,14 +677,20 @@ class MemoryStickRun:
             name = signal.Signals(-status).name
             what = f"OPEN-R object {crashed}" if crashed else "the OPEN-R runtime"
             raise OpenRObjectCrashed(f"{what} crashed ({name}: {signal.strsignal(-status)}) {where}")
-        raise OpenRObjectCrashed(f"the OPEN-R runtime exited with status {status} {where}")
+        running = self._running()
+        by = f" in {running}" if running else ""  # the object that called exit()
+        raise OpenRObjectCrashed(f"the OPEN-R runtime exited with status {status}{by} {where}")
+
+    def _running(self) -> str | None:
+        """The object entry the runtime is running ("OPEN-R object HELLO (entry 1)"), or None."""
+        number, entry = struct.unpack_from("<2I", self._memory, 0)
+        if not number:
+            return None
+        names = ["OVirtualRobotComm", "OVirtualRobotAudioComm", *self.object_names]
+        return f"OPEN-R object {names[number - 1] if number <= len(names) else number} (entry {entry})"
 
     def _waiting(self, seconds: float) -> None:
-        status = struct.unpack_from("<2I", self._memory, 0)
-        what = "the OPEN-R runtime"
-        if status[0]:
-            names = ["OVirtualRobotComm", "OVirtualRobotAudioComm", *self.object_names]
-            what = f"OPEN-R object {names[status[0] - 1] if status[0] <= len(names) else status[0]} (entry {status[1]})"
+        what = self._running() or "the OPEN-R runtime"
         print(
             f"aibo-sim: waiting for {what}: no answer for {seconds:.1f} s of wall time "
             f"(simulated time stays at t = {self.time_ms / 1000:.3f} s)",

@@ -1,4 +1,6 @@
-// Crash: writes through a null pointer on its third sensor vector (aibo-sim's runtime tests).
+// Crash: writes through a null pointer on its third sensor vector (aibo-sim's runtime tests); with
+// CRASH_HOW=exit in the environment it calls exit(3) there instead, with CRASH_HOW=init it never
+// returns from DoInit.
 #ifndef Crash_h_DEFINED
 #define Crash_h_DEFINED
 
