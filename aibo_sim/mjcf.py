@@ -21,6 +21,10 @@ from .sim import models_dir
 
 CAMERA_FOCAL = 0.00327  # m (Sony: f = 3.27 mm)
 PAW_RADIUS = 0.01172  # Tekkotsu BallOfFootRadius; Webots uses 0.017 (see models/README.md)
+# How far the paws sink into the carpet under the standing robot's weight (MuJoCo's soft contacts):
+# the keyframes start them there, so that the contacts carry the robot from the start (a robot at
+# rest reads 1 g at t = 0, not a free fall).
+PAW_SINK = 0.0001
 PAW_TOUCH_RADIUS = 0.015  # Webots touch sphere
 SHIN_COLLISION_REACH, SHIN_COLLISION_RADIUS = 0.7, 0.0145  # shin capsule: knee to 70 % of the way to the paw
 TIMESTEP = 0.002  # s: four physics steps per 8 ms OPEN-R joint frame (models/README.md, "Conventions": the timestep)
@@ -394,7 +398,7 @@ def _sensors() -> ET.Element:
 
 
 def _pose_qpos(model, pose: dict[str, float]) -> np.ndarray:
-    """qpos for ``pose`` with the body pitched and lifted so all four paws touch z = 0."""
+    """qpos for ``pose`` with the body pitched and lifted so all four paws touch z = 0, sunk by ``PAW_SINK``."""
     import mujoco
 
     data = mujoco.MjData(model)
@@ -412,7 +416,7 @@ def _pose_qpos(model, pose: dict[str, float]) -> np.ndarray:
     qpos[3:7] = (math.cos(pitch / 2), 0, math.sin(pitch / 2), 0)
     data.qpos[:] = qpos
     mujoco.mj_kinematics(model, data)
-    qpos[2] = PAW_RADIUS - data.geom_xpos[paws][:, 2].min()
+    qpos[2] = PAW_RADIUS - PAW_SINK - data.geom_xpos[paws][:, 2].min()
     return qpos
 
 

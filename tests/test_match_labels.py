@@ -220,16 +220,17 @@ def test_coco_json_has_a_category_per_team_and_the_robots_team_and_number(match,
 
 
 # A lone robot's detections at two known poses (ers7 profile), made by the code before matches
-# (the tree at 72a6158): sha256 of their JSON (masks included), and the fields without the masks.
+# (the tree at 72a6158), with the robot then 0.1 mm lower (its paws sunk as they rest, mjcf.PAW_SINK,
+# remade so): sha256 of their JSON (masks included), and the fields without the masks.
 LONE_ROBOT = {
     "goal": (
         (1.6, 0.2, 0.0, 2.2, 0.0),
-        "0ef33cbb2072d8303784fbb7c6eab17289a77b19c925d5da6ae437c5249c7f8b",
+        "448c0621d2515aa39366c09341332a52cb6db70f2c34a1ec6ddbd5a9d01f889b",
         [
-            {"category": "goal", "object": "goal_skyblue", "bbox": [55, 0, 153, 72], "area": 9348, "visibility": 1.0},
-            {"category": "ball", "object": "ball", "bbox": [172, 82, 36, 38], "area": 1125, "visibility": 1.0},
+            {"category": "goal", "object": "goal_skyblue", "bbox": [55, 0, 153, 72], "area": 9347, "visibility": 1.0},
+            {"category": "ball", "object": "ball", "bbox": [172, 82, 36, 38], "area": 1123, "visibility": 1.0},
         ],
-        {"pixel": [191.02093524955524, 100.10190709347214], "visible": True, "distance_m": 0.4879016335011938},
+        {"pixel": [191.02655183321866, 100.06010202014293], "visible": True, "distance_m": 0.4878698161530265},
     ),
     "beacon": (
         (
@@ -239,18 +240,18 @@ LONE_ROBOT = {
             2.35 * math.cos(math.atan2(1.95, 1.35)),
             2.35 * math.sin(math.atan2(1.95, 1.35)),
         ),
-        "e5d7267811d7ff41f84c300c16d25f02f4f894281422bf8a743d377be16c647b",
+        "8ba4caa1793371ed63a40fc1dd369f6f350866b741bb1382d51a7413ab48d548",
         [
             {
                 "category": "beacon",
                 "object": "beacon_skyblue_left",
-                "bbox": [98, 8, 10, 40],
-                "area": 335,
-                "visibility": 0.8981,
+                "bbox": [98, 7, 10, 41],
+                "area": 336,
+                "visibility": 0.8984,
             },
             {"category": "ball", "object": "ball", "bbox": [99, 41, 8, 6], "area": 38, "visibility": 0.7917},
         ],
-        {"pixel": [102.69014030592622, 42.904385779255186], "visible": True, "distance_m": 2.1726119678609215},
+        {"pixel": [102.69014082411618, 42.89488838920831], "visible": True, "distance_m": 2.172604822887163},
     ),
 }
 LONE_CLASSES_SHA256 = "812e71b5c6af9ff0154ec51aeb111fdf9a7d724c937ba5e0603cfe40e614099d"

@@ -453,3 +453,17 @@ def test_geom_groups_sets_groups_for_the_block_and_restores_them_after_an_error(
         assert (model.geom_group[geoms] == 5).all() and lock.locked()
         raise KeyError("inside")
     assert np.array_equal(model.geom_group, own) and not lock.locked()
+
+
+@pytest.mark.parametrize("keyframe", ["home", "stand", "sit"])
+def test_a_robot_at_rest_is_carried_by_its_paws_from_the_start(keyframe):
+    """The keyframes start the paws sunk as they rest (mjcf.PAW_SINK): at t = 0 the contacts carry
+    the robot and its accelerometer reads about 1 g (it read 0 g, a free fall, until the first step)."""
+    from aibo_sim.sim import GRAVITY
+
+    sim = Simulation()
+    try:
+        sim.reset(keyframe=keyframe)
+        assert 0.7 * GRAVITY < np.linalg.norm(sim.acceleration()) < 1.1 * GRAVITY
+    finally:
+        sim.close()
