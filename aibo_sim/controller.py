@@ -57,6 +57,7 @@ from .robot import (
     TouchSensor,
     sampling_period,
     short_repr,
+    whole_ms,
 )
 
 
@@ -186,9 +187,10 @@ def robot_run(run_fn) -> None:
         raise TypeError(f"robot_run({short_repr(run_fn)}): the run function must be callable")
     ms = 0
     while True:
-        ms = run_fn(ms)
-        if not isinstance(ms, (int, np.integer)) or ms <= 0:
-            raise ValueError(f"run function returned {ms!r}: it must return the next step in ms (e.g. TIME_STEP)")
+        returned = run_fn(ms)
+        ms = whole_ms(returned)
+        if ms is None or ms <= 0:
+            raise ValueError(f"run function returned {returned!r}: it must return the next step in ms (e.g. TIME_STEP)")
         _rendering("robot_run").step(ms)
 
 
@@ -254,8 +256,13 @@ def robot_keyboard_get_key() -> int:
 
 
 def robot_console_printf(fmt: str, *args) -> None:
-    """Write ``fmt % args`` (``fmt`` itself without ``args``) to stdout and flush it."""
-    sys.stdout.write(fmt % args if args else fmt)
+    """Write ``fmt % args`` to stdout, as C's printf (``%%`` is ``%`` without ``args`` too), and
+    flush it; a format its ``args`` do not fill is a TypeError naming it."""
+    try:
+        text = fmt % args
+    except (TypeError, ValueError) as exc:
+        raise TypeError(f"robot_console_printf({short_repr(fmt)}): {exc}") from None
+    sys.stdout.write(text)
     sys.stdout.flush()
 
 

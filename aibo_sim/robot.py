@@ -30,6 +30,7 @@ from .mtn import Motion, MotionPlayer, MtnError, check_joint, mtn_new
 from .sim import FRAME_MS, Simulation
 
 BACKENDS = ("sim", "openr")
+MAX_SAMPLING_PERIOD_MS = 0xFFFF  # Webots 5 passes periods as unsigned short
 
 
 class DeviceError(RuntimeError):
@@ -54,10 +55,12 @@ def whole_ms(value) -> int | None:
 
 def sampling_period(ms, what: str) -> int:
     """``ms`` as a whole number of milliseconds; DeviceError naming ``what`` (a device, a call)
-    unless it is a positive whole number."""
+    unless it is a positive whole number up to 65535 (Webots 5's periods are unsigned shorts)."""
     period = whole_ms(ms)
-    if period is None or period <= 0:
-        raise DeviceError(f"{what}: sampling period must be a positive whole number of ms, not {ms!r}")
+    if period is None or not 0 < period <= MAX_SAMPLING_PERIOD_MS:
+        raise DeviceError(
+            f"{what}: sampling period must be a whole number of ms from 1 to {MAX_SAMPLING_PERIOD_MS}, not {ms!r}"
+        )
     return period
 
 

@@ -52,10 +52,32 @@ def test_robot_step_takes_whole_numbers_of_any_numeric_type(robot):
     assert robot.time_ms == 80
 
 
-@pytest.mark.parametrize("ms", [8.9, 0, "32", math.nan])
-def test_sampling_periods_must_be_whole_positive_ms(robot, ms):
-    with pytest.raises(DeviceError, match=r"sampling period must be a positive whole number of ms"):
+@pytest.mark.parametrize("ms", [8.9, 0, "32", math.nan, 65536])
+def test_sampling_periods_must_be_whole_ms_that_webots_unsigned_short_holds(robot, ms):
+    with pytest.raises(DeviceError, match=r"sampling period must be a whole number of ms from 1 to 65535, not "):
         api.servo_enable_position(api.robot_get_device(HEAD_PAN), ms)
+    api.servo_enable_position(api.robot_get_device(HEAD_PAN), 65535)
+
+
+def test_console_printf_formats_as_printf_with_or_without_arguments(robot, capsys):
+    api.robot_console_printf("A 100%%\n")
+    api.robot_console_printf("B %d%%\n", 5)
+    assert capsys.readouterr().out == "A 100%\nB 5%\n"  # as C's printf writes them (tests/test_c_controller.py)
+    with pytest.raises(TypeError, match=r"^robot_console_printf\('C %d\\n'\): not enough arguments"):
+        api.robot_console_printf("C %d\n")
+
+
+def test_a_run_function_may_return_a_whole_float_as_robot_step_takes_it(robot):
+    steps = []
+
+    def run(ms):
+        steps.append(ms)
+        return 16.0
+
+    with pytest.raises(api.SimulationEnd):
+        robot.end_ms = 48
+        api.robot_run(run)
+    assert steps[:3] == [0, 16, 16] and robot.time_ms == 48
 
 
 @pytest.mark.parametrize("value", [None, "0.5", True, math.nan, -math.inf])
