@@ -318,7 +318,8 @@ def _mtn_play(args) -> int:
             f"heading {result['heading_change_deg']:+.1f} deg, {'FELL' if result['fell'] else 'did not fall'}, "
             f"{result['duration_s']:.2f} s; ended at x {x:+.3f} m, y {y:+.3f} m, yaw {yaw:+.1f} deg; "
             f"kinematic distance {result['kinematic_distance_m']:+.3f} m; peak leg joint speed "
-            f"{result['peak_leg_joint_speed_rad_s']:.1f} rad/s; paws carry {paw_share}"
+            f"{result['peak_leg_joint_speed_rad_s']:.1f} rad/s; paws carry {paw_share}; "
+            f"from the {result['start_keyframe']} keyframe"
         )
     return 0
 
@@ -411,8 +412,9 @@ def build_parser() -> argparse.ArgumentParser:
     info.set_defaults(handler=_mtn_info)
     play = mtn.add_parser(
         "play",
-        help="play a file on the standing robot and report how it moved",
-        description="Play a motion on the standing robot and report how it moved. It takes "
+        help="play a file on the robot and report how it moved",
+        description="Play a motion on the robot, standing (sitting for a motion whose name says it starts "
+        "sitting, as Sony's a_sit#...) and report how it moved. It takes "
         "the options of every aibo-sim command; it renders no camera frame and reads no "
         "noisy sensor, so --seed and the camera options leave its report unchanged.",
     )

@@ -27,6 +27,9 @@ from .sim import FRAME_MS, Simulation, models_dir
 
 KEYFRAME_MS = 16  # Sony's walks: pre-sampled 16 ms keyframes, numInterpolate 0
 BLEND_MS = 512  # play_motion's blend from the current pose to a motion's first keyframe
+# Sony names a motion a_<start posture>#<end posture>_<label>: the start postures with a keyframe
+# of that name (models/ers7.xml) start there; the others (stand, walk, sleep, ...) from the stand.
+START_KEYFRAMES = ("sit",)
 
 
 # ----------------------------------------------------------------------------- kinematics
@@ -296,6 +299,14 @@ class GaitMeter:
         return self.paw_force / self.leg_force if self.leg_force > 0 else None
 
 
+def start_keyframe(motion: Motion, model: mujoco.MjModel) -> str:
+    """The keyframe a new robot plays ``motion`` from: its name's start posture where ``model``
+    has that keyframe (``sit`` for Sony's ``a_sit#...`` dances), else ``stand``."""
+    posture = motion.name[2:].split("#", 1)[0] if motion.name.startswith("a_") and "#" in motion.name else ""
+    has_key = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_KEY, posture) >= 0 if posture in START_KEYFRAMES else False
+    return posture if has_key else "stand"
+
+
 def play_motion(
     motion_or_path,
     repeat: int = 1,
@@ -306,9 +317,10 @@ def play_motion(
     world: WorldConfig | None = None,
     camera: CameraConfig | None = None,
 ) -> dict:
-    """Play a motion (or MTN file) ``repeat`` times on ``sim`` (default: a new robot standing in
-    ``world``'s scene, the RoboCup field by default, with its seed and ``camera``, which ``mtn
-    play`` takes like every ``aibo-sim`` command) and say where it went. ``world.pose`` (x, y in
+    """Play a motion (or MTN file) ``repeat`` times on ``sim`` (default: a new robot in ``world``'s
+    scene, the RoboCup field by default, with its seed and ``camera``, which ``mtn play`` takes
+    like every ``aibo-sim`` command, in the keyframe its name starts from: ``start_keyframe``)
+    and say where it went. ``world.pose`` (x, y in
     metres, yaw in degrees) places the robot first; ``world.ball`` (x, y) places the ball, and
     without it a new robot's scene has no ball (a walk measured into a ball measures the ball).
 
@@ -342,8 +354,11 @@ def play_motion(
         world.scene, seed=world.seed, camera=camera, ball=world.ball is not None, ball_type=world.ball_type
     )
     try:
+        keyframe = start_keyframe(motion, sim.model)
+        if keyframe != sim.keyframe:
+            sim.reset(keyframe=keyframe)
         place(sim, world.pose, world.ball)
-        return _play(sim, motion, player, repeat, mode, step_ms)
+        return {**_play(sim, motion, player, repeat, mode, step_ms), "start_keyframe": keyframe}
     finally:
         sim.close()
 

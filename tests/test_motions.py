@@ -126,10 +126,18 @@ def test_sit_then_stand_reach_the_keyframe_poses():
     assert math.degrees(sim.body_pose()[2]) < 5
 
 
-def test_stand_from_standing_blends_to_sit_first():
+def test_a_motion_named_to_start_sitting_starts_from_the_sit_keyframe():
+    """Sony's names, a_<start posture>#<end posture>_<label>: STAND.MTN (a_sit#stand_standup)
+    starts sitting; SIT.MTN (a_stand#sit_sitdown) and a sleep motion (no such keyframe) standing."""
     result = motions.play_motion(MOTION_DIR / "STAND.MTN")
-    assert not result["fell"]
-    assert result["duration_s"] == pytest.approx((1600 + 8) / 1000)  # from sit, after the blend
+    assert not result["fell"] and result["start_keyframe"] == "sit"
+    assert result["duration_s"] == pytest.approx((1600 + 8) / 1000)  # the motion's own, after the blend
+    assert motions.play_motion(MOTION_DIR / "SIT.MTN")["start_keyframe"] == "stand"
+    model = load_model(models_dir() / "scene.xml")
+    sleep = Motion.from_poses("a_sleep#sleep_x", None, [motions.STAND_POSE], 16)
+    assert motions.start_keyframe(sleep, model) == "stand"
+    sit = Motion.from_poses("a_sit#sit_x", None, [motions.SIT_POSE], 16)
+    assert motions.start_keyframe(sit, model) == "sit"
 
 
 def test_play_motion_rejects_bad_arguments():
