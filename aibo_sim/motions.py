@@ -303,8 +303,9 @@ def start_keyframe(motion: Motion, model: mujoco.MjModel) -> str:
     """The keyframe a new robot plays ``motion`` from: its name's start posture where ``model``
     has that keyframe (``sit`` for Sony's ``a_sit#...`` dances), else ``stand``."""
     posture = motion.name[2:].split("#", 1)[0] if motion.name.startswith("a_") and "#" in motion.name else ""
-    has_key = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_KEY, posture) >= 0 if posture in START_KEYFRAMES else False
-    return posture if has_key else "stand"
+    if posture in START_KEYFRAMES and mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_KEY, posture) >= 0:
+        return posture
+    return "stand"
 
 
 def play_motion(
