@@ -483,11 +483,18 @@ class _SignalsStopCleanly:
         self._previous: dict[int, object] = {}
         self._first = (0, 0.0)  # the first signal's number and time.monotonic()
 
-    def __enter__(self) -> None:
+    @property
+    def received(self) -> int:
+        """The first signal received (0: none): what ended the command, where a library re-raised
+        its exception as a bare KeyboardInterrupt (Ray's ``get`` does)."""
+        return self._first[0]
+
+    def __enter__(self) -> _SignalsStopCleanly:
         if threading.current_thread() is threading.main_thread():
             self._previous[signal.SIGTERM] = signal.signal(signal.SIGTERM, self._raise)
             if signal.getsignal(signal.SIGINT) is signal.default_int_handler:  # not where Ctrl-C is ignored
                 self._previous[signal.SIGINT] = signal.signal(signal.SIGINT, self._raise)
+        return self
 
     def __exit__(self, *exc_info) -> None:
         if self._deadline is not None:
@@ -549,8 +556,9 @@ def main(argv: list[str] | None = None) -> int:
         if isinstance(stream, io.TextIOWrapper):
             stream.reconfigure(errors="backslashreplace")
     args = build_parser().parse_args(argv)
+    signals = _SignalsStopCleanly()
     try:
-        with _SignalsStopCleanly():
+        with signals:
             return args.handler(args)
     except ControllerFailed as exc:
         print(f"aibo-sim: {exc}", file=sys.stderr)
@@ -583,16 +591,16 @@ def main(argv: list[str] | None = None) -> int:
         interrupt = interrupt_behind(exc)
         if interrupt is None:
             raise
-        return _interrupted(interrupt, args.command)
+        return _interrupted(interrupt, args.command, signals.received)
     except KeyboardInterrupt as exc:
-        return _interrupted(exc, args.command)
+        return _interrupted(exc, args.command, signals.received)
 
 
-def _interrupted(interrupt: KeyboardInterrupt, command: str) -> int:
+def _interrupted(interrupt: KeyboardInterrupt, command: str, received: int) -> int:
     """Say that Ctrl-C (130, as a shell reports a process ended by SIGINT: 128 + 2) or SIGTERM (143)
-    ended the command; the exit status."""
+    ended the command (``received``: the signal, where the exception no longer says); the exit status."""
     hint = " (the dump can continue with --resume)" if command == "dump" else ""
-    if isinstance(interrupt, Terminated):
+    if isinstance(interrupt, Terminated) or received == signal.SIGTERM:
         print(f"aibo-sim: terminated (SIGTERM){hint}", file=sys.stderr)
         return EXIT_TERMINATED
     print(f"\naibo-sim: interrupted{hint}", file=sys.stderr)

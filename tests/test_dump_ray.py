@@ -6,12 +6,14 @@ import io
 import json
 import os
 import signal
+import subprocess
 import sys
 import threading
 import time
 from pathlib import Path
 
 import pytest
+from test_dump_reliability import _cli, _lines, _wait_for
 
 from aibo_sim import runner
 from aibo_sim.cli import main
@@ -63,6 +65,25 @@ def test_ray_gives_the_local_engines_bytes_and_resumes(ray, local_dump, tmp_path
     assert summary.new_frames == 4 and _files(out) == reference
     with pytest.raises(DumpError, match="already holds a dump: pass --resume"):
         dump(out, controller=TRACKER, frames=12, workers=2, formats=FORMATS, engine="ray")
+
+
+def test_sigterm_stops_a_ray_dump_cleanly_with_143(tmp_path):
+    """ray.init puts its own SIGTERM handler (an exit with status 1 at once): the command's is put
+    back, so a Ray dump stops as a local one does, saying how to resume."""
+    out = tmp_path / "dump"
+    command = ["dump", str(TRACKER), "--out", str(out), "--steps", "3000", "--workers", "2", "--formats", "rgb"]
+    dumping = subprocess.Popen(_cli(*command, "--engine", "ray"), cwd=ROOT, stderr=subprocess.PIPE, text=True)
+    try:
+        _wait_for(lambda: _lines(out / "shard_0") >= 2, STARTUP_S, "frames")
+        dumping.send_signal(signal.SIGTERM)
+        status = dumping.wait(STARTUP_S)
+    finally:
+        if dumping.poll() is None:
+            dumping.kill()
+            dumping.wait()
+    error = dumping.stderr.read()
+    assert status == 143 and "terminated (SIGTERM) (the dump can continue with --resume)" in error, error
+    assert not list(out.rglob(".tmp.*"))
 
 
 def test_a_lost_ray_worker_is_retried(ray, local_dump, tmp_path):

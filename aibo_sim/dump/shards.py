@@ -193,8 +193,12 @@ def ray_session(address: str | None):
             raise ValueError(f"--ray-address {address}: no Ray cluster answers there ({exc.strerror or exc})") from None
     started = not ray.is_initialized()
     if started:
+        handlers = {number: signal.getsignal(number) for number in (signal.SIGTERM, signal.SIGINT)}
         try:
             ray.init(address=address, include_dashboard=False, logging_level="warning")
+            if threading.current_thread() is threading.main_thread():
+                for number, handler in handlers.items():  # Ray's own exit at once, put back: the command stops cleanly
+                    signal.signal(number, signal.SIG_DFL if handler is None else handler)
         except Exception as exc:  # Ray's own exception types, by version
             where = f"--ray-address {address}" if address else "--engine ray"
             hint = (
