@@ -11,7 +11,7 @@ import pytest
 from pycocotools.coco import COCO
 
 from aibo_sim.cli import main
-from aibo_sim.config import CameraConfig
+from aibo_sim.config import CameraConfig, WorldConfig
 from aibo_sim.dump import dump, load_dump
 from aibo_sim.dump.coco import Objects, coco_bytes, mask_rle
 from aibo_sim.field import SEGMENTATION_CLASSES
@@ -72,6 +72,27 @@ def test_coco_masks_decode_to_the_pixels_of_each_box_and_the_ball_to_its_segment
             assert [xs.min(), ys.min(), xs.max() - xs.min() + 1, ys.max() - ys.min() + 1] == a["bbox"]
             if a["category_id"] == ball_id:
                 np.testing.assert_array_equal(mask, frame.seg == ball_id)
+
+
+def test_goal_and_beacon_masks_are_the_segmentation_files_pixels_of_their_class(tmp_path):
+    """Goals and beacons are drawn as merged meshes, labelled from their own geoms: their masks
+    together are the seg file's pixels of their class, pixel for pixel (a few edge pixels
+    differed, either way), each frame of a dump facing the sky-blue goal."""
+    out = tmp_path / "dump"
+    dump(
+        out, controller=TRACKER, frames=30, formats=FORMATS + ("seg",), world=WorldConfig(pose=(0, 0, 0), ball=(2.3, 0))
+    )
+    coco = COCO(str(out / "coco.json"))
+    seen = 0
+    for image_id, frame in zip(range(1, 31), load_dump(out)):
+        for category in ("goal", "beacon"):
+            number = SEGMENTATION_CLASSES.index(category)
+            masks = [coco.annToMask(a) for a in coco.loadAnns(coco.getAnnIds(imgIds=image_id, catIds=number))]
+            union = np.sum(masks, axis=0) if masks else np.zeros((H, W))
+            assert union.max() <= 1  # one object a pixel
+            np.testing.assert_array_equal(union > 0, frame.seg == number, err_msg=f"frame {image_id - 1} {category}")
+            seen += int(union.sum())
+    assert seen > 30 * 1000  # the goal fills a good part of every frame
 
 
 def test_records_without_masks_still_give_boxes(coco_dump, tmp_path):

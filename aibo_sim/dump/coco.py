@@ -33,6 +33,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import cv2
 import mujoco
 import numpy as np
 
@@ -107,6 +108,26 @@ class Objects:
         with geom_groups(sim.model, slice(None), shown, sim.world.render_lock):
             return sim.camera.segmentation()
 
+    def _as_segmented(self, sim: Simulation, view: _View, owners: np.ndarray) -> np.ndarray:
+        """``owners`` (object body per pixel, -1 none) with each goal's and beacon's pixels those
+        the camera's segmentation shows their class at: drawn there as merged meshes, their own
+        geoms rasterise apart along some edges. A pixel of the class that the own geoms leave to
+        no object of it takes the nearest one's."""
+        drawn = sim.camera.segmentation()
+        drawn_class = np.where(drawn >= 0, self.classes[drawn], "")
+        result = owners.copy()
+        for category in MERGED:
+            ours = np.isin(owners, [body for body, fields in view.fields.items() if fields["category"] == category])
+            here = drawn_class == category
+            known, unknown = ours & here, here & ~ours
+            result[ours & ~here] = -1
+            if known.any() and unknown.any():  # labels number the known pixels in row order
+                _, nearest = cv2.distanceTransformWithLabels(
+                    (~known).astype(np.uint8), cv2.DIST_L2, 3, labelType=cv2.DIST_LABEL_PIXEL
+                )
+                result[unknown] = owners[known][nearest[unknown] - 1]
+        return result
+
     def detect(self, sim: Simulation | None = None) -> list[dict]:
         """The current frame's visible objects as ``sim``'s camera sees them (default: the
         observer's): category, object (body name; a robot's spec name), for a robot its team and
@@ -115,7 +136,7 @@ class Objects:
         if sim is None:
             raise ValueError("Objects.detect: which robot's camera? (Objects was made from a model)")
         view = self.view(sim)
-        owners = view.owner[self._render(sim, view.shown)]
+        owners = self._as_segmented(sim, view, view.owner[self._render(sim, view.shown)])
         detections = []
         for body in np.unique(owners[owners >= 0]).tolist():
             ys, xs = np.nonzero(owners == body)
@@ -126,7 +147,7 @@ class Objects:
                     **view.fields[body],
                     "bbox": [x, y, int(xs.max()) - x + 1, int(ys.max()) - y + 1],
                     "area": int(xs.size),
-                    "visibility": round(xs.size / int((alone >= 0).sum()), VISIBILITY_DIGITS),
+                    "visibility": round(min(1.0, xs.size / int((alone >= 0).sum())), VISIBILITY_DIGITS),
                     "segmentation": mask_rle(owners == body),
                 }
             )
