@@ -219,6 +219,10 @@ def test_openr_message_bands_and_luma_are_the_encoding_of_the_png(full_dump):
             for band, array in bands.items():
                 assert np.array_equal(array, message.band(index, band))
         assert np.array_equal(frame.luma, openr_bridge.reconstruct_luma(message))
+    assert frame.bands(openr_bridge.ofbkimageLAYER_M).keys() == frame.bands("M").keys()
+    for layer in ("X", 4):
+        with pytest.raises(ValueError, match=rf"^bands\({layer!r}\): the layers are H, M, L, C or their numbers 0-3$"):
+            frame.bands(layer)
 
 
 def test_segmentation_depth_and_ball_pixel_agree_with_the_picture(full_dump):

@@ -230,8 +230,11 @@ class DumpFrame:
             raise DumpError(f"{path}: not an OFbkImageVectorData message ({exc}); the file is corrupt") from None
 
     def bands(self, layer: str | int) -> dict[int, np.ndarray]:
-        """The bands of a layer ("H", "M", "L", "C" or ofbkimageLAYER_*) keyed by ofbkimageBAND_*."""
-        index = LAYERS[layer] if isinstance(layer, str) else layer
+        """The bands of a layer ("H", "M", "L", "C" or ofbkimageLAYER_*) keyed by ofbkimageBAND_*;
+        ValueError naming another."""
+        index = LAYERS.get(layer) if isinstance(layer, str) else layer
+        if index not in LAYERS.values():
+            raise ValueError(f"bands({layer!r}): the layers are {', '.join(LAYERS)} or their numbers 0-3")
         data = self._raw("bands", openr_bridge.LAYER_NAMES[index])
         width, height = openr_bridge.LAYER_SIZE[index]
         info = openr_bridge.OFbkImageInfo(openr_bridge.LAYER_TYPE[index], 0, 0, 0, data.size, width, height)
