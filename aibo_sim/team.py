@@ -113,7 +113,9 @@ def _number(value) -> bool:
 
 
 def _pose_problem(pose: Sequence[float]) -> str | None:
-    """Why ``pose`` (three numbers) cannot be a robot's pose, or None."""
+    """Why ``pose`` cannot be a robot's pose (three finite numbers on the carpet), or None."""
+    if not isinstance(pose, (list, tuple)) or len(pose) != 3 or not all(_number(v) for v in pose):
+        return f"pose must be 3 numbers [x, y, yaw] (metres, degrees), not {pose!r}"
     if not all(math.isfinite(v) for v in pose):
         return f"pose {_show(pose)} is not finite numbers"
     if abs(pose[2]) > MAX_MAGNITUDE:
@@ -226,12 +228,10 @@ def _table_robot(table: dict, folder: Path) -> RobotSpec:
         raise ValueError(problem)
     pose = table.get("pose")
     if pose is not None:
-        if not isinstance(pose, list) or len(pose) != 3 or not all(_number(v) for v in pose):
-            raise ValueError(f"pose must be 3 numbers [x, y, yaw] (metres, degrees), not {pose!r}")
-        pose = tuple(float(v) for v in pose)
         problem = _pose_problem(pose)
         if problem:
             raise ValueError(problem)
+        pose = tuple(float(v) for v in pose)
     controller = table.get("controller")
     if controller is not None:
         if not isinstance(controller, str) or not controller.strip():

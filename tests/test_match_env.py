@@ -12,7 +12,7 @@ from pettingzoo.test import parallel_api_test
 
 from aibo_sim.envs.match import BALL_PROGRESS_REWARD, FALL_PENALTY, MatchEnv, ScriptedOpponentsEnv
 from aibo_sim.ers7 import JOINT_INDEX
-from aibo_sim.team import RobotSpec
+from aibo_sim.team import RobotSpec, TeamError
 
 MATCH_VS_SCRIPTED = "aibo_sim/MatchVsScripted-v0"
 STRIKERS = [RobotSpec("red", 4), RobotSpec("blue", 4)]  # kickoff poses, facing each other across the centre
@@ -275,3 +275,16 @@ def test_scripted_robots_chase_the_ball():
     assert np.linalg.norm(match.robot("blue_1").body_pose()[0][:2] - keeper) < 0.1  # the goalkeeper stays
     assert not any(match.robot(name).fallen() for name in match.robots)
     env.close()
+
+
+def test_robots_inside_each_other_or_with_a_malformed_pose_are_refused_as_run_refuses_them(tmp_path):
+    robots = tmp_path / "robots.toml"
+    robots.write_text(
+        '[[robot]]\nteam = "red"\nnumber = 2\npose = [0.5, 0.5, 0]\n\n'
+        '[[robot]]\nteam = "blue"\nnumber = 2\npose = [0.71, 0.5, 180]\n'
+    )
+    with pytest.raises(ValueError, match=r"robots\.toml:1: red 2 starts inside blue 2 \(\d+\.\d cm deep\)$"):
+        MatchEnv(robots=str(robots), camera=None)
+    for pose in [(0, 0), ("a", 0, 0), (0, 0, 0, 0)]:
+        with pytest.raises(TeamError, match=r"robot 1 \(red 4\): pose must be 3 numbers \[x, y, yaw\]"):
+            MatchEnv(robots=[RobotSpec("red", 4, pose)], camera=None)

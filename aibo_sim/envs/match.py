@@ -43,6 +43,7 @@ from ..config import CameraConfig
 from ..ers7 import DISTANCE_SENSORS, JOINT_INDEX, JOINTS, TOUCH_SENSORS, joint_indices
 from ..motions import BLEND_MS
 from ..mtn import MotionPlayer, read_mtn
+from ..placement import place_match
 from ..render import Renderer
 from ..robot import short_repr
 from ..sim import ACCEL_RANGE, FRAME_MS, Simulation, models_dir, placement_values, release_freed_memory
@@ -287,6 +288,11 @@ class MatchEnv(pettingzoo.ParallelEnv):
             robots=specs,
             camera=CameraConfig(camera_profile, settings=CameraSettings(camera_wb, camera_gain, camera_shutter)),
         )
+        try:
+            place_match(self.sim)  # no robot inside another, a wall or a goal, as run and dump refuse
+        except BaseException:
+            self.sim.close()
+            raise
         self._closed = False
         self.robots: dict[str, Simulation] = dict(zip(names, self.sim.world.robots))  # every robot, by name
         self.possible_agents = [name for name in names if name not in scripted]
