@@ -47,6 +47,11 @@ from .runner import (
 from .sim import Simulation, SimulationDiverged
 from .team import check_controllers, check_robots
 
+# After Ctrl-C or SIGTERM, how long a match waits for its robots' threads before it writes its
+# run.json files: a Python controller stuck in its own code never ends (the command itself ends
+# 10 s after the signal, cli.STOP_GRACE_S); a C controller is stopped within 2 s.
+STOP_WAIT_S = 6.0
+
 # The options of a run of one robot that a match refuses, and why.
 SINGLE_ROBOT_OPTIONS = {
     "--pose": "each robot's pose comes from its entry",
@@ -291,8 +296,9 @@ def run_match(
     except BaseException:  # Ctrl-C, SIGTERM: every robot stops at its next step
         interrupted = True
         world.lockstep.stop()
+        deadline = time.monotonic() + STOP_WAIT_S
         for player in started:
-            player.ended.wait()
+            player.ended.wait(max(0.0, deadline - time.monotonic()))
         raise
     finally:
         os.chdir(previous)

@@ -242,6 +242,35 @@ def test_ctrl_c_ends_a_match_after_every_robots_controller_has_ended(tmp_path):
     assert json.loads((tmp_path / "out" / "run.json").read_text())["status"] == "interrupted"
 
 
+@pytest.mark.slow
+def test_a_signal_ends_a_match_whose_python_controller_is_stuck_with_every_run_json_interrupted(tmp_path):
+    """A controller stuck in its own code never steps again: the match waits STOP_WAIT_S for it,
+    then writes its run.json files (they stayed "incomplete")."""
+    import time
+
+    from aibo_sim import match
+
+    stuck = tmp_path / "stuck.py"  # stuck from t = 0.1 s for 10 s of wall time, then steps (and ends)
+    stuck.write_text(
+        "import time\nfrom aibo_sim.controller import *\n"
+        "while robot_get_time() < 0.1:\n    robot_step(8)\n"
+        "until = time.monotonic() + 10\nwhile time.monotonic() < until:\n    time.sleep(0.05)\n"
+        "robot_step(8)\n"
+    )
+    robots = [RobotSpec("red", 1, None, str(TRACKER)), RobotSpec("blue", 1, None, str(stuck))]
+    timer = threading.Timer(2.0, signal.pthread_kill, [threading.main_thread().ident, signal.SIGINT])
+    timer.start()
+    started = time.monotonic()
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            run_match(robots, duration=60, out=tmp_path / "out", progress=False, camera=CameraConfig("ideal"))
+    finally:
+        timer.cancel()
+    assert time.monotonic() - started < 2.0 + match.STOP_WAIT_S + 5
+    for run_json in (tmp_path / "out" / "run.json", tmp_path / "out" / "robot2" / "run.json"):
+        assert json.loads(run_json.read_text())["status"] == "interrupted", run_json
+
+
 def test_run_robots_file_on_the_command_line(tmp_path, capsys):
     robots = tmp_path / "robots.toml"
     robots.write_text(
