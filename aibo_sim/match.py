@@ -233,6 +233,7 @@ def run_match(
         for robot in world.robots:
             with controller_named_as_given(robot.spec):
                 players.append(_player(robot, robot.spec.controller or controller_path, compiled))
+        _check_module_names(players)
         out = out and make_out_folder(out)
         if out:
             _check_match_folder(out, len(players))
@@ -351,6 +352,31 @@ def _play(player: _Player, lockstep: Lockstep) -> None:
             player.robot.camera.close()  # its OpenGL context is current in this thread only
         finally:
             player.ended.set()
+
+
+def _check_module_names(players: list[_Player]) -> None:
+    """ValueError where the folders of two Python controllers hold a module of one name (``NAME.py``
+    or a package ``NAME/``, not a controller's own main file): a match's Python controllers share
+    one interpreter, where both would import the one found first."""
+    mains = {player.path for player in players}
+    seen: dict[str, tuple[str, Path]] = {}
+    for player in players:
+        if player.kind != "python":
+            continue
+        for entry in sorted(player.path.parent.iterdir()):
+            if entry.suffix == ".py" and entry.is_file() and entry not in mains:
+                name = entry.stem
+            elif (entry / "__init__.py").is_file():
+                name = entry.name
+            else:
+                continue
+            robot, first = seen.setdefault(name, (player.robot.spec.name, entry))
+            if first != entry:
+                raise ValueError(
+                    f"{robot}'s {first} and {player.robot.spec.name}'s {entry} are both the module {name!r}: the "
+                    "Python controllers of a match share one interpreter, where both would import the first: "
+                    "rename one"
+                )
 
 
 def _check_match_folder(out: Path, robots: int) -> None:

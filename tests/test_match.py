@@ -271,6 +271,35 @@ def test_a_signal_ends_a_match_whose_python_controller_is_stuck_with_every_run_j
         assert json.loads(run_json.read_text())["status"] == "interrupted", run_json
 
 
+def test_two_teams_modules_of_one_name_are_refused_before_anything_is_written(tmp_path, capsys):
+    """One interpreter runs a match's Python controllers: blue's `import strategy` would get red's."""
+    for team in ("redteam", "blueteam"):
+        (tmp_path / team).mkdir()
+        (tmp_path / team / "strategy.py").write_text(f"NAME = {team!r}\n")
+        (tmp_path / team / "player.py").write_text(
+            "from aibo_sim.controller import *\nimport strategy\nrobot_step(8)\n"
+        )
+    robots = ["--robot", f"red:4::{tmp_path / 'redteam' / 'player.py'}", "--robot"]
+    blue = f"blue:4::{tmp_path / 'blueteam' / 'player.py'}"
+    assert main(["run", *robots, blue, "--duration", "0.1", "--out", str(tmp_path / "out")]) == 2
+    error = capsys.readouterr().err
+    assert (
+        error.count("\n") == 1
+        and (
+            f"red 4's {tmp_path / 'redteam' / 'strategy.py'} and blue 4's {tmp_path / 'blueteam' / 'strategy.py'} are "
+            "both the module 'strategy': the Python controllers of a match share one interpreter"
+        )
+        in error
+    )
+    assert not (tmp_path / "out").exists()
+    # One folder for both robots is one module: the same file.
+    blue = f"blue:4::{tmp_path / 'redteam' / 'player.py'}"
+    assert (
+        main(["run", *robots, blue, "--duration", "0.1", "--out", str(tmp_path / "out"), "--camera-profile", "ideal"])
+        == 0
+    )
+
+
 def test_run_robots_file_on_the_command_line(tmp_path, capsys):
     robots = tmp_path / "robots.toml"
     robots.write_text(
