@@ -214,13 +214,16 @@ class FrameWriter:
 
     def _prepare(self, marker: dict) -> None:
         frames = self.directory
-        for name in self._check():  # the earlier run's frames, checked again under the lock
+        earlier = [frames / name for name in self._check()]  # the earlier run's frames, checked again under the lock
+        if earlier_run(self.out) is not None:  # and a memory stick's console and sound, which this run may not write
+            earlier += [self.out / CONSOLE_FILE, self.out / SOUND_FILE]
+        for path in earlier:
             try:
-                (frames / name).unlink()
+                path.unlink()
             except FileNotFoundError:
                 pass
             except OSError as exc:
-                raise OSError(f"cannot remove the earlier run's {frames / name}: {exc.strerror or exc}") from exc
+                raise OSError(f"cannot remove the earlier run's {path}: {exc.strerror or exc}") from exc
         try:
             make_folder(frames)
         except SymlinkRefused:

@@ -244,6 +244,23 @@ def test_run_json_describes_the_pictures_the_backend_serves(tmp_path):
     assert json.loads((tmp_path / "openr" / "run.json").read_text())["camera"] == served
 
 
+def test_a_run_into_an_earlier_runs_folder_leaves_no_console_or_sound_of_it(tmp_path):
+    """A memory stick's run writes console.log and speaker.wav in --out: a later run there that
+    writes neither (a controller's) removes them with the earlier frames; in a folder holding no
+    aibo-sim run they are the user's, left alone."""
+    out = tmp_path / "out"
+    run_controller(SCRIPTED, duration=0.1, out=out)
+    for name in ("console.log", "speaker.wav"):
+        (out / name).write_text("a memory stick's, earlier")
+    run_controller(SCRIPTED, duration=0.1, out=out)
+    assert not (out / "console.log").exists() and not (out / "speaker.wav").exists()
+    theirs = tmp_path / "theirs"
+    theirs.mkdir()
+    (theirs / "console.log").write_text("the user's")
+    run_controller(SCRIPTED, duration=0.1, out=theirs)
+    assert (theirs / "console.log").read_text() == "the user's"
+
+
 def test_a_controller_that_ends_before_the_duration_is_said_to_have_ended(tmp_path, capsys):
     forgot = tmp_path / "forgot.py"  # robot_run(run) left out: nothing steps
     forgot.write_text("from aibo_sim.controller import *\ndef run(ms):\n    return 32\n")
