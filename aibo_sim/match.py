@@ -20,6 +20,7 @@ import threading
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
+from traceback import walk_tb
 
 from . import controller
 from .cbind import compile_controller, controller_sources, is_c_controller
@@ -285,6 +286,15 @@ def run_match(
     sys.path[:0] = added  # modules beside each controller import
     previous = Path.cwd()
     interrupted, started = False, []
+    thread_errors: list[tuple[str, list[_Player]]] = []  # threads the controllers started raised (_play keeps its own)
+
+    def thread_failed(args) -> None:
+        if not issubclass(args.exc_type, SimulationEnd):
+            name = args.thread.name if args.thread is not None else "?"
+            error = f"its thread {name!r} raised {args.exc_type.__name__}: {args.exc_value}"
+            thread_errors.append((error, _code_owners(players, args.exc_traceback)))
+
+    previous_hook, threading.excepthook = threading.excepthook, thread_failed
     try:
         if out is not None:
             os.chdir(out)  # the controllers' own files land in --out
@@ -302,10 +312,12 @@ def run_match(
             player.ended.wait(max(0.0, deadline - time.monotonic()))
         raise
     finally:
+        threading.excepthook = previous_hook
         os.chdir(previous)
         for path in added:
             sys.path.remove(path)
         progress_bar.close()
+        _blame_thread_errors(thread_errors)
         summary = _summary(sim, players, seed, scene, ball, ball_type, time.perf_counter() - start, interrupted)
         unwritten = [p.writer.error for p in players if p.writer is not None and p.writer.error is not None]
         try:
@@ -352,6 +364,29 @@ def _play(player: _Player, lockstep: Lockstep) -> None:
             player.robot.camera.close()  # its OpenGL context is current in this thread only
         finally:
             player.ended.set()
+
+
+def _code_owners(players: list[_Player], traceback) -> list[_Player]:
+    """The Python controllers whose code a thread's traceback runs through: those whose main file
+    it is, else those whose folder holds it (the first frame that has any); every Python
+    controller where none."""
+    python = [player for player in players if player.kind == "python"]
+    for frame, _ in walk_tb(traceback):
+        file = Path(frame.f_code.co_filename)
+        owners = [p for p in python if p.path == file] or [p for p in python if p.path.parent == file.parent]
+        if owners:
+            return owners
+    return python
+
+
+def _blame_thread_errors(thread_errors: list[tuple[str, list[_Player]]]) -> None:
+    """A thread a Python controller started raised: that controller failed, as in a run of one
+    robot (the thread's first error; of several controllers its code could be, each, saying so)."""
+    if thread_errors:
+        error, owners = thread_errors[0]
+        suspects = "" if len(owners) == 1 else f" (a thread of one of {len(owners)} Python controllers)"
+        for player in owners:
+            player.error = player.error or ControllerFailed(error + suspects)
 
 
 def _check_module_names(players: list[_Player]) -> None:

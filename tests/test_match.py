@@ -300,6 +300,23 @@ def test_two_teams_modules_of_one_name_are_refused_before_anything_is_written(tm
     )
 
 
+def test_a_thread_a_match_controller_started_that_raises_fails_that_robot(tmp_path, capsys):
+    """As in a run of one robot; the robot is the one whose code the thread ran (its traceback)."""
+    threads = tmp_path / "threads.py"
+    threads.write_text(
+        "import threading\nfrom aibo_sim.controller import *\n\n"
+        "def worker():\n    raise RuntimeError('worker failed')\n\n"
+        "robot_live(lambda: threading.Thread(target=worker, name='worker').start())\n"
+        "robot_run(lambda ms: 32)\n"
+    )
+    robots = ["--robot", "red:4", "--robot", f"blue:4::{threads}", "--camera-profile", "ideal"]
+    assert main(["run", str(TRACKER), *robots, "--duration", "0.3", "--out", str(tmp_path / "out")]) == 1
+    assert "blue 4: its thread 'worker' raised RuntimeError: worker failed" in capsys.readouterr().err
+    summary = json.loads((tmp_path / "out" / "run.json").read_text())
+    assert summary["status"] == "failed" and [robot["status"] for robot in summary["robots"]] == ["done", "failed"]
+    assert summary["robots"][1]["error"] == "its thread 'worker' raised RuntimeError: worker failed"
+
+
 def test_run_robots_file_on_the_command_line(tmp_path, capsys):
     robots = tmp_path / "robots.toml"
     robots.write_text(
