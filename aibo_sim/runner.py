@@ -181,8 +181,9 @@ class FrameWriter:
             self.lock.release()
             raise
 
-    def _check(self) -> list[str]:
-        """The names in an earlier run's ``frames/``; OSError when the folder is not one to reuse."""
+    def _check(self) -> list[Path]:
+        """The earlier run's files to remove: its frames, and a memory stick's console and sound,
+        which this run may not write; OSError when the folder is not one to reuse."""
         frames = self.directory
         if frames.is_symlink():
             raise SymlinkRefused.at(frames)
@@ -210,14 +211,12 @@ class FrameWriter:
                 f"{f' and {len(foreign) - 1} more' if len(foreign) > 1 else ''}): refusing to remove them; "
                 "choose another --out"
             )
-        return names
+        own = [self.out / CONSOLE_FILE, self.out / SOUND_FILE] if previous is not None else []
+        return [frames / name for name in names] + own
 
     def _prepare(self, marker: dict) -> None:
         frames = self.directory
-        earlier = [frames / name for name in self._check()]  # the earlier run's frames, checked again under the lock
-        if earlier_run(self.out) is not None:  # and a memory stick's console and sound, which this run may not write
-            earlier += [self.out / CONSOLE_FILE, self.out / SOUND_FILE]
-        for path in earlier:
+        for path in self._check():  # checked again under the lock
             try:
                 path.unlink()
             except FileNotFoundError:
