@@ -108,12 +108,11 @@ class Objects:
         with geom_groups(sim.model, slice(None), shown, sim.world.render_lock):
             return sim.camera.segmentation()
 
-    def _as_segmented(self, sim: Simulation, view: _View, owners: np.ndarray) -> np.ndarray:
+    def _as_segmented(self, view: _View, owners: np.ndarray, drawn: np.ndarray) -> np.ndarray:
         """``owners`` (object body per pixel, -1 none) with each goal's and beacon's pixels those
         the camera's segmentation shows their class at: drawn there as merged meshes, their own
         geoms rasterise apart along some edges. A pixel of the class that the own geoms leave to
-        no object of it takes the nearest one's."""
-        drawn = sim.camera.segmentation()
+        no object of it takes the nearest one's. ``drawn``: the frame's geom ids."""
         drawn_class = np.where(drawn >= 0, self.classes[drawn], "")
         result = owners.copy()
         for category in MERGED:
@@ -128,15 +127,17 @@ class Objects:
                 result[unknown] = owners[known][nearest[unknown] - 1]
         return result
 
-    def detect(self, sim: Simulation | None = None) -> list[dict]:
+    def detect(self, sim: Simulation | None = None, ids: np.ndarray | None = None) -> list[dict]:
         """The current frame's visible objects as ``sim``'s camera sees them (default: the
         observer's): category, object (body name; a robot's spec name), for a robot its team and
-        number, bbox, area, visibility, segmentation."""
+        number, bbox, area, visibility, segmentation. ``ids``: the frame's ``camera.segmentation()``
+        (geom ids), rendered when not given."""
         sim = sim if sim is not None else self.observer
         if sim is None:
             raise ValueError("Objects.detect: which robot's camera? (Objects was made from a model)")
         view = self.view(sim)
-        owners = self._as_segmented(sim, view, view.owner[self._render(sim, view.shown)])
+        drawn = sim.camera.segmentation() if ids is None else ids
+        owners = self._as_segmented(view, view.owner[self._render(sim, view.shown)], drawn)
         detections = []
         for body in np.unique(owners[owners >= 0]).tolist():
             ys, xs = np.nonzero(owners == body)

@@ -352,14 +352,16 @@ class DumpWriter:
             self._video.write(np.ascontiguousarray(rgb[..., ::-1]))
         if index in self.complete and index not in self.missing:
             return
-        for path, data in self._encode(sim, rgb, index):
+        # The frame's geom ids, rendered once for the seg and robots files and for coco's goals and beacons.
+        ids = sim.camera.segmentation() if {"seg", "robots", "coco"} & set(self.formats) else None
+        for path, data in self._encode(sim, rgb, index, ids):
             write_atomic(path, data)
             self.bytes_written += len(data)
         if index in self.missing:  # its line is there already
             self.missing.discard(index)
             self.repaired_frames += 1
             return
-        objects = {"objects": self._objects.detect(sim)} if self._objects is not None else {}
+        objects = {"objects": self._objects.detect(sim, ids)} if self._objects is not None else {}
         line = json.dumps({**frame_metadata(sim, index), **objects, **(extra or {})}) + "\n"
         try:
             self._lines.write(line.encode())
@@ -369,8 +371,8 @@ class DumpWriter:
         self.complete.add(index)
         self.new_frames += 1
 
-    def _encode(self, sim: Simulation, rgb: np.ndarray, index: int):
-        """(path, bytes) of each file of a frame."""
+    def _encode(self, sim: Simulation, rgb: np.ndarray, index: int, ids: np.ndarray | None):
+        """(path, bytes) of each file of a frame (``ids``: its geom ids, for seg and robots)."""
         wants = set(self.formats)
 
         def path(name: str, layer: str = "") -> Path:
@@ -396,7 +398,6 @@ class DumpWriter:
         if "depth" in wants:
             yield path("depth"), npy(sim.camera.depth())
         if wants & {"seg", "robots"}:
-            ids = sim.camera.segmentation()
             if "seg" in wants:
                 yield path("seg"), png(self._classes[ids])
             if "robots" in wants:
