@@ -607,5 +607,20 @@ def _interrupted(interrupt: KeyboardInterrupt, command: str, received: int) -> i
     return EXIT_INTERRUPTED
 
 
+def program() -> int:
+    """The ``aibo-sim`` program: ``main``, then the exit with its status, not waiting for threads
+    that still run a controller's code (Python waits for every thread that is not a daemon: one a
+    controller started and never ends, or a match's robot stuck in its controller after a signal,
+    would hold the command for ever; a run of Webots ends its controllers' processes)."""
+    status = main()
+    left = [repr(t.name) for t in threading.enumerate() if t is not threading.main_thread() and not t.daemon]
+    if not left:
+        return status
+    print(f"aibo-sim: the run is over; not waiting for threads still running: {', '.join(left)}", file=sys.stderr)
+    sys.stdout.flush()
+    sys.stderr.flush()
+    os._exit(status)
+
+
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(program())

@@ -63,26 +63,26 @@ from .robot import (
 
 class _Installed:
     """What the API functions drive: the robot, the thread that runs its controller (the camera
-    renders there), the device tags handed out, the reset and exit functions registered."""
+    renders there), the device tags handed out, the reset and exit functions registered, and
+    when the controller last called the API (``time.monotonic()``: the runner's wait notices)."""
 
     def __init__(self, robot: Robot | None):
         self.robot, self.thread = robot, threading.current_thread()
         self.tags: list[Device] = []
         self.reset_fn = None
         self.die_fns: list = []
+        self.last_call_s = time.monotonic()
 
 
 _installed = _Installed(None)  # the run's controller
 _match: dict[int, _Installed] = {}  # in a match, each robot's, by the thread running its controller
-last_call_s = 0.0  # time.monotonic() at the last API call (the runner's wait notices)
 
 
 def install(robot: Robot | None, match: bool = False) -> None:
     """Make ``robot`` the one the API functions drive, from this thread (the runner calls this).
     ``match=True``: one of several robots, each controller in its own thread; its API calls
     must come from that thread (another gets the robot ``install`` gave it without ``match``)."""
-    global _installed, last_call_s
-    last_call_s = time.monotonic()
+    global _installed
     if not match:
         _installed = _Installed(robot)
     elif robot is not None:
@@ -95,13 +95,18 @@ def _state() -> _Installed:
     return _match.get(threading.get_ident(), _installed) if _match else _installed
 
 
+def installed() -> _Installed:
+    """What ``install`` gave this thread (the runner reads its ``last_call_s`` from another)."""
+    return _state()
+
+
 def current_robot() -> Robot:
     """The robot the API functions drive in this thread.
 
     :raises RuntimeError: no robot installed (the controller was not started by ``aibo-sim run``).
     """
-    global last_call_s
-    robot = _state().robot
+    state = _state()
+    robot = state.robot
     if robot is None:
         if _match:
             raise RuntimeError(
@@ -109,7 +114,7 @@ def current_robot() -> Robot:
                 "must come from the thread that runs it"
             )
         raise RuntimeError("no robot: run the controller with `aibo-sim run CONTROLLER`")
-    last_call_s = time.monotonic()
+    state.last_call_s = time.monotonic()
     return robot
 
 
@@ -126,9 +131,9 @@ def _rendering(function: str) -> Robot:
 
 
 def _device(tag, kind: type) -> Device:
-    global last_call_s
-    last_call_s = time.monotonic()
-    tags = _state().tags
+    state = _state()
+    state.last_call_s = time.monotonic()
+    tags = state.tags
     if not isinstance(tag, (int, np.integer)) or not 0 < tag <= len(tags):
         raise DeviceError(f"invalid device tag {tag!r}: use the value robot_get_device returned")
     device = tags[tag - 1]

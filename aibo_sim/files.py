@@ -111,6 +111,19 @@ def write_file_atomic(path: Path, data: bytes, temp: Path | None = None) -> None
     write_files_atomic({path: data}, {path: temp} if temp else None)
 
 
+def check_atomic_write(path: Path) -> None:
+    """Raise, before anything is written, the OSError that ``write_file_atomic(path)`` would for
+    what lies in its way: a link at its temporary file (``SymlinkRefused``), a folder there or at
+    ``path`` (a run checks its folder so, that one refused is left as it was)."""
+    temp = path.with_name(f".{path.name}.tmp")
+    if temp.is_symlink():
+        raise SymlinkRefused.at(temp)
+    for folder in (temp, path):
+        if folder.is_dir():
+            where = f"{folder}: " if folder != path else ""
+            raise OSError(f"cannot write {path}: {where}{os.strerror(errno.EISDIR)}")
+
+
 def write_files_atomic(files: dict[Path, bytes], temps: dict[Path, Path] | None = None) -> None:
     """Write several files as one set, each as ``write_file_atomic`` writes one: all of them are
     renamed into place once every one is on disk and no target is a folder, so a write that
@@ -135,7 +148,8 @@ def write_files_atomic(files: dict[Path, bytes], temps: dict[Path, Path] | None 
                     temp.unlink()
         if not isinstance(exc, OSError) or isinstance(exc, SymlinkRefused):
             raise
-        error = OSError(f"cannot write {path}: {exc.strerror or exc}")
+        where = f"{exc.filename}: " if exc.filename not in (None, str(path)) else ""  # the temporary file
+        error = OSError(f"cannot write {path}: {where}{exc.strerror or exc}")
         error.errno = exc.errno
         raise error from exc
 

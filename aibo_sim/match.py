@@ -25,7 +25,7 @@ from traceback import walk_tb
 from . import controller
 from .cbind import compile_controller, controller_sources, is_c_controller
 from .config import CameraConfig, ParameterError, WorldConfig
-from .files import make_folder, write_file_atomic
+from .files import check_atomic_write, make_folder, write_file_atomic
 from .openr.host import MemoryStickRun
 from .placement import make_out_folder, place_match
 from .render import check_rendering
@@ -49,8 +49,8 @@ from .sim import Simulation, SimulationDiverged
 from .team import check_controllers, check_robots
 
 # After Ctrl-C or SIGTERM, how long a match waits for its robots' threads before it writes its
-# run.json files: a Python controller stuck in its own code never ends (the command itself ends
-# 10 s after the signal, cli.STOP_GRACE_S); a C controller is stopped within 2 s.
+# run.json files: a Python controller stuck in its own code never ends (the command then ends
+# without waiting for its thread: cli.program); a C controller is stopped within 2 s.
 STOP_WAIT_S = 6.0
 
 # The options of a run of one robot that a match refuses, and why.
@@ -257,12 +257,12 @@ def run_match(
                 player.writer = FrameWriter(folder, controller=player.path, backend=player.kind, prepare=False)
                 listeners.append(player.writer)
             player.program.end_ms = int(round(duration * 1000))
-        for player in players:  # every robot's folder checked and locked: now each is cleared
-            if player.writer is not None:
-                player.writer.prepare()
-        if out:
+        if out:  # the match "incomplete" first, then every robot's folder (each checked and locked) cleared
             match_json = {"match": True, "status": "incomplete", "robots": [p.robot.spec.as_dict() for p in players]}
             write_file_atomic(out / RUN_FILE, (json.dumps(match_json, indent=2) + "\n").encode())
+        for player in players:
+            if player.writer is not None:
+                player.writer.prepare()
     except BaseException:
         for player in players:
             if player.writer is not None:
@@ -349,7 +349,9 @@ def _play(player: _Player, lockstep: Lockstep) -> None:
         else:
             controller.install(player.program, match=True)
             try:
-                _run_controller_program(player.path, player.executable, player.program, None, match=True)
+                _run_controller_program(
+                    player.path, player.executable, player.program, None, match=player.robot.spec.name
+                )
             finally:
                 controller.install(None, match=True)
     except SimulationDiverged:
@@ -417,6 +419,7 @@ def _check_module_names(players: list[_Player]) -> None:
 def _check_match_folder(out: Path, robots: int) -> None:
     """OSError when ``out`` holds what would lie mixed with this match's files: a run of one robot
     (its frames), or an earlier match's robot folders beyond this match's ``robots``."""
+    check_atomic_write(out / RUN_FILE)
     previous = earlier_run(out)
     if previous is not None and previous.get("match") is not True:
         raise OSError(

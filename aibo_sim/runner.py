@@ -31,7 +31,7 @@ from .cbind import (
     serve,
 )
 from .config import CameraConfig, WorldConfig
-from .files import FolderLock, SymlinkRefused, make_folder, png, read_file, write_file_atomic
+from .files import FolderLock, SymlinkRefused, check_atomic_write, make_folder, png, read_file, write_file_atomic
 from .openr.host import MemoryStickRun, OpenRObjectCrashed
 from .placement import make_out_folder, out_path, place
 from .render import RenderingUnavailable, check_rendering
@@ -211,12 +211,16 @@ class FrameWriter:
                 f"{f' and {len(foreign) - 1} more' if len(foreign) > 1 else ''}): refusing to remove them; "
                 "choose another --out"
             )
+        check_atomic_write(self.out / RUN_FILE)
         own = [self.out / CONSOLE_FILE, self.out / SOUND_FILE] if previous is not None else []
         return [frames / name for name in names] + own
 
     def _prepare(self, marker: dict) -> None:
+        """run.json saying "incomplete" first: a run refused there leaves the earlier one whole."""
         frames = self.directory
-        for path in self._check():  # checked again under the lock
+        earlier = self._check()  # checked again under the lock
+        self.write_run_json(marker)
+        for path in earlier:
             try:
                 path.unlink()
             except FileNotFoundError:
@@ -229,7 +233,6 @@ class FrameWriter:
             raise
         except OSError as exc:
             raise OSError(f"cannot create {frames}: {exc.strerror or exc}") from exc
-        self.write_run_json(marker)
 
     def write_run_json(self, content: dict) -> None:
         """Replace ``run.json`` in ``--out`` with ``content``, atomically."""
@@ -331,11 +334,13 @@ class _WaitNotices:
     prints for a C controller after every ``serve.WAIT_NOTICE_S`` of wall time without an API
     call: a controller that computes for long, or never returns, is not taken for a simulator
     that hangs. None while an API call is under way (the first frames compile the camera's
-    passes: the simulator's time, not the controller's)."""
+    passes: the simulator's time, not the controller's). ``name``: the controller's, and in a
+    match its robot's."""
 
-    def __init__(self, path: Path, robot: Robot):
-        self._name, self._robot, self._stop = path.name, robot, threading.Event()
+    def __init__(self, path: Path, name: str, robot: Robot):
+        self._name, self._robot, self._stop = name, robot, threading.Event()
         self._folder, self._controller_thread = str(path.parent) + os.sep, threading.get_ident()
+        self._installed = controller.installed()
         self._thread = threading.Thread(target=self._watch, name="aibo-sim wait notices", daemon=True)
 
     def __enter__(self) -> _WaitNotices:
@@ -349,11 +354,11 @@ class _WaitNotices:
     def _watch(self) -> None:
         seen, notices = None, 0
         while True:
-            if controller.last_call_s != seen:
-                seen, notices = controller.last_call_s, 0
+            if self._installed.last_call_s != seen:
+                seen, notices = self._installed.last_call_s, 0
             if self._stop.wait(max(0.0, seen + (notices + 1) * serve.WAIT_NOTICE_S - time.monotonic())):
                 return
-            if controller.last_call_s == seen and not self._in_api_call():
+            if self._installed.last_call_s == seen and not self._in_api_call():
                 notices += 1
                 serve.announce_wait(self._name, notices * serve.WAIT_NOTICE_S, self._robot.time_ms)
 
@@ -605,7 +610,7 @@ def _run_as_main(path: Path) -> None:
 
 
 def _run_controller_program(
-    path: Path, executable: Path | None, robot: Robot, workdir: Path | None, match: bool = False
+    path: Path, executable: Path | None, robot: Robot, workdir: Path | None, match: str | None = None
 ) -> None:
     """Run a Python or C controller on ``robot`` until its end; ControllerFailed (or the
     simulator's SimulationDiverged, RenderingUnavailable) for a run that did not end well.
@@ -616,26 +621,27 @@ def _run_controller_program(
     read as a divergence). The physics diverges: SimulationDiverged. Its robot_die functions
     run in every case (Ctrl-C too); one that raises is reported after the controller's own error.
 
-    ``match=True``: one of a match's controllers, in its robot's thread (``match.run_match``
-    installs the robot and sets the folders up once for all of them).
+    ``match``: the robot's name (``red 2``) where it is one of a match's controllers, in its
+    robot's thread (``match.run_match`` installs the robot and sets the folders up once for all).
     """
-    if not match:
+    if match is None:
         controller.install(robot)
     try:
         with contextlib.ExitStack() as stack:
-            threads = stack.enter_context(_ControllerThreads(robot, match))
-            if not match:
+            threads = stack.enter_context(_ControllerThreads(robot, match is not None))
+            if match is None:
                 stack.enter_context(_controller_context(path.parent, workdir))
+            name = path.name if match is None else f"{path.name} of {match}"
             error: BaseException | None = None
             try:
                 if executable is None:
-                    if match:
-                        _run_as_main(path)
-                    else:
-                        with _WaitNotices(path, robot):
+                    with _WaitNotices(path, name, robot):
+                        if match is None:
                             runpy.run_path(str(path), run_name="__main__")
+                        else:
+                            _run_as_main(path)
                 else:
-                    run_c_controller(executable, path.name)
+                    run_c_controller(executable, name)
             except SimulationEnd:
                 pass
             except SystemExit as exc:
@@ -678,5 +684,5 @@ def _run_controller_program(
             if die_report:
                 raise ControllerFailed(f"controller {path.name} ended {where};{die_report}")
     finally:
-        if not match:
+        if match is None:
             controller.install(None)

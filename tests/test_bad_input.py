@@ -593,6 +593,30 @@ def test_sigterm_ends_a_run_as_ctrl_c_does_with_143(tmp_path):
     assert (out / "die.txt").read_text() == "ran"
 
 
+def test_a_run_ends_though_its_controller_left_a_thread_running(tmp_path):
+    """Python waits at exit for every thread that is not a daemon: a thread the controller
+    started and never ends held the command for ever after its run was over."""
+    import subprocess
+    import sys
+
+    ctl = controller(
+        tmp_path,
+        "import threading, time\n"
+        "def spin():\n    while True:\n        time.sleep(0.1)\n"
+        "threading.Thread(target=spin, name='vision').start()\n"
+        "while robot_step(8) != -1:\n    pass\n",
+    )
+    result = subprocess.run(
+        [sys.executable, "-m", "aibo_sim.cli", "run", str(ctl), "--duration", "0.1"],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert result.returncode == 0, result.stderr
+    assert result.stderr == "aibo-sim: the run is over; not waiting for threads still running: 'vision'\n"
+    assert "0.10 s simulated" in result.stdout
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("signals", [1, 2])
 def test_a_controller_that_swallows_the_signal_is_stopped_after_the_grace_or_a_second_signal(tmp_path, signals):

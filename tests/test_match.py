@@ -519,3 +519,20 @@ def test_an_api_call_from_another_thread_of_a_match_controller_says_why_it_has_n
 def test_a_simulation_checks_its_robots(robots, message):
     with pytest.raises(ValueError, match=message):
         Simulation(camera=CameraConfig("ideal"), robots=robots)
+
+
+def test_a_match_announces_a_python_controller_that_computes_long_naming_its_robot(tmp_path, monkeypatch, capsys):
+    """As in a run of one robot (serve.WAIT_NOTICE_S without an API call): the others wait for it."""
+    from aibo_sim.cbind import serve
+
+    monkeypatch.setattr(serve, "WAIT_NOTICE_S", 0.2)
+    busy = tmp_path / "busy.py"
+    busy.write_text("import time\nfrom aibo_sim.controller import *\nrobot_step(40)\ntime.sleep(0.5)\nrobot_step(8)\n")
+    robots = [RobotSpec("red", 1, None, str(TRACKER)), RobotSpec("blue", 1, None, str(busy))]
+    run_match(robots, duration=0.1, out=None, progress=False, camera=CameraConfig("ideal"))
+    err = capsys.readouterr().err
+    assert (
+        "aibo-sim: waiting for controller busy.py of blue 1: no API call for 0.2 s of wall time (simulated time "
+        "stays at t = 0.040 s)\n"
+    ) in err
+    assert "ball_tracker.py" not in err

@@ -180,6 +180,30 @@ def test_a_match_refused_at_a_later_robots_folder_leaves_the_earlier_ones_as_the
     assert list(elsewhere.iterdir()) == []
 
 
+@pytest.mark.parametrize("match", [False, True], ids=["one robot", "a match"])
+@pytest.mark.parametrize("planted", ["link", "folder"])
+def test_a_rerun_refused_at_its_run_json_leaves_the_earlier_run_whole(tmp_path, capsys, match, planted):
+    """The earlier run's frames were removed before run.json was written: its run.json, still
+    "done", then listed frames that were gone."""
+    out = tmp_path / "out"
+    args = ["run", str(SCRIPTED), "--duration", "0.1", "--out", str(out)]
+    args += ["--robot", "red:1", "--robot", "blue:1"] if match else []
+    assert main(args) == 0
+    before = {p: p.read_bytes() for p in out.rglob("*") if p.is_file() and p.name != ".run.lock"}
+    temp = out / "robot1" / ".run.json.tmp" if match else out / ".run.json.tmp"
+    if planted == "link":
+        temp.symlink_to(tmp_path / "victim")
+        error = f"{temp} is a symbolic link: refusing to follow it"
+    else:
+        temp.mkdir()
+        error = f"cannot write {temp.with_name('run.json')}: {temp}: Is a directory"
+    capsys.readouterr()
+    assert main(args) == 2
+    one_error_line(capsys, error)
+    assert {p: p.read_bytes() for p in out.rglob("*") if p.is_file() and p.name != ".run.lock"} == before
+    assert not (tmp_path / "victim").exists()
+
+
 @pytest.mark.parametrize("partial", [False, True], ids=["whole lines", "a partial last line"])
 def test_a_hard_link_in_place_of_a_dumps_frames_jsonl_is_refused_on_resume(tmp_path, capsys, partial):
     out, victim = tmp_path / "out", tmp_path / "victim.jsonl"
