@@ -1,6 +1,25 @@
 """aibo-sim: a MuJoCo simulator of the Sony Aibo ERS-7 with OPEN-R's camera data path."""
 
+import os
+import signal
+import sys
+
 from ._gl import choose_gl_backend, import_mujoco
+
+
+def interrupted_while_loading(number, frame) -> None:
+    """Ctrl-C while the ``aibo-sim`` program loads its modules: one line and 130, as later (not a
+    traceback of whichever import it hit); ``cli.main`` hands Ctrl-C back to Python."""
+    print("\naibo-sim: interrupted", file=sys.stderr, flush=True)
+    os._exit(130)
+
+
+if (
+    sys.argv
+    and os.path.basename(sys.argv[0]) == "aibo-sim"
+    and signal.getsignal(signal.SIGINT) is signal.default_int_handler
+):
+    signal.signal(signal.SIGINT, interrupted_while_loading)
 
 choose_gl_backend()  # before anything imports mujoco
 import_mujoco()

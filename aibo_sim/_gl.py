@@ -39,6 +39,8 @@ def import_mujoco() -> None:
     try:
         import mujoco  # noqa: F401
     except Exception as exc:
+        if isinstance(exc.__context__, KeyboardInterrupt):  # Ctrl-C while it loaded: not a missing library
+            raise exc.__context__ from None
         error = ImportError(
             f"MuJoCo cannot load the OpenGL backend MUJOCO_GL={os.environ.get('MUJOCO_GL', '')!r} "
             f"({type(exc).__name__}: {exc}). Install {SYSTEM_PACKAGES}, or unset MUJOCO_GL to let aibo_sim choose."

@@ -18,6 +18,7 @@ import numpy as np
 
 from openr_bridge import FULL_HEIGHT, FULL_WIDTH, LAYER_SIZE
 
+from . import interrupted_while_loading
 from .mtn import MODES as MTN_MODES
 from .options import (
     ArgumentParser,
@@ -534,6 +535,8 @@ def _reader_gone(stream) -> bool:
 
 
 def main(argv: list[str] | None = None) -> int:
+    if signal.getsignal(signal.SIGINT) is interrupted_while_loading:
+        signal.signal(signal.SIGINT, signal.default_int_handler)
     try:  # the modules a command needs load here: Ctrl-C while they load is an interruption too
         from openr_bridge import OpenRError
 

@@ -593,6 +593,48 @@ def test_sigterm_ends_a_run_as_ctrl_c_does_with_143(tmp_path):
     assert (out / "die.txt").read_text() == "ran"
 
 
+def test_ctrl_c_while_the_program_loads_its_modules_is_an_interruption(tmp_path):
+    """Ctrl-C once MuJoCo's library is mapped (the package still loading: MuJoCo, gymnasium, the
+    command line's modules) printed a traceback of the import it hit, or, inside MuJoCo's
+    import, "MuJoCo cannot load the OpenGL backend" with exit status 2."""
+    import signal
+    import subprocess
+    import sys
+
+    program = Path(sys.executable).with_name("aibo-sim")
+    process = subprocess.Popen(
+        [str(program), "run", str(ROOT / "controllers" / "ball_tracker.py"), "--duration", "20"],
+        cwd=tmp_path,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    maps, deadline = Path(f"/proc/{process.pid}/maps"), time.monotonic() + 60
+    while "libmujoco" not in maps.read_text() and time.monotonic() < deadline:
+        time.sleep(0.001)
+    process.send_signal(signal.SIGINT)
+    _, err = process.communicate(timeout=60)
+    assert process.returncode == 130 and err == "\naibo-sim: interrupted\n", err
+
+
+def test_ctrl_c_while_a_program_imports_aibo_sim_is_not_taken_for_a_missing_opengl(tmp_path):
+    """MuJoCo's module turns the KeyboardInterrupt into "ImportError: initialization failed",
+    which read as an OpenGL backend that cannot load."""
+    import signal
+    import subprocess
+    import sys
+
+    process = subprocess.Popen(
+        [sys.executable, "-c", "import aibo_sim"], cwd=tmp_path, stderr=subprocess.PIPE, text=True
+    )
+    maps, deadline = Path(f"/proc/{process.pid}/maps"), time.monotonic() + 60
+    while "libmujoco" not in maps.read_text() and time.monotonic() < deadline:
+        time.sleep(0.001)
+    process.send_signal(signal.SIGINT)
+    _, err = process.communicate(timeout=60)
+    assert err.rstrip().endswith("KeyboardInterrupt") and "OpenGL backend" not in err, err
+
+
 def test_a_run_ends_though_its_controller_left_a_thread_running(tmp_path):
     """Python waits at exit for every thread that is not a daemon: a thread the controller
     started and never ends held the command for ever after its run was over."""
