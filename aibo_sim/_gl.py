@@ -39,8 +39,11 @@ def import_mujoco() -> None:
     try:
         import mujoco  # noqa: F401
     except Exception as exc:
-        if isinstance(exc.__context__, KeyboardInterrupt):  # Ctrl-C while it loaded: not a missing library
-            raise exc.__context__ from None
+        cause = exc
+        while isinstance(cause, ImportError):  # pybind11's "initialization failed", perhaps twice
+            cause = cause.__cause__
+        if isinstance(cause, KeyboardInterrupt):  # Ctrl-C while it loaded: not a missing library
+            raise cause from None
         error = ImportError(
             f"MuJoCo cannot load the OpenGL backend MUJOCO_GL={os.environ.get('MUJOCO_GL', '')!r} "
             f"({type(exc).__name__}: {exc}). Install {SYSTEM_PACKAGES}, or unset MUJOCO_GL to let aibo_sim choose."
