@@ -19,6 +19,7 @@ import numpy as np
 from openr_bridge import FULL_HEIGHT, FULL_WIDTH, LAYER_SIZE
 
 from . import interrupted_while_loading
+from .config import MAX_MAGNITUDE
 from .mtn import MODES as MTN_MODES
 from .options import (
     ArgumentParser,
@@ -207,12 +208,18 @@ def _side_by_side(args) -> np.ndarray:
 
     import openr_bridge
 
+    from .files import decode_image
+
     pictures = []
     if args.side_by_side:  # a real frame as Tekkotsu's EasyTrain stores it: R, G, B = Y, Cb, Cr
         if not Path(args.side_by_side).is_file():
             what = "not a regular file" if Path(args.side_by_side).exists() else "no such file"
             raise FileNotFoundError(f"--side-by-side {args.side_by_side}: {what}")
-        real = cv2.imread(args.side_by_side, cv2.IMREAD_UNCHANGED)
+        try:
+            data = Path(args.side_by_side).read_bytes()
+        except OSError as exc:
+            raise OSError(f"--side-by-side {args.side_by_side}: cannot read: {exc.strerror or exc}") from None
+        real = decode_image(data, cv2.IMREAD_UNCHANGED)
         sizes = (*LAYER_SIZE[:3], (FULL_WIDTH, FULL_HEIGHT))  # layers H, M, L; the full picture
         found = None if real is None else (real.shape[1], real.shape[0], real.shape[2] if real.ndim == 3 else 1)
         if found is None or found[:2] not in sizes or found[2] not in (3, 4):
@@ -221,7 +228,7 @@ def _side_by_side(args) -> np.ndarray:
                 + ("unreadable" if found is None else "{}x{}, {} channel(s)".format(*found))
                 + f"): a colour PNG (R, G, B = Y, Cb, Cr) of {', '.join(f'{w}x{h}' for w, h in sizes)}"
             )
-        cr, cb, y = cv2.split(cv2.imread(args.side_by_side, cv2.IMREAD_COLOR))
+        cr, cb, y = cv2.split(decode_image(data, cv2.IMREAD_COLOR))
         pictures.append(openr_bridge.ycrcb_to_rgb(y, cr, cb))  # as the wrapper's camera_get_image shows it
     for profile in ("ers7", "ideal"):
         sim = _settled_simulation(args, profile)
@@ -296,8 +303,8 @@ def _mtn_info(args) -> int:
 def _mtn_play(args) -> int:
     from .motions import play_motion
 
-    if args.repeat < 1:
-        raise ValueError(f"--repeat must be at least 1, not {args.repeat}")
+    if not 1 <= args.repeat <= MAX_MAGNITUDE:
+        raise ValueError(f"--repeat must be a whole number from 1 to {MAX_MAGNITUDE:.0f}, not {args.repeat}")
     if args.no_ball and args.ball is not None:
         raise ValueError("--ball and --no-ball exclude each other")
     result = play_motion(

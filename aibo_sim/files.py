@@ -237,6 +237,24 @@ class FolderLock:
             self._fd = None
 
 
+PNG_END = b"\0\0\0\0IEND\xaeB`\x82"  # a PNG's last chunk: IEND, empty, and its CRC
+
+
+def decode_image(data, flags: int) -> np.ndarray | None:
+    """``cv2.imdecode`` of ``data`` (bytes or uint8), None when it holds no whole picture, without
+    libpng's or OpenCV's line on stderr (a PNG cut short ends before its IEND chunk): the caller
+    names the file."""
+    data = np.frombuffer(data, np.uint8)
+    if not data.size or (data[:8].tobytes() == b"\x89PNG\r\n\x1a\n" and data[-12:].tobytes() != PNG_END):
+        return None
+    level = cv2.utils.logging.getLogLevel()
+    cv2.utils.logging.setLogLevel(cv2.utils.logging.LOG_LEVEL_SILENT)
+    try:
+        return cv2.imdecode(data, flags)
+    finally:
+        cv2.utils.logging.setLogLevel(level)
+
+
 def png(image: np.ndarray) -> bytes:
     """PNG bytes of an 8-bit image (BGR when it has three channels, as OpenCV writes)."""
     ok, encoded = cv2.imencode(".png", image)

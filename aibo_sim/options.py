@@ -99,7 +99,7 @@ def add_world_options(parser: argparse.ArgumentParser, camera: bool = True, ball
     ``world_options`` and ``camera_options`` for what they become. ``ball_default`` says where
     the ball is without --ball."""
     parser.add_argument(
-        "--scene", type=path_text, metavar="FILE", help="MJCF scene file (default: the RoboCup 2005 field)"
+        "--scene", type=path_text, metavar="FILE", help="MJCF scene file, FILE.xml (default: the RoboCup 2005 field)"
     )
     parser.add_argument(
         "--pose",

@@ -105,8 +105,12 @@ def load_model(
     try:
         if not path.is_file():
             raise ModelError(f"{path}: " + ("not a regular file" if path.exists() else "no such model file"))
-    except OSError as exc:  # a name too long, a folder without permission
+        with open(path, "rb"):  # readable: MuJoCo calls a file it cannot open empty
+            pass
+    except OSError as exc:  # a name too long, a folder or the file without permission
         raise ModelError(f"{path}: cannot read: {exc.strerror or exc}") from None
+    if path.suffix != ".xml":  # MuJoCo's MjSpec (a match, a pink ball, no ball) finds its reader by it
+        raise ModelError(f"{path}: not an MJCF file's name: a scene is read by its extension, .xml")
     try:
         if ball and ball_type == "robocup" and not match:
             model = mujoco.MjModel.from_xml_path(str(path))

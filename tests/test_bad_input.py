@@ -222,6 +222,42 @@ def test_a_fifo_as_the_scene_is_refused(tmp_path, capsys):
     one_error_line(capsys, str(fifo), "not a regular file")
 
 
+@pytest.mark.parametrize("options", [[], ["--ball-type", "pink"], ["--robot", "red:1", "--robot", "blue:1"]])
+def test_a_scene_not_named_xml_is_refused_alike_in_every_mode(tmp_path, capsys, options):
+    """MuJoCo's MjSpec (a pink ball, a match) finds a file's reader by its extension: such a scene
+    loaded for a plain run, then failed there with "could not find decoder" after a warning line."""
+    models = tmp_path / "models"
+    shutil.copytree(ROOT / "models", models)
+    scene = models / "scene.field"
+    (models / "scene.xml").rename(scene)
+    assert main(["run", str(SCRIPTED), "--duration", "0.1", "--scene", str(scene), *options]) == 2
+    one_error_line(capsys, f"{scene}: not an MJCF file's name: a scene is read by its extension, .xml")
+
+
+@pytest.mark.skipif(os.geteuid() == 0, reason="root reads a file without read permission")
+def test_a_scene_without_read_permission_is_named_so(tmp_path, capsys):
+    scene = tmp_path / "scene.xml"
+    scene.write_text((ROOT / "models" / "scene.xml").read_text())
+    scene.chmod(0)
+    assert main(["run", str(SCRIPTED), "--scene", str(scene)]) == 2
+    one_error_line(capsys, f"{scene}: cannot read: Permission denied")
+
+
+def test_a_fifo_as_a_c_controller_or_its_header_is_refused_without_waiting(tmp_path, capsys):
+    """A FIFO controller was "no such controller file"; a FIFO header, which gcc opens and waits
+    on, held the command for ever."""
+    fifo = tmp_path / "ctl.c"
+    os.mkfifo(fifo)
+    assert main(["run", str(fifo)]) == 2
+    one_error_line(capsys, f"{fifo}: not a regular file")
+    folder = tmp_path / "ctl"
+    folder.mkdir()
+    (folder / "ctl.c").write_text('#include "params.h"\nint main(void) { return 0; }\n')
+    os.mkfifo(folder / "params.h")
+    assert main(["run", str(folder)]) == 2
+    one_error_line(capsys, f"{folder / 'params.h'}: included by {folder / 'ctl.c'}: not a regular file")
+
+
 # ----------------------------------------------------------------------------- dump of another env
 
 
@@ -787,10 +823,31 @@ def test_a_side_by_side_frame_of_no_layers_size_or_grey_is_refused_naming_both(t
     assert not (tmp_path / "out").exists()
 
 
+def test_a_cut_side_by_side_frame_is_one_line_without_opencvs(tmp_path, capfd):
+    """libpng's or OpenCV's own line on the process's stderr came before aibo-sim's."""
+    import cv2
+    import numpy as np
+
+    real = tmp_path / "real.png"
+    ok, encoded = cv2.imencode(".png", np.random.default_rng(0).integers(0, 255, (160, 208, 3), np.uint8))
+    real.write_bytes(encoded.tobytes()[: encoded.size // 2])
+    assert main(["render", "--side-by-side", str(real), "--out", str(tmp_path / "out")]) == 2
+    one_error_line(capfd, f"--side-by-side {real}: not an EasyTrain frame (unreadable)")
+    assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("repeat", ["0", "10" * 12])
+def test_mtn_play_names_a_repeat_out_of_range(capsys, repeat):
+    """One beyond any run's length played until it was killed."""
+    assert main(["mtn", "play", "SIT.MTN", "--repeat", repeat]) == 2
+    assert one_error_line(capsys) == f"aibo-sim: error: --repeat must be a whole number from 1 to 1000000, not {repeat}"
+
+
 @pytest.mark.parametrize(
     "length, message",
     [
-        (["--steps", "-5"], "--steps must be a whole number >= 1, not -5"),
+        (["--steps", "-5"], "--steps must be a whole number from 1 to 1000000, not -5"),
+        (["--steps", "10" * 12], f"--steps must be a whole number from 1 to 1000000, not {'10' * 12}"),
         (["--duration", "-2"], "--duration must be positive and finite, not -2.0"),
         (
             ["--duration", "0.01"],

@@ -59,7 +59,7 @@ def controller_sources(path: str | os.PathLike) -> tuple[Path, list[Path]]:
             )
         return main, sorted(p for p in path.iterdir() if p.suffix in C_SUFFIXES and p.is_file())
     if not path.is_file():
-        raise FileNotFoundError(f"{path}: no such controller file")
+        raise FileNotFoundError(f"{path}: " + ("not a regular file" if path.exists() else "no such controller file"))
     return path, [path]
 
 
@@ -72,6 +72,8 @@ def local_headers(sources: list[Path]) -> list[Path]:
         including = pending.pop()
         for name in QUOTED_INCLUDE.findall(including.read_bytes()):
             header = (including.parent / os.fsdecode(name)).resolve()
+            if header.exists() and not header.is_file():  # a FIFO the compiler would wait on for ever
+                raise OSError(f"{header}: included by {including}: not a regular file")
             if header not in found and header not in sources and header.is_file():
                 found[header] = None
                 pending.append(header)

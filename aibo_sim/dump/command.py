@@ -7,6 +7,7 @@ import sys
 
 from openr_bridge import FRAME_RATE_HZ
 
+from ..config import MAX_MAGNITUDE
 from ..mtn import MODES as MTN_MODES
 from ..options import add_world_options, camera_config, finite_float, path_text, world_config
 from ..robot import BACKENDS
@@ -19,8 +20,8 @@ def _dump_command(args) -> int:
     if "all" in formats and len(formats) > 1:
         raise ValueError(f"--formats {args.formats}: all (every format) cannot be combined with other names")
     formats = FORMATS if formats == ("all",) else formats
-    if args.steps is not None and args.steps <= 0:
-        raise ValueError(f"--steps must be a whole number >= 1, not {args.steps}")
+    if args.steps is not None and not 1 <= args.steps <= MAX_MAGNITUDE:
+        raise ValueError(f"--steps must be a whole number from 1 to {MAX_MAGNITUDE:.0f}, not {args.steps}")
     if args.duration is not None and args.duration <= 0:
         raise ValueError(f"--duration must be positive and finite, not {args.duration}")  # as run says it
     frames = args.steps if args.steps is not None else round((args.duration or 10.0) * FRAME_RATE_HZ)

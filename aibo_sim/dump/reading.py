@@ -15,7 +15,7 @@ import openr_bridge
 from openr_bridge.image import BAND_RUNS
 
 from ..field import SEGMENTATION_CLASSES
-from ..files import SymlinkRefused, read_file
+from ..files import SymlinkRefused, decode_image, read_file
 from .formats import DUMP_FORMAT, LAYERS, DumpError
 
 META, LINES = "meta.json", "frames.jsonl"
@@ -193,7 +193,7 @@ class DumpFrame:
 
     def _png(self, name: str, flags: int) -> np.ndarray:
         data = self._raw(name)
-        image = cv2.imdecode(data, flags) if data.size else None
+        image = decode_image(data, flags)
         if image is None:
             raise DumpError(f"{self.path(name)}: not a readable PNG; the file is corrupt")
         return image
