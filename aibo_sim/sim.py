@@ -615,12 +615,12 @@ class Simulation:
         """The ball's centre (in ``data``, default the live state), or None in a scene without a ball."""
         return (self.data if data is None else data).xpos[self.world.ball_body].copy() if self.has_ball else None
 
-    def overlaps(self, depth: float) -> list[tuple[str, str, float]]:
-        """Pairs that penetrate each other deeper than ``depth`` metres in the current state
-        (MuJoCo's contacts), deepest first: (first, second, metres), each "the robot" (with
-        several robots, each by its name: "red 2"), "the ball" or the other geom's name (its
-        body's, or its number, when it has none)."""
-        model, contacts, world = self.model, self.data.contact, self.world
+    def overlaps(self, depth: float, data: mujoco.MjData | None = None) -> list[tuple[str, str, float]]:
+        """Pairs that penetrate each other deeper than ``depth`` metres in the current state (in
+        ``data``, default the live one: MuJoCo's contacts), deepest first: (first, second,
+        metres), each "the robot" (with several robots, each by its name: "red 2"), "the ball"
+        or the other geom's name (its body's, or its number, when it has none)."""
+        model, contacts, world = self.model, (self.data if data is None else data).contact, self.world
         robots = {model.body_rootid[robot._body]: robot for robot in world.robots}
 
         def name(geom: int) -> str:

@@ -230,8 +230,10 @@ def test_a_scene_not_named_xml_is_refused_alike_in_every_mode(tmp_path, capsys, 
     shutil.copytree(ROOT / "models", models)
     scene = models / "scene.field"
     (models / "scene.xml").rename(scene)
-    assert main(["run", str(SCRIPTED), "--duration", "0.1", "--scene", str(scene), *options]) == 2
+    out = tmp_path / "out"
+    assert main(["run", str(SCRIPTED), "--duration", "0.1", "--scene", str(scene), "--out", str(out), *options]) == 2
     one_error_line(capsys, f"{scene}: not an MJCF file's name: a scene is read by its extension, .xml")
+    assert not out.exists()
 
 
 @pytest.mark.skipif(os.geteuid() == 0, reason="root reads a file without read permission")

@@ -174,6 +174,25 @@ def test_a_refused_step_or_reset_changes_nothing():
             with pytest.raises(ValueError, match=message):
                 env.reset(options={"ball": ball})
             assert env.sim.time_ms == time_ms and env.agents == ["red_4", "blue_4"]  # the match goes on
+        qpos = env.sim.data.qpos.copy()
+        blue = env.robots["blue_4"]  # the ball at its front left leg's knee, as run and dump refuse it
+        x, y = blue.data.xpos[blue.model.body(blue.prefix + "lf_j3").id][:2]
+        with pytest.raises(ValueError, match=rf"the ball at {x:g}, {y:g} would overlap blue 4 by \d+\.\d cm$"):
+            env.reset(options={"ball": (x, y)})
+        assert np.array_equal(env.sim.data.qpos, qpos) and env.sim.time_ms == time_ms
+    finally:
+        env.close()
+
+
+def test_a_randomised_ball_start_is_never_inside_a_robot():
+    """The ball drawn inside a robot was kicked out at 0.8 m/s, a reward to both teams before any
+    action (seed 64 of the default match with ball_start 0.3: 3.6 cm into blue 4)."""
+    env = MatchEnv(camera=None, randomize={"ball_start": 0.3})
+    try:
+        for seed in range(60, 70):
+            env.reset(seed=seed)
+            assert not [pair for pair in env.sim.overlaps(0.001) if "the ball" in pair[:2]], seed
+            assert np.abs(env.sim.ball_position()[:2]).max() <= 0.3
     finally:
         env.close()
 

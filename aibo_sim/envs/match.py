@@ -23,6 +23,7 @@ match (their times in docs/benchmarks.md).
 
 from __future__ import annotations
 
+import copy
 import functools
 import math
 import numbers
@@ -43,10 +44,18 @@ from ..config import CameraConfig
 from ..ers7 import DISTANCE_SENSORS, JOINT_INDEX, JOINTS, TOUCH_SENSORS, joint_indices
 from ..motions import BLEND_MS
 from ..mtn import MotionPlayer, read_mtn
-from ..placement import place_match
+from ..placement import PLACEMENT_OVERLAP_M, place_match
 from ..render import Renderer
 from ..robot import short_repr
-from ..sim import ACCEL_RANGE, FRAME_MS, Simulation, models_dir, placement_values, release_freed_memory
+from ..sim import (
+    ACCEL_RANGE,
+    FRAME_MS,
+    Simulation,
+    ball_joint,
+    models_dir,
+    placement_values,
+    release_freed_memory,
+)
 from ..team import PLAYERS_PER_TEAM, TEAMS, RobotSpec, check_robots, load_robots
 from .base import HEAD_JOINTS, LAYERS, LEG_JOINTS, RENDER_SIZE, AiboEnv, _ClosedSimulation, check_options
 
@@ -293,6 +302,7 @@ class MatchEnv(pettingzoo.ParallelEnv):
         except BaseException:
             self.sim.close()
             raise
+        self._kickoff = copy.copy(self.sim.data)  # where a ball's start is checked (_ball_overlap)
         self._closed = False
         self.robots: dict[str, Simulation] = dict(zip(names, self.sim.world.robots))  # every robot, by name
         self.possible_agents = [name for name in names if name not in scripted]
@@ -351,12 +361,17 @@ class MatchEnv(pettingzoo.ParallelEnv):
             if isinstance(ball, (str, bytes)) or not hasattr(ball, "__len__") or len(ball) != 2:
                 raise ValueError(f"{what}: want two numbers (m), not {ball!r}")
             ball = placement_values(what, x=ball[0], y=ball[1])
+            overlap = self._ball_overlap(ball) if self.sim.has_ball else None
+            if overlap is not None:
+                raise ValueError(f"{what}: the ball at {ball[0]:g}, {ball[1]:g} would overlap {overlap}")
         if seed is not None or self.np_random is None:
             self.np_random, self.np_random_seed = seeding.np_random(seed)
         self.sim.reset(seed=int(self.np_random.integers(2**63)))
         self._randomize_scene()
         if self.sim.has_ball:
-            self.sim.place_ball(*(self.ball_start(KICKOFF_BALL) if ball is None else ball))
+            while ball is None or self._ball_overlap(ball) is not None:  # a randomised start is drawn again
+                ball = self.ball_start(KICKOFF_BALL)
+            self.sim.place_ball(*ball)
         mujoco.mj_forward(self.sim.model, self.sim.data)
         self._ball_x = self._ball_progress_x()
         for script in self._scripts.values():
@@ -494,6 +509,19 @@ class MatchEnv(pettingzoo.ParallelEnv):
     # ---------------------------------------------------------------- internals
 
     ball_start = AiboEnv.ball_start  # the ``ball_start`` randomisation about a nominal spot
+
+    def _ball_overlap(self, ball) -> str | None:
+        """What the ball at ``ball`` (x, y) would sink into deeper than ``PLACEMENT_OVERLAP_M``
+        at the kickoff ("blue 4 by 3.6 cm"), as run and dump refuse it; None for nothing. Found
+        in a copy of the kickoff's state: the live one is left as it is."""
+        model, kickoff = self.sim.model, self._kickoff
+        start = model.jnt_qposadr[ball_joint(model)]
+        kickoff.qpos[start : start + 3] = (*ball, model.geom("ball").size[0])
+        mujoco.mj_fwdPosition(model, kickoff)
+        for first, second, depth in self.sim.overlaps(PLACEMENT_OVERLAP_M, kickoff):
+            if "the ball" in (first, second):
+                return f"{second if first == 'the ball' else first} by {depth * 100:.1f} cm"
+        return None
 
     def _randomize_scene(self) -> None:
         AiboEnv._randomize_scene(self)  # the lights, and robot 1's camera colour deviation
