@@ -6,6 +6,7 @@ that they equal what this module generates. Regenerate with ``python -m aibo_sim
 
 from __future__ import annotations
 
+import argparse
 import math
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass
@@ -914,8 +915,12 @@ def generated_files() -> dict[str, str]:
     }
 
 
-def main() -> None:
+def main(argv=None) -> None:
     """Write the generated files into the models folder (``sim.models_dir``)."""
+    argparse.ArgumentParser(
+        prog="python -m aibo_sim.mjcf",
+        description=f"Write the generated model files (ers7.xml, scene.xml, ...) into {models_dir()}, replacing them.",
+    ).parse_args(argv)
     for name, text in generated_files().items():
         (models_dir() / name).write_text(text)
         print(f"wrote {models_dir() / name}")

@@ -38,6 +38,13 @@ def test_generated_files_are_committed():
         assert (models_dir() / name).read_text() == text, f"models/{name} is stale: run python -m aibo_sim.mjcf"
 
 
+def test_the_generators_help_writes_nothing(capsys, monkeypatch):
+    monkeypatch.setattr(mjcf, "generated_files", lambda: pytest.fail("wrote the model files"))
+    with pytest.raises(SystemExit) as exited:
+        mjcf.main(["--help"])
+    assert exited.value.code == 0 and "Write the generated model files" in capsys.readouterr().out
+
+
 @pytest.mark.parametrize("name", sorted(mjcf.generated_files()))
 def test_files_follow_menageries_xml_layout(name):
     """MuJoCo Menagerie's format check: two-space indents, ``<tag/>``, lines of at most 120
