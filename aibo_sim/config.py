@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 from openr_bridge import FULL_HEIGHT, FULL_WIDTH
 
 from .camera import CameraProfile, CameraSettings, camera_profile, camera_size
-from .field import BALL_TYPES
+from .field import BALL_TYPES, DEFAULT_BALL_TYPE
 
 MAX_MAGNITUDE = 1e6  # |value| beyond this is a typo, not a position (metres) or an angle (degrees)
 SEED_LIMIT = 2**64  # seeds are whole numbers below this (the camera's noise mixes 64 bits of them)
@@ -126,7 +126,7 @@ class WorldConfig:
     seed: int = 0
     pose: tuple[float, float, float] | None = None
     ball: tuple[float, float] | None = None
-    ball_type: str = "robocup"
+    ball_type: str = DEFAULT_BALL_TYPE
 
     def __post_init__(self):
         if self.scene is not None:

@@ -119,7 +119,6 @@ SENSORS: tuple[Sensor, ...] = (
 SENSOR_BY_NAME = {s.name: s for s in SENSORS}
 DISTANCE_SENSORS = tuple(s for s in SENSORS if s.kind == "distance")
 TOUCH_SENSORS = tuple(s for s in SENSORS if s.kind == "touch")
-SENSOR_BY_LOCATOR = {s.locator: s for s in SENSORS}
 # a2 and a3 name the same device's other axes.
 ACCELEROMETER_ALIASES = ("PRM:/a2-Sensor:a2", "PRM:/a3-Sensor:a3")
 

@@ -34,6 +34,7 @@ BALL_MASS = 0.055  # not in the spec: a light plastic ball (choice)
 PINK_BALL_RADIUS = 0.035
 PINK_BALL_MASS = 0.1
 BALL_TYPES = ("robocup", "pink")  # --ball-type: the orange RoboCup ball (the default) or the pink one
+DEFAULT_BALL_TYPE = BALL_TYPES[0]
 
 BEACON_RADIUS = 0.05
 BEACON_X = 1.35

@@ -82,6 +82,7 @@ def box_inertia(mass: float, size: tuple[float, float, float]) -> list[float]:
 
 
 def inertial(mass: float, pos, size) -> ET.Element:
+    """The ``<inertial>`` of a solid box of ``mass`` and full edge lengths ``size`` centred at ``pos``."""
     return E("inertial", pos=pos, mass=mass, diaginertia=box_inertia(mass, size))
 
 
@@ -194,7 +195,7 @@ def _head() -> ET.Element:
         ears.append(
             E(
                 "body",
-                E("inertial", pos=(0, 0, -0.015), mass=0.005, diaginertia=box_inertia(0.005, (0.012, 0.004, 0.03))),
+                inertial(0.005, (0, 0, -0.015), (0.012, 0.004, 0.03)),
                 joint(f"ear_{side}", (sign, 0, 0)),
                 hidden_visual(type="box", size=(0.011, 0.002, 0.017), pos=(0, 0, -0.016), material="dark"),
                 name=f"ear_{side}",
@@ -215,7 +216,7 @@ def _head() -> ET.Element:
     ]
     mouth = E(
         "body",
-        E("inertial", pos=(0.015, 0, -0.006), mass=0.01, diaginertia=box_inertia(0.01, (0.04, 0.03, 0.015))),
+        inertial(0.01, (0.015, 0, -0.006), (0.04, 0.03, 0.015)),
         joint("mouth", (0, -1, 0)),
         hidden_visual(type="ellipsoid", size=(0.022, 0.019, 0.008), pos=(0.013, 0, -0.007), material="dark"),
         collision(type="capsule", fromto=(0.0, 0, -0.007, 0.028, 0, -0.009), size=0.008),
@@ -225,7 +226,7 @@ def _head() -> ET.Element:
     )
     return E(
         "body",
-        E("inertial", pos=(0.04, 0, 0), mass=0.18, diaginertia=box_inertia(0.18, (0.1, 0.07, 0.07))),
+        inertial(0.18, (0.04, 0, 0), (0.1, 0.07, 0.07)),
         joint("head_tilt", (0, -1, 0)),
         hidden_visual(type="ellipsoid", size=(0.054, 0.036, 0.036), pos=(0.018, 0, 0.008)),
         hidden_visual(type="ellipsoid", size=(0.03, 0.03, 0.022), pos=(0.046, 0, 0.002), material="visor"),
@@ -250,7 +251,7 @@ def _head() -> ET.Element:
 def _neck() -> ET.Element:
     pan = E(
         "body",
-        E("inertial", pos=(0, 0, 0), mass=0.010, diaginertia=box_inertia(0.010, (0.03, 0.03, 0.03))),
+        inertial(0.010, (0, 0, 0), (0.03, 0.03, 0.03)),
         joint("head_pan", (0, 0, 1)),
         hidden_visual(type="sphere", size=0.03, material="dark"),
         _head(),
@@ -259,7 +260,7 @@ def _neck() -> ET.Element:
     )
     return E(
         "body",
-        E("inertial", pos=(0, 0, 0.04), mass=0.015, diaginertia=box_inertia(0.015, (0.023, 0.023, 0.08))),
+        inertial(0.015, (0, 0, 0.04), (0.023, 0.023, 0.08)),
         joint("neck_tilt", (0, -1, 0)),
         hidden_visual(type="cylinder", fromto=(0, 0, 0, 0, 0, 0.08), size=0.0117, material="dark"),
         collision(type="cylinder", fromto=(0, 0, 0, 0, 0, 0.08), size=0.0117),
@@ -281,7 +282,7 @@ def _leg(leg: str) -> ET.Element:
     knee = (fb * KNEE_OFFSET[0], side * KNEE_OFFSET[1], KNEE_OFFSET[2])
     shin = E(
         "body",
-        E("inertial", pos=0.6 * paw, mass=0.073, diaginertia=box_inertia(0.073, (0.035, 0.037, 0.07))),
+        inertial(0.073, 0.6 * paw, (0.035, 0.037, 0.07)),
         joint(f"{leg}_j3", (0, -fb, 0)),
         visual(type="capsule", fromto=(0, 0, 0, *(0.8 * paw)), size=0.0145),
         visual(type="sphere", pos=paw, size=PAW_RADIUS, material="paw"),
@@ -294,7 +295,7 @@ def _leg(leg: str) -> ET.Element:
     )
     thigh = E(
         "body",
-        E("inertial", pos=(0, 0, -0.04), mass=0.073, diaginertia=box_inertia(0.073, (0.033, 0.028, 0.065))),
+        inertial(0.073, (0, 0, -0.04), (0.033, 0.028, 0.065)),
         joint(f"{leg}_j2", (side, 0, 0)),
         visual(type="capsule", fromto=(0, 0, 0, *knee), size=0.017),
         collision(type="box", size=(0.0165, 0.014, 0.0325), pos=(0, 0, -0.021)),
@@ -305,7 +306,7 @@ def _leg(leg: str) -> ET.Element:
     disc_y = side * (0.049 - HIP_OFFSET[1])
     return E(
         "body",
-        E("inertial", pos=(0, disc_y, 0), mass=0.05, diaginertia=box_inertia(0.05, (0.064, 0.01, 0.064))),
+        inertial(0.05, (0, disc_y, 0), (0.064, 0.01, 0.064)),
         joint(f"{leg}_j1", (0, -fb, 0)),
         visual(type="sphere", size=0.024),
         collision(type="cylinder", fromto=(0, disc_y - 0.005, 0, 0, disc_y + 0.005, 0), size=0.032),
@@ -319,7 +320,7 @@ def _tail() -> ET.Element:
     tail_dir = np.array([-math.cos(math.radians(20)), 0, math.sin(math.radians(20))])
     tail = E(
         "body",
-        E("inertial", pos=0.03 * tail_dir, mass=0.005, diaginertia=box_inertia(0.005, (0.06, 0.012, 0.012))),
+        inertial(0.005, 0.03 * tail_dir, (0.06, 0.012, 0.012)),
         joint("tail_pan", (1, 0, 0)),
         hidden_visual(type="capsule", fromto=(0, 0, 0, *(0.06 * tail_dir)), size=0.006, material="dark"),
         name="tail",
@@ -351,7 +352,7 @@ def _torso() -> ET.Element:
     return E(
         "body",
         E("freejoint", name="root"),
-        E("inertial", pos=(0, 0, -0.02), mass=0.613, diaginertia=box_inertia(0.613, (0.2, 0.1, 0.1))),
+        inertial(0.613, (0, 0, -0.02), (0.2, 0.1, 0.1)),
         visual(type="ellipsoid", size=(0.112, 0.05, 0.05), pos=(0, 0, 0.012)),
         visual(type="ellipsoid", size=(0.05, 0.045, 0.045), pos=(0.075, 0, -0.002)),
         visual(type="box", size=(0.05, 0.012, 0.003), pos=(0.0, 0, 0.0615), material="dark"),

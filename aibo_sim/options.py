@@ -19,7 +19,7 @@ from openr_bridge import CAMERA_DEFAULTS, CAMERA_SETTINGS
 
 from .camera import PROFILES, CameraSettings
 from .config import MAX_MAGNITUDE, SEED_LIMIT, CameraConfig, ParameterError, WorldConfig
-from .field import BALL_TYPES
+from .field import BALL_TYPES, DEFAULT_BALL_TYPE
 
 CAMERA_SETTING_OPTIONS = (("white_balance", "--camera-wb"), ("gain", "--camera-gain"), ("shutter", "--camera-shutter"))
 WORLD_DESTS = ("scene", "pose", "ball", "ball_type", "seed")
@@ -94,10 +94,9 @@ def seed_number(text: str) -> int:
     return value
 
 
-def add_world_options(parser: argparse.ArgumentParser, camera: bool = True, ball_default: str = "the scene's") -> None:
-    """--scene, --pose, --ball, --seed and (with ``camera``) the camera options; see
-    ``world_options`` and ``camera_options`` for what they become. ``ball_default`` says where
-    the ball is without --ball."""
+def add_world_options(parser: argparse.ArgumentParser, ball_default: str = "the scene's") -> None:
+    """--scene, --pose, --ball, --ball-type, --seed and the camera options; ``world_config`` and
+    ``camera_config`` make the configs of them. ``ball_default`` says where the ball is without --ball."""
     parser.add_argument(
         "--scene", type=path_text, metavar="FILE", help="MJCF scene file, FILE.xml (default: the RoboCup 2005 field)"
     )
@@ -118,7 +117,7 @@ def add_world_options(parser: argparse.ArgumentParser, camera: bool = True, ball
     parser.add_argument(
         "--ball-type",
         choices=BALL_TYPES,
-        default="robocup",
+        default=DEFAULT_BALL_TYPE,
         help="the scene's ball: robocup (the orange RoboCup ball, 84 mm; default) or pink "
         "(Sony's pink AIBO ball, 70 mm, which Sony's samples look for)",
     )
@@ -129,8 +128,6 @@ def add_world_options(parser: argparse.ArgumentParser, camera: bool = True, ball
         metavar="N",
         help="random seed (IR and camera noise, randomised choices; default 0)",
     )
-    if not camera:
-        return
     parser.add_argument(
         "--camera-profile",
         choices=tuple(PROFILES),

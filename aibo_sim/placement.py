@@ -13,6 +13,7 @@ import os
 from pathlib import Path
 
 from .config import CameraConfig, ParameterError
+from .field import DEFAULT_BALL_TYPE
 from .sim import ModelError, Simulation
 from .team import off_the_carpet
 
@@ -42,7 +43,7 @@ def make_out_folder(path) -> Path:
 
 
 def check_place(
-    scene, pose: tuple[float, float, float] | None, ball: tuple[float, float] | None, ball_type: str = "robocup"
+    scene, pose: tuple[float, float, float] | None, ball: tuple[float, float] | None, ball_type: str = DEFAULT_BALL_TYPE
 ) -> None:
     """``place``'s errors for these placements in ``scene``, before a command writes anything."""
     sim = Simulation(scene, camera=CameraConfig("ideal"), ball_type=ball_type)

@@ -31,6 +31,7 @@ from .cbind import (
     serve,
 )
 from .config import CameraConfig, WorldConfig
+from .field import DEFAULT_BALL_TYPE
 from .files import FolderLock, SymlinkRefused, check_atomic_write, make_folder, png, read_file, write_file_atomic
 from .openr.host import MemoryStickRun, OpenRObjectCrashed
 from .placement import make_out_folder, out_path, place
@@ -77,7 +78,7 @@ class RunSummary:
     seed: int = 0
     pose: tuple[float, float, float] | None = None
     ball: tuple[float, float] | None = None
-    ball_type: str = "robocup"
+    ball_type: str = DEFAULT_BALL_TYPE
     camera: dict = field(default_factory=dict)  # ``HeadCamera.describe()`` at the start: profile, lens, settings
 
 

@@ -25,7 +25,7 @@ from .camera import CameraFrame, HeadCamera, scene_light
 from .camera.head import BEHIND_CAMERA_GROUP, HEAD_CAMERA_GROUPS
 from .config import CameraConfig, is_seed
 from .ers7 import DISTANCE_SENSORS, HEAD_CAMERA, JOINTS, LED_BY_NAME, LED_OFF_RGBA, SENSORS, TOUCH_SENSORS
-from .field import BALL_TYPES, COLOURS, PINK_BALL_MASS, PINK_BALL_RADIUS, SPECULAR, UNIFORM_COLOURS
+from .field import BALL_TYPES, COLOURS, DEFAULT_BALL_TYPE, PINK_BALL_MASS, PINK_BALL_RADIUS, SPECULAR, UNIFORM_COLOURS
 from .lod import add_levels_of_detail
 
 FRAME_MS = FRAME_TICK_MS  # OPEN-R joint frame, 8 ms
@@ -90,7 +90,7 @@ def models_dir() -> Path:
 
 
 def load_model(
-    scene: str | Path | None = None, ball: bool = True, ball_type: str = "robocup", robots=None
+    scene: str | Path | None = None, ball: bool = True, ball_type: str = DEFAULT_BALL_TYPE, robots=None
 ) -> mujoco.MjModel:
     """Compile a scene file (default: the RoboCup field), with an error that names the file
     (also for its light's custom numerics out of range, ``SceneLight``, and a timestep that is
@@ -112,7 +112,7 @@ def load_model(
     if path.suffix != ".xml":  # MuJoCo's MjSpec (a match, a pink ball, no ball) finds its reader by it
         raise ModelError(f"{path}: not an MJCF file's name: a scene is read by its extension, .xml")
     try:
-        if ball and ball_type == "robocup" and not match:
+        if ball and ball_type == DEFAULT_BALL_TYPE and not match:
             model = mujoco.MjModel.from_xml_path(str(path))
         else:
             spec = mujoco.MjSpec.from_file(str(path))
@@ -471,7 +471,7 @@ class Simulation:
         keyframe: str = "stand",
         camera: CameraConfig | None = None,
         ball: bool = True,
-        ball_type: str = "robocup",
+        ball_type: str = DEFAULT_BALL_TYPE,
         command_latency_frames: int = 0,
         robots=None,
     ):

@@ -117,7 +117,7 @@ RAW_IMAGE_SIZE = LAYER_SIZE[ofbkimageLAYER_H]  # (width, height) of the Y, Cr, C
 WAIT_NOTICE_S = 10.0
 
 _U32 = struct.Struct("<I")
-_RECORD = struct.Struct("<II")
+RECORD_HEADER = struct.Struct("<II")  # a record's kind and payload size
 _NEXT_FRAME = RECORDS["NEXT_FRAME"]
 
 
@@ -167,23 +167,15 @@ def unpack_string(payload: bytes, offset: int) -> tuple[str, int]:
     return payload[start : start + size].decode("utf-8", "replace"), start + size
 
 
-def iter_records(payload: bytes, offset: int = 0):
-    """(kind, payload bytes) of each record from ``offset`` on."""
-    while offset < len(payload):
-        kind, size = _RECORD.unpack_from(payload, offset)
-        yield kind, payload[offset + 8 : offset + 8 + size]
-        offset += 8 + size
-
-
 def split_frames(payload: bytes) -> list[bytes]:
     """A ``FRAME_DONE`` payload's records per frame: the frame's own, then each foretold frame's
     (the records between ``NEXT_FRAME`` records)."""
     frames, start, offset, end = [], 0, 0, len(payload)
     while offset < end:
-        kind, size = _RECORD.unpack_from(payload, offset)
+        kind, size = RECORD_HEADER.unpack_from(payload, offset)
         if kind == _NEXT_FRAME:
             frames.append(payload[start:offset])
-            start = offset + 8
-        offset += 8 + size
+            start = offset + RECORD_HEADER.size
+        offset += RECORD_HEADER.size + size
     frames.append(payload[start:])
     return frames

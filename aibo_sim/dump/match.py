@@ -25,6 +25,7 @@ from openr_bridge.memory_stick import memory_stick_folder
 from ..camera import CameraSettings, camera_size, describe_camera, scene_light
 from ..camera import camera_profile as resolve_profile
 from ..config import CameraConfig, WorldConfig, is_seed, start_values
+from ..field import DEFAULT_BALL_TYPE
 from ..files import make_folder
 from ..match import controller_named_as_given, refuse_single_robot_options, robot_folder, run_match
 from ..placement import out_path, place_match
@@ -215,7 +216,10 @@ def _run(out: Path, robots, writers, frames: int, world: dict, profile, settings
                 robots,
                 duration=frames / FRAME_RATE_HZ,
                 world=WorldConfig(
-                    world["scene"], world["seed"], ball=world["ball"], ball_type=world.get("ball_type", "robocup")
+                    world["scene"],
+                    world["seed"],
+                    ball=world["ball"],
+                    ball_type=world.get("ball_type", DEFAULT_BALL_TYPE),
                 ),
                 camera=CameraConfig(profile, camera_full, settings),
                 robot_listeners=robot_listeners,

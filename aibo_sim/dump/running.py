@@ -21,6 +21,7 @@ from ..camera import CameraProfile, CameraSettings, camera_size, describe_camera
 from ..camera import camera_profile as resolve_profile  # dump's argument of that name shadows it
 from ..cbind import compile_controller, controller_sources, is_c_controller
 from ..config import CameraConfig, WorldConfig, start_values
+from ..field import DEFAULT_BALL_TYPE
 from ..files import make_folder
 from ..mtn import MODES as MTN_MODES
 from ..placement import check_place, out_path
@@ -76,7 +77,7 @@ def _dump_controller(parameters: dict, out: Path, resume: bool, **lock) -> DumpW
     frames, camera_full = parameters["frames"], parameters["camera_full"]
     settings = CameraSettings(**parameters["camera_settings"])
     model, profile = (
-        load_model(parameters["scene"], ball_type=parameters.get("ball_type", "robocup")),
+        load_model(parameters["scene"], ball_type=parameters.get("ball_type", DEFAULT_BALL_TYPE)),
         _profile(parameters),
     )
     camera = describe_camera(profile, settings, camera_size(camera_full), scene_light(model))
@@ -102,7 +103,7 @@ def _dump_controller(parameters: dict, out: Path, resume: bool, **lock) -> DumpW
                     parameters["seed"],
                     parameters["pose"],
                     parameters["ball"],
-                    parameters.get("ball_type", "robocup"),
+                    parameters.get("ball_type", DEFAULT_BALL_TYPE),
                 ),
                 camera=CameraConfig(profile, camera_full, settings),
                 mtn_mode=parameters["mtn_mode"],
@@ -221,7 +222,7 @@ def world_parameters(
         "camera_settings": (settings or CameraSettings()).as_dict(),
         "model_sha256": model_sha256(model),
     }
-    if ball_type != "robocup":  # only then: a dump resumes one made before the pink ball existed
+    if ball_type != DEFAULT_BALL_TYPE:  # only then: a dump resumes one made before the pink ball existed
         world["ball_type"] = ball_type
     if profile.options():  # only then: a dump of a preset resumes one made before options were recorded
         world["camera_profile_options"] = profile.options()
@@ -436,7 +437,7 @@ def dump(
             raise ValueError(f"--engine ray needs Ray, which is not installed: {RAY_INSTALL}") from None
     if env is not None and camera_full:
         raise ValueError("--camera-full applies to controller dumps; environments render their own layer")
-    if env is not None and (ball is not None or pose is not None or ball_type != "robocup"):
+    if env is not None and (ball is not None or pose is not None or ball_type != DEFAULT_BALL_TYPE):
         raise ValueError(
             "--ball, --ball-type and --pose apply to controller dumps; environments place the robot and "
             "their own ball themselves"

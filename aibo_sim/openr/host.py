@@ -108,7 +108,7 @@ SETTING_BY_REQUEST = {
 
 _U32, _FIELDS2, _FIELDS3, _FRAME = struct.Struct("<I"), struct.Struct("<2I"), struct.Struct("<3I"), struct.Struct("<5I")
 _HEADER = _FIELDS2  # a message's size and kind
-_RECORD, _JOINT = struct.Struct("<2I"), struct.Struct("<2i")
+_JOINT = struct.Struct("<2i")
 _JOINT_RECORD = protocol.RECORDS["JOINT"]
 
 
@@ -545,8 +545,8 @@ class MemoryStickRun:
         without a call more."""
         servos, offset, end = self.sim.servos, 0, len(payload)
         while offset < end:
-            kind, size = _RECORD.unpack_from(payload, offset)
-            offset += 8 + size
+            kind, size = protocol.RECORD_HEADER.unpack_from(payload, offset)
+            offset += protocol.RECORD_HEADER.size + size
             if kind == _JOINT_RECORD:
                 primitive, value = _JOINT.unpack_from(payload, offset - size)
                 joint = self._joint_of[primitive]

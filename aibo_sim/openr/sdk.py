@@ -32,7 +32,7 @@ from pathlib import Path
 import openr_bridge
 from openr_bridge.host_protocol import c_header
 
-from ..cbind.build import CompileError, _compiler, _run, _version
+from ..cbind.build import _compiler, _run, _version
 
 SOURCES = Path(openr_bridge.__file__).resolve().parent / "sdk"
 # What every object and the library are compiled with: Sony's SDK compiled C++98 (GCC 3.3), whose
@@ -162,8 +162,3 @@ def _build(build: Path, root: Path, cxx: str, cc: str) -> None:
         "building",
     )
     shutil.rmtree(build / "obj")
-
-
-def build_error(error: CompileError) -> str:
-    """A build failure's message as aibo-sim prints it."""
-    return f"the host OPEN-R SDK did not build: {error}"
