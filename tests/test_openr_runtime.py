@@ -176,6 +176,30 @@ def test_effector_plays_each_vector_and_asks_for_the_next_after_its_last_frame(o
     assert [int(s[1]) for s in sensors] == list(range(0, 36, 4))  # 4 frames a vector, every 32 ms
     assert {s[2] for s in sensors} == {"4"}
     assert abs(np.degrees(int(sensors[-1][6]) / 1e6) - 33) < 1.5  # the pan got there
+    # Each OCommandInfo's frameNumber, written by the effector: the frame its vector started in
+    # (Sony's Level2 reference); vector v, from region v % 2, starts in frame 4v.
+    assert started_frames(lines) == [4 * v for v in range(6)]
+
+
+def started_frames(lines: list[str]) -> list[int]:
+    """After each ready, the frame that the vector just played started in, as the effector (or the
+    speaker) wrote it into its region's info: the probe prints both regions', vector k's is k % 2."""
+    started = [int(line.split()[-1]) for line in lines if line.startswith("started region")]
+    return [started[2 * k + k % 2] for k in range(len(started) // 2)]
+
+
+def test_a_vectors_wait_delays_it_by_as_many_frames(objects, tmp_path):
+    """ODataVectorInfo::wait "delays commands and the output of sound, for the number of frames
+    (in units of 8msec) specified by 'wait'" (Sony's Level2 reference): it was ignored."""
+    stick = make_stick(
+        tmp_path / "ms", objects, ["JPROBE"], JOINT_PROBE, {"JOINTPROBE_MODE": "MODE.TXT"}, {"MODE.TXT": "wait"}
+    )
+    result = run_stick(stick, 0.5, tmp_path / "out", lambda r: r.sim.servos.command[PAN])
+    # vector 2 waits 25 frames: the pan holds vector 1's last set-point (17 degrees) meanwhile
+    expected = [10 + k for k in range(8)] + [17] * 25 + [18 + k for k in range(16)]
+    assert np.allclose(np.degrees(result.frames[: len(expected)]), expected, atol=1e-5)
+    lines = result.lines("JointProbe")
+    assert started_frames(lines) == [0, 4, 33, 37, 41, 45]
 
 
 @pytest.mark.parametrize("mode", ["nopower", "nogain"])
@@ -550,7 +574,8 @@ def test_the_speaker_plays_sound_vectors_one_after_the_other_into_a_wav_file(obj
     result = run_stick(stick, 0.5, out)
     assert [victim.read_bytes() for victim in victims] == [b"theirs", b"theirs"]
     assert not (out / "speaker.wav").is_symlink() and (out / "console.log").stat().st_nlink == 1
-    readies = result.lines("SoundProbe")
+    lines = result.lines("SoundProbe")
+    readies = [line for line in lines if line.startswith("ready")]
     # The boot's ready before DoStart, which fills both regions (as Sony's SoundPlay); then after
     # each vector the region it played is free again (SoundPlay takes it, and had none without).
     assert readies[:3] == ["ready 1 refs 1 1 before start", "ready 2 refs 1 2", "ready 3 refs 2 1"]
@@ -560,6 +585,27 @@ def test_the_speaker_plays_sound_vectors_one_after_the_other_into_a_wav_file(obj
         samples = np.frombuffer(sound.readframes(sound.getnframes()), "<i2").astype(int)
     tone = np.trunc(10000 * np.sin(2 * np.pi * 1000 * np.arange(5120) / 16000)).astype(int)
     assert len(samples) == 5120 and np.abs(samples - tone).max() <= 1  # from t = 0, without a gap
+    assert started_frames(lines) == [4 * k for k in range(10)]  # each OSoundInfo's frameNumber
+
+
+def test_a_sound_vectors_wait_delays_its_output(objects, tmp_path):
+    """The third vector waits 10 frames (ODataVectorInfo::wait): 1280 samples of silence at 16 kHz
+    before it, its frameNumber 10 frames later, the vectors after it as much later."""
+    stick = make_stick(
+        tmp_path / "ms",
+        objects,
+        ["SPROBE"],
+        "SoundProbe.Speaker.OSoundVectorData.S OVirtualRobotAudioComm.Speaker.OSoundVectorData.O\n",
+        {"SOUNDPROBE_MODE": "MODE.TXT"},
+        {"MODE.TXT": "wait"},
+    )
+    result = run_stick(stick, 0.6, tmp_path / "out")
+    with wave.open(str(tmp_path / "out" / "speaker.wav")) as sound:
+        samples = np.frombuffer(sound.readframes(sound.getnframes()), "<i2").astype(int)
+    tone = np.trunc(10000 * np.sin(2 * np.pi * 1000 * np.arange(5120) / 16000)).astype(int)
+    expected = np.concatenate([tone[:1024], np.zeros(1280, int), tone[1024:]])
+    assert len(samples) == len(expected) and np.abs(samples - expected).max() <= 1
+    assert started_frames(result.lines("SoundProbe")) == [0, 4, 18, 22, 26, 30, 34, 38, 42, 46]
 
 
 def test_a_link_at_the_console_log_is_refused_before_the_run(objects, tmp_path):

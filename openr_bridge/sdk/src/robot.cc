@@ -147,11 +147,13 @@ void NotifyPower(const OPowerStatus& before) {
     }
 }
 
-/* A subject's vectors queued at the effector or the speaker, with the frame each has reached. */
+/* A subject's vectors queued at the effector or the speaker, with the frame each has reached and
+ * the frames it still waits before it starts (its ODataVectorInfo's wait). */
 struct Playing {
     RCRegion* region;
     longword  frame;
     longword  frames;
+    longword  wait;
 };
 
 struct Queue {
@@ -218,8 +220,9 @@ class VirtualRobotAudioComm;
 VirtualRobotComm* robotComm = NULL;
 VirtualRobotAudioComm* audioComm = NULL;
 
-/* Queues `region` (a vector of `frames` frames) for the subject that sent it; the subject is
- * asked for more when its queue has been played. */
+/* Queues `region` (a vector of `frames` frames, after its vectorInfo's `wait` frames: Sony's "delays
+ * commands and the output of sound") for the subject that sent it; the subject is asked for more
+ * when its queue has been played. */
 void TakeVector(std::vector<Queue>& queues, const SubjectID& sender, RCRegion* region, longword frames) {
     Queue* queue = NULL;
     for (size_t i = 0; i < queues.size(); i++) {
@@ -231,17 +234,22 @@ void TakeVector(std::vector<Queue>& queues, const SubjectID& sender, RCRegion* r
         queue->subject = sender;
     }
     region->AddReference();
-    Playing playing = {region, 0, frames ? frames : 1};
+    Playing playing = {region, 0, frames ? frames : 1, ((ODataVectorInfo*)region->Base())->wait};
     queue->vectors.push_back(playing);
 }
 
-/* One frame of each subject's first vector (`play`: what it commands); a vector's last frame
- * gives its region back and asks its subject for the next. */
-void PlayQueues(OObserver* observer, std::vector<Queue>& queues, void (*play)(Playing&)) {
+/* One frame of each subject's first vector (`start`: at its first frame; `play`: what it commands),
+ * or of its wait; a vector's last frame gives its region back and asks its subject for the next. */
+void PlayQueues(OObserver* observer, std::vector<Queue>& queues, void (*start)(Playing&), void (*play)(Playing&)) {
     for (size_t q = 0; q < queues.size(); q++) {
         Queue& queue = queues[q];
         if (queue.vectors.empty()) continue;
         Playing& playing = queue.vectors.front();
+        if (playing.wait > 0) {
+            playing.wait--;
+            continue;
+        }
+        if (start != NULL && playing.frame == 0) start(playing);
         if (play != NULL) play(playing);
         if (++playing.frame >= playing.frames) {
             playing.region->RemoveReference();
@@ -256,7 +264,9 @@ void PlayQueues(OObserver* observer, std::vector<Queue>& queues, void (*play)(Pl
 bool AsksForMore(const std::vector<Queue>& queues) {
     for (size_t q = 0; q < queues.size(); q++) {
         const std::deque<Playing>& vectors = queues[q].vectors;
-        if (vectors.size() == 1 && vectors.front().frame + 1 >= vectors.front().frames) return true;
+        if (vectors.size() == 1 && vectors.front().wait == 0 && vectors.front().frame + 1 >= vectors.front().frames) {
+            return true;
+        }
     }
     return false;
 }
@@ -266,9 +276,20 @@ void Advance(std::vector<Queue>& queues, void (*play)(Playing&)) {
     for (size_t q = 0; q < queues.size(); q++) {
         std::deque<Playing>& vectors = queues[q].vectors;
         if (vectors.empty()) continue;
+        if (vectors.front().wait > 0) {
+            vectors.front().wait--;
+            continue;
+        }
         if (play != NULL) play(vectors.front());
         if (++vectors.front().frame >= vectors.front().frames) vectors.pop_front();
     }
+}
+
+/* The effector's first frame of a command vector: each OCommandInfo's frameNumber is this frame's
+ * (Sony: "the frame sequence number when the first frame is processed by the command"). */
+void StampCommands(Playing& playing) {
+    OCommandVectorData* vector = (OCommandVectorData*)playing.region->Base();
+    for (longword i = 0; i < vector->vectorInfo.numData; i++) vector->GetInfo((int)i)->frameNumber = FrameNumber();
 }
 
 /* The effector's frame of a command vector: each joint's and LED's value. */
@@ -319,7 +340,7 @@ public:
         }
     }
 
-    void PlayFrame() { PlayQueues(observer[0], effector, PlayCommands); }
+    void PlayFrame() { PlayQueues(observer[0], effector, StampCommands, PlayCommands); }
 };
 
 class VirtualRobotAudioComm : public OObject {
@@ -353,7 +374,8 @@ public:
     }
 
     /* A sound vector's samples, at AIBO_OPENR_SPEAKER_RATE and 16 bits, recorded now for the
-     * simulator as played from `cursor` (after the sounds before it); its region is held as long. */
+     * simulator as played from `cursor` (after the sounds before it) and its vectorInfo's `wait`
+     * frames more, each OSoundInfo's frameNumber that first frame's; its region is held as long. */
     void Play(const SubjectID& sender, RCRegion* region) {
         OSoundVectorData* vector = (OSoundVectorData*)region->Base();
         std::vector<sword> samples;
@@ -373,8 +395,9 @@ public:
         if (samples.empty()) samples.push_back(0);
         const longword perFrame = AIBO_OPENR_SPEAKER_RATE * 8 / 1000;
         longword now = FrameNumber() * perFrame;
-        longword start = cursor > now ? cursor : now;
+        longword start = (cursor > now ? cursor : now) + vector->vectorInfo.wait * perFrame;
         cursor = start + (longword)samples.size();
+        for (longword i = 0; i < vector->vectorInfo.numData; i++) vector->GetInfo((int)i)->frameNumber = start / perFrame;
         std::string payload((const char*)&start, sizeof start);
         payload.append((const char*)&samples[0], samples.size() * sizeof(sword));
         Record(AIBO_OPENR_RECORD_SOUND, payload.data(), payload.size());
@@ -382,7 +405,7 @@ public:
     }
 
     void PlayFrame() {
-        PlayQueues(observer[0], speaker, NULL);
+        PlayQueues(observer[0], speaker, NULL, NULL);
         if (micIndex >= 0 && subject[0]->NumberOfObservers() > 0 && FrameNumber() % AIBO_OPENR_SENSOR_FRAMES == 0) {
             SendSilence();
         }

@@ -6,7 +6,7 @@
 
 static const char* const PAN = "PRM:/r1/c1/c2-Joint2:12";
 
-JointProbe::JointProbe() : pan(oprimitiveID_UNDEF), started(false), sent(0), sensorIndex(-1) {}
+JointProbe::JointProbe() : pan(oprimitiveID_UNDEF), started(false), waits(false), sent(0), sensorIndex(-1) {}
 
 OStatus JointProbe::DoInit(const OSystemEvent&) {
     NEW_ALL_SUBJECT_AND_OBSERVER;
@@ -35,6 +35,7 @@ OStatus JointProbe::DoStart(const OSystemEvent&) {
         OPENR::DeleteDesignData(id);
     }
     OSYSPRINT(("mode [%s]\n", mode));
+    waits = strncmp(mode, "wait", 4) == 0;
     if (strncmp(mode, "nopower", 7) != 0) OPENR::SetMotorPower(opowerON);
     if (strncmp(mode, "nogain", 6) != 0) {
         word g[6] = {1, 1, 1, 1, 1, 1};
@@ -62,6 +63,7 @@ void JointProbe::Send(int vector) {
     OCommandVectorData* data = (OCommandVectorData*)free->Base();
     OJointCommandValue2* value = (OJointCommandValue2*)data->GetData(0)->value;
     for (int k = 0; k < FRAMES; k++) value[k].value = oradians(10 + 4 * vector + k);
+    data->vectorInfo.wait = waits && vector == 2 ? WAIT : 0;
     subject[sbjMove]->SetData(free);
     sent++;
 }
@@ -73,6 +75,10 @@ void JointProbe::Ready(const OReadyEvent& event) {
     }
     OSYSPRINT(("ready %s refs %d %d\n", event.IsAssert() ? "assert" : "deassert", region[0]->NumberOfReference(),
                region[1]->NumberOfReference()));
+    for (int i = 0; i < 2; i++) {  // the frame each region's vector started in, as the effector wrote it
+        OCommandVectorData* data = (OCommandVectorData*)region[i]->Base();
+        OSYSPRINT(("started region %d frame %u\n", i, (unsigned)data->GetInfo(0)->frameNumber));
+    }
     if (sent < VECTORS) {
         Send(sent);
         subject[sbjMove]->NotifyObservers();

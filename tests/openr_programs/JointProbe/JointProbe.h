@@ -1,7 +1,7 @@
 // JointProbe: drives the head pan through the effector, six 4-frame command vectors from two
 // regions, and prints what OPEN-R tells it (aibo-sim's runtime tests read its console).
 // /MS/OPEN-R/MW/DATA/P/MODE.TXT (design data JOINTPROBE_MODE) may hold "nopower" (no
-// SetMotorPower) or "nogain" (no joint gain).
+// SetMotorPower), "nogain" (no joint gain) or "wait" (the third vector waits WAIT frames).
 #ifndef JointProbe_h_DEFINED
 #define JointProbe_h_DEFINED
 
@@ -26,9 +26,11 @@ private:
 
     static const int VECTORS = 6;
     static const int FRAMES = 4;
+    static const int WAIT = 25;
     OPrimitiveID pan;
     RCRegion*    region[2];
     bool         started;
+    bool         waits;
     int          sent;
     int          sensorIndex;
 };

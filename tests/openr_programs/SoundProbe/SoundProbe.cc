@@ -1,4 +1,5 @@
 #include <math.h>
+#include <string.h>
 #include <OPENR/OPENRAPI.h>
 #include <OPENR/OSyslog.h>
 #include <OPENR/core_macro.h>
@@ -29,6 +30,13 @@ OStatus SoundProbe::DoInit(const OSystemEvent&) {
 }
 
 OStatus SoundProbe::DoStart(const OSystemEvent&) {
+    ODesignDataID id;
+    byte* data;
+    size_t size;
+    if (OPENR::FindDesignData("SOUNDPROBE_MODE", &id, &data, &size) == oSUCCESS) {
+        waits = size >= 4 && memcmp(data, "wait", 4) == 0;
+        OPENR::DeleteDesignData(id);
+    }
     Send();
     Send();
     subject[sbjSpeaker]->NotifyObservers();
@@ -45,6 +53,7 @@ void SoundProbe::Send() {
     }
     sword* samples = (sword*)((OSoundVectorData*)free->Base())->GetData(0);
     for (int k = 0; k < SAMPLES; k++) samples[k] = (sword)(10000 * sin(2 * M_PI * 1000 * (sent * SAMPLES + k) / 16000.0));
+    ((OSoundVectorData*)free->Base())->vectorInfo.wait = waits && sent == 2 ? WAIT : 0;
     subject[sbjSpeaker]->SetData(free);
     sent++;
 }
@@ -55,6 +64,10 @@ void SoundProbe::Ready(const OReadyEvent&) {
     OSYSPRINT(("ready %d refs %d %d%s\n", readies, region[0]->NumberOfReference(), region[1]->NumberOfReference(),
                started ? "" : " before start"));
     if (!started) return;
+    for (int i = 0; i < 2; i++) {  // the frame each region's sound starts in, as the speaker wrote it
+        OSoundVectorData* data = (OSoundVectorData*)region[i]->Base();
+        OSYSPRINT(("started region %d frame %u\n", i, (unsigned)data->GetInfo(0)->frameNumber));
+    }
     Send();
     subject[sbjSpeaker]->NotifyObservers();
 }
