@@ -23,11 +23,13 @@ from .config import MAX_MAGNITUDE
 from .mtn import MODES as MTN_MODES
 from .options import (
     ArgumentParser,
+    add_robots_options,
     add_world_options,
     camera_config,
     error_line,
     finite_float,
     path_text,
+    robots_of,
     world_config,
 )
 from .placement import make_out_folder, place
@@ -35,32 +37,6 @@ from .robot import BACKENDS
 
 EXIT_BAD_INPUT, EXIT_CONTROLLER, EXIT_DIVERGED, EXIT_INTERRUPTED, EXIT_BROKEN_PIPE = 2, 1, 3, 130, 141
 EXIT_TERMINATED = 128 + signal.SIGTERM  # 143, as a shell reports a process that SIGTERM ended
-
-
-def _match_robots(args):
-    """The robots of ``--robots FILE`` or the repeated ``--robot``, or None for one robot;
-    ValueError naming the option that cannot go with them."""
-    from .match import refuse_single_robot_options
-    from .team import check_robots, load_robots, parse_robot
-
-    if args.robots is None and not args.robot:
-        if args.controller is None:
-            raise ValueError("run needs a CONTROLLER (or --robots FILE / --robot naming each robot's)")
-        return None
-    if args.robots is not None and args.robot:
-        raise ValueError("--robots and --robot: give the robots one way, not both")
-    refuse_single_robot_options(
-        "run",
-        {
-            "--pose": args.pose,
-            "--backend": args.backend,
-            "--mtn-mode": args.mtn_mode,
-            "--memory-stick": args.memory_stick,
-        },
-    )
-    if args.robots is not None:
-        return load_robots(args.robots)
-    return check_robots([parse_robot(text) for text in args.robot], "--robot")
 
 
 def _run_match(args, robots) -> int:
@@ -97,7 +73,9 @@ def _run(args) -> int:
     from .runner import MEMORY_STICK, run_controller
     from .viewer import LiveViewer
 
-    robots = _match_robots(args)
+    robots = robots_of(args, "run")
+    if robots is None and args.controller is None:
+        raise ValueError("run needs a CONTROLLER (or --robots FILE / --robot naming each robot's)")
     if args.view_robot is not None and (robots is None or not args.view):
         raise ValueError("--view-robot applies to --view in a match (--robots, --robot)")
     if robots is not None:
@@ -349,20 +327,7 @@ def build_parser() -> argparse.ArgumentParser:
         "the system compiler); or a memory stick folder (OPEN-R/MW/CONF/OBJECT.CFG: its OPEN-R objects "
         "run on the host runtime). In a match, the controller of the robots that name none",
     )
-    run.add_argument(
-        "--robots",
-        type=path_text,
-        metavar="FILE",
-        help="a match: a TOML file of [[robot]] tables (team red|blue, number 1-4, optional pose [x, y, yaw_deg] "
-        "and controller), up to 8 robots; each robot's frames go to --out/robotN",
-    )
-    run.add_argument(
-        "--robot",
-        action="append",
-        default=[],
-        metavar="TEAM:NUMBER[:X,Y,YAW_DEG][:CONTROLLER]",
-        help="a match robot (repeat for each; instead of --robots), e.g. red:4 or blue:1:2.4,0,180",
-    )
+    add_robots_options(run)
     run.add_argument("--backend", choices=BACKENDS, help="the controller's robot side: sim (default) or openr")
     run.add_argument("--duration", type=finite_float, default=10.0, help="simulated seconds (default 10)")
     run.add_argument("--out", type=path_text, help="folder for camera frames, the controller's files and run.json")

@@ -20,6 +20,7 @@ from openr_bridge import CAMERA_DEFAULTS, CAMERA_SETTINGS
 from .camera import PROFILES, CameraSettings
 from .config import MAX_MAGNITUDE, SEED_LIMIT, CameraConfig, ParameterError, WorldConfig
 from .field import BALL_TYPES, DEFAULT_BALL_TYPE
+from .team import MAX_ROBOTS, PLAYERS_PER_TEAM, TEAMS
 
 CAMERA_SETTING_OPTIONS = (("white_balance", "--camera-wb"), ("gain", "--camera-gain"), ("shutter", "--camera-shutter"))
 WORLD_DESTS = ("scene", "pose", "ball", "ball_type", "seed")
@@ -156,3 +157,39 @@ def camera_config(args: argparse.Namespace) -> CameraConfig:
     return CameraConfig(
         args.camera_profile, args.camera_full, CameraSettings(args.camera_wb, args.camera_gain, args.camera_shutter)
     )
+
+
+def add_robots_options(parser: argparse.ArgumentParser) -> None:
+    """--robots FILE and the repeated --robot: the robots of a match (``robots_of`` reads them)."""
+    parser.add_argument(
+        "--robots",
+        type=path_text,
+        metavar="FILE",
+        help=f"a match: a TOML file of [[robot]] tables (team {'|'.join(TEAMS)}, number 1-{PLAYERS_PER_TEAM}, "
+        f"optional pose [x, y, yaw_deg] and controller), up to {MAX_ROBOTS} robots; each robot's frames go to "
+        "--out/robotN",
+    )
+    parser.add_argument(
+        "--robot",
+        action="append",
+        default=[],
+        metavar="TEAM:NUMBER[:X,Y,YAW_DEG][:CONTROLLER]",
+        help="a match robot (repeat for each; instead of --robots), e.g. red:4 or blue:1:2.4,0,180",
+    )
+
+
+def robots_of(args: argparse.Namespace, command: str) -> list | None:
+    """The robots (``team.RobotSpec``) of ``--robots FILE`` or the repeated ``--robot``, or None for
+    one robot; ValueError naming the option that cannot go with them (``command``: run or dump)."""
+    from .match import refuse_single_robot_options
+    from .team import check_robots, load_robots, parse_robot
+
+    if args.robots is None and not args.robot:
+        return None
+    if args.robots is not None and args.robot:
+        raise ValueError("--robots and --robot: give the robots one way, not both")
+    options = {"--pose": args.pose, "--backend": args.backend, "--mtn-mode": args.mtn_mode}
+    refuse_single_robot_options(command, {**options, "--memory-stick": args.memory_stick})
+    if args.robots is not None:
+        return load_robots(args.robots)
+    return check_robots([parse_robot(text) for text in args.robot], "--robot")

@@ -9,7 +9,15 @@ from openr_bridge import FRAME_RATE_HZ
 
 from ..config import MAX_MAGNITUDE
 from ..mtn import MODES as MTN_MODES
-from ..options import add_world_options, camera_config, finite_float, path_text, world_config
+from ..options import (
+    add_robots_options,
+    add_world_options,
+    camera_config,
+    finite_float,
+    path_text,
+    robots_of,
+    world_config,
+)
 from ..robot import BACKENDS
 from .formats import DEFAULT_FORMATS, FORMATS
 from .running import ENGINES, POLICIES, dump
@@ -30,11 +38,7 @@ def _dump_command(args) -> int:
             f"--duration {args.duration:g} s holds no camera frame: give at least "
             f"{0.5 / FRAME_RATE_HZ:.3f} s (frames are 1/{FRAME_RATE_HZ} s apart)"
         )
-    robots = None
-    if args.robots is not None or args.robot:  # a match: one dump per robot
-        from ..cli import _match_robots  # run's reading of --robots and --robot (cli imports this module)
-
-        robots = _match_robots(args)
+    robots = robots_of(args, "dump")  # a match: one dump per robot
     # Ctrl-C and SIGTERM (``cli._SignalsStopCleanly``) stop it cleanly: writers abort, workers stop.
     summary = dump(
         args.out,
@@ -87,20 +91,7 @@ def add_dump_parser(subcommands) -> argparse.ArgumentParser:
         type=path_text,
         help="controller file (or use --env); in a match, the controller of the robots that name none",
     )
-    parser.add_argument(
-        "--robots",
-        type=path_text,
-        metavar="FILE",
-        help="a match: a TOML file of [[robot]] tables (team red|blue, number 1-4, optional pose [x, y, yaw_deg] "
-        "and controller), up to 8 robots; each robot's frames go to --out/robotN",
-    )
-    parser.add_argument(
-        "--robot",
-        action="append",
-        default=[],
-        metavar="TEAM:NUMBER[:X,Y,YAW_DEG][:CONTROLLER]",
-        help="a match robot (repeat for each; instead of --robots), e.g. red:4 or blue:1:2.4,0,180",
-    )
+    add_robots_options(parser)
     parser.add_argument("--env", help="gymnasium environment id, e.g. aibo_sim/HeadTrackBall-v0")
     parser.add_argument("--policy", choices=POLICIES, help="environment dumps: the policy (default random)")
     parser.add_argument("--out", type=path_text, required=True, help="dump folder: new, empty, or a dump to --resume")
