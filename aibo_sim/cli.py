@@ -19,7 +19,7 @@ import numpy as np
 from openr_bridge import FULL_HEIGHT, FULL_WIDTH, LAYER_SIZE
 
 from . import interrupted_while_loading
-from .config import MAX_MAGNITUDE
+from .config import DEFAULT_DURATION_S, MAX_MAGNITUDE
 from .mtn import MODES as MTN_MODES
 from .options import (
     ArgumentParser,
@@ -329,7 +329,12 @@ def build_parser() -> argparse.ArgumentParser:
     )
     add_robots_options(run)
     run.add_argument("--backend", choices=BACKENDS, help="the controller's robot side: sim (default) or openr")
-    run.add_argument("--duration", type=finite_float, default=10.0, help="simulated seconds (default 10)")
+    run.add_argument(
+        "--duration",
+        type=finite_float,
+        default=DEFAULT_DURATION_S,
+        help=f"simulated seconds (default {DEFAULT_DURATION_S:g})",
+    )
     run.add_argument("--out", type=path_text, help="folder for camera frames, the controller's files and run.json")
     run.add_argument(
         "--mtn-mode",

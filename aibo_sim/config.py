@@ -19,6 +19,7 @@ from .field import BALL_TYPES, DEFAULT_BALL_TYPE
 
 MAX_MAGNITUDE = 1e6  # |value| beyond this is a typo, not a position (metres) or an angle (degrees)
 SEED_LIMIT = 2**64  # seeds are whole numbers below this (the camera's noise mixes 64 bits of them)
+DEFAULT_DURATION_S = 10.0  # simulated seconds of a run, a match or a dump not told how long
 
 
 def is_seed(value, count: int = 1) -> bool:

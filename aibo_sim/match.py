@@ -24,7 +24,7 @@ from traceback import walk_tb
 
 from . import controller
 from .cbind import compile_controller, controller_sources, is_c_controller
-from .config import CameraConfig, ParameterError, WorldConfig
+from .config import DEFAULT_DURATION_S, CameraConfig, ParameterError, WorldConfig
 from .files import check_atomic_write, make_folder, write_file_atomic
 from .openr.host import MemoryStickRun
 from .placement import make_out_folder, place_match
@@ -41,6 +41,7 @@ from .runner import (
     _memory_stick,
     _run_controller_program,
     _run_memory_stick,
+    check_duration,
     check_python_controller,
     earlier_run,
     motion_dirs,
@@ -192,7 +193,7 @@ def run_match(
     robots,
     *,
     controller_path=None,
-    duration: float = 10.0,
+    duration: float = DEFAULT_DURATION_S,
     world: WorldConfig | None = None,
     camera: CameraConfig | None = None,
     out=None,
@@ -222,8 +223,7 @@ def run_match(
             "pose", " ".join(map(str, world.pose)), "applies to a run of one robot: each robot's pose is its spec's"
         )
     scene, seed, ball, ball_type = world.scene, world.seed, world.ball, world.ball_type
-    if not (isinstance(duration, (int, float)) and math.isfinite(duration) and duration > 0):
-        raise ValueError(f"--duration must be a positive number of seconds, not {duration!r}")
+    check_duration(duration)
     check_controllers(robots, controller_path, "run")
     sim = Simulation(scene, seed=seed, camera=camera, ball_type=ball_type, robots=robots)
     world, compiled = sim.world, {}

@@ -30,7 +30,7 @@ from .cbind import (
     run_c_controller,
     serve,
 )
-from .config import CameraConfig, WorldConfig
+from .config import DEFAULT_DURATION_S, CameraConfig, WorldConfig
 from .field import DEFAULT_BALL_TYPE
 from .files import FolderLock, SymlinkRefused, check_atomic_write, make_folder, png, read_file, write_file_atomic
 from .openr.host import MemoryStickRun, OpenRObjectCrashed
@@ -420,7 +420,7 @@ def run_controller(
     world: WorldConfig | None = None,
     camera: CameraConfig | None = None,
     backend: str | None = None,
-    duration: float = 10.0,
+    duration: float = DEFAULT_DURATION_S,
     out: str | Path | None = None,
     mtn_mode: str | None = None,
     memory_stick=None,
@@ -456,12 +456,7 @@ def run_controller(
             path = controller_sources(path)[0]  # the main file: its folder holds the controller's motions
         else:
             check_python_controller(path)
-    if isinstance(duration, (str, bytes, bool)) or not isinstance(duration, (int, float, np.integer, np.floating)):
-        raise ValueError(f"--duration must be a number of seconds, not {duration!r}")
-    if not (math.isfinite(duration) and duration > 0):
-        raise ValueError(f"--duration must be positive and finite, not {duration}")
-    if round(duration * 1000) < FRAME_MS:
-        raise ValueError(f"--duration {duration} s is shorter than one {FRAME_MS} ms joint frame: nothing would run")
+    check_duration(duration)
     world, camera = world or WorldConfig(), camera or CameraConfig()
     scene = world.scene
     sim = Simulation(scene, seed=world.seed, camera=camera, ball_type=world.ball_type)
@@ -572,6 +567,26 @@ def run_controller(
     return summary
 
 
+def check_duration(duration) -> None:
+    """ValueError unless ``duration`` is a positive, finite number of seconds holding at least one
+    8 ms joint frame (a run's, a match's, a dump's)."""
+    if isinstance(duration, (str, bytes, bool)) or not isinstance(duration, (int, float, np.integer, np.floating)):
+        raise ValueError(f"--duration must be a number of seconds, not {duration!r}")
+    if not (math.isfinite(duration) and duration > 0):
+        raise ValueError(f"--duration must be positive and finite, not {duration}")
+    if round(duration * 1000) < FRAME_MS:
+        raise ValueError(f"--duration {duration} s is shorter than one {FRAME_MS} ms joint frame: nothing would run")
+
+
+def refuse_controller_options(folder: Path, backend: str | None, mtn_mode: str | None, memory_stick) -> None:
+    """ValueError for a controller's option given with the memory stick ``folder``."""
+    for option, value in (("--backend", backend), ("--mtn-mode", mtn_mode), ("--memory-stick", memory_stick)):
+        if value not in (None, MEMORY_STICK if option == "--backend" else None):
+            raise ValueError(
+                f"{option} applies to controllers: {folder} is a memory stick, whose OPEN-R objects run as on the robot"
+            )
+
+
 def _memory_stick(path: Path, backend: str | None, mtn_mode: str | None, memory_stick) -> MemoryStick | None:
     """The memory stick ``path`` names (``memory_stick_folder``), loaded and its objects read (a
     ConfigError naming the file and line of a problem), or None for a controller; ValueError for
@@ -579,11 +594,7 @@ def _memory_stick(path: Path, backend: str | None, mtn_mode: str | None, memory_
     folder = memory_stick_folder(path)
     if folder is None:
         return None
-    for option, value in (("--backend", backend), ("--mtn-mode", mtn_mode), ("--memory-stick", memory_stick)):
-        if value not in (None, MEMORY_STICK if option == "--backend" else None):
-            raise ValueError(
-                f"{option} applies to controllers: {folder} is a memory stick, whose OPEN-R objects run as on the robot"
-            )
+    refuse_controller_options(folder, backend, mtn_mode, memory_stick)
     stick = load_memory_stick(folder)
     stick.check_objects()
     return stick

@@ -7,7 +7,7 @@ import sys
 
 from openr_bridge import FRAME_RATE_HZ
 
-from ..config import MAX_MAGNITUDE
+from ..config import DEFAULT_DURATION_S, MAX_MAGNITUDE
 from ..mtn import MODES as MTN_MODES
 from ..options import (
     add_robots_options,
@@ -19,6 +19,7 @@ from ..options import (
     world_config,
 )
 from ..robot import BACKENDS
+from ..runner import check_duration
 from .formats import DEFAULT_FORMATS, FORMATS
 from .running import ENGINES, POLICIES, dump
 
@@ -30,9 +31,9 @@ def _dump_command(args) -> int:
     formats = FORMATS if formats == ("all",) else formats
     if args.steps is not None and not 1 <= args.steps <= MAX_MAGNITUDE:
         raise ValueError(f"--steps must be a whole number from 1 to {MAX_MAGNITUDE:.0f}, not {args.steps}")
-    if args.duration is not None and args.duration <= 0:
-        raise ValueError(f"--duration must be positive and finite, not {args.duration}")  # as run says it
-    frames = args.steps if args.steps is not None else round((args.duration or 10.0) * FRAME_RATE_HZ)
+    if args.duration is not None:
+        check_duration(args.duration)
+    frames = args.steps if args.steps is not None else round((args.duration or DEFAULT_DURATION_S) * FRAME_RATE_HZ)
     if frames < 1:
         raise ValueError(
             f"--duration {args.duration:g} s holds no camera frame: give at least "

@@ -24,7 +24,7 @@ from openr_bridge.memory_stick import memory_stick_folder
 
 from ..camera import CameraSettings, camera_size, describe_camera, scene_light
 from ..camera import camera_profile as resolve_profile
-from ..config import CameraConfig, WorldConfig, is_seed, start_values
+from ..config import DEFAULT_DURATION_S, CameraConfig, WorldConfig, is_seed, start_values
 from ..field import DEFAULT_BALL_TYPE
 from ..files import make_folder
 from ..match import controller_named_as_given, refuse_single_robot_options, robot_folder, run_match
@@ -95,7 +95,7 @@ def dump_match(
     robots,
     *,
     controller=None,
-    frames: int = 300,
+    frames: int = round(DEFAULT_DURATION_S * FRAME_RATE_HZ),
     world: WorldConfig | None = None,
     camera: CameraConfig | None = None,
     formats=(),

@@ -20,14 +20,14 @@ from openr_bridge.memory_stick import load_memory_stick, memory_stick_folder
 from ..camera import CameraProfile, CameraSettings, camera_size, describe_camera, scene_light
 from ..camera import camera_profile as resolve_profile  # dump's argument of that name shadows it
 from ..cbind import compile_controller, controller_sources, is_c_controller
-from ..config import CameraConfig, WorldConfig, start_values
+from ..config import DEFAULT_DURATION_S, CameraConfig, WorldConfig, start_values
 from ..field import DEFAULT_BALL_TYPE
 from ..files import make_folder
 from ..mtn import MODES as MTN_MODES
 from ..placement import check_place, out_path
 from ..render import check_rendering
 from ..robot import BACKENDS, SimulationEnd, check_memory_stick
-from ..runner import MEMORY_STICK, Progress, check_python_controller, run_controller
+from ..runner import MEMORY_STICK, Progress, check_python_controller, refuse_controller_options, run_controller
 from ..sim import ModelError, ball_joint, is_seed, load_model
 from .formats import DEFAULT_FORMATS, FORMATS, DumpError, is_match, robots_meta
 from .shards import dump_sharded, ray_session
@@ -343,7 +343,7 @@ def dump(
     controller: str | Path | None = None,
     env: str | None = None,
     policy: str | None = None,
-    frames: int = 300,
+    frames: int = round(DEFAULT_DURATION_S * FRAME_RATE_HZ),
     backend: str | None = None,
     world: WorldConfig | None = None,
     camera: CameraConfig | None = None,
@@ -396,12 +396,7 @@ def dump(
         raise ValueError("dump a controller file or an environment (--env), not both or neither")
     check_formats(formats)
     if controller is not None and memory_stick_folder(controller) is not None:
-        for option, value in (("--backend", backend), ("--mtn-mode", mtn_mode), ("--memory-stick", memory_stick)):
-            if value is not None:
-                raise ValueError(
-                    f"{option} applies to controllers: {controller} is a memory stick, whose OPEN-R "
-                    "objects run as on the robot"
-                )
+        refuse_controller_options(controller, backend, mtn_mode, memory_stick)
         backend = MEMORY_STICK
     backend = backend or "sim"
     if backend not in (*BACKENDS, MEMORY_STICK):
