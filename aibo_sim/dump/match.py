@@ -22,10 +22,8 @@ from pathlib import Path
 from openr_bridge import FRAME_RATE_HZ
 from openr_bridge.memory_stick import memory_stick_folder
 
-from ..camera import CameraSettings, camera_size, describe_camera, scene_light
-from ..camera import camera_profile as resolve_profile
-from ..config import DEFAULT_DURATION_S, CameraConfig, WorldConfig, is_seed, start_values
-from ..field import DEFAULT_BALL_TYPE
+from ..camera import describe_camera, scene_light
+from ..config import DEFAULT_DURATION_S, CameraConfig, WorldConfig
 from ..files import make_folder
 from ..match import controller_named_as_given, refuse_single_robot_options, robot_folder, run_match
 from ..placement import out_path, place_match
@@ -114,20 +112,15 @@ def dump_match(
     ``out/robotN``. Everything is checked before a folder is made: the options a match does not take
     (ValueError saying why), the robots (TeamError), the controllers (compiled), the places."""
     world, camera = world or WorldConfig(), camera or CameraConfig()
-    scene, seed, ball, ball_type = world.scene, world.seed, world.ball, world.ball_type
-    camera_full, camera_profile, camera_settings = camera.full, camera.profile, camera.settings
+    scene, ball, ball_type = world.scene, world.ball, world.ball_type
     _refuse(env, workers, world.pose, backend, mtn_mode, memory_stick, policy, engine, ray_address)
     robots = check_robots(robots, "--robots")
     robots = _controllers(robots, controller)
     check_formats(formats)
     if frames < 1:
         raise ValueError(f"the number of frames must be positive, not {frames}")
-    if not is_seed(seed):
-        raise ValueError(f"--seed must be a whole number from 0 to 2**64 - 1, not {seed!r}")
-    profile, settings = resolve_profile(camera_profile), camera_settings or CameraSettings()
     model = load_model(scene, ball_type=ball_type, robots=robots)
     check_rendering(model)
-    ball = start_values("ball", ball, 2)
     _check_places(scene, robots, ball, ball_type)
     hashes = {}
     for robot in robots:
@@ -135,11 +128,11 @@ def dump_match(
             with controller_named_as_given(robot):
                 hashes[robot.controller] = controller_sha256(Path(robot.controller))
     out = out_path(out)
-    recorded = world_parameters(frames, scene, seed, ball, ball_type, formats, camera_full, profile, settings, model)
+    recorded = world_parameters(frames, world, camera, formats, model)
     match = {"controller": controller and str(Path(controller).resolve()), "robots": [r.as_dict() for r in robots]}
     shards = [robot_folder(k) for k in range(len(robots))]
     meta = {"format": DUMP_FORMAT, "parameters": recorded_parameters(recorded, match), "shards": shards}
-    described = describe_camera(profile, settings, camera_size(camera_full), scene_light(model))
+    described = describe_camera(camera.profile, camera.settings, camera.size, scene_light(model))
     start = time.perf_counter()
     prepared = prepare_folder(out, meta, resume)
     writers: list[DumpWriter] = []
@@ -171,7 +164,7 @@ def dump_match(
                     robots=robots_meta(robots, k + 1),
                 )
             )
-        _run(out, robots, writers, frames, recorded, profile, settings, camera_full)
+        _run(out, robots, writers, frames, replace(world, scene=recorded["scene"]), camera)
         coco = coco_bytes(out, [out / shard for shard in shards]) if "coco" in recorded["formats"] else b""
         if coco:
             write_atomic(out / COCO, coco)
@@ -192,9 +185,9 @@ def dump_match(
     )
 
 
-def _run(out: Path, robots, writers, frames: int, world: dict, profile, settings, camera_full: bool) -> None:
+def _run(out: Path, robots, writers, frames: int, world: WorldConfig, camera: CameraConfig) -> None:
     """The match, each robot's frames into its writer, then the writers finished (their videos and
-    coco.json). The controllers run in ``out/controller_files``."""
+    coco.json). The controllers run in ``out/controller_files`` (``world``'s scene: a whole path)."""
     workdir = out / CONTROLLER_FILES
     try:
         make_folder(workdir)
@@ -215,13 +208,8 @@ def _run(out: Path, robots, writers, frames: int, world: dict, profile, settings
             run_match(
                 robots,
                 duration=frames / FRAME_RATE_HZ,
-                world=WorldConfig(
-                    world["scene"],
-                    world["seed"],
-                    ball=world["ball"],
-                    ball_type=world.get("ball_type", DEFAULT_BALL_TYPE),
-                ),
-                camera=CameraConfig(profile, camera_full, settings),
+                world=world,
+                camera=camera,
                 robot_listeners=robot_listeners,
                 progress=False,
             )

@@ -20,7 +20,7 @@ from openr_bridge.memory_stick import load_memory_stick, memory_stick_folder
 from ..camera import CameraProfile, CameraSettings, camera_size, describe_camera, scene_light
 from ..camera import camera_profile as resolve_profile  # dump's argument of that name shadows it
 from ..cbind import compile_controller, controller_sources, is_c_controller
-from ..config import DEFAULT_DURATION_S, CameraConfig, WorldConfig, start_values
+from ..config import DEFAULT_DURATION_S, CameraConfig, WorldConfig
 from ..field import DEFAULT_BALL_TYPE
 from ..files import make_folder
 from ..mtn import MODES as MTN_MODES
@@ -206,27 +206,26 @@ PARAMETER_ORDER = (  # meta.json's "parameters", in this order: a dump's file re
 )
 
 
-def world_parameters(
-    frames: int, scene, seed: int, ball, ball_type: str, formats, camera_full: bool, profile, settings, model
-) -> dict:
+def world_parameters(frames: int, world: WorldConfig, camera: CameraConfig, formats, model) -> dict:
     """What every dump records of its world and camera (a single robot's, each robot's of a match):
-    frames, scene, seed, ball, formats, camera and the model's hash."""
-    world = {
+    frames, scene, seed, ball, its type (not the default's), formats, camera (its profile's
+    options where it has any) and the model's hash."""
+    recorded = {
         "frames": frames,
-        "scene": scene and str(Path(scene).resolve()),
-        "seed": seed,
-        "ball": ball and list(ball),
+        "scene": world.scene and str(Path(world.scene).resolve()),
+        "seed": world.seed,
+        "ball": world.ball and list(world.ball),
         "formats": [f for f in FORMATS if f in formats],
-        "camera_full": camera_full,
-        "camera_profile": profile.name,
-        "camera_settings": (settings or CameraSettings()).as_dict(),
+        "camera_full": camera.full,
+        "camera_profile": camera.profile.name,
+        "camera_settings": camera.settings.as_dict(),
         "model_sha256": model_sha256(model),
     }
-    if ball_type != DEFAULT_BALL_TYPE:  # only then: a dump resumes one made before the pink ball existed
-        world["ball_type"] = ball_type
-    if profile.options():  # only then: a dump of a preset resumes one made before options were recorded
-        world["camera_profile_options"] = profile.options()
-    return world
+    if world.ball_type != DEFAULT_BALL_TYPE:  # only then: a dump resumes one made before the pink ball existed
+        recorded["ball_type"] = world.ball_type
+    if camera.profile.options():  # only then: a dump of a preset resumes one made before options were recorded
+        recorded["camera_profile_options"] = camera.profile.options()
+    return recorded
 
 
 def recorded_parameters(*parts: dict) -> dict:
@@ -391,7 +390,6 @@ def dump(
             ray_address=ray_address,
         )
     scene, seed, pose, ball, ball_type = world.scene, world.seed, world.pose, world.ball, world.ball_type
-    camera_full, camera_profile, camera_settings = camera.full, camera.profile, camera.settings
     if (controller is None) == (env is None):
         raise ValueError("dump a controller file or an environment (--env), not both or neither")
     check_formats(formats)
@@ -430,7 +428,7 @@ def dump(
             import ray  # noqa: F401
         except ImportError:
             raise ValueError(f"--engine ray needs Ray, which is not installed: {RAY_INSTALL}") from None
-    if env is not None and camera_full:
+    if env is not None and camera.full:
         raise ValueError("--camera-full applies to controller dumps; environments render their own layer")
     if env is not None and (ball is not None or pose is not None or ball_type != DEFAULT_BALL_TYPE):
         raise ValueError(
@@ -445,7 +443,6 @@ def dump(
     if memory_stick is not None:
         memory_stick = Path(memory_stick).resolve()
         openr_bridge.OpenRSystem.from_memory_stick(memory_stick)  # a ConfigError naming it, before the folder is made
-    profile = resolve_profile(camera_profile)
     if env is not None:
         _check_env(env)
     model = load_model(scene, ball_type=ball_type)
@@ -457,7 +454,6 @@ def dump(
         if env is not None:  # the environments place the ball at each reset
             raise ModelError(f"--scene {scene}: environment {env} places the ball, but {exc}") from None
         placeable_ball = False
-    pose, ball = start_values("pose", pose, 3), start_values("ball", ball, 2)
     if controller is not None:
         check_place(
             scene, pose, ball, ball_type
@@ -467,9 +463,6 @@ def dump(
         controller = Path(controller).resolve()
         source_sha256 = controller_sha256(controller)
     out = out_path(out)
-    world = world_parameters(
-        frames, scene, seed, ball, ball_type, formats, camera_full, profile, camera_settings, model
-    )
     run = {
         "controller": controller and str(controller),
         "env": env,
@@ -481,7 +474,7 @@ def dump(
     }
     if source_sha256 is not None:
         run["controller_sha256"] = source_sha256  # a resume refuses another controller
-    parameters = recorded_parameters(world, run)
+    parameters = recorded_parameters(world_parameters(frames, world, camera, formats, model), run)
     if workers == 1:
         return dump_one(parameters, out, resume)
     if engine == "local":
