@@ -44,9 +44,7 @@ Decisions where the spec leaves room (also listed in the report that came with t
 
 from __future__ import annotations
 
-import contextlib
 import os
-import secrets
 import struct
 from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass
@@ -59,6 +57,7 @@ from openr_bridge.config import read_regular_file
 from openr_bridge.errors import NotRegularFile
 
 from . import ers7
+from .files import write_file_atomic
 
 MAGIC = b"OMTN"
 ODA_MAGIC, ODA_HEADER_SIZE, ODA_ENTRY_SIZE = b"ODAR", 64, 144  # Sony's archives of motions and sounds (ODA.h)
@@ -464,22 +463,9 @@ def serialize_mtn(motion: Motion) -> bytes:
 
 
 def write_mtn(motion: Motion, path: str | os.PathLike) -> None:
-    """Write ``motion`` to ``path`` atomically: the bytes are built first, written to a temporary
-    file in the same directory, then renamed over ``path``; on failure nothing is left behind."""
-    data = serialize_mtn(motion)
-    path = Path(path)
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.{secrets.token_hex(4)}.tmp")
-    fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_BINARY", 0), 0o666)
-    try:
-        with os.fdopen(fd, "wb") as f:
-            f.write(data)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        with contextlib.suppress(FileNotFoundError):
-            os.unlink(tmp)
-        raise
+    """Write ``motion`` to ``path`` whole or not at all (``files.write_file_atomic``: the bytes
+    built first, then a temporary file renamed over ``path``, never written through a link)."""
+    write_file_atomic(Path(path), serialize_mtn(motion))
 
 
 # ----------------------------------------------------------------------------- playback

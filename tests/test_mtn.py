@@ -355,10 +355,10 @@ def test_write_failing_midway_leaves_old_file_and_no_temp(tmp_path, monkeypatch)
     target = tmp_path / "motion.mtn"
     target.write_bytes(b"old")
 
-    def broken_fsync(fd):
+    def full_disk(source, target):
         raise OSError("disk full")
 
-    monkeypatch.setattr(os, "fsync", broken_fsync)
+    monkeypatch.setattr(os, "replace", full_disk)
     with pytest.raises(OSError, match="disk full"):
         write_mtn(tiny_motion(), target)
     assert [p.name for p in tmp_path.iterdir()] == ["motion.mtn"]

@@ -303,7 +303,7 @@ def _check_out(out_dir) -> Path:
 def build_ms(controller, out_dir) -> Path:
     """Write the memory-stick project of ``controller`` (a .c/.cc/.cpp file, or a folder holding
     its main file under the folder's name) in ``out_dir`` (new, or an empty folder); returns
-    ``out_dir``. BuildMsError, naming the argument, for bad input."""
+    ``out_dir``. BuildMsError, naming the controller or --out, for bad input."""
     if str(controller) == "":
         raise BuildMsError("controller is empty: give a C or C++ controller file or folder")
     path = Path(controller)
