@@ -5,13 +5,14 @@ import signal
 import sys
 
 from ._gl import choose_gl_backend, import_mujoco
+from .exit_status import EXIT_INTERRUPTED
 
 
 def interrupted_while_loading(number, frame) -> None:
     """Ctrl-C while the ``aibo-sim`` program loads its modules: one line and 130, as later (not a
     traceback of whichever import it hit); ``cli.main`` hands Ctrl-C back to Python."""
     print("\naibo-sim: interrupted", file=sys.stderr, flush=True)
-    os._exit(130)
+    os._exit(EXIT_INTERRUPTED)
 
 
 if (

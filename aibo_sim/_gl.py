@@ -15,6 +15,8 @@ import ctypes.util
 import os
 import sys
 
+from .exit_status import EXIT_BAD_INPUT
+
 HEADLESS_LIBRARIES = (("egl", "EGL"), ("osmesa", "OSMesa"))
 SYSTEM_PACKAGES = "EGL: Debian/Ubuntu 'libegl1 libgl1-mesa-dri' (Mesa's software renderer works); OSMesa: 'libosmesa6'"
 
@@ -50,5 +52,5 @@ def import_mujoco() -> None:
         )
         if sys.argv and (sys.argv[0] == "-m" or os.path.basename(sys.argv[0]) == "aibo-sim"):  # while -m finds it
             print(f"aibo-sim: error: {error}", file=sys.stderr)
-            raise SystemExit(2) from None
+            raise SystemExit(EXIT_BAD_INPUT) from None
         raise error from None

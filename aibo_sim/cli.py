@@ -20,6 +20,14 @@ from openr_bridge import FULL_HEIGHT, FULL_WIDTH, LAYER_SIZE
 
 from . import interrupted_while_loading
 from .config import DEFAULT_DURATION_S, MAX_MAGNITUDE
+from .exit_status import (
+    EXIT_BAD_INPUT,
+    EXIT_BROKEN_PIPE,
+    EXIT_CONTROLLER,
+    EXIT_DIVERGED,
+    EXIT_INTERRUPTED,
+    EXIT_TERMINATED,
+)
 from .mtn import MODES as MTN_MODES
 from .options import (
     ArgumentParser,
@@ -34,9 +42,6 @@ from .options import (
 )
 from .placement import make_out_folder, place
 from .robot import BACKENDS
-
-EXIT_BAD_INPUT, EXIT_CONTROLLER, EXIT_DIVERGED, EXIT_INTERRUPTED, EXIT_BROKEN_PIPE = 2, 1, 3, 130, 141
-EXIT_TERMINATED = 128 + signal.SIGTERM  # 143, as a shell reports a process that SIGTERM ended
 
 
 def _run_match(args, robots) -> int:
@@ -528,10 +533,7 @@ def main(argv: list[str] | None = None) -> int:
         print("\naibo-sim: interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED
 
-    # Exit status: 0 done; 1 the controller failed (it raised, its robot_die function raised, or
-    # it called sys.exit with a status other than 0); 2 bad input (one line naming it); 3 the
-    # physics diverged; 130 interrupted (Ctrl-C); 141 standard output closed by its reader (`| head`);
-    # 143 terminated (SIGTERM).
+    # Exit status: 0 done, else one of exit_status's.
     for stream in (sys.stdout, sys.stderr):  # text a terminal's encoding lacks (a motion's latin-1 name) escaped
         if isinstance(stream, io.TextIOWrapper):
             stream.reconfigure(errors="backslashreplace")

@@ -19,6 +19,7 @@ from openr_bridge import CAMERA_DEFAULTS, CAMERA_SETTINGS
 
 from .camera import PROFILES, CameraSettings
 from .config import MAX_MAGNITUDE, SEED_LIMIT, CameraConfig, ParameterError, WorldConfig
+from .exit_status import EXIT_BAD_INPUT
 from .field import BALL_TYPES, DEFAULT_BALL_TYPE
 from .team import MAX_ROBOTS, PLAYERS_PER_TEAM, TEAMS
 
@@ -53,7 +54,7 @@ class ArgumentParser(argparse.ArgumentParser):
     and an argument no parser knows is named by the command it was given to (``aibo-sim render``)."""
 
     def error(self, message: str):
-        self.exit(2, f"{self.prog}: error: {error_line(message)} (see {self.prog} --help)\n")
+        self.exit(EXIT_BAD_INPUT, f"{self.prog}: error: {error_line(message)} (see {self.prog} --help)\n")
 
     def parse_known_args(self, args=None, namespace=None):
         namespace, extras = super().parse_known_args(args, namespace)
