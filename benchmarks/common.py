@@ -2,14 +2,15 @@
 
 import time
 
-REPEATS = 5
+REPEATS = 5  # a measurement's best of so many
+SIM_SECONDS = 10.0  # simulated seconds of a timed run
 
 
-def best_mean_seconds(run, iterations: int, repeats: int = REPEATS) -> float:
-    """Best over ``repeats`` of the mean time of ``iterations`` calls (after one warm-up)."""
+def best_mean_seconds(run, iterations: int) -> float:
+    """Best over ``REPEATS`` of the mean time of ``iterations`` calls (after one warm-up)."""
     run()
     best = float("inf")
-    for _ in range(repeats):
+    for _ in range(REPEATS):
         start = time.perf_counter()
         for _ in range(iterations):
             run()

@@ -5,7 +5,7 @@
 head's target, as a tracking controller does; their own work is small, so the ratio is what
 the binding costs (each call travels to this process over a socket, ``aibo_sim.cbind``).
 Sim backend, the default ``ers7`` camera, no frames written, ``SIM_SECONDS`` a run; best of
-``ROUNDS``, the two alternating so that both see the shared machine's quiet and busy spells.
+``REPEATS``, the two alternating so that both see the shared machine's quiet and busy spells.
 
 Run: ``python -m benchmarks --only controllers``
 """
@@ -17,21 +17,19 @@ from pathlib import Path
 from aibo_sim.cbind import compile_controller
 from aibo_sim.runner import run_controller
 
-from .common import row
+from .common import REPEATS, SIM_SECONDS, row
 
 ROOT = Path(__file__).resolve().parents[1]
 CONTROLLERS = {
     "Python": ROOT / "benchmarks" / "c_vs_python" / "sweep.py",
     "C": ROOT / "benchmarks" / "c_vs_python" / "sweep",
 }
-SIM_SECONDS = 10.0
-ROUNDS = 5
 
 
 def measure() -> list[dict]:
     compile_controller(CONTROLLERS["C"])
     best = dict.fromkeys(CONTROLLERS, 0.0)
-    for _ in range(ROUNDS):
+    for _ in range(REPEATS):
         for language, path in CONTROLLERS.items():
             summary = run_controller(path, duration=SIM_SECONDS, progress=False)
             best[language] = max(best[language], summary.real_time_factor)

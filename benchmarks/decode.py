@@ -14,10 +14,12 @@ from functools import partial
 
 import numpy as np
 
-from openr_bridge import OpenRSystem, encode_frame, ofbkimageLAYER_H
+from openr_bridge import FULL_HEIGHT, FULL_WIDTH, LAYER_SIZE, OpenRSystem, encode_frame, ofbkimageLAYER_H
 from openr_bridge.report_c import compile_report_c
 
 from .common import REPEATS, best_mean_seconds, row
+
+WIDTH, HEIGHT = LAYER_SIZE[ofbkimageLAYER_H]  # layer H
 
 
 def field_scene(height: int = 320, width: int = 416) -> np.ndarray:
@@ -37,11 +39,11 @@ def field_scene(height: int = 320, width: int = 416) -> np.ndarray:
 def decode_cases() -> dict:
     """Messages whose layer H is a field scene, colour noise, and uniformly random bytes."""
     rng = np.random.default_rng(0)
-    random_bytes = encode_frame(np.zeros((160, 208, 3), np.uint8))
-    random_bytes.GetData(ofbkimageLAYER_H)[:] = rng.integers(0, 256, 160 * 6 * 208, dtype=np.uint8)
+    random_bytes = encode_frame(np.zeros((HEIGHT, WIDTH, 3), np.uint8))
+    random_bytes.GetData(ofbkimageLAYER_H)[:] = rng.integers(0, 256, HEIGHT * 6 * WIDTH, dtype=np.uint8)
     return {
         "scene": encode_frame(field_scene()),
-        "noise": encode_frame(rng.integers(0, 256, (160, 208, 3), dtype=np.uint8)),
+        "noise": encode_frame(rng.integers(0, 256, (HEIGHT, WIDTH, 3), dtype=np.uint8)),
         "random bytes": random_bytes,
     }
 
@@ -56,7 +58,7 @@ def measure() -> list[dict]:
             python_s = best_mean_seconds(system.controller.camera_get_image, 300)
             reference, ratio = None, None
             if report_c is not None:
-                layer_h = message.GetData(ofbkimageLAYER_H).reshape(160, 6, 208)
+                layer_h = message.GetData(ofbkimageLAYER_H).reshape(HEIGHT, 6, WIDTH)
                 c_s = min(report_c.seconds_per_image(layer_h, 300) for _ in range(REPEATS))
                 reference = f"report C loop, cc -O2 ({name})"
                 ratio = c_s / python_s
@@ -71,7 +73,7 @@ def measure() -> list[dict]:
                     target=("ratio", ">=", 1) if report_c is not None else None,
                 )
             )
-    for height, width in [(320, 416), (160, 208)]:
+    for height, width in [(FULL_HEIGHT, FULL_WIDTH), (HEIGHT, WIDTH)]:
         seconds = best_mean_seconds(partial(encode_frame, field_scene(height, width)), 30)
         rows.append(row(f"encode_frame {width}x{height} RGB to OFbkImageVectorData", seconds * 1e3, "ms"))
     return rows

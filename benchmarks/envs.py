@@ -40,13 +40,15 @@ import numpy as np
 import aibo_sim.envs  # noqa: F401  (registers the environments; aibo_sim sets MUJOCO_GL for Ant-v5 too)
 from aibo_sim.envs.threaded import ThreadedVectorEnv
 from aibo_sim.envs.vector import BusyWaitWorker, HybridVectorEnv
+from openr_bridge import LAYER_SIZE, ofbkimageLAYER_H
 
 from .common import row
 
 AIBO = "aibo_sim/HeadTrackBall-v0"  # the ers7 camera profile (the default)
 AIBO_IDEAL = AIBO + "@ideal"  # the same with camera_profile="ideal"
 ANT = "Ant-v5"
-ANT_KWARGS = {"render_mode": "rgb_array", "width": 208, "height": 160}
+LAYER_H = LAYER_SIZE[ofbkimageLAYER_H]  # width, height
+ANT_KWARGS = {"render_mode": "rgb_array", "width": LAYER_H[0], "height": LAYER_H[1]}  # as the head camera's
 STEPS = {AIBO: 300, AIBO_IDEAL: 300, ANT: 40, "CartPole-v1": 300}
 ROUNDS = 10  # blocks per environment and setting, alternating with the reference's
 SPAWN = {"context": "spawn"}

@@ -12,7 +12,7 @@ vector, an image or an effector ready event for HeadSwing: 540 of 1250 frames; t
 foretells the others and their set-points, ``host_protocol``'s Lookahead); the image message,
 which the runtime makes from the sensor's Y, Cr, Cb frame in the shared memory that becomes
 its region. Sony's MovingHead7 and BallTrackingHead7 are timed too when
-``../shared/data/openr-samples`` is there. Best of ``ROUNDS``, alternating: on the shared
+``../shared/data/openr-samples`` is there. Best of ``REPEATS``, alternating: on the shared
 2-core machine one program's 10 s runs differ by up to 1.5x from one to the next, so that a
 best of three could meet or miss the target by luck (docs/benchmark-notes.md).
 
@@ -29,17 +29,15 @@ from pathlib import Path
 from aibo_sim.config import WorldConfig
 from aibo_sim.openr.sdk import sdk_root
 from aibo_sim.runner import run_controller
+from aibo_sim.sim import FRAME_MS
 
-from .common import row
+from .common import REPEATS, SIM_SECONDS, row
 
 ROOT = Path(__file__).resolve().parents[1]
 PROGRAM = ROOT / "benchmarks" / "head_swing"
 TWIN = PROGRAM / "head_swing.py"
 SAMPLES = ROOT.parent / "shared" / "data" / "openr-samples"
 SONY = ("ers7/MovingHead7", "ers7/BallTrackingHead7")
-SIM_SECONDS = 10.0
-FRAME_MS = 8.0
-ROUNDS = 5
 
 
 def build(folder: Path) -> None:
@@ -64,7 +62,7 @@ def measure() -> list[dict]:
     build(PROGRAM)
     programs = {"sim": (TWIN, {}), "openr": (TWIN, {"backend": "openr"}), "stick": (PROGRAM, {})}
     best = dict.fromkeys(programs, 0.0)
-    for _ in range(ROUNDS):
+    for _ in range(REPEATS):
         for name, (program, options) in programs.items():
             best[name] = max(best[name], real_time_factor(program, 1, **options))
     frame_ms = {name: FRAME_MS / value for name, value in best.items()}  # wall time a frame costs
@@ -97,7 +95,7 @@ def measure() -> list[dict]:
                 (copy / "MS" / "OPEN-R" / "MW" / "OBJS").mkdir(parents=True, exist_ok=True)
                 build(copy)
                 options = {"world": WorldConfig(ball_type="pink")} if name == "BallTrackingHead7" else {}
-                value = real_time_factor(copy, ROUNDS, **options)
+                value = real_time_factor(copy, REPEATS, **options)
                 rows.append(row(f"real-time factor, Sony's {name} (memory stick)", value, "x"))
     return rows
 

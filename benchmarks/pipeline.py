@@ -18,6 +18,7 @@ import mujoco
 
 from aibo_sim.robot import Robot
 from aibo_sim.sim import Simulation
+from openr_bridge import FRAME_RATE_HZ, LAYER_SIZE, ofbkimageLAYER_H
 
 from .common import best_mean_seconds, row
 
@@ -27,7 +28,8 @@ SIM_SECONDS = 3.0
 
 def _floor_seconds_per_frame(sim: Simulation) -> float:
     model, data = sim.model, sim.data
-    renderer = mujoco.Renderer(model, 160, 208)
+    width, height = LAYER_SIZE[ofbkimageLAYER_H]
+    renderer = mujoco.Renderer(model, height, width)
     renderer.scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = False
     steps = round(1 / 30 / model.opt.timestep)
 
@@ -72,7 +74,7 @@ def measure() -> list[dict]:
     ]
     for backend in ("sim", "openr"):
         seconds = min(_run_seconds(backend, camera=True) for _ in range(3))
-        fps = SIM_SECONDS * 30 / seconds
+        fps = SIM_SECONDS * FRAME_RATE_HZ / seconds
         rows.append(
             row(
                 f"camera pipeline, {backend} backend (physics + camera at 30 fps)",
