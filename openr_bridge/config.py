@@ -57,7 +57,7 @@ def _quote(text: str) -> str:
     return f"{text[:QUOTE_LIMIT]!r}... ({len(text)} characters in all)"
 
 
-def _cut(text) -> str:
+def cut(text) -> str:
     """``str(text)`` cut to QUOTE_LIMIT characters with a note of the full length."""
     text = str(text)
     return text if len(text) <= QUOTE_LIMIT else f"{text[:QUOTE_LIMIT]}... ({len(text)} characters in all)"
@@ -159,7 +159,7 @@ def parse_stub_cfg(source: bytes | str, path: str = "stub.cfg") -> StubConfig:
             raise ConfigError(f"{key} must be at least 1 (register a dummy {KINDS[kind]})", path, number)
         if int(count) != len(listed):
             raise ConfigError(
-                f"{key} is {int(count)} but {len(listed)} {KINDS[kind]} services are listed {_cut(listed)}",
+                f"{key} is {int(count)} but {len(listed)} {KINDS[kind]} services are listed {cut(listed)}",
                 path,
                 number,
             )
@@ -201,7 +201,7 @@ def parse_connect_cfg(source: bytes | str, path: str = "CONNECT.CFG") -> list[Co
         for name, kind in ((subject, "S"), (observer, "O")):
             if name.kind != kind:
                 raise ConfigError(
-                    f"{_cut(name)} should be {KINDS[kind]} ('.{kind}'), the line being subject then observer",
+                    f"{cut(name)} should be {KINDS[kind]} ('.{kind}'), the line being subject then observer",
                     path,
                     number,
                 )
@@ -253,9 +253,9 @@ def _parse_service(value: str, path: str, number: int, first_line: dict[ServiceN
         raise ConfigError(f"expected '\"Object.Sub.Data.S|O\", member, member', got {_quote(value)}", path, number)
     name = _service_name(match[1], path, number)
     if name.kind not in KINDS:
-        raise ConfigError(f"service type {_quote(name.kind)} of {_cut(name)} is neither S nor O", path, number)
+        raise ConfigError(f"service type {_quote(name.kind)} of {cut(name)} is neither S nor O", path, number)
     if name in first_line:
-        raise ConfigError(f"service {_cut(name)} listed twice (first on line {first_line[name]})", path, number)
+        raise ConfigError(f"service {cut(name)} listed twice (first on line {first_line[name]})", path, number)
     first_line[name] = number
     connect, notify = (None if member == "null" else member[:-2] for member in match.groups()[1:])
     return Service(name, connect, notify, number)

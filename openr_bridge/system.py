@@ -15,7 +15,7 @@ against libOPENR.
 
 from pathlib import Path
 
-from .config import Connection, ServiceName, _cut, find_connect_cfg, load_connect_cfg
+from .config import Connection, ServiceName, cut, find_connect_cfg, load_connect_cfg
 from .errors import ConfigError
 from .primitive import OPENR, OCameraPrimitive
 from .wiring import DATA_DIR, OObject, OVirtualRobotComm
@@ -89,14 +89,14 @@ class OpenRSystem:
         known = sorted({gate.service.name.object for gate in self._gates.values()})
         if name.object in known:
             services = sorted(key for key in self._gates if key.startswith(name.object + "."))
-            problem = f"{name.object} has no service {_cut(name)} (it has {', '.join(services)})"
+            problem = f"{name.object} has no service {cut(name)} (it has {', '.join(services)})"
             if name.object == "Controller":  # the report's wrapper, modelled here for its camera alone
                 problem += (
                     "; this model of the wrapper takes the camera's image only: a stick built by "
                     "aibo-sim build-ms runs as itself (aibo-sim run ITS_FOLDER)"
                 )
         else:
-            problem = f"unknown object {_cut(repr(name.object))} (known: {', '.join(known)})"
+            problem = f"unknown object {cut(repr(name.object))} (known: {', '.join(known)})"
             problem += "".join(
                 f"; object names are case-sensitive: did you mean {candidate!r}?"
                 for candidate in known

@@ -177,10 +177,7 @@ def robot_labels(sim: Simulation, ids: np.ndarray | None = None) -> tuple[np.nda
     if ids is None:
         ids = sim.camera.segmentation()
     instances = geom_robots(sim.model)[ids]
-    teams = np.zeros(MAX_ROBOTS + 1, np.uint8)
-    for index, robot in enumerate(sim.world.robots):
-        teams[index + 1] = LABEL_TEAMS.index(robot.spec.team)
-    return instances, teams[instances]
+    return instances, instance_teams(robots_meta(sim.world.robot_specs, sim.index + 1))[instances]
 
 
 # ---------------------------------------------------------------- layouts

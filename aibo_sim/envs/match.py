@@ -54,10 +54,9 @@ from ..sim import (
     ball_joint,
     models_dir,
     placement_values,
-    release_freed_memory,
 )
 from ..team import PLAYERS_PER_TEAM, TEAMS, RobotSpec, check_robots, load_robots
-from .base import HEAD_JOINTS, LAYERS, LEG_JOINTS, RENDER_SIZE, AiboEnv, _ClosedSimulation, check_options
+from .base import HEAD_JOINTS, LAYERS, LEG_JOINTS, RENDER_SIZE, AiboEnv, check_options
 
 MAX_CYCLES = 900  # steps (camera frames at 30 fps): 30 s of play
 BALL_PROGRESS_REWARD = 10.0  # per metre the ball moves towards the opposing goal, as ReachBall's progress
@@ -469,16 +468,8 @@ class MatchEnv(pettingzoo.ParallelEnv):
     def close(self):
         """Free the renderers; then ``reset``, ``step``, ``render`` and ``state`` raise
         ``gymnasium.error.ClosedEnvironmentError``. Closing again does nothing."""
-        if self._closed:
-            return
-        if self._renderer is not None:
-            self._renderer.close()
-            self._renderer = None
-        self.sim.close()
-        self._closed = True
-        self.sim = _ClosedSimulation(type(self).__name__)
+        AiboEnv.close(self)
         self.robots = {}
-        release_freed_memory()
 
     __reduce_ex__ = AiboEnv.__reduce_ex__  # a MuJoCo simulation and OpenGL renderers: no pickling
 

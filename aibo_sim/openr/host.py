@@ -57,7 +57,7 @@ import numpy as np
 
 import openr_bridge
 from openr_bridge import host_protocol as protocol
-from openr_bridge.config import ConfigError, Connection, _cut
+from openr_bridge.config import ConfigError, Connection, cut
 from openr_bridge.errors import CdtError
 from openr_bridge.ers7_camera import CAMERA_SETTINGS, openr_frame_number
 from openr_bridge.memory_stick import MemoryStick, read_object
@@ -397,10 +397,10 @@ class MemoryStickRun:
                     continue
                 known = sorted(set(services.values()))
                 problem = (
-                    f"{name.object} has no service {_cut(name)} (it registers "
+                    f"{name.object} has no service {cut(name)} (it registers "
                     f"{', '.join(s for s in sorted(services) if services[s] == name.object)})"
                     if name.object in known
-                    else f"no object named {_cut(repr(name.object))} registers {_cut(name)} (the objects: "
+                    else f"no object named {cut(repr(name.object))} registers {cut(name)} (the objects: "
                     f"{', '.join(known)}; names are case-sensitive)"
                 )
                 raise ConfigError(problem, connection.path, connection.line)
