@@ -31,8 +31,9 @@ def openr_frame_number(tick: int) -> int:
 
 
 def frame_number_for_image(index: int) -> int:
-    """frameNumber of the index-th image at 30 fps: steps of 4 or 5, 25 per 6 images."""
-    return index * 1000 // (FRAME_RATE_HZ * FRAME_TICK_MS)
+    """frameNumber of the index-th image at 30 fps: the first 8 ms frame at or after index/30 s,
+    where the simulator takes it (steps of 4 or 5, 25 per 6 images)."""
+    return -(-index * 1000 // (FRAME_RATE_HZ * FRAME_TICK_MS))
 
 
 # Camera settings (OPrimitiveControl.h): OPENR::ControlPrimitive(cameraID, request, &value, ...).

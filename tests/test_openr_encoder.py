@@ -306,7 +306,11 @@ def test_haar_analysis_of_any_luma():
 
 
 def test_frame_numbers_count_8ms_ticks():
-    assert [frame_number_for_image(n) for n in range(8)] == [0, 4, 8, 12, 16, 20, 25, 29]
+    # the first 8 ms frame at or after n/30 s, as the runtime delivers images: 0, 5, 9, 13, ...
+    assert [frame_number_for_image(n) for n in range(8)] == [0, 5, 9, 13, 17, 21, 25, 30]
+    for n in range(100):
+        tick = frame_number_for_image(n)
+        assert tick * 8 * 30 >= n * 1000 > (tick - 1) * 8 * 30
     message = encode_frame(np.zeros((160, 208, 3), np.uint8), frame_number=2**32 + 5, field_counter=2**16 + 3)
     assert message.band(H, ofbkimageBAND_Y)[-1, :2].tolist() == [3, 0]
     # OPEN-R's frame numbers wrap to 1 after oframeMAX_NUMBER (0x0ffffff0), never to 0.
