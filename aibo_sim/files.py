@@ -102,13 +102,14 @@ def create_file(temp: Path) -> int:
         return open_file(temp, flags)
 
 
-def write_file_atomic(path: Path, data: bytes, temp: Path | None = None) -> None:
+def write_file_atomic(path: Path, data: bytes, temp: Path | None = None, durable: bool = False) -> None:
     """Write ``path`` whole or not at all: as ``temp`` (default ``.NAME.tmp`` in the same folder,
     a name no pattern of a run's files matches), created anew (never through a link), then
-    renamed (a link at ``path`` is replaced, not followed). An OSError names ``path``
-    (``SymlinkRefused`` the link); no temporary file is left, whatever stops the write (a full
-    disk: "cannot write PATH: No space left on device"; Ctrl-C)."""
-    write_files_atomic({path: data}, {path: temp} if temp else None)
+    renamed (a link at ``path`` is replaced, not followed). An OSError of the same kind names
+    ``path`` (``SymlinkRefused`` the link); no temporary file is left, whatever stops the write (a
+    full disk: "cannot write PATH: No space left on device"; Ctrl-C). ``durable``: on the disk
+    before the rename (``fsync``: a crash leaves the old file or the new, never an empty one)."""
+    write_files_atomic({path: data}, {path: temp} if temp else None, durable)
 
 
 def check_atomic_write(path: Path) -> None:
@@ -124,7 +125,7 @@ def check_atomic_write(path: Path) -> None:
             raise OSError(f"cannot write {path}: {where}{os.strerror(errno.EISDIR)}")
 
 
-def write_files_atomic(files: dict[Path, bytes], temps: dict[Path, Path] | None = None) -> None:
+def write_files_atomic(files: dict[Path, bytes], temps: dict[Path, Path] | None = None, durable: bool = False) -> None:
     """Write several files as one set, each as ``write_file_atomic`` writes one: all of them are
     renamed into place once every one is on disk and no target is a folder, so a write that
     fails (a full disk) leaves the earlier set as it was."""
@@ -136,6 +137,9 @@ def write_files_atomic(files: dict[Path, bytes], temps: dict[Path, Path] | None 
             fd = create_file(temps[path])
             with open(fd, "wb") as file:
                 file.write(data)
+                if durable:
+                    file.flush()
+                    os.fsync(file.fileno())
         for path in files:
             if path.is_dir():  # os.replace would refuse it after renaming the others
                 raise IsADirectoryError(errno.EISDIR, os.strerror(errno.EISDIR), str(path))
@@ -149,7 +153,7 @@ def write_files_atomic(files: dict[Path, bytes], temps: dict[Path, Path] | None 
         if not isinstance(exc, OSError) or isinstance(exc, SymlinkRefused):
             raise
         where = f"{exc.filename}: " if exc.filename not in (None, str(path)) else ""  # the temporary file
-        error = OSError(f"cannot write {path}: {where}{exc.strerror or exc}")
+        error = type(exc)(f"cannot write {path}: {where}{exc.strerror or exc}")  # FileNotFoundError...
         error.errno = exc.errno
         raise error from exc
 
@@ -241,18 +245,13 @@ PNG_END = b"\0\0\0\0IEND\xaeB`\x82"  # a PNG's last chunk: IEND, empty, and its 
 
 
 def decode_image(data, flags: int) -> np.ndarray | None:
-    """``cv2.imdecode`` of ``data`` (bytes or uint8), None when it holds no whole picture, without
-    libpng's or OpenCV's line on stderr (a PNG cut short ends before its IEND chunk): the caller
-    names the file."""
+    """``cv2.imdecode`` of ``data`` (bytes or uint8), None when it holds no picture; a PNG cut
+    short (no IEND chunk) is None without being decoded, where libpng and OpenCV would print a
+    line of their own on stderr: the caller names the file."""
     data = np.frombuffer(data, np.uint8)
-    if not data.size or (data[:8].tobytes() == b"\x89PNG\r\n\x1a\n" and data[-12:].tobytes() != PNG_END):
+    if not data.size or (data[:8].tobytes() == b"\x89PNG\r\n\x1a\n" and PNG_END not in data.tobytes()):
         return None
-    level = cv2.utils.logging.getLogLevel()
-    cv2.utils.logging.setLogLevel(cv2.utils.logging.LOG_LEVEL_SILENT)
-    try:
-        return cv2.imdecode(data, flags)
-    finally:
-        cv2.utils.logging.setLogLevel(level)
+    return cv2.imdecode(data, flags)
 
 
 def png(image: np.ndarray) -> bytes:

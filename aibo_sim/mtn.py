@@ -464,8 +464,8 @@ def serialize_mtn(motion: Motion) -> bytes:
 
 def write_mtn(motion: Motion, path: str | os.PathLike) -> None:
     """Write ``motion`` to ``path`` whole or not at all (``files.write_file_atomic``: the bytes
-    built first, then a temporary file renamed over ``path``, never written through a link)."""
-    write_file_atomic(Path(path), serialize_mtn(motion))
+    built first, then a temporary file, on the disk, renamed over ``path``; never through a link)."""
+    write_file_atomic(Path(path), serialize_mtn(motion), durable=True)
 
 
 # ----------------------------------------------------------------------------- playback

@@ -825,6 +825,19 @@ def test_a_side_by_side_frame_of_no_layers_size_or_grey_is_refused_naming_both(t
     assert not (tmp_path / "out").exists()
 
 
+def test_a_png_with_bytes_after_its_end_is_still_a_picture():
+    """Only a PNG cut short (no IEND chunk) is refused unread: bytes after the end are no cut."""
+    import cv2
+    import numpy as np
+
+    from aibo_sim.files import decode_image
+
+    picture = np.random.default_rng(0).integers(0, 255, (160, 208, 3), np.uint8)
+    encoded = cv2.imencode(".png", picture)[1].tobytes()
+    assert np.array_equal(decode_image(encoded + b"\0" * 16, cv2.IMREAD_COLOR), picture)
+    assert decode_image(encoded[:-1], cv2.IMREAD_COLOR) is None
+
+
 def test_a_cut_side_by_side_frame_is_one_line_without_opencvs(tmp_path, capfd):
     """libpng's or OpenCV's own line on the process's stderr came before aibo-sim's."""
     import cv2

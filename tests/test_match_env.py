@@ -197,6 +197,12 @@ def test_a_randomised_ball_start_is_never_inside_a_robot():
         env.close()
 
 
+def test_a_match_whose_robot_stands_on_the_centre_spot_is_refused_when_made():
+    """The ball starts there: reset drew its start again for ever (ball_start 0 draws the spot)."""
+    with pytest.raises(ValueError, match=r"^the ball on the centre spot would overlap red 1 by \d+\.\d cm"):
+        MatchEnv([RobotSpec("red", 1, (0.05, 0.05, 0.0)), RobotSpec("blue", 1)], camera=None)
+
+
 def test_robots_from_a_team_file_and_bad_arguments(tmp_path):
     path = tmp_path / "robots.toml"
     path.write_text('[[robot]]\nteam = "blue"\nnumber = 2\n\n[[robot]]\nteam = "red"\nnumber = 1\n')

@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import os
 import random
+import re
 import signal
 import struct
 import subprocess
@@ -355,14 +356,22 @@ def test_write_failing_midway_leaves_old_file_and_no_temp(tmp_path, monkeypatch)
     target = tmp_path / "motion.mtn"
     target.write_bytes(b"old")
 
-    def full_disk(source, target):
+    def broken_fsync(fd):
         raise OSError("disk full")
 
-    monkeypatch.setattr(os, "replace", full_disk)
+    monkeypatch.setattr(os, "fsync", broken_fsync)
     with pytest.raises(OSError, match="disk full"):
         write_mtn(tiny_motion(), target)
     assert [p.name for p in tmp_path.iterdir()] == ["motion.mtn"]
     assert target.read_bytes() == b"old"
+
+
+def test_writing_into_a_missing_folder_is_a_file_not_found_error_naming_the_file(tmp_path):
+    target = tmp_path / "missing" / "motion.mtn"
+    with pytest.raises(
+        FileNotFoundError, match=rf"^cannot write {re.escape(str(target))}: .*No such file or directory$"
+    ):
+        write_mtn(tiny_motion(), target)
 
 
 def test_serialize_rejects_out_of_range_values():

@@ -62,6 +62,7 @@ MAX_CYCLES = 900  # steps (camera frames at 30 fps): 30 s of play
 BALL_PROGRESS_REWARD = 10.0  # per metre the ball moves towards the opposing goal, as ReachBall's progress
 FALL_PENALTY = 1.0
 KICKOFF_BALL = (0.0, 0.0)  # the centre spot
+BALL_DRAWS = 100  # randomised ball starts drawn at most (_ball_start)
 ATTACKS = {"red": 1.0, "blue": -1.0}  # the sign of the X axis each team attacks along (field.py: red defends -X)
 # The third-person view of render(): the whole field from above its -Y side line.
 FIELD_VIEW = {"lookat": (0.0, -0.1, 0.0), "distance": 4.9, "azimuth": 90.0, "elevation": -52.0}
@@ -302,6 +303,10 @@ class MatchEnv(pettingzoo.ParallelEnv):
             self.sim.close()
             raise
         self._kickoff = copy.copy(self.sim.data)  # where a ball's start is checked (_ball_overlap)
+        overlap = self._ball_overlap(KICKOFF_BALL) if self.sim.has_ball else None
+        if overlap is not None:  # the ball's start when not randomised, and the randomised one's fallback
+            self.sim.close()
+            raise ValueError(f"the ball on the centre spot would overlap {overlap}: place the robots elsewhere")
         self._closed = False
         self.robots: dict[str, Simulation] = dict(zip(names, self.sim.world.robots))  # every robot, by name
         self.possible_agents = [name for name in names if name not in scripted]
@@ -368,9 +373,7 @@ class MatchEnv(pettingzoo.ParallelEnv):
         self.sim.reset(seed=int(self.np_random.integers(2**63)))
         self._randomize_scene()
         if self.sim.has_ball:
-            while ball is None or self._ball_overlap(ball) is not None:  # a randomised start is drawn again
-                ball = self.ball_start(KICKOFF_BALL)
-            self.sim.place_ball(*ball)
+            self.sim.place_ball(*(self._ball_start() if ball is None else ball))
         mujoco.mj_forward(self.sim.model, self.sim.data)
         self._ball_x = self._ball_progress_x()
         for script in self._scripts.values():
@@ -500,6 +503,15 @@ class MatchEnv(pettingzoo.ParallelEnv):
     # ---------------------------------------------------------------- internals
 
     ball_start = AiboEnv.ball_start  # the ``ball_start`` randomisation about a nominal spot
+
+    def _ball_start(self) -> tuple[float, float]:
+        """The ball's start around the centre spot (``ball_start``), drawn again while it is inside
+        a robot, at most ``BALL_DRAWS`` times; then the centre spot (clear: checked in ``__init__``)."""
+        for _ in range(BALL_DRAWS):
+            ball = self.ball_start(KICKOFF_BALL)
+            if self._ball_overlap(ball) is None:
+                return ball
+        return KICKOFF_BALL
 
     def _ball_overlap(self, ball) -> str | None:
         """What the ball at ``ball`` (x, y) would sink into deeper than ``PLACEMENT_OVERLAP_M``
