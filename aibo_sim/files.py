@@ -152,7 +152,8 @@ def write_files_atomic(files: dict[Path, bytes], temps: dict[Path, Path] | None 
                     temp.unlink()
         if not isinstance(exc, OSError) or isinstance(exc, SymlinkRefused):
             raise
-        where = f"{exc.filename}: " if exc.filename not in (None, str(path)) else ""  # the temporary file
+        in_the_way = exc.filename not in (None, str(path)) and os.path.lexists(exc.filename)
+        where = f"{exc.filename}: " if in_the_way else ""  # the temporary file (a folder there)
         error = type(exc)(f"cannot write {path}: {where}{exc.strerror or exc}")  # FileNotFoundError...
         error.errno = exc.errno
         raise error from exc

@@ -368,9 +368,7 @@ def test_write_failing_midway_leaves_old_file_and_no_temp(tmp_path, monkeypatch)
 
 def test_writing_into_a_missing_folder_is_a_file_not_found_error_naming_the_file(tmp_path):
     target = tmp_path / "missing" / "motion.mtn"
-    with pytest.raises(
-        FileNotFoundError, match=rf"^cannot write {re.escape(str(target))}: .*No such file or directory$"
-    ):
+    with pytest.raises(FileNotFoundError, match=rf"^cannot write {re.escape(str(target))}: No such file or directory$"):
         write_mtn(tiny_motion(), target)
 
 
