@@ -363,6 +363,15 @@ def test_a_crashing_object_is_named_with_the_signal_and_the_time(objects, tmp_pa
         run_stick(stick, 1.0, tmp_path / "out")
 
 
+def test_what_an_objects_constructor_prints_is_stamped_with_its_name(objects, tmp_path, monkeypatch):
+    """The stub names the object once its file is loaded, after its globals were constructed:
+    their output, stamped "system" before, is stamped with the file's name (CRASH.BIN)."""
+    monkeypatch.setenv("CRASH_HOW", "say")
+    stick = make_stick(tmp_path / "ms", objects, ["CRASH"], f"{SENSOR} Crash.Sensor.OSensorFrameVectorData.O\n")
+    result = run_stick(stick, 0.05, tmp_path / "out")
+    assert result.console.splitlines()[0] == "[    0.000 s] CRASH: made"
+
+
 def test_an_object_that_calls_exit_is_named(objects, tmp_path, monkeypatch):
     monkeypatch.setenv("CRASH_HOW", "exit")
     stick = make_stick(tmp_path / "ms", objects, ["CRASH"], f"{SENSOR} Crash.Sensor.OSensorFrameVectorData.O\n")

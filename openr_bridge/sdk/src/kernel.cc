@@ -224,10 +224,10 @@ void SetConsole(int stdoutFd, int logFileFd) {
 }
 
 /* Text an object prints, on the console and in the log at once (a prompt without its newline
- * too, as a terminal shows it), each line stamped with the time and the object's name; a line
- * left open by another object is ended first. */
+ * too, as a terminal shows it), each line stamped with the time and the object's name (its
+ * file's while its globals are constructed); a line left open by another object is ended first. */
 void Print(const char* text) {
-    Object* object = current;
+    Object* object = current != NULL ? current : constructing;
     if (lineOpen && lineObject != object) FlushConsole();
     std::string out;
     for (const char* c = text; *c; c++) {

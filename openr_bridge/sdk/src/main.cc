@@ -143,7 +143,10 @@ std::string LoadObjects(Reader& setup) {
     longword count = setup.U32();
     for (longword i = 0; i < count; i++) {
         std::string path = setup.String(), label = setup.String();
-        Object* object = AddObject(label, NULL, false);
+        std::string file = label.substr(label.rfind('/') + 1);
+        /* the file's name (HELLO for /MS/OPEN-R/MW/OBJS/HELLO.BIN) until the stub names the object:
+         * what its constructors print is stamped with it */
+        Object* object = AddObject(file.substr(0, file.find('.')), NULL, false);
         SetConstructing(object);
         EnterObjectCode(true);
         void* library = dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);
@@ -154,12 +157,7 @@ std::string LoadObjects(Reader& setup) {
         if (table == NULL) Fail(label + ": no ObjectEntryTable (is it an OPEN-R object built by stubgen2 and mkbin?)");
         for (; table->selector != UNDEF; table++) object->entries[table->selector] = table->entry;
         const char* name = (const char*)dlsym(library, "aibo_openr_object_name");
-        if (name != NULL) {
-            object->name = name;
-        } else {  /* a stub not made by our stubgen2: the file's name, as HELLO for /MS/OPEN-R/MW/OBJS/HELLO.BIN */
-            std::string file = label.substr(label.rfind('/') + 1);
-            object->name = file.substr(0, file.find('.'));
-        }
+        if (name != NULL) object->name = name;  /* else a stub not made by our stubgen2: the file's name */
     }
     Boot(oreasonBOOT, oentryINIT, Objects());
     const std::vector<Object*> programs = ObjectsOf(false);

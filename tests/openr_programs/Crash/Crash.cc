@@ -9,6 +9,10 @@ static bool How(const char* how) {
     return chosen != 0 && strcmp(chosen, how) == 0;
 }
 
+Crash::Crash() : vectors(0) {
+    if (How("say")) OSYSPRINT(("made\n"));
+}
+
 OStatus Crash::DoInit(const OSystemEvent&) {
     for (volatile int i = 0; How("init"); i++) {
     }

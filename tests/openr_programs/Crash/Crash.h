@@ -1,6 +1,6 @@
 // Crash: writes through a null pointer on its third sensor vector (aibo-sim's runtime tests); with
 // CRASH_HOW=exit in the environment it calls exit(3) there instead, with CRASH_HOW=init it never
-// returns from DoInit.
+// returns from DoInit, with CRASH_HOW=say its constructor prints "made".
 #ifndef Crash_h_DEFINED
 #define Crash_h_DEFINED
 
@@ -11,7 +11,7 @@
 
 class Crash : public OObject {
 public:
-    Crash() : vectors(0) {}
+    Crash();
     OSubject*  subject[numOfSubject];
     OObserver* observer[numOfObserver];
     virtual OStatus DoInit(const OSystemEvent& event);
