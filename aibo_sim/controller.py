@@ -91,13 +91,9 @@ def install(robot: Robot | None, match: bool = False) -> None:
         _match.pop(threading.get_ident(), None)
 
 
-def _state() -> _Installed:
-    return _match.get(threading.get_ident(), _installed) if _match else _installed
-
-
 def installed() -> _Installed:
     """What ``install`` gave this thread (the runner reads its ``last_call_s`` from another)."""
-    return _state()
+    return _match.get(threading.get_ident(), _installed) if _match else _installed
 
 
 def current_robot() -> Robot:
@@ -105,7 +101,7 @@ def current_robot() -> Robot:
 
     :raises RuntimeError: no robot installed (the controller was not started by ``aibo-sim run``).
     """
-    state = _state()
+    state = installed()
     robot = state.robot
     if robot is None:
         if _match:
@@ -121,7 +117,7 @@ def current_robot() -> Robot:
 def _rendering(function: str) -> Robot:
     """The robot, for a call that may render the camera: DeviceError from any thread but the
     controller's (an OpenGL context is current in one thread; another's call would break it)."""
-    robot, thread, own = current_robot(), threading.current_thread(), _state().thread
+    robot, thread, own = current_robot(), threading.current_thread(), installed().thread
     if thread is not own:
         raise DeviceError(
             f"{function} called from thread {thread.name!r}: the camera renders in the thread that "
@@ -131,7 +127,7 @@ def _rendering(function: str) -> Robot:
 
 
 def _device(tag, kind: type) -> Device:
-    state = _state()
+    state = installed()
     state.last_call_s = time.monotonic()
     tags = state.tags
     if not isinstance(tag, (int, np.integer)) or not 0 < tag <= len(tags):
@@ -150,7 +146,7 @@ def robot_live(reset_fn=None) -> None:
     if reset_fn is not None and not callable(reset_fn):
         raise TypeError(f"robot_live({short_repr(reset_fn)}): the reset function must be callable (or None)")
     current_robot()
-    _state().reset_fn = reset_fn
+    installed().reset_fn = reset_fn
     if reset_fn is not None:
         reset_fn()
 
@@ -160,7 +156,7 @@ def robot_die(exit_fn) -> None:
     it called ``sys.exit`` or it was interrupted)."""
     if not callable(exit_fn):
         raise TypeError(f"robot_die({short_repr(exit_fn)}): the exit function must be callable")
-    _state().die_fns.append(exit_fn)
+    installed().die_fns.append(exit_fn)
 
 
 def call_die_functions() -> list[tuple[object, BaseException]]:
@@ -169,7 +165,7 @@ def call_die_functions() -> list[tuple[object, BaseException]]:
     controller's own exception rather than instead of it). ``SimulationEnd`` (an exit function
     that steps past the run's end) and ``sys.exit(0)`` are not errors; KeyboardInterrupt
     propagates."""
-    state = _state()
+    state = installed()
     functions, failures = list(state.die_fns), []
     state.die_fns.clear()
     for fn in functions:
@@ -216,7 +212,7 @@ def robot_get_device(name: str) -> int:
 
     :raises DeviceError: no such device; the message names the nearest locators.
     """
-    device, tags = current_robot().get_device(name), _state().tags
+    device, tags = current_robot().get_device(name), installed().tags
     if device not in tags:
         tags.append(device)
     return tags.index(device) + 1

@@ -102,6 +102,11 @@ def create_file(temp: Path) -> int:
         return open_file(temp, flags)
 
 
+def temporary_path(path: Path) -> Path:
+    """Where ``write_file_atomic`` writes ``path`` first, by default: ``.NAME.tmp`` beside it."""
+    return path.with_name(f".{path.name}.tmp")
+
+
 def write_file_atomic(path: Path, data: bytes, temp: Path | None = None, durable: bool = False) -> None:
     """Write ``path`` whole or not at all: as ``temp`` (default ``.NAME.tmp`` in the same folder,
     a name no pattern of a run's files matches), created anew (never through a link), then
@@ -116,7 +121,7 @@ def check_atomic_write(path: Path) -> None:
     """Raise, before anything is written, the OSError that ``write_file_atomic(path)`` would for
     what lies in its way: a link at its temporary file (``SymlinkRefused``), a folder there or at
     ``path`` (a run checks its folder so, that one refused is left as it was)."""
-    temp = path.with_name(f".{path.name}.tmp")
+    temp = temporary_path(path)
     if temp.is_symlink():
         raise SymlinkRefused.at(temp)
     for folder in (temp, path):
@@ -129,7 +134,7 @@ def write_files_atomic(files: dict[Path, bytes], temps: dict[Path, Path] | None 
     """Write several files as one set, each as ``write_file_atomic`` writes one: all of them are
     renamed into place once every one is on disk and no target is a folder, so a write that
     fails (a full disk) leaves the earlier set as it was."""
-    temps = {path: (temps or {}).get(path) or path.with_name(f".{path.name}.tmp") for path in files}
+    temps = {path: (temps or {}).get(path) or temporary_path(path) for path in files}
     path, created = None, []
     try:
         for path, data in files.items():
