@@ -253,7 +253,7 @@ def _motion_file(name: str) -> Path:
 def _read_motion(name: str):
     """The motion ``name`` names: an MTN file, a bundled motion's name, or ``ARCHIVE.ODA:MOTION``,
     a motion in one of Sony's ODA archives (an archive alone: an error listing its motions)."""
-    from .mtn import ODA_MAGIC, MtnError, read_mtn, read_oda_motion
+    from .mtn import MAGIC, ODA_MAGIC, MtnError, read_mtn, read_oda_motion
     from .sim import models_dir
 
     path = _motion_file(name)
@@ -267,12 +267,17 @@ def _read_motion(name: str):
         raise FileNotFoundError(f"{name}: no such motion file, nor a bundled motion ({bundled})")
     try:
         return read_mtn(path)
-    except MtnError:
-        if path.is_file():
-            with path.open("rb") as file:
-                if file.read(4) == ODA_MAGIC:
-                    return read_oda_motion(path, None)  # raises, naming the archive's motions
-        raise
+    except MtnError as error:
+        if error.offset != 0 or not path.is_file():
+            raise
+        with path.open("rb") as file:
+            magic = file.read(4)
+        if magic == ODA_MAGIC:
+            return read_oda_motion(path, None)  # raises, naming the archive's motions
+        if len(magic) < len(MAGIC):
+            raise
+        why = f"wrong magic {magic!r}: neither an MTN motion ({MAGIC!r}) nor an ODA archive ({ODA_MAGIC!r})"
+        raise MtnError(error.source, 0, why) from None
 
 
 def _mtn_info(args) -> int:

@@ -674,6 +674,13 @@ def test_mtn_info_and_play_take_archive_colon_motion(tmp_path, capsys):
     assert json.loads(capsys.readouterr().out)["name"] == tiny_motion().name
     assert main(["mtn", "info", str(archive)]) == 2
     assert "an ODA archive: name one of its motions" in capsys.readouterr().err
+    other = tmp_path / "SYSMTN.ODA"  # as Sony's system archives, enciphered: no magic of either
+    other.write_bytes(b"\x9f\x8c\xda\xc8" + TINY[4:])
+    assert main(["mtn", "play", str(other)]) == 2
+    assert capsys.readouterr().err.endswith(
+        "byte 0 (0x0): wrong magic b'\\x9f\\x8c\\xda\\xc8': "
+        "neither an MTN motion (b'OMTN') nor an ODA archive (b'ODAR')\n"
+    )
 
 
 def test_sonys_ers7_motions_in_monets_archive_all_read_and_play():
