@@ -388,6 +388,8 @@ def test_workers_write_shards_with_their_own_seeds(tmp_path):
     assert len(frames) == 5 and [f.meta["index"] for f in frames] == [0, 1, 2, 0, 1]
     assert [f.folder.name for f in frames] == ["shard_0"] * 3 + ["shard_1"] * 2
     assert not np.array_equal(frames[0].rgb, frames[3].rgb)  # the balls lie elsewhere
+    lens = json.loads((out / "shard_1" / "meta.json").read_text())["camera"]
+    assert frames[4].camera == lens and lens["width"] == 208 and lens["fx"] > 0  # the top meta.json has none
 
 
 def test_command_line_env_dump(tmp_path):

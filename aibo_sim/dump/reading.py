@@ -166,6 +166,11 @@ class DumpFrame:
         self.folder, self.meta, self._dump_meta = folder, meta, dump_meta
         self.width, self.height = dump_meta["camera"]["width"], dump_meta["camera"]["height"]
 
+    @property
+    def camera(self) -> dict:
+        """The lens of this frame's picture: its dump's (or shard's) ``meta.json`` ``"camera"``."""
+        return self._dump_meta["camera"]
+
     def path(self, name: str, layer: str = "") -> Path:
         """The file of format ``name`` (a layer's, for ``bands``) of this frame.
 
