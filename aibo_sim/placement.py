@@ -12,9 +12,11 @@ import math
 import os
 from pathlib import Path
 
+import mujoco
+
 from .config import CameraConfig, ParameterError
 from .field import DEFAULT_BALL_TYPE
-from .sim import ModelError, Simulation
+from .sim import ModelError, Simulation, ball_joint
 from .team import off_the_carpet
 
 PLACEMENT_OVERLAP_M = 0.005  # a placed robot or ball sunk deeper than this into something is an error
@@ -58,9 +60,38 @@ def _given(values) -> str:
     return " ".join(f"{v:g}" for v in values)
 
 
+def ball_off_the_field(sim, ball) -> str | None:
+    """``off the carpet (|x| <= 3 m) of the default field`` where the ball at ``ball`` (x, y) would
+    lie beyond the default field's walls; None inside them, and anywhere in a scene of one's own."""
+    problem = off_the_carpet(*ball) if sim.scene is None else None
+    return None if problem is None else f"{problem} of the default field"
+
+
+def ball_start_problem(sim, ball, data: mujoco.MjData) -> str | None:
+    """Why the ball cannot start at ``ball`` (x, y) with everything else as in ``data`` (a copy: the
+    ball is moved in it): ``lies off the carpet ...`` (``ball_off_the_field``), or ``would overlap
+    blue 4 by 3.6 cm`` where it sinks deeper than ``PLACEMENT_OVERLAP_M`` into something, as run
+    refuses them; None where it can."""
+    off = ball_off_the_field(sim, ball)
+    if off is not None:
+        return f"lies {off}"
+    model = sim.model
+    start = model.jnt_qposadr[ball_joint(model)]
+    data.qpos[start : start + 3] = (*ball, model.geom("ball").size[0])
+    mujoco.mj_fwdPosition(model, data)
+    for first, second, depth in sim.overlaps(PLACEMENT_OVERLAP_M, data):
+        if "the ball" in (first, second):
+            return f"would overlap {second if first == 'the ball' else first} by {depth * 100:.1f} cm"
+    return None
+
+
 def _place_ball(sim, ball: tuple[float, float] | None) -> None:
-    """The ball at ``ball`` when given; a ``ParameterError`` naming ``ball`` where it cannot go."""
+    """The ball at ``ball`` when given; a ``ParameterError`` naming ``ball`` where it cannot go
+    (off the default field, or in a scene without a ball)."""
     if ball is not None:
+        off = ball_off_the_field(sim, ball)
+        if off is not None:
+            raise ParameterError.at("ball", _given(ball), off)
         try:
             sim.place_ball(*ball)
         except ModelError as exc:

@@ -312,6 +312,7 @@ PLACED = [
         (["--pose", "3", "0", "0"], r"--pose 3 0 0: the robot would overlap wall_skyblue by \d+\.\d cm"),
         (["--ball", "-0.12", "0.06"], r"--ball -0.12 0.06: the ball would overlap the robot by \d+\.\d cm"),
         (["--pose", "50", "0", "0"], r"--pose 50 0 0: off the carpet \(\|x\| <= 3 m\) of the default field"),
+        (["--ball", "0", "2.5"], r"--ball 0 2.5: off the carpet \(\|y\| <= 2 m\) of the default field"),
     ],
 )
 def test_a_robot_or_ball_placed_into_something_exits_2_naming_the_option(tmp_path, command, placement, message, capsys):

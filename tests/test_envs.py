@@ -375,3 +375,30 @@ def test_reach_ball_never_starts_reached_nor_with_the_ball_under_the_robot():
         env.close()
     assert min(distances) >= 0.3 - 0.01  # START_CLEARANCE, as the robot's stance settles
     assert min(distances) < 0.4  # near ones are kept
+
+
+def test_reach_ball_never_starts_in_a_wall_nor_beyond_the_walls():
+    """Spread over +-3 m, the ball started inside a wall (flung out at 1.4 m/s at the first step)
+    or behind one, out of reach: drawn again, as run refuses such a --ball."""
+    env = gym.make(REACH, randomize={"ball_start": 3.0}, camera=None)
+    try:
+        sim = env.unwrapped.sim
+        for seed in range(30):
+            env.reset(seed=seed)
+            assert not [pair for pair in sim.overlaps(0.001) if "the ball" in pair[:2]], seed
+            x, y, _ = sim.ball_position()
+            assert abs(x) <= 3.0 and abs(y) <= 2.0, seed
+    finally:
+        env.close()
+
+
+def test_head_track_ball_rolls_on_the_ground_of_the_scene_it_is_given():
+    """The webots scene's ball is 3.5 cm: it was held 7 mm above the carpet (the field's 4.2 cm)."""
+    env = gym.make(HEAD_TRACK, camera=None, scene=str(ROOT / "models" / "scene_webots.xml"))
+    try:
+        env.reset(seed=0)
+        env.step(env.action_space.sample())
+        radius = env.unwrapped.sim.model.geom("ball").size[0]
+        assert radius == 0.035 and abs(env.unwrapped.sim.ball_position()[2] - radius) < 0.0005  # on the carpet
+    finally:
+        env.close()

@@ -179,6 +179,8 @@ def test_a_refused_step_or_reset_changes_nothing():
         x, y = blue.data.xpos[blue.model.body(blue.prefix + "lf_j3").id][:2]
         with pytest.raises(ValueError, match=rf"the ball at {x:g}, {y:g} would overlap blue 4 by \d+\.\d cm$"):
             env.reset(options={"ball": (x, y)})
+        with pytest.raises(ValueError, match=r"the ball at 3.5, 0 lies off the carpet \(\|x\| <= 3 m\) of the default"):
+            env.reset(options={"ball": (3.5, 0.0)})  # behind the goal's wall
         assert np.array_equal(env.sim.data.qpos, qpos) and env.sim.time_ms == time_ms
     finally:
         env.close()

@@ -11,6 +11,7 @@ and settings, domain randomisation, rendering). The tasks are its subclasses:
 
 from __future__ import annotations
 
+import copy
 import math
 import numbers
 from collections.abc import Mapping
@@ -25,6 +26,7 @@ from ..camera import CameraSettings, RobotColour
 from ..camera.backends import OpenRCamera
 from ..config import CameraConfig
 from ..ers7 import DISTANCE_SENSORS, JOINT_INDEX, JOINTS, LEGS, TOUCH_SENSORS
+from ..placement import ball_start_problem
 from ..render import Renderer
 from ..sim import ACCEL_RANGE, MAX_PLACEMENT, Simulation, release_freed_memory
 
@@ -32,6 +34,7 @@ CAMERA_MODES = ("rgb", "ycrcb", "openr", None)
 LAYERS = {name: layer for layer, name in enumerate(openr_bridge.LAYER_NAMES[:3])}  # the YCrCb layers H, M, L
 YCRCB_BANDS = (openr_bridge.ofbkimageBAND_Y, openr_bridge.ofbkimageBAND_Cr, openr_bridge.ofbkimageBAND_Cb)
 RANDOMIZATIONS = ("lighting", "ball_start", "camera_robot")
+BALL_DRAWS = 100  # randomised ball starts drawn at most (drawn_ball_start)
 RENDER_SIZE = (480, 360)  # third-person view, width x height
 HEAD_JOINTS = ("neck_tilt", "head_pan", "head_tilt")
 LEG_JOINTS = tuple(j.name for j in JOINTS if j.name.split("_")[0] in LEGS)
@@ -352,6 +355,22 @@ class AiboEnv(gym.Env):
         """The ball's start on the ground: ``nominal_xy`` moved by the ``ball_start`` randomisation."""
         reach = self.randomize.get("ball_start", 0.0)
         return np.asarray(nominal_xy, dtype=np.float64) + self.np_random.uniform(-reach, reach, 2)
+
+    def drawn_ball_start(self, nominal_xy, refuse=lambda ball: False, state: mujoco.MjData | None = None) -> np.ndarray:
+        """``ball_start`` about ``nominal_xy``, drawn again while the ball would lie off the default
+        field or sink into something with everything else as in ``state`` (changed here; default a
+        copy of the live state), as run refuses a ball (``placement.ball_start_problem``), or while
+        ``refuse(ball)``; at most ``BALL_DRAWS`` times, then ``nominal_xy``. Not randomised:
+        ``nominal_xy`` unchecked (drawn all the same, so the random stream stays one draw a reset)."""
+        nominal_xy = np.asarray(nominal_xy, dtype=np.float64)
+        if not self.randomize.get("ball_start"):
+            return self.ball_start(nominal_xy)
+        state = copy.copy(self.sim.data) if state is None else state
+        for _ in range(BALL_DRAWS):
+            ball = self.ball_start(nominal_xy)
+            if not refuse(ball) and ball_start_problem(self.sim, ball, state) is None:
+                return ball
+        return nominal_xy
 
     def image_position(self, point) -> tuple[np.ndarray, bool]:
         """Where a world point lies in the head camera's current frame, by projection through

@@ -10,7 +10,6 @@ import math
 
 import numpy as np
 
-from ..field import BALL_RADIUS
 from .base import HEAD_JOINTS, AiboEnv
 
 BALL_START = (0.9, 0.0)  # metres ahead of the robot, on the ground
@@ -97,6 +96,7 @@ class HeadTrackBallEnv(AiboEnv):
     def __init__(self, **options):
         super().__init__(**options)
         self._ball_qpos, self._ball_qvel = self.sim.ball_state()  # views into MjData
+        self._ball_radius = float(self.sim.model.geom("ball").size[0])  # the scene's ball, on the ground
 
     def _reset_task(self) -> None:
         rng = self.np_random
@@ -116,7 +116,7 @@ class HeadTrackBallEnv(AiboEnv):
         )
         if x < NEAREST_X:
             x, vx = NEAREST_X, 0.0
-        self._ball_qpos[:] = (x, y, BALL_RADIUS, 1.0, 0.0, 0.0, 0.0)
+        self._ball_qpos[:] = (x, y, self._ball_radius, 1.0, 0.0, 0.0, 0.0)
         self._ball_qvel[:] = (vx, vy, 0.0, 0.0, 0.0, 0.0)
 
     def _ball_in_image(self) -> tuple[np.ndarray, bool]:

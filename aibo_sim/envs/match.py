@@ -44,14 +44,13 @@ from ..config import CameraConfig
 from ..ers7 import DISTANCE_SENSORS, JOINT_INDEX, JOINTS, TOUCH_SENSORS, joint_indices
 from ..motions import BLEND_MS
 from ..mtn import MotionPlayer, read_mtn
-from ..placement import PLACEMENT_OVERLAP_M, place_match
+from ..placement import ball_start_problem, place_match
 from ..render import Renderer
 from ..robot import short_repr
 from ..sim import (
     ACCEL_RANGE,
     FRAME_MS,
     Simulation,
-    ball_joint,
     models_dir,
     placement_values,
 )
@@ -62,7 +61,6 @@ MAX_CYCLES = 900  # steps (camera frames at 30 fps): 30 s of play
 BALL_PROGRESS_REWARD = 10.0  # per metre the ball moves towards the opposing goal, as ReachBall's progress
 FALL_PENALTY = 1.0
 KICKOFF_BALL = (0.0, 0.0)  # the centre spot
-BALL_DRAWS = 100  # randomised ball starts drawn at most (_ball_start)
 ATTACKS = {"red": 1.0, "blue": -1.0}  # the sign of the X axis each team attacks along (field.py: red defends -X)
 # The third-person view of render(): the whole field from above its -Y side line.
 FIELD_VIEW = {"lookat": (0.0, -0.1, 0.0), "distance": 4.9, "azimuth": 90.0, "elevation": -52.0}
@@ -196,8 +194,9 @@ class MatchEnv(pettingzoo.ParallelEnv):
     ``reset`` puts every robot in the keyframe ``stand``'s posture at its pose (``robots``'
     poses; the kickoff poses by default), its servo targets the keyframe's, and the ball at
     rest on the centre spot (``KICKOFF_BALL``), moved by up to r m in each horizontal
-    direction with ``randomize={"ball_start": r}``; ``reset(options={"ball": (x, y)})`` puts it
-    at (x, y) instead. The same seed gives the same match, bit for bit.
+    direction with ``randomize={"ball_start": r}`` (drawn again where ``run`` would refuse that
+    ball: ``placement.ball_start_problem``); ``reset(options={"ball": (x, y)})`` puts it at
+    (x, y) instead. The same seed gives the same match, bit for bit.
 
     ## Episode End
 
@@ -302,11 +301,11 @@ class MatchEnv(pettingzoo.ParallelEnv):
         except BaseException:
             self.sim.close()
             raise
-        self._kickoff = copy.copy(self.sim.data)  # where a ball's start is checked (_ball_overlap)
-        overlap = self._ball_overlap(KICKOFF_BALL) if self.sim.has_ball else None
+        self._kickoff = copy.copy(self.sim.data)  # where a ball's start is checked (ball_start_problem)
+        overlap = ball_start_problem(self.sim, KICKOFF_BALL, self._kickoff) if self.sim.has_ball else None
         if overlap is not None:  # the ball's start when not randomised, and the randomised one's fallback
             self.sim.close()
-            raise ValueError(f"the ball on the centre spot would overlap {overlap}: place the robots elsewhere")
+            raise ValueError(f"the ball on the centre spot {overlap}: place the robots elsewhere")
         self._closed = False
         self.robots: dict[str, Simulation] = dict(zip(names, self.sim.world.robots))  # every robot, by name
         self.possible_agents = [name for name in names if name not in scripted]
@@ -365,15 +364,15 @@ class MatchEnv(pettingzoo.ParallelEnv):
             if isinstance(ball, (str, bytes)) or not hasattr(ball, "__len__") or len(ball) != 2:
                 raise ValueError(f"{what}: want two numbers (m), not {ball!r}")
             ball = placement_values(what, x=ball[0], y=ball[1])
-            overlap = self._ball_overlap(ball) if self.sim.has_ball else None
-            if overlap is not None:
-                raise ValueError(f"{what}: the ball at {ball[0]:g}, {ball[1]:g} would overlap {overlap}")
+            problem = ball_start_problem(self.sim, ball, self._kickoff) if self.sim.has_ball else None
+            if problem is not None:
+                raise ValueError(f"{what}: the ball at {ball[0]:g}, {ball[1]:g} {problem}")
         if seed is not None or self.np_random is None:
             self.np_random, self.np_random_seed = seeding.np_random(seed)
         self.sim.reset(seed=int(self.np_random.integers(2**63)))
         self._randomize_scene()
         if self.sim.has_ball:
-            self.sim.place_ball(*(self._ball_start() if ball is None else ball))
+            self.sim.place_ball(*(self.drawn_ball_start(KICKOFF_BALL, state=self._kickoff) if ball is None else ball))
         mujoco.mj_forward(self.sim.model, self.sim.data)
         self._ball_x = self._ball_progress_x()
         for script in self._scripts.values():
@@ -503,28 +502,7 @@ class MatchEnv(pettingzoo.ParallelEnv):
     # ---------------------------------------------------------------- internals
 
     ball_start = AiboEnv.ball_start  # the ``ball_start`` randomisation about a nominal spot
-
-    def _ball_start(self) -> tuple[float, float]:
-        """The ball's start around the centre spot (``ball_start``), drawn again while it is inside
-        a robot, at most ``BALL_DRAWS`` times; then the centre spot (clear: checked in ``__init__``)."""
-        for _ in range(BALL_DRAWS):
-            ball = self.ball_start(KICKOFF_BALL)
-            if self._ball_overlap(ball) is None:
-                return ball
-        return KICKOFF_BALL
-
-    def _ball_overlap(self, ball) -> str | None:
-        """What the ball at ``ball`` (x, y) would sink into deeper than ``PLACEMENT_OVERLAP_M``
-        at the kickoff ("blue 4 by 3.6 cm"), as run and dump refuse it; None for nothing. Found
-        in a copy of the kickoff's state: the live one is left as it is."""
-        model, kickoff = self.sim.model, self._kickoff
-        start = model.jnt_qposadr[ball_joint(model)]
-        kickoff.qpos[start : start + 3] = (*ball, model.geom("ball").size[0])
-        mujoco.mj_fwdPosition(model, kickoff)
-        for first, second, depth in self.sim.overlaps(PLACEMENT_OVERLAP_M, kickoff):
-            if "the ball" in (first, second):
-                return f"{second if first == 'the ball' else first} by {depth * 100:.1f} cm"
-        return None
+    drawn_ball_start = AiboEnv.drawn_ball_start  # ... drawn again where the ball cannot start
 
     def _randomize_scene(self) -> None:
         AiboEnv._randomize_scene(self)  # the lights, and robot 1's camera colour deviation

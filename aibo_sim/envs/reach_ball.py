@@ -81,8 +81,10 @@ class ReachBallEnv(AiboEnv):
 
     ``AiboEnv``'s (standing on the centre spot facing +X); the ball at rest at (0.8, 0) m
     (``BALL_START``), moved by up to r m in each horizontal direction with
-    ``randomize={"ball_start": r}`` (drawn again while it falls within 0.3 m of the robot's centre,
-    ``START_CLEARANCE``: an episode never starts reached, nor with the ball under the robot).
+    ``randomize={"ball_start": r}``, drawn again while it falls within 0.3 m of the robot's centre
+    (``START_CLEARANCE``: an episode never starts reached, nor with the ball under the robot), off
+    the default field's carpet or inside something (a wall, a goal), at most 100 times
+    (``BALL_DRAWS``), then at (0.8, 0).
 
     ## Episode End
 
@@ -106,10 +108,11 @@ class ReachBallEnv(AiboEnv):
 
     def _reset_task(self) -> None:
         body, _, _ = self.sim.body_pose()
-        start = self.ball_start(BALL_START)
-        while np.linalg.norm(start - body[:2]) < START_CLEARANCE:
-            start = self.ball_start(BALL_START)
-        self.sim.place_ball(*start)
+
+        def near(ball) -> bool:  # the episode would start reached, or with the ball under the robot
+            return np.linalg.norm(ball - body[:2]) < START_CLEARANCE
+
+        self.sim.place_ball(*self.drawn_ball_start(BALL_START, near))
         self._distance = self._ball_distance()
 
     def _ball_distance(self) -> float:
