@@ -285,6 +285,41 @@ def test_what_a_c_controller_printed_before_an_api_error_is_not_lost(tmp_path, c
     assert "before the error\n" in capfd.readouterr().out
 
 
+def test_console_printf_prints_in_order_with_printf_whole_and_byte_for_byte(tmp_path, capfdbinary):
+    """robot_console_printf went through the simulator, which printed it after the controller's
+    next printf (B0 A0 ...), cut at 4095 bytes and with other bytes than UTF-8 replaced."""
+    body = "int main(void) {\n  static char long_text[6001];\n  memset(long_text, 'x', 6000);\n"
+    body += '  for (int n = 0; n < 3; n++) { robot_console_printf("A%d\\n", n); printf("B%d\\n", n); robot_step(8); }\n'
+    body += '  robot_console_printf("%s|END caf\\xe9\\n", long_text);\n  return 0;\n}\n'
+    run_controller(c_file(tmp_path, "order.c", "#include <string.h>\n" + body), duration=1)
+    assert capfdbinary.readouterr().out == b"A0\nB0\nA1\nB1\nA2\nB2\n" + b"x" * 6000 + b"|END caf\xe9\n"
+
+
+def test_what_a_c_controller_printed_before_it_crashed_is_not_lost(tmp_path, capfd):
+    """Its standard output into a file was flushed at its calls only: the line before a crash was lost."""
+    body = 'int main(void) {\n  robot_step(8);\n  printf("about to crash\\n");\n  *(volatile int *)0 = 1;\n}\n'
+    with pytest.raises(ControllerFailed, match="SIGSEGV"):
+        run_controller(c_file(tmp_path, "crash.c", body), duration=1)
+    assert capfd.readouterr().out == "about to crash\n"
+
+
+def test_the_bindings_own_failures_are_named_not_taken_for_the_controllers_exit(tmp_path):
+    """A call from a second thread mixed its messages with the first's (wrong answers, the run 'ok'); a
+    call too large ended with 'exited with exit(70)', a status the controller never gave."""
+    thread = "#include <pthread.h>\nstatic void *other(void *unused) { (void)unused; robot_get_name(); return 0; }\n"
+    thread += "int main(void) {\n  pthread_t t;\n  robot_step(8);\n  pthread_create(&t, 0, other, 0);\n"
+    thread += "  pthread_join(t, 0);\n  robot_step(8);\n  return 0;\n}\n"
+    big = "#include <string.h>\nint main(void) {\n  static char name[70000];\n  memset(name, 'a', sizeof name - 1);\n"
+    big += "  mtn_new(name);\n  return 0;\n}\n"
+    for name, body, message in (
+        ("thread.c", thread, "robot_get_name called from a second thread: a C controller makes its calls from one"),
+        ("big.c", "#include <device/mtn.h>\n" + big, "mtn_new: its arguments exceed 65536 bytes"),
+    ):
+        with pytest.raises(ControllerFailed, match=message) as failed:
+            run_controller(c_file(tmp_path, name, body), duration=1)
+        assert "exit(" not in str(failed.value)
+
+
 @pytest.mark.slow
 def test_a_controller_that_computes_long_is_announced_as_such(tmp_path, monkeypatch, capsys):
     monkeypatch.setattr(cbind.serve, "WAIT_NOTICE_S", 0.2)
@@ -361,9 +396,10 @@ def test_ctrl_c_runs_the_c_robot_die_functions_then_exits_130(tmp_path):
     source = c_file(
         tmp_path,
         "loop.c",
-        'static void bye(void) {\n  FILE *f = fopen("die.txt", "w");\n'
-        '  fprintf(f, "%d\\n", robot_step(8));\n  fclose(f);\n}\n'
-        'int main(void) {\n  robot_live(0); robot_die(bye);\n  fclose(fopen("started.txt", "w"));\n'
+        'static void bye(void) {\n  FILE *f = fopen("die.txt", "w");\n  fputs("bye\\n", f);\n  fclose(f);\n'
+        "  for (;;) robot_step(8);\n}\n"
+        'static void then(void) { fclose(fopen("then.txt", "w")); }\n'
+        'int main(void) {\n  robot_live(0); robot_die(bye); robot_die(then);\n  fclose(fopen("started.txt", "w"));\n'
         "  for (;;) robot_step(8);\n}\n",
     )
     out = tmp_path / "out"
@@ -378,7 +414,9 @@ def test_ctrl_c_runs_the_c_robot_die_functions_then_exits_130(tmp_path):
     time.sleep(0.3)
     run.send_signal(signal.SIGINT)
     assert run.communicate(timeout=60)[1].endswith("aibo-sim: interrupted\n") and run.returncode == 130
-    assert (out / "die.txt").read_text() == "0\n"  # its robot_step past the end returned, as in Python
+    # its robot_step past the end ended it, as Python's SimulationEnd does (it stepped on, for ever,
+    # answered "end" without simulating), and the next one ran
+    assert (out / "die.txt").read_text() == "bye\n" and (out / "then.txt").exists()
 
 
 @pytest.mark.slow
@@ -392,8 +430,8 @@ def test_a_signal_right_after_a_call_is_read_loses_no_call(tmp_path, signal_name
     source = c_file(
         tmp_path,
         "loop.c",
-        'static void bye(void) {\n  FILE *f = fopen("die.txt", "w");\n'
-        '  fprintf(f, "%d\\n", robot_step(8));\n  fclose(f);\n}\n'
+        'static void bye(void) {\n  FILE *f = fopen("die.txt", "w");\n  fputs("bye\\n", f);\n  fclose(f);\n'
+        "  robot_step(8);\n  abort();\n}\n"  # not reached: the step past the end ends the function
         "int main(void) {\n  robot_live(0); robot_die(bye);\n  for (;;) robot_step(8);\n}\n",
     )
     out = tmp_path / "out"
@@ -412,7 +450,7 @@ def test_a_signal_right_after_a_call_is_read_loses_no_call(tmp_path, signal_name
     )
     run = subprocess.run([sys.executable, "-c", script], cwd=ROOT, capture_output=True, text=True, timeout=120)
     assert run.returncode == status, run.stderr
-    assert (out / "die.txt").read_text() == "0\n"
+    assert (out / "die.txt").read_text() == "bye\n"
 
 
 def test_the_wheel_ships_the_headers_and_the_binding():

@@ -239,6 +239,20 @@ def test_resume_refuses_a_changed_controller_file(tmp_path):
     assert _snapshot(out, lock=False) == before
 
 
+@pytest.mark.skipif(not shutil.which("cc"), reason="needs cc")
+def test_resume_refuses_a_c_controller_whose_own_header_changed(tmp_path, monkeypatch):
+    """Only the sources were hashed: a changed ball_vision.h resumed with the changed controller."""
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))
+    controller, out = tmp_path / "tracker", tmp_path / "dump"
+    shutil.copytree(ROOT / "controllers" / "ball_tracker_c", controller)
+    (controller / "ball_tracker_c.c").rename(controller / "tracker.c")
+    dump(out, controller=controller, frames=2, formats=("rgb",))
+    header = controller / "ball_vision.h"
+    header.write_text(header.read_text() + "\n#define CHANGED 1\n")
+    with pytest.raises(DumpError, match=r"cannot resume, the controller .* changed"):
+        dump(out, controller=controller, frames=2, formats=("rgb",), resume=True)
+
+
 # ---------------------------------------------------------------- folders that are not a dump
 
 

@@ -27,7 +27,7 @@ INCLUDE = PACKAGE / "include"
 LIBRARY = PACKAGE / "libaibo.c"
 # -ffp-contract=off: no fused multiply-add, so that a controller's double arithmetic rounds as
 # the source (and Python) says, on every machine.
-FLAGS = ("-O2", "-ffp-contract=off")
+FLAGS = ("-O2", "-ffp-contract=off", "-pthread")
 QUOTED_INCLUDE = re.compile(rb'^[ \t]*#[ \t]*include[ \t]*"([^"\n]+)"', re.MULTILINE)
 INSTALL_HINT = {
     "cc": "a C compiler (Debian/Ubuntu: apt-get install gcc)",
@@ -146,7 +146,14 @@ def compile_controller(path: str | os.PathLike) -> Path:
                 source,
                 "compiling",
             )
-        command = [compilers.get("c++", compilers["cc"]), *map(str, objects), "-o", str(build / main.stem), "-lm"]
+        command = [
+            compilers.get("c++", compilers["cc"]),
+            *map(str, objects),
+            "-o",
+            str(build / main.stem),
+            "-pthread",
+            "-lm",
+        ]
         _run(command, main, "linking")
         try:
             os.replace(build, folder)  # whole or not at all; a racing build of the same key may have won

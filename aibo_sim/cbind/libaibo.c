@@ -7,12 +7,17 @@
  * brings the answers of the calls that only read the state (protocol.PREFETCHED) the controller
  * made before: they serve it until its next call without results. When the
  * simulator answers "end" (the run is over), the controller exits with status 0; at exit, the
- * robot_die functions run. A controller that closed its end of the socket (AIBO_SIM_FD) and
- * then calls cannot go on: it exits, leaving the reason for the simulator in AIBO_SIM_SHM,
- * past the images (serve.py reports it). */
+ * robot_die functions run, and one that steps past the end ends there, as Python's
+ * SimulationEnd ends it. Where the binding cannot go on (the controller closed its end of the
+ * socket, then called; a call from a second thread; a call too large), it exits, leaving the
+ * reason for the simulator in AIBO_SIM_SHM, past the images (serve.py reports it). Standard
+ * output is line-buffered and flushed at each call, so what the controller printed shows
+ * before its end, in a file or a pipe too. */
 #include <errno.h>
 #include <fcntl.h>
+#include <pthread.h>
 #include <sched.h>
+#include <setjmp.h>
 #include <stdarg.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -50,11 +55,32 @@ static unsigned char ahead[1 << 16];
 static size_t ahead_length;
 static void (*die_functions[MAX_DIE_FUNCTIONS])(void);
 static int die_count, exiting;
+static jmp_buf die_function_end; /* where a robot_die function that steps past the run's end ends */
+static pthread_t caller;          /* the thread that made the first call: the only one answered */
 
-static void fail(const char *what) {
-    fprintf(stderr, "aibo-sim C binding: %s: %s\n", what, strerror(errno));
+/* What the controller printed shows before anything ends it, in a file or a pipe too. */
+__attribute__((constructor)) static void line_buffered_output(void) { setvbuf(stdout, NULL, _IOLBF, BUFSIZ); }
+
+/* The binding cannot go on: the reason goes to the simulator, in AIBO_SIM_SHM past the images
+ * (serve.py reports it as the controller's error), or to stderr where that file cannot be opened. */
+static void binding_failed(const char *format, ...) {
+    char why[512];
+    va_list args;
+    va_start(args, format);
+    int size = vsnprintf(why, sizeof why, format, args);
+    va_end(args);
+    size = size < 0 ? 0 : size >= (int)sizeof why ? (int)sizeof why - 1 : size;
+    const char *shm = getenv("AIBO_SIM_SHM");
+    int file = shm ? open(shm, O_WRONLY | O_CLOEXEC) : -1;
+    if (file >= 0 && pwrite(file, why, (size_t)size, AIBO_MAX_IMAGE_BYTES) == size) {
+        close(file);
+    } else {
+        fprintf(stderr, "aibo-sim C binding: %s\n", why);
+    }
     _exit(70);
 }
+
+static void fail(const char *what) { binding_failed("%s: %s", what, strerror(errno)); }
 
 static void flush_calls(void);
 
@@ -65,7 +91,7 @@ static void at_exit(void) {
     while (die_count) {
         void (*exit_fn)(void) = die_functions[0];
         memmove(die_functions, die_functions + 1, --die_count * sizeof *die_functions);
-        exit_fn();
+        if (!setjmp(die_function_end)) exit_fn(); /* C++: the locals it left are not destroyed */
     }
     flush_calls();
 }
@@ -82,6 +108,7 @@ static void connect_to_simulator(void) {
     images = mmap(NULL, AIBO_MAX_IMAGE_BYTES, PROT_READ, MAP_SHARED, file, 0);
     if (images == MAP_FAILED) fail("mmap");
     close(file);
+    caller = pthread_self();
     atexit(at_exit);
 }
 
@@ -90,16 +117,10 @@ static void connect_to_simulator(void) {
  * gone, and reports why itself. */
 static void channel_failed(void) {
     if (errno == EBADF || errno == ENOTSOCK) {
-        char why[200];
-        int size = snprintf(why, sizeof why, "closed its connection to the simulator (descriptor %d, AIBO_SIM_FD), "
-                            "then made a call", channel);
-        int file = open(getenv("AIBO_SIM_SHM"), O_WRONLY | O_CLOEXEC);
-        if (file >= 0) {
-            if (pwrite(file, why, (size_t)size, AIBO_MAX_IMAGE_BYTES) < 0) { /* the exit status is all it has */ }
-            close(file);
-        }
+        binding_failed("closed its connection to the simulator (descriptor %d, AIBO_SIM_FD), then made a call",
+                       channel);
     }
-    _exit(70);
+    _exit(70); /* the simulator is gone: it reports why */
 }
 
 /* ---- sending */
@@ -119,12 +140,11 @@ static void flush_calls(void) {
     start = outgoing_length = 0;
 }
 
+static enum aibo_op current_op; /* the call being made */
+
 static void put(const void *bytes, size_t size) {
     if (outgoing_length + size > sizeof outgoing) {
-        if (start == 0) {
-            fprintf(stderr, "aibo-sim C binding: a call's arguments exceed %zu bytes\n", sizeof outgoing);
-            _exit(70);
-        }
+        if (start == 0) binding_failed("%s: its arguments exceed %zu bytes", aibo_op_names[current_op], sizeof outgoing);
         size_t building = outgoing_length - start; /* send the calls before this one */
         write_all(outgoing, start);
         memmove(outgoing, outgoing + start, building);
@@ -137,9 +157,19 @@ static void put(const void *bytes, size_t size) {
     outgoing_length += size;
 }
 
-static void begin(enum aibo_op op) {
+/* A call from the thread that made the first; another's would mix their messages. */
+static void check_thread(enum aibo_op call) {
+    if (!pthread_equal(pthread_self(), caller)) {
+        binding_failed("%s called from a second thread: a C controller makes its calls from one thread",
+                       aibo_op_names[call]);
+    }
+}
+
+static void begin(enum aibo_op call) {
     if (channel < 0) connect_to_simulator();
-    int32_t code = op, size = 0;
+    check_thread(call);
+    current_op = call;
+    int32_t code = call, size = 0;
     put(&size, 4); /* the length, filled in by end_call */
     put(&code, 4);
 }
@@ -200,7 +230,7 @@ static size_t read_answer(size_t have, size_t need) {
 }
 
 /* Sends the queue and this call, and reads its answer; on "end", the controller ends (a
- * robot_die function that steps past the end just goes on). */
+ * robot_die function that steps past the end ends there). */
 static void call(void) {
     end_call();
     fflush(stdout); /* what the controller printed shows even if this call's error ends it */
@@ -208,13 +238,16 @@ static void call(void) {
     size_t have = read_answer(0, 4);
     uint32_t size;
     memcpy(&size, answer, 4);
-    if (size > sizeof answer - 4) _exit(70);
+    if (size > sizeof answer - 4) binding_failed("%s: an answer of %u bytes is too large", aibo_op_names[current_op], size);
     read_answer(have, 4 + size);
     cursor = 8;
     answer_end = 4 + size;
     int32_t status;
     memcpy(&status, answer + 4, 4);
-    if (status == AIBO_STATUS_END && !exiting) exit(0); /* at_exit runs the robot_die functions */
+    if (status == AIBO_STATUS_END) {
+        if (!exiting) exit(0); /* at_exit runs the robot_die functions */
+        longjmp(die_function_end, 1);
+    }
 }
 
 static int get_int(void) {
@@ -244,6 +277,7 @@ static const char *get_string(char *keep, size_t capacity) {
 
 /* The answer of `op` on `arg` (a tag, a motion, 0 for none) robot_step brought, into `answer`. */
 static int answered_ahead(enum aibo_op op, int arg) {
+    if (channel >= 0) check_thread(op);
     for (size_t at = 0; at < ahead_length;) {
         int32_t entry[2];
         uint32_t size;
@@ -307,10 +341,7 @@ void robot_live(void (*reset)(void)) {
 
 void robot_die(void (*exit_fn)(void)) {
     if (channel < 0) connect_to_simulator();
-    if (die_count == MAX_DIE_FUNCTIONS) {
-        fprintf(stderr, "aibo-sim C binding: more than %d robot_die functions\n", MAX_DIE_FUNCTIONS);
-        _exit(70);
-    }
+    if (die_count == MAX_DIE_FUNCTIONS) binding_failed("more than %d robot_die functions", MAX_DIE_FUNCTIONS);
     die_functions[die_count++] = exit_fn;
 }
 
@@ -372,17 +403,13 @@ int robot_keyboard_get_key(void) {
     return get_int();
 }
 
+/* Printed here, as Python's writes to its stdout: in order with the controller's printf. */
 void robot_console_printf(const char *format, ...) {
-    char text[4096];
     va_list args;
     va_start(args, format);
-    vsnprintf(text, sizeof text, format, args);
+    vprintf(format, args);
     va_end(args);
-    fflush(stdout); /* the controller's own output first, in order */
-    begin(AIBO_OP_robot_console_printf);
-    put_string(text);
-    send_call();
-    flush_calls(); /* printed now, in order with the controller's own output */
+    fflush(stdout);
 }
 
 /* ---- servos */

@@ -120,7 +120,6 @@ def _handlers(image: memoryview) -> dict:
     )
     handlers.update(
         {
-            "robot_console_printf": lambda text: api.robot_console_printf("%s", text),
             "camera_get_image": camera_get_image,
             "mtn_new": motions.new,
             "mtn_delete": motions.delete,

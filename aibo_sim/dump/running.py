@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import contextlib
 import hashlib
+import os
 import time
 from pathlib import Path
 
@@ -19,7 +20,7 @@ from openr_bridge.memory_stick import load_memory_stick, memory_stick_folder
 
 from ..camera import CameraProfile, CameraSettings, camera_size, describe_camera, scene_light
 from ..camera import camera_profile as resolve_profile  # dump's argument of that name shadows it
-from ..cbind import compile_controller, controller_sources, is_c_controller
+from ..cbind.build import compile_controller, controller_sources, is_c_controller, local_headers
 from ..config import DEFAULT_DURATION_S, CameraConfig, WorldConfig
 from ..field import DEFAULT_BALL_TYPE
 from ..files import make_folder
@@ -304,9 +305,10 @@ def model_sha256(model: mujoco.MjModel) -> str:
 
 
 def controller_sha256(path: Path) -> str:
-    """The hash of a controller: its file's, or for a C or C++ controller folder, that of its
-    sources' names and hashes (compiled first: a syntax or compile error stops the dump at once);
-    for a memory stick, that of its configuration files and objects (each read and checked first)."""
+    """The hash of a controller: its file's, or for a C or C++ controller with several sources or
+    headers of its own (``local_headers``), that of their names and hashes (compiled first: a
+    syntax or compile error stops the dump at once); for a memory stick, that of its configuration
+    files and objects (each read and checked first)."""
     if memory_stick_folder(path) is not None:
         stick = load_memory_stick(memory_stick_folder(path))
         files = [stick.object_cfg, *(o.file for o in stick.objects)]
@@ -321,10 +323,12 @@ def controller_sha256(path: Path) -> str:
         check_python_controller(path)
         return file_sha256(path)
     compile_controller(path)
-    sources = controller_sources(path)[1]
-    if sources == [path]:
+    main, sources = controller_sources(path)
+    headers = local_headers(sources)
+    if sources == [path] and not headers:
         return file_sha256(path)
-    return hashlib.sha256("".join(f"{s.name}\0{file_sha256(s)}\0" for s in sources).encode()).hexdigest()
+    named = [(s.name, s) for s in sources] + [(os.path.relpath(h, main.parent), h) for h in headers]
+    return hashlib.sha256("".join(f"{name}\0{file_sha256(f)}\0" for name, f in named).encode()).hexdigest()
 
 
 def check_formats(formats) -> None:
