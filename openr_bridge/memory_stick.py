@@ -82,9 +82,16 @@ def memory_stick_folder(path) -> Path | None:
     return None
 
 
+def is_8_3(name: str) -> bool:
+    """Whether ``name`` fits the memory stick's FAT: up to 8 characters, then up to 3 after one dot."""
+    base, _, extension = name.partition(".")
+    return 0 < len(base) <= 8 and len(extension) <= 3 and "." not in extension
+
+
 def stick_path(root: Path, ms_path: str, config: Path, line: int) -> Path:
     """The file of the folder ``root`` that ``/MS/...`` names (names matched ignoring case; a
-    missing one kept as written), or ConfigError naming ``config`` and ``line``."""
+    missing one kept as written), or ConfigError naming ``config`` and ``line``; every name 8.3,
+    as the robot requires (Sony's Programmer's Guide, A.1)."""
     if ms_path[:4].upper() != "/MS/":
         raise ConfigError(f"{_quote(ms_path)} is not on the memory stick (a path must begin with /MS/)", config, line)
     found = root
@@ -93,6 +100,12 @@ def stick_path(root: Path, ms_path: str, config: Path, line: int) -> Path:
             continue
         if part == "..":
             raise ConfigError(f"{_quote(ms_path)} climbs out of the memory stick", config, line)
+        if not is_8_3(part):
+            raise ConfigError(
+                f"{_quote(ms_path)}: {_quote(part)} is not an 8.3 name (the robot's memory stick has no longer names)",
+                config,
+                line,
+            )
         matches = [entry for entry in found.iterdir() if entry.name.upper() == part.upper()] if found.is_dir() else []
         found = matches[0] if len(matches) == 1 else found / part
     return found

@@ -113,6 +113,8 @@ static void init(void) {
         led_set(robot_get_device("PRM:/r1/c1/c2/c3/l2-LED2:l2"), 1);
         led_set(robot_get_device("PRM:/r1/c1/c2/c3/la-LED3:la"), 128);
         led_set(robot_get_device("PRM:/lz-LED3:lz"), 300);
+    } else if (is("ear")) {
+        servo_set_position(robot_get_device("PRM:/r1/c1/c2/c3/e5-Joint4:15"), 0.26);
     } else if (is("short name")) {
         fprintf(out, "%d\n", mtn_get_length(mtn_new("Walk_Forward.long.mtn")));
     } else if (is("device error")) {
@@ -156,6 +158,7 @@ int main(void) {
     robot_die(die);
     if (is("step")) robot_step(32);
     robot_run(run);
+    if (is("after run")) fclose(fopen("after.txt", "w"));  /* never reached: robot_run does not return */
     return 0;
 }
 """
@@ -414,6 +417,24 @@ def test_leds_end_lit_as_on_the_openr_backend(probe, tmp_path, monkeypatch):
     assert np.array_equal(sim.model.geom_rgba, reference_sim.model.geom_rgba)
 
 
+def test_an_ear_held_up_is_flicked_for_128_ms_then_let_down(probe, tmp_path):
+    """The plunger was on for as long as the set-point stayed up; Sony's Model Information warns that
+    this may damage the robot, and its MovingEar7 turns it on for 16 frames."""
+    controller, project = probe
+    (tmp_path / "scenario.txt").write_text("ear\n")
+    record, sim, _ = run_stick(project, 96, tmp_path)
+    up = [bool(ctrl[sim.model.actuator("ear_l").id] > 0) for ctrl in record.ctrl]
+    first = up.index(True)
+    assert up[first : first + 16] == [True] * 16 and not any(up[first + 16 :]), up
+
+
+def test_robot_run_does_not_return_on_the_stick_as_in_the_simulator(probe, tmp_path):
+    """robot_run returned on the stick, so main's statements after it ran there, and never in the simulator."""
+    (tmp_path / "scenario.txt").write_text("after run\n")
+    run_stick(probe[1], 16, tmp_path)
+    assert (tmp_path / "console.log").exists() and not (tmp_path / "after.txt").exists()
+
+
 def test_sensor_values_are_the_python_apis_to_the_micro_unit(probe, tmp_path, monkeypatch):
     stick, reference, _, _ = probe_runs(monkeypatch, probe, tmp_path, "sensors")
     values = [np.loadtxt(folder / "probe.txt") for folder in (stick, reference)]
@@ -487,6 +508,17 @@ def test_the_wrappers_structure_sizes_are_checked_when_it_compiles(probe, tmp_pa
         text=True,
     )
     assert result.returncode != 0 and "OCommandInfo_is_32_bytes" in result.stderr
+
+
+def test_make_clean_removes_what_sonys_mkbin_leaves_too(probe, tmp_path):
+    project = tmp_path / "project"
+    shutil.copytree(probe[1], project)
+    leftovers = ["controller.nosnap.elf", "controller.rel.elf", "controller.snap.elf", "controller.snap.cc"]
+    for name in leftovers:
+        (project / "Controller" / name).write_text("mkbin's\n")
+    subprocess.run(["make", "clean"], cwd=project, check=True, capture_output=True)
+    assert not [name for name in leftovers if (project / "Controller" / name).exists()]
+    assert not (project / "MS" / "OPEN-R" / "MW" / "OBJS" / "CONTROLL.BIN").exists()
 
 
 def test_the_project_is_sonys_form_and_its_device_table_is_ers7s(probe):

@@ -467,6 +467,15 @@ def test_connect_cfg_naming_an_unregistered_service_names_its_line(objects, tmp_
         run_stick(stick, 0.1, tmp_path / "out")
 
 
+def test_connect_cfg_naming_an_object_without_services_says_it_has_none(objects, tmp_path):
+    """Such an object was left out of the objects listed, and said not to be there."""
+    line = "FileProbe.Talk.OSensorFrameVectorData.S JointProbe.Sensor.OSensorFrameVectorData.O\n"
+    stick = make_stick(tmp_path / "ms", objects, ["JPROBE", "FPROBE"], JOINT_PROBE + line)
+    message = r"CONNECT\.CFG:3: FileProbe has no service FileProbe\.Talk\.OSensorFrameVectorData\.S \("
+    with pytest.raises(ConfigError, match=message):
+        run_stick(stick, 0.1, tmp_path / "out")
+
+
 def test_an_object_that_is_not_built_for_this_machine_is_refused(objects, tmp_path):
     stick = make_stick(tmp_path / "ms", objects, ["JPROBE"], JOINT_PROBE)
     (stick / "OPEN-R" / "MW" / "OBJS" / "JPROBE.BIN").write_bytes(b"\x1f\x8b" + bytes(20))
@@ -486,6 +495,23 @@ def test_an_object_that_is_not_built_for_this_machine_is_refused(objects, tmp_pa
         ConfigError,
         match=r"OBJECT\.CFG:1: /MS/OPEN-R/MW/OBJS/JPROBE\.BIN is not an object built for this machine "
         r"\(a Sony SDK build for the robot\? rebuild with OPENRSDK_ROOT=\$\(aibo-sim openr sdk\)\)$",
+    ):
+        run_stick(stick, 0.1, tmp_path / "out")
+
+
+def test_names_that_are_not_8_3_are_refused_as_the_robot_refuses_them(objects, tmp_path):
+    """Sony's Programmer's Guide (A.1): a file name must have 8+3 format. An existing long name was
+    found and opened, and OBJECT.CFG could name one, where the robot refuses both."""
+    stick = make_stick(tmp_path / "ms", objects, ["FPROBE"], data={"longer_name.txt": "already there\n"})
+    lines = run_stick(stick, 1.0, tmp_path / "out").lines("FileProbe")
+    assert "write /MS/OPEN-R/MW/DATA/P/longer_name.txt: refused (errno 13)" in lines
+    assert (stick / "OPEN-R" / "MW" / "DATA" / "P" / "longer_name.txt").read_text() == "already there\n"
+    objs = stick / "OPEN-R" / "MW" / "OBJS"
+    (objs / "FPROBE.BIN").rename(objs / "fileprobe.bin")
+    (stick / "OPEN-R" / "MW" / "CONF" / "OBJECT.CFG").write_text("/MS/OPEN-R/MW/OBJS/fileprobe.bin\n")
+    with pytest.raises(
+        ConfigError,
+        match=r"OBJECT\.CFG:1: '/MS/OPEN-R/MW/OBJS/fileprobe\.bin': 'fileprobe\.bin' is not an 8\.3 name \(the robot's",
     ):
         run_stick(stick, 0.1, tmp_path / "out")
 

@@ -37,6 +37,7 @@ import shutil
 from pathlib import Path
 
 import openr_bridge
+from openr_bridge.memory_stick import is_8_3
 from openr_bridge.primitive import REQUEST_NAMES, allowed_values
 
 from .. import ers7
@@ -102,11 +103,6 @@ def _stick_path(name: str) -> tuple[str, ...]:
     return (*DATA_FOLDER, short_name(name))
 
 
-def _is_83(part: str) -> bool:
-    stem, _, extension = part.partition(".")
-    return 0 < len(stem) <= 8 and len(extension) <= 3 and "." not in extension
-
-
 def _motions(main: Path, sources) -> dict[tuple[str, ...], Path]:
     """Each motion file's place on the stick and the file copied there; BuildMsError naming the
     controller for a literal that names no file, or two files that would share a place."""
@@ -120,7 +116,7 @@ def _motions(main: Path, sources) -> dict[tuple[str, ...], Path]:
                 "motions (models/motions): put the file beside the controller"
             )
         place = _stick_path(name)
-        if not all(_is_83(part) for part in place):
+        if not all(is_8_3(part) for part in place):
             raise BuildMsError(
                 f"{where} opens {name!r}: /MS/... names must be 8.3 names (the stick's FAT has no longer ones)"
             )
@@ -263,6 +259,7 @@ def makefile(sources: list[Path]) -> str:
             "",
             "clean:",
             "\trm -f *.o controller/*.o controller.bin ControllerStub.h ControllerStub.cc def.h entry.h",
+            "\trm -f *.elf *.snap.cc  # Sony's mkbin's own intermediate files, as its samples clean them",
             f"\trm -f $(INSTALLDIR)/OPEN-R/MW/OBJS/{OBJECT_FILE}",
             "",
         ]

@@ -395,10 +395,10 @@ class MemoryStickRun:
             for name in (connection.subject, connection.observer):
                 if str(name) in services:
                     continue
-                known = sorted(set(services.values()))
+                known = sorted({*services.values(), *self.object_names})  # an object may register none
+                registers = [s for s in sorted(services) if services[s] == name.object]
                 problem = (
-                    f"{name.object} has no service {cut(name)} (it registers "
-                    f"{', '.join(s for s in sorted(services) if services[s] == name.object)})"
+                    f"{name.object} has no service {cut(name)} (it registers {', '.join(registers) or 'none'})"
                     if name.object in known
                     else f"no object named {cut(repr(name.object))} registers {cut(name)} (the objects: "
                     f"{', '.join(known)}; names are case-sensitive)"

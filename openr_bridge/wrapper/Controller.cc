@@ -41,6 +41,7 @@ WRAPPER_STATIC_ASSERT(sizeof(slongword) == 4 && sizeof(longword) == 4 && sizeof(
 namespace {
 
 const size_t SENSOR_FRAMES = 4;   /* frames per sensor vector on the ERS-7: the primer's length */
+const int EAR_FLICK_FRAMES = 16;  /* an ear plunger's time on, 128 ms: Sony's MovingEar7 */
 
 template <class T, size_t N> size_t Count(const T (&)[N]) { return N; }
 
@@ -74,7 +75,7 @@ void Fail(const char* format, ...) {
 Controller* Controller::instance_ = 0;
 
 Controller::Controller()
-    : state_(LOADED), failJump_(0), cameraId_(oprimitiveID_UNDEF), nextDie_(0), run_(0), lastStep_(0), runTick_(0),
+    : state_(LOADED), failJump_(0), runJump_(0), cameraId_(oprimitiveID_UNDEF), nextDie_(0), run_(0), lastStep_(0), runTick_(0),
       nextTick_(0), newestTick_(-1), haveOrigin_(false), primed_(false), origin_(0) {
     instance_ = this;
 }
@@ -85,6 +86,7 @@ OStatus Controller::DoInit(const OSystemEvent&) {
     SET_ALL_READY_AND_NOTIFY_ENTRY;
     const std::vector<std::string>& locators = robot_.Locators();
     ids_.assign(locators.size(), oprimitiveID_UNDEF);
+    earUpFrames_.assign(locators.size(), 0);
     for (size_t i = 0; i < locators.size(); i++) {
         if (OPENR::OpenPrimitive(locators[i].c_str(), &ids_[i]) != oSUCCESS) {
             OSYSLOG1((osyslogERROR, "cannot open the primitive %s", locators[i].c_str()));
@@ -143,12 +145,18 @@ OStatus Controller::DoDestroy(const OSystemEvent&) {
 
 /* ------------------------------------------------------------------ controller code */
 
-void Controller::CallMain(void*) {
+/* Calls main(), which robot_run leaves (Run): as in Webots, its statements after robot_run never run. */
+void Controller::CallMain(void* self) {
     static char name[] = "Controller";
     static char* argv[] = {name, 0};
+    Controller& controller = *(Controller*)self;
+    jmp_buf ran;
+    controller.runJump_ = &ran;
     int (*plain)() = aibo_controller_main_cc;
     int (*withArguments)(int, char**) = aibo_controller_main_cc;
-    if (aibo_controller_main_c != 0) {
+    if (setjmp(ran) != 0) {
+        /* robot_run was called */
+    } else if (aibo_controller_main_c != 0) {
         aibo_controller_main_c(1, argv);
     } else if (withArguments != 0) {
         withArguments(1, argv);
@@ -157,6 +165,7 @@ void Controller::CallMain(void*) {
     } else {
         wrapper::Fail("the controller has no main()");
     }
+    controller.runJump_ = 0;
 }
 
 void Controller::CallRun(void* self) {
@@ -215,6 +224,7 @@ void Controller::Die(void (*function)(void)) {
 void Controller::Run(int (*function)(int)) {
     if (function == 0) wrapper::Fail("robot_run(NULL): the run function must be callable");
     run_ = function;
+    if (runJump_ != 0) longjmp(*runJump_, 1);  /* out of main(); C++: its locals are not destroyed */
 }
 
 void Controller::CameraControl(int tag, const char* function, int value) {
@@ -408,7 +418,9 @@ void Controller::Fill(OCommandVectorData* vector, size_t first, size_t end) {
             OJointCommandValue4* values = (OJointCommandValue4*)data->value;
             double middle = (ers7::JOINTS[j].low + ers7::JOINTS[j].high) / 2;
             for (size_t k = 0; k < frames; k++) {
-                values[k].value = pending_[first + k].joints[j] > middle ? ojoint4_STATE1 : ojoint4_STATE0;
+                int& up = earUpFrames_[j];
+                up = pending_[first + k].joints[j] > middle ? up + (up <= EAR_FLICK_FRAMES) : 0;
+                values[k].value = up > 0 && up <= EAR_FLICK_FRAMES ? ojoint4_STATE1 : ojoint4_STATE0;
                 values[k].period = 1;
             }
         } else {

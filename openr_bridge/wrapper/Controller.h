@@ -9,8 +9,8 @@
  *
  * Start (DoStart): motor power on, Sony's standard joint gains (Model Information 2.2), then the
  * controller's main() is called: robot_live(init) calls init, robot_die registers, robot_run
- * stores the run function and returns (main's statements after it run now, once; in Webots
- * they are never reached). robot_step cannot be: an Aperios object is one thread that must
+ * stores the run function and leaves main() (its statements after robot_run are never reached,
+ * as in Webots). robot_step cannot be: an Aperios object is one thread that must
  * return from each message before the next (the next sensor data) can arrive, so a loop that
  * waits inside a call would never see time pass. robot_step is therefore an explicit error
  * that ends the controller; write the controller with robot_run.
@@ -36,8 +36,11 @@
  *
  * Values as the robot gives them: joint angles and the commanded set-points in micro-radians,
  * distances in micrometres, accelerations in micrometres/s^2; touch sensors 0/1 (switches as
- * sent, pressure sensors above their threshold). Ears (Joint4) are up or down: up while their
- * set-point is above mid-range. LED2 lights are on or off: on for any value but 0.
+ * sent, pressure sensors above their threshold). Ears (Joint4) are plungers: a set-point rising
+ * above mid-range flicks the ear up for EAR_FLICK_FRAMES (128 ms, as Sony's MovingEar7; Sony's
+ * Model Information warns that a plunger held on may damage the robot), then it is let down
+ * until the set-point falls below mid-range and rises again. LED2 lights are on or off: on for
+ * any value but 0.
  *
  * An error in a call (an unknown device, a sample not there yet, ...) prints aibo_sim's message
  * for it, runs the robot_die functions and shuts the robot down (OPENR::Shutdown), as an error
@@ -107,6 +110,7 @@ private:
     wrapper::Robot robot_;
     State state_;
     jmp_buf* failJump_;
+    jmp_buf* runJump_;                       /* where robot_run leaves main() */
     std::vector<OPrimitiveID> ids_;          /* by robot_.Locators(): the joints first */
     std::vector<OPrimitiveID> ledIds_;
     std::map<OPrimitiveID, int> slots_;      /* sensor primitive -> snapshot slot */
@@ -123,6 +127,7 @@ private:
     std::vector<wrapper::FrameCommand> pending_;
     std::vector<RCRegion*> regions_;
     std::deque<RCRegion*> outgoing_;
+    std::vector<int> earUpFrames_;           /* by joint: frames since an ear's set-point rose above mid-range */
 };
 
 #endif

@@ -98,18 +98,12 @@ std::string MapPath(const char* path, bool create, std::string* error) {
     for (size_t i = 0; i < resolved.size(); i++) {
         std::string name = resolved[i];
         if (stick) {
-            std::string existing = FindIgnoringCase(mapped, name);
-            if (!existing.empty()) {
-                name = existing;
-            } else if (create && i + 1 == resolved.size()) {
-                if (!Is83(name)) {
-                    *error = "not an 8.3 name (the memory stick's FAT has no longer names)";
-                    return "";
-                }
-                name = Upper(name);
-            } else {
-                name = Upper(name);
+            if (!Is83(name)) {  /* the robot refuses it, to create or to find (Programmer's Guide A.1) */
+                *error = "not an 8.3 name (the memory stick's FAT has no longer names)";
+                return "";
             }
+            std::string existing = FindIgnoringCase(mapped, name);
+            name = existing.empty() ? Upper(name) : existing;
         }
         mapped += "/" + name;
         struct stat status;
