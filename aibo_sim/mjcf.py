@@ -29,6 +29,7 @@ PAW_SINK = 0.0001
 PAW_TOUCH_RADIUS = 0.015  # Webots touch sphere
 SHIN_COLLISION_REACH, SHIN_COLLISION_RADIUS = 0.7, 0.0145  # shin capsule: knee to 70 % of the way to the paw
 TIMESTEP = 0.002  # s: four physics steps per 8 ms OPEN-R joint frame (models/README.md, "Conventions": the timestep)
+LIMIT_TIME_CONSTANT = 2 * TIMESTEP  # s: joint stops as stiff as is stable (MuJoCo's 20 ms let the tail and ears pass)
 
 # The servos: a DC motor behind a gearbox, driven by Sony's PID through a PWM stage that
 # saturates at +-255 (models/README.md, "Servos"). The position actuator is the controller: its
@@ -130,7 +131,7 @@ def _defaults() -> ET.Element:
         "default",
         E(
             "default",
-            E("joint", armature=SERVO_ARMATURE),
+            E("joint", armature=SERVO_ARMATURE, solreflimit=(LIMIT_TIME_CONSTANT, 1)),
             E("position", inheritrange=1, forcerange=(-MAX_TORQUE, MAX_TORQUE)),
             E("site", group=4, rgba=(0.9, 0.2, 0.2, 0.4)),
             E(
