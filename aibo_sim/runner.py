@@ -688,6 +688,8 @@ def _run_controller_program(
                     f"controller {path.name} exited with {call}({status}) {where}{die_report}", exit_status=error.code
                 ) from error
             if isinstance(error, CControllerError):
+                if error.time_ms is not None:  # its robot_die functions may have stepped since
+                    where = f"at simulated t = {error.time_ms / 1000:.3f} s"
                 raise ControllerFailed(f"controller {path.name} {where}: {error}") from error
             if error is not None:
                 raise ControllerFailed(

@@ -285,6 +285,25 @@ def test_what_a_c_controller_printed_before_an_api_error_is_not_lost(tmp_path, c
     assert "before the error\n" in capfd.readouterr().out
 
 
+def test_the_robot_die_functions_run_after_a_call_that_failed_as_in_python(tmp_path):
+    """The controller was killed at the failed call: its robot_die functions, which a Python
+    controller's exception runs, did not. Its calls after the failed one are not made (Python's
+    raise would not reach them); a robot_die function's own failed call ends it and is reported."""
+    body = 'static void save(void) {\n  FILE *f = fopen("results.txt", "w");\n'
+    body += '  fprintf(f, "t %g\\n", robot_get_time());\n  fclose(f);\n'
+    body += "  robot_step(16);\n  servo_set_position(77, 0.1);\n  robot_step(8);\n"
+    body += '  fclose(fopen("not_reached.txt", "w"));\n}\n'
+    body += "int main(void) {\n  robot_die(save);\n  robot_step(16);\n  servo_set_position(99, 0.1);\n"
+    body += '  robot_step(8);\n  fclose(fopen("not_reached.txt", "w"));\n  return 0;\n}\n'
+    with pytest.raises(ControllerFailed) as failed:
+        run_controller(c_file(tmp_path, "fails.c", body), duration=1, out=tmp_path / "out")
+    message = str(failed.value)
+    assert message.startswith("controller fails.c at simulated t = 0.016 s: servo_set_position(99, 0.1) raised")
+    assert "\nthen its robot_die function's call servo_set_position(77, 0.1) raised DeviceError" in message
+    assert (tmp_path / "out" / "results.txt").read_text() == "t 0.016\n"
+    assert not (tmp_path / "out" / "not_reached.txt").exists()
+
+
 def test_console_printf_prints_in_order_with_printf_whole_and_byte_for_byte(tmp_path, capfdbinary):
     """robot_console_printf went through the simulator, which printed it after the controller's
     next printf (B0 A0 ...), cut at 4095 bytes and with other bytes than UTF-8 replaced."""

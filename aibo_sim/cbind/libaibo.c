@@ -229,8 +229,8 @@ static size_t read_answer(size_t have, size_t need) {
     return have;
 }
 
-/* Sends the queue and this call, and reads its answer; on "end", the controller ends (a
- * robot_die function that steps past the end ends there). */
+/* Sends the queue and this call, and reads its answer; on "end" or "failed", the controller
+ * ends (a robot_die function ends there). */
 static void call(void) {
     end_call();
     fflush(stdout); /* what the controller printed shows even if this call's error ends it */
@@ -244,8 +244,10 @@ static void call(void) {
     answer_end = 4 + size;
     int32_t status;
     memcpy(&status, answer + 4, 4);
-    if (status == AIBO_STATUS_END) {
-        if (!exiting) exit(0); /* at_exit runs the robot_die functions */
+    if (status == AIBO_STATUS_END || status == AIBO_STATUS_FAILED) {
+        /* the run is over, or a call failed (the simulator reports it): at_exit runs the
+         * robot_die functions; in one of them, it ends there */
+        if (!exiting) exit(status == AIBO_STATUS_END ? 0 : 1);
         longjmp(die_function_end, 1);
     }
 }

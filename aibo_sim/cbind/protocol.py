@@ -77,7 +77,8 @@ PREFETCHED = (
     "mtn_get_length",
     "mtn_get_time",
 )
-STATUS = {"ok": 0, "end": 1}  # end: the run is over (the controller runs its robot_die functions and exits)
+# end: the run is over; failed: a call failed (the controller runs its robot_die functions and exits)
+STATUS = {"ok": 0, "end": 1, "failed": 2}
 MAX_IMAGE_BYTES = FULL_WIDTH * FULL_HEIGHT * 3  # the shared memory block: the largest camera image
 MAX_ANSWER_BYTES = 1 << 16  # the controller's buffer for an answer, its 4-byte size included
 

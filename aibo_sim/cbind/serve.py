@@ -18,11 +18,14 @@ reports it:
   stopped without them; a second signal acts at once (a ``robot_die`` function that never
   returns);
 - ``exit(N)``, N not 0: ``SystemExit(N)``, as a Python controller's ``sys.exit(N)``;
-- a call raised (an unknown device, a bad value): the controller is stopped and
-  ``CControllerError`` names the call and the error;
+- a call raised (an unknown device, a bad value): the controller's calls after it are not made
+  (a Python controller raised there), its next call that waits is answered "failed", its
+  ``robot_die`` functions run (a call of theirs that fails ends that one), then
+  ``CControllerError`` names the call and the error, and those of the ``robot_die`` functions;
 - it crashed (a signal: segmentation fault, abort): ``CControllerError`` names the signal;
-- it closed its socket, then made a call: ``CControllerError`` says so (``libaibo.c`` leaves
-  the reason in the shared file, past the images; not its ``exit(70)``).
+- the binding could not go on (it closed its socket, then made a call; a call from a second
+  thread; a call too large): ``CControllerError`` gives the reason ``libaibo.c`` leaves in the
+  shared file, past the images (not its ``exit(70)``).
 
 A controller that computes for long between two calls leaves the simulated time where it
 is; after ``WAIT_NOTICE_S`` of wall time without a call, one line on stderr says that the
@@ -59,7 +62,11 @@ _OP, _LENGTH, _AHEAD = struct.Struct("<i"), struct.Struct("<I"), struct.Struct("
 
 
 class CControllerError(RuntimeError):
-    """A C controller's call failed, or the controller crashed."""
+    """A C controller's call failed (at simulated ``time_ms``), or the controller crashed."""
+
+    def __init__(self, message: str, time_ms: int | None = None):
+        super().__init__(message)
+        self.time_ms = time_ms
 
 
 class _Motions:
@@ -135,6 +142,7 @@ class _Call:
     its answer written (precompiled: the binding's cost is mostly this, per call)."""
 
     END = struct.pack("<Ii", 4, STATUS["end"])
+    FAILED = struct.pack("<Ii", 4, STATUS["failed"])
 
     def __init__(self, name: str, arguments: str, results: str, function):
         assert "s" not in arguments or arguments == "s"  # a string comes alone
@@ -257,7 +265,7 @@ class _Server:
     def __init__(self, channel: socket.socket, image: memoryview, name: str, robot, child: Child):
         handlers = _handlers(image)
         self._table = [_Call(op_name, arguments, results, handlers[op_name]) for op_name, arguments, results in OPS]
-        self._channel, self._calls = channel, _Calls(channel, name, robot, child)
+        self._channel, self._calls, self._robot = channel, _Calls(channel, name, robot, child), robot
         self._wanted = {}  # the PREFETCHED calls made so far, by (number, arguments): answered with each step
         self._child = child
 
@@ -265,13 +273,18 @@ class _Server:
         """Answer the controller's calls until it exits; SimulationEnd after a run that ended.
         Once a signal is pending, every ``robot_step`` is answered "end" (the controller's
         robot_die functions run, then it exits)."""
-        ended = False
+        ended, failure, dying, skipping = False, None, [], False
         while (payload := self._calls.next()) is not None:
             number = _OP.unpack_from(payload)[0]
             if not 0 <= number < len(self._table):
                 raise CControllerError(f"unknown call number {number} (a controller built against other headers?)")
             call = self._table[number]
             args = call.arguments(payload)
+            if skipping:  # after a call that failed, until the call that waits: made by no Python controller
+                if call.results:
+                    self._channel.sendall(_Call.FAILED)
+                    skipping = False
+                continue
             if self._child.pending is not None and call.name == "robot_step":
                 self._channel.sendall(_Call.END)
                 continue
@@ -291,7 +304,17 @@ class _Server:
                 raise
             except Exception as exc:
                 shown = ", ".join(repr(a) for a in args)
-                raise CControllerError(f"{call.name}({shown}) raised {type(exc).__name__}: {exc}") from exc
+                error = f"{call.name}({shown}) raised {type(exc).__name__}: {exc}"
+                if failure is None and not ended:
+                    failure = CControllerError(error, self._robot.time_ms)
+                    failure.__cause__ = exc
+                else:  # in a robot_die function, which ends there
+                    dying.append(error)
+                skipping = True
+                if call.results:
+                    self._channel.sendall(_Call.FAILED)
+                    skipping = False
+                continue
             if call.results:
                 self._channel.sendall(
                     _with_answers_ahead(call.answer(result), self._wanted)
@@ -299,6 +322,10 @@ class _Server:
                     else call.answer(result)
                 )
         self._child.wait(None, WAIT_NOTICE_S, self._calls.announce_wait)  # it may run on after closing its socket
+        if failure is not None or dying:
+            errors = ([str(failure)] if failure else []) + [f"its robot_die function's call {e}" for e in dying]
+            message = "\nthen ".join(errors)
+            raise CControllerError(message, failure and failure.time_ms) from failure and failure.__cause__
         if ended and self._child.stop() == 0:
             raise SimulationEnd()
 
