@@ -304,6 +304,23 @@ def test_the_robot_die_functions_run_after_a_call_that_failed_as_in_python(tmp_p
     assert not (tmp_path / "out" / "not_reached.txt").exists()
 
 
+def test_calls_at_exit_outside_the_robot_die_functions_and_from_the_thread_that_ends(tmp_path, capfd):
+    """An atexit handler of the controller's own that steps past the end gets its calls answered
+    (it crashed: the robot_die functions' way out was taken); robot_die functions run in the thread
+    that ended the controller, which may not be the one that made the calls (they were refused)."""
+    own = 'static void settle(void) {\n  robot_step(8);\n  robot_step(8);\n  printf("settled\\n");\n}\n'
+    own += "static int run(int ms) { return 8; }\nint main(void) {\n  atexit(settle);\n  robot_run(run);\n}\n"
+    worker = '#include <pthread.h>\nstatic void bye(void) { printf("bye t=%.3f\\n", robot_get_time()); }\n'
+    worker += "static void *work(void *unused) {\n  (void)unused;\n  robot_die(bye);\n"
+    worker += "  for (int i = 0; i < 5; i++) robot_step(8);\n  return 0;\n}\n"
+    worker += (
+        "int main(void) {\n  pthread_t t;\n  pthread_create(&t, 0, work, 0);\n  pthread_join(t, 0);\n  return 0;\n}\n"
+    )
+    run_controller(c_file(tmp_path, "own.c", own), duration=0.1)
+    run_controller(c_file(tmp_path, "worker.c", worker), duration=1)
+    assert capfd.readouterr().out == "settled\nbye t=0.040\n"
+
+
 def test_console_printf_prints_in_order_with_printf_whole_and_byte_for_byte(tmp_path, capfdbinary):
     """robot_console_printf went through the simulator, which printed it after the controller's
     next printf (B0 A0 ...), cut at 4095 bytes and with other bytes than UTF-8 replaced."""
@@ -328,10 +345,14 @@ def test_the_bindings_own_failures_are_named_not_taken_for_the_controllers_exit(
     thread = "#include <pthread.h>\nstatic void *other(void *unused) { (void)unused; robot_get_name(); return 0; }\n"
     thread += "int main(void) {\n  pthread_t t;\n  robot_step(8);\n  pthread_create(&t, 0, other, 0);\n"
     thread += "  pthread_join(t, 0);\n  robot_step(8);\n  return 0;\n}\n"
+    race = "#include <pthread.h>\nstatic void *other(void *unused) { (void)unused; for (;;) robot_get_time(); }\n"
+    race += "int main(void) {\n  pthread_t t;\n  robot_step(8);\n  pthread_create(&t, 0, other, 0);\n"
+    race += "  for (;;) robot_step(8);\n}\n"  # the other thread calls while this one waits for its answer
     big = "#include <string.h>\nint main(void) {\n  static char name[70000];\n  memset(name, 'a', sizeof name - 1);\n"
     big += "  mtn_new(name);\n  return 0;\n}\n"
     for name, body, message in (
         ("thread.c", thread, "robot_get_name called from a second thread: a C controller makes its calls from one"),
+        *[("race.c", race, "robot_get_time called from a second thread")] * 3,  # a broken pipe, half the time
         ("big.c", "#include <device/mtn.h>\n" + big, "mtn_new: its arguments exceed 65536 bytes"),
     ):
         with pytest.raises(ControllerFailed, match=message) as failed:

@@ -377,10 +377,11 @@ def test_reach_ball_never_starts_reached_nor_with_the_ball_under_the_robot():
     assert min(distances) < 0.4  # near ones are kept
 
 
-def test_reach_ball_never_starts_in_a_wall_nor_beyond_the_walls():
-    """Spread over +-3 m, the ball started inside a wall (flung out at 1.4 m/s at the first step)
-    or behind one, out of reach: drawn again, as run refuses such a --ball."""
-    env = gym.make(REACH, randomize={"ball_start": 3.0}, camera=None)
+@pytest.mark.parametrize("env_id", [REACH, HEAD_TRACK])
+def test_the_ball_never_starts_in_a_wall_nor_beyond_the_walls(env_id):
+    """Spread over +-3 m, the ball started inside a wall (ReachBall's was flung out at 1.4 m/s at
+    the first step) or behind one, out of reach: drawn again, as run refuses such a --ball."""
+    env = gym.make(env_id, randomize={"ball_start": 3.0}, camera=None)
     try:
         sim = env.unwrapped.sim
         for seed in range(30):

@@ -54,8 +54,8 @@ static size_t outgoing_length, start, cursor, answer_end;
 static unsigned char ahead[1 << 16];
 static size_t ahead_length;
 static void (*die_functions[MAX_DIE_FUNCTIONS])(void);
-static int die_count, exiting;
-static jmp_buf die_function_end; /* where a robot_die function that steps past the run's end ends */
+static int die_count, exiting, dying;
+static jmp_buf die_function_end; /* where a robot_die function ends that steps past the run's end (while dying) */
 static pthread_t caller;          /* the thread that made the first call: the only one answered */
 
 /* What the controller printed shows before anything ends it, in a file or a pipe too. */
@@ -91,7 +91,9 @@ static void at_exit(void) {
     while (die_count) {
         void (*exit_fn)(void) = die_functions[0];
         memmove(die_functions, die_functions + 1, --die_count * sizeof *die_functions);
+        dying = 1;
         if (!setjmp(die_function_end)) exit_fn(); /* C++: the locals it left are not destroyed */
+        dying = 0;
     }
     flush_calls();
 }
@@ -157,9 +159,10 @@ static void put(const void *bytes, size_t size) {
     outgoing_length += size;
 }
 
-/* A call from the thread that made the first; another's would mix their messages. */
+/* A call from the thread that made the first; another's would mix their messages. At exit, the
+ * robot_die functions run in the thread that ended the controller. */
 static void check_thread(enum aibo_op call) {
-    if (!pthread_equal(pthread_self(), caller)) {
+    if (!exiting && !pthread_equal(pthread_self(), caller)) {
         binding_failed("%s called from a second thread: a C controller makes its calls from one thread",
                        aibo_op_names[call]);
     }
@@ -248,7 +251,7 @@ static void call(void) {
         /* the run is over, or a call failed (the simulator reports it): at_exit runs the
          * robot_die functions; in one of them, it ends there */
         if (!exiting) exit(status == AIBO_STATUS_END ? 0 : 1);
-        longjmp(die_function_end, 1);
+        if (dying) longjmp(die_function_end, 1); /* else an atexit handler of its own: the call returns */
     }
 }
 

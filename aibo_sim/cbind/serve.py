@@ -35,6 +35,7 @@ is not taken for a simulator that hangs (``runner`` says the same of a Python co
 
 from __future__ import annotations
 
+import contextlib
 import io
 import mmap
 import os
@@ -282,11 +283,11 @@ class _Server:
             args = call.arguments(payload)
             if skipping:  # after a call that failed, until the call that waits: made by no Python controller
                 if call.results:
-                    self._channel.sendall(_Call.FAILED)
+                    self._send(_Call.FAILED)
                     skipping = False
                 continue
             if self._child.pending is not None and call.name == "robot_step":
-                self._channel.sendall(_Call.END)
+                self._send(_Call.END)
                 continue
             if call.ahead:
                 self._wanted[number, args] = call
@@ -298,7 +299,7 @@ class _Server:
                 result = call.function(*args)
             except SimulationEnd:
                 ended = True
-                self._channel.sendall(_Call.END)
+                self._send(_Call.END)
                 continue
             except (SimulationDiverged, RenderingUnavailable):  # the simulator's failures, not the controller's
                 raise
@@ -312,11 +313,11 @@ class _Server:
                     dying.append(error)
                 skipping = True
                 if call.results:
-                    self._channel.sendall(_Call.FAILED)
+                    self._send(_Call.FAILED)
                     skipping = False
                 continue
             if call.results:
-                self._channel.sendall(
+                self._send(
                     _with_answers_ahead(call.answer(result), self._wanted)
                     if call.name == "robot_step"
                     else call.answer(result)
@@ -328,6 +329,12 @@ class _Server:
             raise CControllerError(message, failure and failure.time_ms) from failure and failure.__cause__
         if ended and self._child.stop() == 0:
             raise SimulationEnd()
+
+    def _send(self, answer: bytes) -> None:
+        """Send an answer; a controller that exited without reading it is found by the next read
+        (the binding may have left its reason: ``run_c_controller`` reads it)."""
+        with contextlib.suppress(BrokenPipeError, ConnectionResetError):
+            self._channel.sendall(answer)
 
 
 def _with_answers_ahead(answer: bytes, wanted: dict) -> bytes:

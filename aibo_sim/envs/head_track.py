@@ -69,7 +69,9 @@ class HeadTrackBallEnv(AiboEnv):
 
     ``AiboEnv``'s (standing on the centre spot facing +X); the ball at (0.9, 0) m
     (``BALL_START``), moved by up to r m in each horizontal direction with
-    ``randomize={"ball_start": r}``, and its path drawn.
+    ``randomize={"ball_start": r}`` (drawn again where ``run`` would refuse that ball: off the
+    default field's carpet or inside a wall; ``drawn_ball_start``), and its path drawn (it may
+    pass through a wall: the ball is moved, not pushed).
 
     ## Episode End
 
@@ -100,7 +102,7 @@ class HeadTrackBallEnv(AiboEnv):
 
     def _reset_task(self) -> None:
         rng = self.np_random
-        start = self.ball_start(BALL_START)
+        start = self.drawn_ball_start(BALL_START)
         omega = 2 * np.pi * rng.uniform(*FREQUENCY_HZ, 2)
         phase = rng.uniform(0, 2 * np.pi, 2)
         # Per axis (start, amplitude, angular frequency, phase), in Python floats: scalar math

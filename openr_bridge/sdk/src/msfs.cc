@@ -1,8 +1,8 @@
 /*
  * msfs.cc: the files an object sees. On the robot the only file system is the Memory Stick,
  * mounted at /MS, FAT with 8.3 names in upper case (a program may spell them in any case). Here
- * /MS/... is the memory-stick folder: each name is found ignoring case, a new file or folder is
- * made in upper case and must be an 8.3 name. A relative path is the run's working folder
+ * /MS/... is the memory-stick folder: each name must be an 8.3 name (as the robot requires, to
+ * find a file as to make one), is found ignoring case, and a new file or folder is made in upper case. A relative path is the run's working folder
  * (aibo-sim's --out), as for any aibo-sim controller. Any other path, one that climbs out of
  * its folder with "..", and one through a symbolic link in either folder (a FAT stick has none;
  * one planted in --out could lead anywhere) is refused (errno EACCES) and logged, never opened.
