@@ -27,6 +27,7 @@ from .exit_status import (
     EXIT_DIVERGED,
     EXIT_INTERRUPTED,
     EXIT_TERMINATED,
+    STOP_GRACE_S,
 )
 from .mtn import MODES as MTN_MODES
 from .options import (
@@ -447,7 +448,6 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-STOP_GRACE_S = 10.0  # after a signal, the time a command has to stop cleanly (robot_die, run.json, temporary files)
 # The same signal again within this is the one stop, sent twice: `timeout` and `kill -- -PGID`
 # send it to the process and to its process group.
 DUPLICATE_SIGNAL_S = 0.25

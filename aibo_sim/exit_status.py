@@ -10,3 +10,4 @@ EXIT_DIVERGED = 3  # the physics diverged
 EXIT_INTERRUPTED = 128 + signal.SIGINT  # 130, as a shell reports a process that Ctrl-C ended
 EXIT_BROKEN_PIPE = 128 + signal.SIGPIPE  # 141: standard output closed by its reader (`| head`)
 EXIT_TERMINATED = 128 + signal.SIGTERM  # 143, as a shell reports a process that SIGTERM ended
+STOP_GRACE_S = 10.0  # after a signal, the time a command has to stop cleanly (robot_die, run.json, temporary files)

@@ -304,6 +304,27 @@ def test_the_robot_die_functions_run_after_a_call_that_failed_as_in_python(tmp_p
     assert not (tmp_path / "out" / "not_reached.txt").exists()
 
 
+def test_a_failed_call_queued_before_the_end_ends_no_robot_die_function(tmp_path):
+    """A failed call queued by main() before it returned, or by a robot_die function before it
+    returned, cut the next robot_die function short at its first call (Python runs it whole); a
+    crash in a robot_die function after a failed call was not reported."""
+    die = 'static void die1(void) {\n  robot_get_device("PRM:/r1/c1-Joint2:11");\n  fclose(fopen("die1.txt", "w"));\n'
+    die += "  servo_set_position(1, 1.0 / 0.0);\n}\n"  # queued, then it returns
+    die += 'static void die2(void) {\n  robot_get_time();\n  fclose(fopen("die2.txt", "w"));\n'
+    die += "  *(volatile int *)0 = 1;\n}\n"
+    body = die + "int main(void) {\n  robot_die(die1);\n  robot_die(die2);\n"
+    body += "  servo_set_position(99, 0.1);\n  return 0;\n}\n"
+    with pytest.raises(ControllerFailed) as failed:
+        run_controller(c_file(tmp_path, "queued.c", body), duration=1, out=tmp_path / "out")
+    assert str(failed.value).split("\n")[1:] == [
+        "then its robot_die function's call servo_set_position(1, inf) raised DeviceError: PRM:/r1/c1-Joint2:11: "
+        "position must be a finite number, not inf",
+        "then it crashed in a robot_die function (SIGSEGV)",
+    ]
+    assert "at simulated t = 0.000 s: servo_set_position(99, 0.1) raised DeviceError" in str(failed.value)
+    assert (tmp_path / "out" / "die1.txt").exists() and (tmp_path / "out" / "die2.txt").exists()
+
+
 def test_calls_at_exit_outside_the_robot_die_functions_and_from_the_thread_that_ends(tmp_path, capfd):
     """An atexit handler of the controller's own that steps past the end gets its calls answered
     (it crashed: the robot_die functions' way out was taken); robot_die functions run in the thread
@@ -457,6 +478,42 @@ def test_ctrl_c_runs_the_c_robot_die_functions_then_exits_130(tmp_path):
     # its robot_step past the end ended it, as Python's SimulationEnd does (it stepped on, for ever,
     # answered "end" without simulating), and the next one ran
     assert (out / "die.txt").read_text() == "bye\n" and (out / "then.txt").exists()
+
+
+@pytest.mark.slow
+def test_one_sigterm_ends_a_c_controller_whose_robot_die_function_calls_for_ever(tmp_path):
+    """Only silence was cut short (2 s): a robot_die function looping on robot_get_time kept the run
+    going until a second signal, where a Python controller is stopped STOP_GRACE_S after the first."""
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    from aibo_sim.exit_status import STOP_GRACE_S
+
+    source = c_file(
+        tmp_path,
+        "poll.c",
+        'static void bye(void) {\n  fclose(fopen("bye.txt", "w"));\n  for (;;) robot_get_time();\n}\n'
+        "int main(void) {\n  robot_die(bye);\n  for (;;) robot_step(8);\n}\n",
+    )
+    out = tmp_path / "out"
+    run = subprocess.Popen(
+        [sys.executable, "-m", "aibo_sim.cli", "run", str(source), "--duration", "100000", "--out", str(out)],
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    deadline = time.monotonic() + 60
+    while not (out / "frames").exists() and time.monotonic() < deadline:
+        time.sleep(0.05)
+    time.sleep(0.5)
+    run.send_signal(signal.SIGTERM)
+    try:
+        err = run.communicate(timeout=STOP_GRACE_S + 20)[1]
+    finally:
+        run.kill()
+    assert run.returncode == 143 and (out / "bye.txt").exists()
+    assert f"controller poll.c still calling {STOP_GRACE_S:g} s after SIGTERM: stopped" in err
 
 
 @pytest.mark.slow

@@ -17,7 +17,8 @@ the one place of this discipline:
   (its process group is killed then: a grandchild holding the socket open cannot keep the run
   waiting). Every ``notice_s`` of wall time without a message it calls ``on_wait(seconds)``.
   Once a signal is pending, a child that sends nothing for ``GRACE_S`` is stopped, one line on
-  stderr says so (with ``grace_note``: what could not run then) and the signal is raised again.
+  stderr says so (with ``grace_note``: what could not run then) and the signal is raised again;
+  so is one still calling ``STOP_GRACE_S`` after it (``stop_if_overdue``, at each call).
 - ``stop()`` kills the whole process group (the child and whatever it started in it), reaps the
   child and returns its exit status (``returncode``); the signals go back to their handlers.
   Used as a context manager (``with Child(...) as child``), the child starts on entry and stops
@@ -39,6 +40,8 @@ import subprocess
 import sys
 import threading
 import time
+
+from ..exit_status import STOP_GRACE_S
 
 GRACE_S = 2.0  # after a signal, how long a child may stay silent before it is stopped
 EXIT_POLL_S = 0.1  # how often the child's exit is checked where no pidfd tells it
@@ -130,7 +133,7 @@ class Child:
                 return channel is not None and bool(select.select([channel], [], [], 0)[0])
             now = time.monotonic()
             if self.pending is not None and now >= max(began, self._signalled_at) + GRACE_S:
-                self._give_up()
+                self._give_up(f"made no call for {GRACE_S:g} s after")
                 return False
             if now >= began + (notices + 1) * notice_s:
                 notices += 1
@@ -175,14 +178,20 @@ class Child:
         with contextlib.suppress(ProcessLookupError, PermissionError):
             os.killpg(self._process.pid, signal.SIGKILL)
 
-    def _give_up(self) -> None:
-        """A signal is pending and the child stayed silent for ``GRACE_S``: stop it, say so, raise the signal."""
+    def stop_if_overdue(self) -> None:
+        """A signal is pending and the child still calls ``STOP_GRACE_S`` after it (a robot_die
+        function that loops, a C++ destructor that steps): stop it, as a Python controller is."""
+        if self.pending is not None and time.monotonic() >= self._signalled_at + STOP_GRACE_S:
+            self._give_up(f"still calling {STOP_GRACE_S:g} s after", with_note=False)
+
+    def _give_up(self, why: str, with_note: bool = True) -> None:
+        """A signal is pending and the child did not end (``why``): stop it, say so (with
+        ``grace_note`` where it made no call), raise the signal."""
         number, self.pending = self.pending, None
         self.stop()
-        note = f"; {self.grace_note}" if self.grace_note else ""
+        note = f"; {self.grace_note}" if self.grace_note and with_note else ""
         print(
-            f"aibo-sim: {self.name} made no call for {GRACE_S:g} s after {signal.Signals(number).name}: "
-            f"stopped, with its process group{note}",
+            f"aibo-sim: {self.name} {why} {signal.Signals(number).name}: stopped, with its process group{note}",
             file=sys.stderr,
             flush=True,
         )

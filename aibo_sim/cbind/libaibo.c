@@ -57,6 +57,7 @@ static void (*die_functions[MAX_DIE_FUNCTIONS])(void);
 static int die_count, exiting, dying;
 static jmp_buf die_function_end; /* where a robot_die function ends that steps past the run's end (while dying) */
 static pthread_t caller;          /* the thread that made the first call: the only one answered */
+static pthread_mutex_t calling = PTHREAD_MUTEX_INITIALIZER; /* held by a call being made */
 
 /* What the controller printed shows before anything ends it, in a file or a pipe too. */
 __attribute__((constructor)) static void line_buffered_output(void) { setvbuf(stdout, NULL, _IOLBF, BUFSIZ); }
@@ -83,12 +84,19 @@ static void binding_failed(const char *format, ...) {
 static void fail(const char *what) { binding_failed("%s: %s", what, strerror(errno)); }
 
 static void flush_calls(void);
+static void settle_calls(void);
 
-/* At exit (main returned, exit() called, or the run's end): the robot_die functions, then the
- * calls still waiting to be sent. */
+/* At exit (main returned, exit() called, or the run's end): the robot_die functions, in the
+ * thread that ended the controller (the only one answered from then on), each after the calls
+ * queued before it are settled (a failed one ends the controller, not the next function), then
+ * the calls still waiting to be sent. */
 static void at_exit(void) {
+    pthread_mutex_lock(&calling); /* after the call another thread is making */
+    caller = pthread_self();
     exiting = 1;
+    pthread_mutex_unlock(&calling);
     while (die_count) {
+        settle_calls();
         void (*exit_fn)(void) = die_functions[0];
         memmove(die_functions, die_functions + 1, --die_count * sizeof *die_functions);
         dying = 1;
@@ -159,18 +167,23 @@ static void put(const void *bytes, size_t size) {
     outgoing_length += size;
 }
 
-/* A call from the thread that made the first; another's would mix their messages. At exit, the
- * robot_die functions run in the thread that ended the controller. */
-static void check_thread(enum aibo_op call) {
-    if (!exiting && !pthread_equal(pthread_self(), caller)) {
+/* A call is made from the thread that made the first (at exit, the one that ended the
+ * controller), holding `calling` until it is sent (and answered); another thread's would mix
+ * their messages: it ends the run, or at exit waits for the end. */
+static void start_call(enum aibo_op call) {
+    pthread_mutex_lock(&calling);
+    if (pthread_equal(pthread_self(), caller)) return;
+    if (!exiting) {
         binding_failed("%s called from a second thread: a C controller makes its calls from one thread",
                        aibo_op_names[call]);
     }
+    pthread_mutex_unlock(&calling);
+    for (;;) pause();
 }
 
 static void begin(enum aibo_op call) {
     if (channel < 0) connect_to_simulator();
-    check_thread(call);
+    start_call(call);
     current_op = call;
     int32_t code = call, size = 0;
     put(&size, 4); /* the length, filled in by end_call */
@@ -202,6 +215,7 @@ static void end_call(void) {
 static void send_call(void) {
     end_call();
     ahead_length = 0;
+    pthread_mutex_unlock(&calling);
 }
 
 /* ---- answers */
@@ -247,12 +261,21 @@ static void call(void) {
     answer_end = 4 + size;
     int32_t status;
     memcpy(&status, answer + 4, 4);
+    pthread_mutex_unlock(&calling);
     if (status == AIBO_STATUS_END || status == AIBO_STATUS_FAILED) {
         /* the run is over, or a call failed (the simulator reports it): at_exit runs the
          * robot_die functions; in one of them, it ends there */
         if (!exiting) exit(status == AIBO_STATUS_END ? 0 : 1);
         if (dying) longjmp(die_function_end, 1); /* else an atexit handler of its own: the call returns */
     }
+}
+
+/* The calls queued so far made, and answered together by robot_get_mode's answer: the
+ * simulator reports one that failed, and what the controller does next goes on. */
+static void settle_calls(void) {
+    if (start == 0) return;
+    begin(AIBO_OP_robot_get_mode);
+    call();
 }
 
 static int get_int(void) {
@@ -282,7 +305,8 @@ static const char *get_string(char *keep, size_t capacity) {
 
 /* The answer of `op` on `arg` (a tag, a motion, 0 for none) robot_step brought, into `answer`. */
 static int answered_ahead(enum aibo_op op, int arg) {
-    if (channel >= 0) check_thread(op);
+    if (channel < 0) return 0;
+    start_call(op);
     for (size_t at = 0; at < ahead_length;) {
         int32_t entry[2];
         uint32_t size;
@@ -291,10 +315,12 @@ static int answered_ahead(enum aibo_op op, int arg) {
         if (entry[0] == (int32_t)op && entry[1] == arg) {
             memcpy(answer + 8, ahead + at + 12, size);
             cursor = 8;
+            pthread_mutex_unlock(&calling);
             return 1;
         }
         at += 12 + size;
     }
+    pthread_mutex_unlock(&calling);
     return 0;
 }
 

@@ -286,6 +286,7 @@ class _Server:
                     self._send(_Call.FAILED)
                     skipping = False
                 continue
+            self._child.stop_if_overdue()
             if self._child.pending is not None and call.name == "robot_step":
                 self._send(_Call.END)
                 continue
@@ -325,6 +326,11 @@ class _Server:
         self._child.wait(None, WAIT_NOTICE_S, self._calls.announce_wait)  # it may run on after closing its socket
         if failure is not None or dying:
             errors = ([str(failure)] if failure else []) + [f"its robot_die function's call {e}" for e in dying]
+            status = self._child.stop()
+            if status < 0:
+                errors.append(f"it crashed in a robot_die function ({signal.Signals(-status).name})")
+            elif status not in (0, 1):  # 1: its way out after the failed call
+                errors.append(f"a robot_die function exited with exit({status})")
             message = "\nthen ".join(errors)
             raise CControllerError(message, failure and failure.time_ms) from failure and failure.__cause__
         if ended and self._child.stop() == 0:
