@@ -447,12 +447,28 @@ def test_dump_takes_a_c_controller_as_it_takes_its_python_twin(tmp_path, monkeyp
     assert all((tmp_path / "c" / "rgb" / f.name).read_bytes() == f.read_bytes() for f in frames)
 
 
-@pytest.mark.slow
-def test_ctrl_c_runs_the_c_robot_die_functions_then_exits_130(tmp_path):
-    import signal
+def start_long_run(source: Path, out: Path, started: Path):
+    """``aibo-sim run source`` for a long time in a process of its own (its stderr piped), once
+    ``started`` exists and a little more."""
     import subprocess
     import sys
     import time
+
+    run = subprocess.Popen(
+        [sys.executable, "-m", "aibo_sim.cli", "run", str(source), "--duration", "100000", "--out", str(out)],
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    deadline = time.monotonic() + 60
+    while not started.exists() and time.monotonic() < deadline:
+        time.sleep(0.05)
+    time.sleep(0.3)
+    return run
+
+
+@pytest.mark.slow
+def test_ctrl_c_runs_the_c_robot_die_functions_then_exits_130(tmp_path):
+    import signal
 
     source = c_file(
         tmp_path,
@@ -464,15 +480,7 @@ def test_ctrl_c_runs_the_c_robot_die_functions_then_exits_130(tmp_path):
         "  for (;;) robot_step(8);\n}\n",
     )
     out = tmp_path / "out"
-    run = subprocess.Popen(
-        [sys.executable, "-m", "aibo_sim.cli", "run", str(source), "--duration", "100000", "--out", str(out)],
-        stderr=subprocess.PIPE,
-        text=True,
-    )
-    deadline = time.monotonic() + 60
-    while not (out / "started.txt").exists() and time.monotonic() < deadline:
-        time.sleep(0.05)
-    time.sleep(0.3)
+    run = start_long_run(source, out, out / "started.txt")
     run.send_signal(signal.SIGINT)
     assert run.communicate(timeout=60)[1].endswith("aibo-sim: interrupted\n") and run.returncode == 130
     # its robot_step past the end ended it, as Python's SimulationEnd does (it stepped on, for ever,
@@ -485,9 +493,6 @@ def test_one_sigterm_ends_a_c_controller_whose_robot_die_function_calls_for_ever
     """Only silence was cut short (2 s): a robot_die function looping on robot_get_time kept the run
     going until a second signal, where a Python controller is stopped STOP_GRACE_S after the first."""
     import signal
-    import subprocess
-    import sys
-    import time
 
     from aibo_sim.exit_status import STOP_GRACE_S
 
@@ -498,15 +503,7 @@ def test_one_sigterm_ends_a_c_controller_whose_robot_die_function_calls_for_ever
         "int main(void) {\n  robot_die(bye);\n  for (;;) robot_step(8);\n}\n",
     )
     out = tmp_path / "out"
-    run = subprocess.Popen(
-        [sys.executable, "-m", "aibo_sim.cli", "run", str(source), "--duration", "100000", "--out", str(out)],
-        stderr=subprocess.PIPE,
-        text=True,
-    )
-    deadline = time.monotonic() + 60
-    while not (out / "frames").exists() and time.monotonic() < deadline:
-        time.sleep(0.05)
-    time.sleep(0.5)
+    run = start_long_run(source, out, out / "frames")
     run.send_signal(signal.SIGTERM)
     try:
         err = run.communicate(timeout=STOP_GRACE_S + 20)[1]
