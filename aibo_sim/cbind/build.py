@@ -80,6 +80,14 @@ def local_headers(sources: list[Path]) -> list[Path]:
     return sorted(found)
 
 
+def own_files(main: Path, sources: list[Path]) -> list[tuple[str, Path]]:
+    """The controller's own files, each with its name in the compile cache's key and a dump's hash:
+    the sources by their names, the headers they include with quotes (``local_headers``) by their
+    paths from the main file's folder (a controller copied elsewhere keeps its key)."""
+    headers = [(os.path.relpath(h, main.parent), h) for h in local_headers(sources)]
+    return [(s.name, s) for s in sources] + headers
+
+
 def _compiler(kind: str, needed_by: str = "this controller") -> str:
     """The path of the C (``cc``) or C++ (``c++``) compiler; CompileError naming it when missing
     (``needed_by`` says what needs it)."""
@@ -124,11 +132,8 @@ def compile_controller(path: str | os.PathLike) -> Path:
     ):
         digest.update(part.encode() if isinstance(part, str) else part)
         digest.update(b"\0")
-    for source in sources:
-        digest.update(source.name.encode() + b"\0" + source.read_bytes() + b"\0")
-    for included in local_headers(sources):
-        name = os.path.relpath(included, main.parent)  # the controller copied elsewhere keeps its key
-        digest.update(name.encode() + b"\0" + included.read_bytes() + b"\0")
+    for name, file in own_files(main, sources):
+        digest.update(name.encode() + b"\0" + file.read_bytes() + b"\0")
     folder = _cache_root() / digest.hexdigest()[:32]
     executable = folder / main.stem
     if executable.is_file():

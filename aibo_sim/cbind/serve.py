@@ -312,10 +312,10 @@ class _Server:
                     failure.__cause__ = exc
                 else:  # in a robot_die function, which ends there
                     dying.append(error)
-                skipping = True
                 if call.results:
                     self._send(_Call.FAILED)
-                    skipping = False
+                else:
+                    skipping = True
                 continue
             if call.results:
                 self._send(
@@ -331,8 +331,8 @@ class _Server:
                 errors.append(f"it crashed in a robot_die function ({signal.Signals(-status).name})")
             elif status not in (0, 1):  # 1: its way out after the failed call
                 errors.append(f"a robot_die function exited with exit({status})")
-            message = "\nthen ".join(errors)
-            raise CControllerError(message, failure and failure.time_ms) from failure and failure.__cause__
+            time_ms, cause = (failure.time_ms, failure.__cause__) if failure else (None, None)
+            raise CControllerError("\nthen ".join(errors), time_ms) from cause
         if ended and self._child.stop() == 0:
             raise SimulationEnd()
 

@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import contextlib
 import hashlib
-import os
 import time
 from pathlib import Path
 
@@ -20,7 +19,7 @@ from openr_bridge.memory_stick import load_memory_stick, memory_stick_folder
 
 from ..camera import CameraProfile, CameraSettings, camera_size, describe_camera, scene_light
 from ..camera import camera_profile as resolve_profile  # dump's argument of that name shadows it
-from ..cbind.build import compile_controller, controller_sources, is_c_controller, local_headers
+from ..cbind.build import compile_controller, controller_sources, is_c_controller, own_files
 from ..config import DEFAULT_DURATION_S, CameraConfig, WorldConfig
 from ..field import DEFAULT_BALL_TYPE
 from ..files import make_folder
@@ -306,7 +305,7 @@ def model_sha256(model: mujoco.MjModel) -> str:
 
 def controller_sha256(path: Path) -> str:
     """The hash of a controller: its file's, or for a C or C++ controller with several sources or
-    headers of its own (``local_headers``), that of their names and hashes (compiled first: a
+    headers of its own (``cbind.build.own_files``), that of their names and hashes (compiled first: a
     syntax or compile error stops the dump at once); for a memory stick, that of its configuration
     files and objects (each read and checked first)."""
     if memory_stick_folder(path) is not None:
@@ -324,11 +323,10 @@ def controller_sha256(path: Path) -> str:
         return file_sha256(path)
     compile_controller(path)
     main, sources = controller_sources(path)
-    headers = local_headers(sources)
-    if sources == [path] and not headers:
+    files = own_files(main, sources)
+    if sources == [path] and len(files) == 1:
         return file_sha256(path)
-    named = [(s.name, s) for s in sources] + [(os.path.relpath(h, main.parent), h) for h in headers]
-    return hashlib.sha256("".join(f"{name}\0{file_sha256(f)}\0" for name, f in named).encode()).hexdigest()
+    return hashlib.sha256("".join(f"{name}\0{file_sha256(f)}\0" for name, f in files).encode()).hexdigest()
 
 
 def check_formats(formats) -> None:
