@@ -136,7 +136,18 @@ static void init(void) {
     }
 }
 
+static int inner(int ms) {
+    fprintf(out, "inner %d %g\n", ms, robot_get_time());
+    return 32;
+}
+
 static int run(int ms) {
+    if (is("run in run")) {
+        fprintf(out, "outer %d %g\n", ms, robot_get_time());
+        if (ms) robot_run(inner);
+        fprintf(out, "after robot_run\n"); /* never reached after robot_run: it does not return */
+        return 64;
+    }
     if (is("camera") && ms) {
         fwrite(camera_get_image(camera), 3, camera_get_width(camera) * camera_get_height(camera), out);
     } else if (is("sensors") && ms) {
@@ -433,6 +444,16 @@ def test_robot_run_does_not_return_on_the_stick_as_in_the_simulator(probe, tmp_p
     (tmp_path / "scenario.txt").write_text("after run\n")
     run_stick(probe[1], 16, tmp_path)
     assert (tmp_path / "console.log").exists() and not (tmp_path / "after.txt").exists()
+
+
+def test_robot_run_in_the_run_function_replaces_it_at_once_as_in_the_simulator(probe, tmp_path, monkeypatch):
+    """That robot_run returned on the stick: the old run function went on and the new one started
+    a step later."""
+    stick, reference, _, _ = probe_runs(monkeypatch, probe, tmp_path, "run in run", frames=32)
+    lines = (stick / "probe.txt").read_text().splitlines()
+    assert lines[:4] == ["outer 0 0", "after robot_run", "outer 64 0.064", "inner 0 0.064"]
+    assert lines[4:6] == ["inner 32 0.096", "inner 32 0.128"]
+    assert (reference / "probe.txt").read_text().splitlines() == lines
 
 
 def test_sensor_values_are_the_python_apis_to_the_micro_unit(probe, tmp_path, monkeypatch):

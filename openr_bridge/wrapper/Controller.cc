@@ -168,9 +168,15 @@ void Controller::CallMain(void* self) {
     controller.runJump_ = 0;
 }
 
+/* Calls the run function; one that calls robot_run is left (Run) and the new one called at once
+ * with 0, as in the simulator, where that robot_run never returns. */
 void Controller::CallRun(void* self) {
     Controller& controller = *(Controller*)self;
+    jmp_buf replaced;
+    controller.runJump_ = &replaced;
+    if (setjmp(replaced) != 0) controller.lastStep_ = 0;
     int ms = controller.run_(controller.lastStep_);
+    controller.runJump_ = 0;
     if (ms <= 0 || ms % wrapper::FRAME_MS != 0) {
         wrapper::Fail("step of %d ms: must be a positive whole multiple of the %d ms joint frame", ms,
                       wrapper::FRAME_MS);
@@ -188,6 +194,7 @@ void Controller::CallDie(void* self) {
 bool Controller::Protected(void (*call)(void*), void* argument) {
     jmp_buf here;
     jmp_buf* outer = failJump_;
+    jmp_buf* outerRun = runJump_;
     failJump_ = &here;
     if (setjmp(here) == 0) {
         call(argument);
@@ -195,6 +202,7 @@ bool Controller::Protected(void (*call)(void*), void* argument) {
         return true;
     }
     failJump_ = outer;
+    runJump_ = outerRun;  /* the failed call's, if it set one, is gone */
     return false;
 }
 
@@ -212,6 +220,7 @@ void Controller::Fail(const char* message) {
  * then, unless the robot is already stopping, it shuts down. */
 void Controller::End(bool shutdown) {
     state_ = ENDED;
+    runJump_ = 0;  /* robot_run in a robot_die function returns */
     while (nextDie_ < dieFunctions_.size()) Protected(CallDie, this);
     if (shutdown) OPENR::Shutdown(OBootCondition(obcbPAUSE_SW));
 }

@@ -10,7 +10,7 @@
  * Start (DoStart): motor power on, Sony's standard joint gains (Model Information 2.2), then the
  * controller's main() is called: robot_live(init) calls init, robot_die registers, robot_run
  * stores the run function and leaves main() (its statements after robot_run are never reached,
- * as in Webots). robot_step cannot be: an Aperios object is one thread that must
+ * as in Webots; called in the run function, it leaves that and the new one starts at once). robot_step cannot be: an Aperios object is one thread that must
  * return from each message before the next (the next sensor data) can arrive, so a loop that
  * waits inside a call would never see time pass. robot_step is therefore an explicit error
  * that ends the controller; write the controller with robot_run.
@@ -110,7 +110,7 @@ private:
     wrapper::Robot robot_;
     State state_;
     jmp_buf* failJump_;
-    jmp_buf* runJump_;                       /* where robot_run leaves main() */
+    jmp_buf* runJump_;                       /* where robot_run leaves main() or the run function */
     std::vector<OPrimitiveID> ids_;          /* by robot_.Locators(): the joints first */
     std::vector<OPrimitiveID> ledIds_;
     std::map<OPrimitiveID, int> slots_;      /* sensor primitive -> snapshot slot */
