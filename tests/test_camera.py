@@ -235,6 +235,24 @@ def test_same_seed_same_noise_and_ir_untouched_by_rendering():
     assert not np.array_equal(frames_a[0], frames_c[0])
 
 
+def test_no_two_frames_share_their_noise_shifted():
+    """Real temporal noise is drawn afresh each frame: one frame's noise field is not another's
+    moved along the rows (one pool offset per frame made a seventh of all frame pairs so)."""
+    from aibo_sim.camera.sensor import Sensor
+
+    profile = CameraProfile("flat", sensor=True, vignetting=False, motion_blur=False, softness_px=0.0)
+    height, width = 160, 208
+    maps = tuple(m.astype(np.float64) for m in np.meshgrid(np.arange(width) + 2.0, np.arange(height) + 2.0))
+    sensor = Sensor(profile, CameraSettings(), 5000.0, maps, (width + 4, height + 4), (1.0, 1.0))
+    render = np.full((height + 4, width + 4, 4), 128, np.uint8)
+    noise = [sensor.expose(render, (0.0, 0.0), 0, index)[..., 0].astype(float).ravel() for index in range(16)]
+    spectra = [np.fft.rfft((n - n.mean()) / n.std(), 2 * n.size) for n in noise]
+    correlations = [
+        np.fft.irfft(a * np.conj(b)).max() / noise[0].size for i, a in enumerate(spectra) for b in spectra[i + 1 :]
+    ]
+    assert max(correlations) < 0.1, max(correlations)  # every raster shift of every pair
+
+
 def dot_grid(spacing=0.05, columns=11, rows=9) -> tuple[str, np.ndarray]:
     points = np.array(
         [
@@ -670,9 +688,9 @@ def _warp(
         slope,
         intercept,
         np.zeros(height, np.int64),
-        np.zeros((3, height * width), np.int8),
+        np.zeros((3, width), np.int8),
         np.zeros(3, np.float32),
-        0,
+        np.zeros(height, np.int64),
         np.float32(0),
         np.zeros((3, image.shape[1] + 4 + kernels.SLACK), np.float32),
         np.zeros((3, width + kernels.SLACK), np.float32),

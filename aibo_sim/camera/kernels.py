@@ -149,7 +149,7 @@ def develop(
     coefficient_row,
     noise,
     noise_scale,
-    start,
+    noise_rows,
     y_floor,
     across,
     line,
@@ -168,7 +168,7 @@ def develop(
        ``matrix`` (3, 4) to Y, Cr, Cb, ``curve v^2 + slope v + intercept`` (vignetting and
        robot colour, planes (3, rows, w), image row v at ``coefficient_row[v]``; Cr's curve is
        not read: its table has two columns, so Cr's fit is a line), plus
-       ``noise[c, start + v w + u] * noise_scale[c]``; Y floored at ``y_floor``, all clipped to
+       ``noise[c, noise_rows[v] + u] * noise_scale[c]``; Y floored at ``y_floor``, all clipped to
        0..255 and rounded half up.
 
     ``*_pointers`` and ``*_runs`` split each row into runs of one source offset (``lens.Warp``:
@@ -220,7 +220,7 @@ def develop(
                         + (centre * q + outer * p) * a1[i]
                         + (outer * q + centre * p) * a2[i]
                     )
-        at = start + v * width
+        at = noise_rows[v]
         noise_y, noise_cr, noise_cb = noise[0, at : at + width], noise[1, at : at + width], noise[2, at : at + width]
         row = coefficient_row[v]
         curve_y, curve_cb = curve[0, row], curve[2, row]

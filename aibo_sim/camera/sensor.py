@@ -34,9 +34,9 @@ Then, per frame:
 5. per-robot colour: ``v' = pivot + gain (v - pivot) + offset`` per channel (section 4);
 6. noise: Gaussian, sigma per channel at MID gain times sqrt(gain factor) (section 4; per
    layer-H pixel: a 416 x 320 picture's pixels draw twice the sigma, its 2 x 2 means the measured one), from
-   a fixed pool of normal numbers (bytes, in steps of sigma / ``NOISE_STEPS``) at an offset
-   drawn from (seed, frame index): the same frame of the same seed gets the same noise
-   whoever asks and in whatever order;
+   a fixed pool of normal numbers (bytes, in steps of sigma / ``NOISE_STEPS``), each row at an
+   offset drawn from (seed, frame index, row): the same frame of the same seed gets the same
+   noise whoever asks and in whatever order;
 7. rounding and clipping to bytes (Y floor ``y_floor``, below ``black_level``: a black target
    reads the black level, its noise reaching down to the floor).
 
@@ -376,12 +376,16 @@ def _noise_pool(length: int) -> np.ndarray:
     return np.clip(np.round(normal * NOISE_STEPS), -127, 127).astype(np.int8)
 
 
-def noise_offset(seed: int, index: int, choices: int) -> int:
-    """Where frame ``index`` of ``seed`` starts in the noise pool (splitmix64 of both)."""
-    z = (seed * 0x9E3779B97F4A7C15 + index * 0xBF58476D1CE4E5B9 + 0x94D049BB133111EB) & (2**64 - 1)
-    z = ((z ^ (z >> 30)) * 0xBF58476D1CE4E5B9) & (2**64 - 1)
-    z = ((z ^ (z >> 27)) * 0x94D049BB133111EB) & (2**64 - 1)
-    return (z ^ (z >> 31)) % choices
+def noise_rows(seed: int, index: int, rows: int, choices: int) -> np.ndarray:
+    """Where each row of frame ``index`` of ``seed`` starts in the noise pool (splitmix64 of the
+    three), int64 (rows,): each row drawn apart, so that no two frames share a noise field
+    shifted (one offset for the whole frame made frames whose offsets fell close copies of each
+    other, moved along the rows)."""
+    key = (seed * 0x9E3779B97F4A7C15 + index * 0xBF58476D1CE4E5B9 + 0x94D049BB133111EB) & (2**64 - 1)
+    z = np.uint64(key) + np.arange(rows, dtype=np.uint64) * np.uint64(0xD1B54A32D192ED03)
+    z = (z ^ (z >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
+    z = (z ^ (z >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
+    return ((z ^ (z >> np.uint64(31))) % np.uint64(choices)).astype(np.int64)
 
 
 class Sensor:
@@ -418,7 +422,7 @@ class Sensor:
         self._vignetting_rows, self._coefficient_row = self._distinct_rows(vignetting.transpose(0, 3, 1, 2))
         pixels = self.width * self.height
         self._pool = _noise_pool(NOISE_POOL_FRAMES * pixels * 3).reshape(3, -1)
-        self._choices = (NOISE_POOL_FRAMES - 1) * pixels
+        self._choices = NOISE_POOL_FRAMES * pixels - self.width + 1
         self._buffers: dict[tuple, np.ndarray] = {}
         self.configure(settings, profile.robot)
         # Every pass loaded now (numba's cache): not at a run's first moving frame, where a
@@ -533,7 +537,7 @@ class Sensor:
             self._coefficient_row,
             self._pool,
             self._noise_scale,
-            noise_offset(seed, index, self._choices),
+            noise_rows(seed, index, self.height, self._choices),
             self._y_floor,
             self._buffer((3, width + 4 + slack), np.float32),
             self._buffer((3, self.width + slack), np.float32),
