@@ -235,6 +235,21 @@ def test_same_seed_same_noise_and_ir_untouched_by_rendering():
     assert not np.array_equal(frames_a[0], frames_c[0])
 
 
+@pytest.mark.parametrize("gamma", [1.0, 2.2, 3.0])
+def test_the_gamma_is_the_profiles(gamma):
+    """Twice the signal (HIGH gain) is 2 ** (1 / gamma) on the codes."""
+    from aibo_sim.camera.sensor import Sensor
+
+    profile = CameraProfile(
+        "flat", sensor=True, vignetting=False, motion_blur=False, softness_px=0.0, noise_sigma=(0, 0, 0), gamma=gamma
+    )
+    height, width = 8, 8
+    maps = tuple(m.astype(np.float64) for m in np.meshgrid(np.arange(width) + 2.0, np.arange(height) + 2.0))
+    sensor = Sensor(profile, CameraSettings(gain="high"), 5000.0, maps, (width + 4, height + 4), (1.0, 1.0))
+    y = sensor.expose(np.full((height + 4, width + 4, 4), 64, np.uint8), (0.0, 0.0), 0, 0)[..., 0]
+    assert np.all(y == round(20 + 232 / 255 * 64 * 2 ** (1 / gamma))), (y[0, 0], gamma)
+
+
 def test_no_two_frames_share_their_noise_shifted():
     """Real temporal noise is drawn afresh each frame: one frame's noise field is not another's
     moved along the rows (one pool offset per frame made a seventh of all frame pairs so)."""

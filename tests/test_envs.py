@@ -330,6 +330,21 @@ def test_randomisation_varies_the_scene_between_seeds_and_only_then():
     assert not np.array_equal(image_0, image_1) and not np.array_equal(ball_0, ball_1)
 
 
+@pytest.mark.parametrize("env_id", [HEAD_TRACK, "aibo_sim/MatchVsScripted-v0"])
+def test_a_profiles_robot_colour_is_kept_without_camera_robot(env_id):
+    """Each reset set a neutral RobotColour in its place: an offset of +30 on Y was lost."""
+    from aibo_sim.camera import PROFILES, RobotColour
+
+    def mean_y(**options):
+        env = gym.make(env_id, camera="ycrcb", **options)
+        observation, _ = env.reset(seed=3)
+        env.close()
+        return observation["image"][..., 0].mean()
+
+    brighter = PROFILES["ers7"].with_options(robot=RobotColour(offset=(30.0, 0.0, 0.0)))
+    assert mean_y(camera_profile=brighter) - mean_y() == pytest.approx(30, abs=1.5)
+
+
 def test_render_rgb_array_shows_the_third_person_view():
     env = gym.make(HEAD_TRACK, render_mode="rgb_array", camera=None)
     env.reset(seed=0)

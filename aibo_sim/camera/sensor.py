@@ -15,7 +15,7 @@ Then, per frame:
    scene's ``light_temperature_K``) x white balance gains (von Kries against the preset's
    Planckian, section 6) x exposure (each gain step and each shutter step doubles the
    signal, section 1) x ``sensitivity``, then the on-chip gamma with clipping at 0 and full
-   scale. The gamma (UNCONFIRMED) is a pure power, L^(1/2.2) (sRGB's usual approximation),
+   scale. The gamma (UNCONFIRMED) is a pure power, L^(1/``gamma``), 2.2 (sRGB's usual approximation),
    and the render's codes are read with its inverse: a factor k on the light is then a gain
    k^(1/2.2) on the codes, exact for every code, and black stays black at every exposure
    (sRGB's own curve read this way, 1.055 L^(1/2.4) - 0.055 without its linear toe, lifted a
@@ -33,7 +33,10 @@ Then, per frame:
    every entry), linear in r between the radii;
 5. per-robot colour: ``v' = pivot + gain (v - pivot) + offset`` per channel (section 4);
 6. noise: Gaussian, sigma per channel at MID gain times sqrt(gain factor) (section 4; per
-   layer-H pixel: a 416 x 320 picture's pixels draw twice the sigma, its 2 x 2 means the measured one), from
+   layer-H pixel: a 416 x 320 picture's pixels draw twice the sigma, its 2 x 2 means the measured one),
+   in output levels whatever the brightness: in rUNSWift's table (one gain) the darkest targets
+   are no noisier (blue, Y 21: sigma Y 1.1; red 0.9; white, Y 149: 2.0), so a dark scene at
+   high gain is noisier against its signal, not in levels; from
    a fixed pool of normal numbers (bytes, in steps of sigma / ``NOISE_STEPS``), each row at an
    offset drawn from (seed, frame index, row): the same frame of the same seed gets the same
    noise whoever asks and in whatever order;
@@ -42,8 +45,10 @@ Then, per frame:
 
 UNCONFIRMED in the spec, chosen here and configurable: rolling shutter (``readout_ms``,
 default 0: off, no source gives the ERS-7's readout time; the last row ends its exposure at
-the frame's tick), frame latency (``latency_frames``, default 0), the gamma curve, the
-vignetting's dependence on settings (the measured table, FL / HIGH / FAST, is used for all).
+the frame's tick), frame latency (``latency_frames``, default 0), the gamma curve
+(``gamma``, 2.2). Chosen and not configurable beyond ``vignetting=False``: the measured
+vignetting table (FL / HIGH / FAST) for every setting (ARAIBO's per-setting offsets belong to
+its correction, not to a falloff anyone measured).
 """
 
 from __future__ import annotations
@@ -95,7 +100,6 @@ ROBOT_GAIN_SIGMA = (0.034, 0.046, 0.021)
 ROBOT_OFFSET_SIGMA = (1.5, 1.8, 2.25)
 NOISE_POOL_FRAMES = 8
 NOISE_STEPS = 32  # the noise pool's steps per sigma: bytes reach 127 / 32, ~4 sigma
-GAMMA = 2.2  # stage 2's curve: a pure power, black stays black
 MIN_BLUR_PX = 0.25  # image motion below this is left sharp
 
 
@@ -212,6 +216,7 @@ class CameraProfile:
     softness_px: float = 0.37
     motion_blur: bool = True
     readout_ms: float = 0.0  # rolling shutter: time from the first row's exposure end to the last's
+    gamma: float = 2.2  # stage 2's curve, L ** (1 / gamma): a pure power, black stays black
     latency_frames: int = 0  # a frame is delivered this many camera frames after its exposure
     robot: RobotColour = field(default_factory=RobotColour)
 
@@ -233,7 +238,12 @@ class CameraProfile:
                 bad(parameter, f"{count} finite numbers")
         if min(self.noise_sigma) < 0:
             bad("noise_sigma", "3 numbers >= 0")
-        for parameter, low, above in (("sensitivity", 0, True), ("softness_px", 0, False), ("readout_ms", 0, False)):
+        for parameter, low, above in (
+            ("sensitivity", 0, True),
+            ("softness_px", 0, False),
+            ("readout_ms", 0, False),
+            ("gamma", 0, True),
+        ):
             value = getattr(self, parameter)
             if not (finite(value) and (value > low if above else value >= low)):
                 bad(parameter, f"a finite number {'>' if above else '>='} {low}")
@@ -479,7 +489,7 @@ class Sensor:
         each is kept)."""
         response = self._responses.get(light)
         if response is None:
-            response = self._responses[light] = ((self._gains * light) ** (1 / GAMMA)).astype(np.float32)
+            response = self._responses[light] = ((self._gains * light) ** (1 / self.profile.gamma)).astype(np.float32)
         return response
 
     def _buffer(self, shape: tuple[int, ...], dtype: type) -> np.ndarray:

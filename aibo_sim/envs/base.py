@@ -171,7 +171,8 @@ class AiboEnv(gym.Env):
     light's intensity by a factor in [1-m, 1+m], moves the ball's start by up to r metres in
     each horizontal direction, and draws the camera's per-robot colour deviation (per-channel
     gain and offset of Y, Cr, Cb: ``camera_robot``) from s times the spread measured over real
-    robots. ``render_mode="rgb_array"``: ``render`` returns the ``tracking`` camera's view,
+    robots (without it, the camera profile's own ``robot``). ``render_mode="rgb_array"``:
+    ``render`` returns the ``tracking`` camera's view,
     480x360 RGB, with shadows and reflections (``quality="high"``): about 68 ms a frame in Mesa's
     software OpenGL on one thread (54 ms with ``LP_NUM_THREADS=2`` on 2 cores), against 5 ms
     without. A bad argument raises ValueError naming it. An environment cannot be pickled or
@@ -348,7 +349,7 @@ class AiboEnv(gym.Env):
         model.vis.headlight.diffuse[:] = headlight * factor
         model.vis.headlight.ambient[:] = ambient * factor
         spread = self.randomize.get("camera_robot", 0.0)
-        self.camera_robot = RobotColour.draw(rng, spread) if spread else RobotColour()
+        self.camera_robot = RobotColour.draw(rng, spread) if spread else self.sim.camera.profile.robot
         self.sim.camera.set_robot(self.camera_robot)
 
     def ball_start(self, nominal_xy) -> np.ndarray:

@@ -235,7 +235,8 @@ class MatchEnv(pettingzoo.ParallelEnv):
     robots file (``team.load_robots``); every robot needs a team. The robots' ``controller``
     entries (of a robots file) are not run: agents and scripts drive the robots.
     ``randomize``: ``lighting``, ``ball_start`` (around the centre spot) and ``camera_robot``
-    (one colour deviation drawn per robot). ``scripted``: robot name -> a factory called with
+    (one colour deviation drawn per robot; without it, each camera profile's own ``robot``).
+    ``scripted``: robot name -> a factory called with
     that robot's ``Simulation`` view that returns a scripted policy (``BallChaser`` for one;
     ``scripted_team`` makes a whole set): those robots are no agents; before each step
     ``policy.plan(frames)`` gives their joint targets for each 8 ms frame of it (and
@@ -510,7 +511,7 @@ class MatchEnv(pettingzoo.ParallelEnv):
         for name, robot in self.robots.items():
             colour = self.camera_robot
             if robot is not self.sim:
-                colour = RobotColour.draw(self.np_random, spread) if spread else RobotColour()
+                colour = RobotColour.draw(self.np_random, spread) if spread else robot.camera.profile.robot
                 robot.camera.set_robot(colour)
             self.camera_robots[name] = colour
 
