@@ -514,6 +514,32 @@ def test_one_sigterm_ends_a_c_controller_whose_robot_die_function_calls_for_ever
 
 
 @pytest.mark.slow
+def test_one_sigterm_ends_a_c_controller_that_calls_for_ever_after_a_failed_call(tmp_path):
+    """After a failed call the simulator skipped its calls without results before looking at the
+    signal: one that never waited for an answer again was stopped only by SIGKILL."""
+    import signal
+
+    from aibo_sim.exit_status import STOP_GRACE_S
+
+    source = c_file(
+        tmp_path,
+        "skips.c",
+        'int main(void) {\n  DeviceTag s = robot_get_device("PRM:/r1/c1-Joint2:11");\n'
+        '  fclose(fopen("failing.txt", "w"));\n  servo_set_position(999, 0.1);\n'
+        "  for (;;) servo_set_position(s, 0.1);\n}\n",
+    )
+    out = tmp_path / "out"
+    run = start_long_run(source, out, out / "failing.txt")
+    run.send_signal(signal.SIGTERM)
+    try:
+        err = run.communicate(timeout=STOP_GRACE_S + 20)[1]
+    finally:
+        run.kill()
+    assert run.returncode == 143, err
+    assert f"controller skips.c still calling {STOP_GRACE_S:g} s after SIGTERM: stopped" in err
+
+
+@pytest.mark.slow
 @pytest.mark.parametrize("signal_name, status", [("SIGINT", 130), ("SIGTERM", 143)])
 def test_a_signal_right_after_a_call_is_read_loses_no_call(tmp_path, signal_name, status):
     """The signal comes just after a call was read, before it is answered: a KeyboardInterrupt
@@ -645,3 +671,113 @@ int main(void) {
 """
     run_controller(c_file(tmp_path, "motions.c", body), duration=20)
     assert "done 1500" in capfd.readouterr().out
+
+
+def run_cli(source: Path, out: Path, timeout: float = 60):
+    """``aibo-sim run source`` in a process of its own; one that hangs is failed after ``timeout``
+    and ended by SIGTERM (which stops its controller too)."""
+    import subprocess
+    import sys
+
+    run = subprocess.Popen(
+        [sys.executable, "-m", "aibo_sim.cli", "run", str(source), "--duration", "5", "--out", str(out)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    try:
+        run.stdout_text, run.stderr = run.communicate(timeout=timeout)
+    except subprocess.TimeoutExpired:
+        run.terminate()
+        pytest.fail(f"aibo-sim run {source.name} hung: {run.communicate(timeout=30)[1]}")
+    return run
+
+
+@pytest.mark.parametrize(
+    "handler, message",
+    [
+        ("  seen = robot_get_time();", "robot_get_time called in a signal handler that interrupted robot_step"),
+        ("  exit(0);", "exit() called in a signal handler that interrupted robot_step: the robot_die functions cannot"),
+    ],
+)
+def test_a_call_or_exit_in_a_signal_handler_that_interrupts_a_call_ends_the_run_naming_it(tmp_path, handler, message):
+    """The handler waited for the lock its own thread held: the run hung for good."""
+    body = "#include <signal.h>\n#include <sys/time.h>\nstatic volatile double seen;\n"
+    body += "static void tick(int number) {\n  (void)number;\n" + handler + "\n}\n"
+    body += "int main(void) {\n  struct itimerval every = {{0, 1000}, {0, 1000}};\n  signal(SIGALRM, tick);\n"
+    body += "  robot_live(0);\n  setitimer(ITIMER_REAL, &every, 0);\n  for (;;) robot_step(8);\n}\n"
+    run = run_cli(c_file(tmp_path, "handler.c", body), tmp_path / "out")
+    assert run.returncode == 1 and message in run.stderr, run.stderr
+
+
+def test_a_forked_childs_calls_and_exit_leave_the_controllers_connection_alone(tmp_path):
+    """The child's exit ran the robot_die functions, and their calls, on the controller's connection."""
+    body = "#include <sys/wait.h>\n#include <unistd.h>\n"
+    body += 'static void bye(void) {\n  FILE *f = fopen("died.txt", "a");\n  fprintf(f, "%d\\n", (int)getpid());\n'
+    body += "  fclose(f);\n  robot_step(8);\n}\n"
+    body += "int main(void) {\n  int status[2];\n  robot_die(bye);\n  robot_step(8);\n"
+    body += "  for (int k = 0; k < 2; k++) {\n    pid_t child = fork();\n"
+    body += "    if (child == 0) { if (k) robot_get_time(); exit(3); }\n    waitpid(child, &status[k], 0);\n  }\n"
+    body += '  FILE *f = fopen("children.txt", "w");\n'
+    body += '  fprintf(f, "%d %d %d\\n", (int)getpid(), WEXITSTATUS(status[0]), WEXITSTATUS(status[1]));\n'
+    body += "  fclose(f);\n  for (;;) robot_step(8);\n}\n"
+    run = run_cli(c_file(tmp_path, "forks.c", body), tmp_path / "out")
+    assert run.returncode == 0, run.stderr
+    pid, *statuses = (tmp_path / "out" / "children.txt").read_text().split()
+    assert statuses == ["3", "70"] and (tmp_path / "out" / "died.txt").read_text() == pid + "\n"
+    assert "robot_get_time called in a child process (fork)" in run.stderr
+
+
+def test_exit_in_a_robot_die_function_goes_on_with_the_next_and_sends_its_calls(tmp_path):
+    """exit() in a robot_die function skipped the next one, and the calls it had queued were never made."""
+    body = "#include <device/led.h>\nstatic void first(void) {\n  led_set(999, 1);\n  exit(3);\n}\n"
+    body += 'static void second(void) {\n  fclose(fopen("second.txt", "w"));\n}\n'
+    body += "int main(void) {\n  robot_die(first);\n  robot_die(second);\n  for (;;) robot_step(32);\n}\n"
+    with pytest.raises(ControllerFailed) as failed:
+        run_controller(c_file(tmp_path, "exits.c", body), duration=0.1, out=tmp_path / "out")
+    assert (tmp_path / "out" / "second.txt").exists()
+    assert "its robot_die function's call led_set(999, 1) raised DeviceError" in str(failed.value)
+    assert "a robot_die function exited with exit(3)" in str(failed.value)
+
+
+@pytest.mark.parametrize(
+    "main_body, message",
+    [
+        ("robot_die(0);", "robot_die(NULL): the exit function must be callable"),
+        ("robot_run(0);", "robot_run(NULL): the run function must be callable"),
+        ("robot_run(zero);", "run function returned 0: it must return the next step in ms (e.g. TIME_STEP)"),
+    ],
+)
+def test_robot_die_and_robot_run_refuse_what_python_refuses_in_its_words(tmp_path, main_body, message):
+    """robot_die(NULL) crashed at the end, robot_run(NULL) at once; a run function returning 0 was
+    reported as robot_step(0)'s error. As after Python's exception, the robot_die functions run."""
+    body = 'static void bye(void) { fclose(fopen("died.txt", "w")); }\nstatic int zero(int ms) { return 0 * ms; }\n'
+    body += f"int main(void) {{\n  robot_die(bye);\n  {main_body}\n  for (;;) robot_step(8);\n}}\n"
+    with pytest.raises(ControllerFailed) as failed:
+        run_controller(c_file(tmp_path, "refused.c", body), duration=0.1, out=tmp_path / "out")
+    assert str(failed.value) == f"controller refused.c at simulated t = 0.000 s: {message}"
+    assert (tmp_path / "out" / "died.txt").exists()
+
+
+def test_the_programs_a_controller_runs_inherit_neither_its_connection_nor_its_variables(tmp_path):
+    body = '#include <fcntl.h>\nint main(void) {\n  int fd = atoi(getenv("AIBO_SIM_FD"));\n  robot_live(0);\n'
+    body += '  FILE *f = fopen("inherited.txt", "w");\n'
+    body += '  fprintf(f, "%d %d %d\\n", fcntl(fd, F_GETFD) & FD_CLOEXEC,\n'
+    body += '          !getenv("AIBO_SIM_FD"), !getenv("AIBO_SIM_SHM"));\n'
+    body += "  fclose(f);\n  return 0;\n}\n"
+    run_controller(c_file(tmp_path, "inherits.c", body), duration=0.1, out=tmp_path / "out")
+    assert (tmp_path / "out" / "inherited.txt").read_text() == "1 1 1\n"
+
+
+def test_mtn_get_name_gives_the_files_bytes(tmp_path):
+    """The name went out as UTF-8 and was cut at 255 bytes, mid-character."""
+    from aibo_sim.mtn import serialize_mtn
+
+    motion = read_mtn(models_dir() / "motions" / "WALKFWD.MTN")
+    motion.name = "\xe9" * 200
+    (tmp_path / "long.mtn").write_bytes(serialize_mtn(motion))
+    body = "#include <string.h>\n#include <device/mtn.h>\nint main(void) {\n"
+    body += '  const char *name = mtn_get_name(mtn_new("long.mtn"));\n'
+    body += '  FILE *f = fopen("name.bin", "wb");\n  fwrite(name, 1, strlen(name), f);\n  fclose(f);\n  return 0;\n}\n'
+    run_controller(c_file(tmp_path, "named.c", body), duration=0.1, out=tmp_path / "out")
+    assert (tmp_path / "out" / "name.bin").read_bytes() == b"\xe9" * 200

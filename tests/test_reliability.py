@@ -433,12 +433,18 @@ def test_a_child_that_keeps_the_socket_open_does_not_hold_the_run(tmp_path):
 
 
 @needs_cc
-def test_a_c_controller_that_closes_its_socket_is_not_reported_as_exit_70(tmp_path):
+@pytest.mark.parametrize(
+    "reuse",
+    ["", "  int s;\n  do s = socket(AF_INET, SOCK_DGRAM, 0); while (s >= 0 && s < fd);\n"],
+    ids=["closed", "another socket in its place"],
+)
+def test_a_c_controller_that_closes_its_socket_is_not_reported_as_exit_70(tmp_path, reuse):
     source = tmp_path / "closes.c"
     source.write_text(
-        "#include <stdlib.h>\n#include <unistd.h>\n#include <device/robot.h>\n"
-        'int main(void) {\n  robot_live(0); robot_step(8);\n  close(atoi(getenv("AIBO_SIM_FD")));\n'
-        "  robot_step(8); return 0;\n}\n"
+        "#include <stdlib.h>\n#include <unistd.h>\n#include <sys/socket.h>\n#include <device/robot.h>\n"
+        'int main(void) {\n  int fd = atoi(getenv("AIBO_SIM_FD"));\n  robot_live(0); robot_step(8);\n  close(fd);\n'
+        + reuse
+        + "  robot_step(8); return 0;\n}\n"
     )
     with pytest.raises(ControllerFailed) as failed:
         run_controller(source, duration=1)

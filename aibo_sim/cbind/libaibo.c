@@ -24,6 +24,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/mman.h>
+#include <signal.h>
 #include <sys/socket.h>
 #include <time.h>
 #include <unistd.h>
@@ -45,6 +46,7 @@
 #define SPIN_NS 2000000L
 
 static int channel = -1;
+static enum aibo_op current_op; /* the call being made */
 static unsigned char *images;
 /* Calls without results wait in `outgoing` and go with the next call that has results (one
  * write); `start` is where the call being built begins. Answers arrive in `answer`. */
@@ -58,27 +60,44 @@ static int die_count, exiting, dying;
 static jmp_buf die_function_end; /* where a robot_die function ends that steps past the run's end (while dying) */
 static pthread_t caller;          /* the thread that made the first call: the only one answered */
 static pthread_mutex_t calling = PTHREAD_MUTEX_INITIALIZER; /* held by a call being made */
+static __thread volatile sig_atomic_t in_call; /* this thread makes a call: one of its signal handler's would deadlock */
+static int forked;                     /* this is a child the controller forked: its calls are refused */
+static char reason_file[4096];         /* AIBO_SIM_SHM, where the binding leaves its reason */
 
 /* What the controller printed shows before anything ends it, in a file or a pipe too. */
 __attribute__((constructor)) static void line_buffered_output(void) { setvbuf(stdout, NULL, _IOLBF, BUFSIZ); }
 
-/* The binding cannot go on: the reason goes to the simulator, in AIBO_SIM_SHM past the images
- * (serve.py reports it as the controller's error), or to stderr where that file cannot be opened. */
-static void binding_failed(const char *format, ...) {
+/* The controller's error as the simulator reports it: in AIBO_SIM_SHM past the images (serve.py
+ * reads it), or on stderr where that file cannot be opened. */
+static void leave_reason(const char *format, va_list args) {
     char why[512];
-    va_list args;
-    va_start(args, format);
     int size = vsnprintf(why, sizeof why, format, args);
-    va_end(args);
     size = size < 0 ? 0 : size >= (int)sizeof why ? (int)sizeof why - 1 : size;
-    const char *shm = getenv("AIBO_SIM_SHM");
-    int file = shm ? open(shm, O_WRONLY | O_CLOEXEC) : -1;
+    int file = reason_file[0] ? open(reason_file, O_WRONLY | O_CLOEXEC) : -1;
     if (file >= 0 && pwrite(file, why, (size_t)size, AIBO_MAX_IMAGE_BYTES) == size) {
         close(file);
     } else {
         fprintf(stderr, "aibo-sim C binding: %s\n", why);
     }
+}
+
+/* The binding cannot go on: its reason, and the controller ends without its robot_die functions. */
+static void binding_failed(const char *format, ...) {
+    va_list args;
+    va_start(args, format);
+    leave_reason(format, args);
+    va_end(args);
     _exit(70);
+}
+
+/* An error the Python API raises: its reason, and the controller ends through its robot_die
+ * functions, as an exception ends a Python controller. */
+static void controller_failed(const char *format, ...) {
+    va_list args;
+    va_start(args, format);
+    leave_reason(format, args);
+    va_end(args);
+    exit(1);
 }
 
 static void fail(const char *what) { binding_failed("%s: %s", what, strerror(errno)); }
@@ -89,12 +108,25 @@ static void settle_calls(void);
 /* At exit (main returned, exit() called, or the run's end): the robot_die functions, in the
  * thread that ended the controller (the only one answered from then on), each after the calls
  * queued before it are settled (a failed one ends the controller, not the next function), then
- * the calls still waiting to be sent. */
+ * the calls still waiting to be sent. It is registered again first: after a robot_die function
+ * that calls exit(), it goes on with the next one there (glibc runs a handler registered during
+ * exit). A
+ * forked child's exit leaves the controller's connection alone. */
 static void at_exit(void) {
-    pthread_mutex_lock(&calling); /* after the call another thread is making */
-    caller = pthread_self();
-    exiting = 1;
-    pthread_mutex_unlock(&calling);
+    if (forked) return;
+    if (in_call) {
+        binding_failed("exit() called in a signal handler that interrupted %s: the robot_die functions cannot run "
+                       "(exit() is not async-signal-safe: set a flag that the controller's loop reads)",
+                       aibo_op_names[current_op]);
+    }
+    if (!exiting) {
+        pthread_mutex_lock(&calling); /* after the call another thread is making */
+        caller = pthread_self();
+        exiting = 1;
+        pthread_mutex_unlock(&calling);
+    }
+    if (die_count) atexit(at_exit);
+    dying = 0; /* here again: the robot_die function that called exit() is over */
     while (die_count) {
         settle_calls();
         void (*exit_fn)(void) = die_functions[0];
@@ -106,6 +138,8 @@ static void at_exit(void) {
     flush_calls();
 }
 
+static void in_a_forked_child(void) { forked = 1; }
+
 static void connect_to_simulator(void) {
     const char *fd = getenv("AIBO_SIM_FD"), *shm = getenv("AIBO_SIM_SHM");
     if (!fd || !shm) {
@@ -113,20 +147,26 @@ static void connect_to_simulator(void) {
         _exit(70);
     }
     channel = atoi(fd);
+    snprintf(reason_file, sizeof reason_file, "%s", shm);
     int file = open(shm, O_RDONLY);
     if (file < 0) fail(shm);
     images = mmap(NULL, AIBO_MAX_IMAGE_BYTES, PROT_READ, MAP_SHARED, file, 0);
     if (images == MAP_FAILED) fail("mmap");
     close(file);
+    /* The programs it runs inherit neither the connection nor the variables naming it. */
+    fcntl(channel, F_SETFD, FD_CLOEXEC);
+    unsetenv("AIBO_SIM_FD");
+    unsetenv("AIBO_SIM_SHM");
     caller = pthread_self();
+    pthread_atfork(NULL, NULL, in_a_forked_child);
     atexit(at_exit);
 }
 
-/* The socket failed: the controller closed its descriptor (EBADF; ENOTSOCK where the number
- * now names another file), which the simulator, still there, is told; else the simulator is
- * gone, and reports why itself. */
+/* The socket failed: the simulator is gone (EPIPE, ECONNRESET), and reports why itself; else the
+ * controller closed its descriptor (EBADF), or the number now names another file or socket,
+ * which the simulator, still there, is told. */
 static void channel_failed(void) {
-    if (errno == EBADF || errno == ENOTSOCK) {
+    if (errno != EPIPE && errno != ECONNRESET) {
         binding_failed("closed its connection to the simulator (descriptor %d, AIBO_SIM_FD), then made a call",
                        channel);
     }
@@ -150,7 +190,6 @@ static void flush_calls(void) {
     start = outgoing_length = 0;
 }
 
-static enum aibo_op current_op; /* the call being made */
 
 static void put(const void *bytes, size_t size) {
     if (outgoing_length + size > sizeof outgoing) {
@@ -169,10 +208,26 @@ static void put(const void *bytes, size_t size) {
 
 /* A call is made from the thread that made the first (at exit, the one that ended the
  * controller), holding `calling` until it is sent (and answered); another thread's would mix
- * their messages: it ends the run, or at exit waits for the end. */
+ * their messages: it ends the run, or at exit waits for the end. A call from a signal handler
+ * that interrupted a call, or from a forked child, is refused. */
 static void start_call(enum aibo_op call) {
+    if (forked) {
+        fprintf(stderr, "aibo-sim C binding: %s called in a child process (fork): only the controller's process calls\n",
+                aibo_op_names[call]);
+        _exit(70);
+    }
+    if (in_call) {
+        binding_failed("%s called in a signal handler that interrupted %s: the API is not async-signal-safe (set a "
+                       "flag that the controller's loop reads)",
+                       aibo_op_names[call], aibo_op_names[current_op]);
+    }
+    in_call = 1;
     pthread_mutex_lock(&calling);
-    if (pthread_equal(pthread_self(), caller)) return;
+    if (pthread_equal(pthread_self(), caller)) {
+        current_op = call;
+        return;
+    }
+    in_call = 0;
     if (!exiting) {
         binding_failed("%s called from a second thread: a C controller makes its calls from one thread",
                        aibo_op_names[call]);
@@ -181,10 +236,15 @@ static void start_call(enum aibo_op call) {
     for (;;) pause();
 }
 
+/* The call is sent (and answered): another may start. */
+static void finish_call(void) {
+    in_call = 0;
+    pthread_mutex_unlock(&calling);
+}
+
 static void begin(enum aibo_op call) {
     if (channel < 0) connect_to_simulator();
     start_call(call);
-    current_op = call;
     int32_t code = call, size = 0;
     put(&size, 4); /* the length, filled in by end_call */
     put(&code, 4);
@@ -215,7 +275,7 @@ static void end_call(void) {
 static void send_call(void) {
     end_call();
     ahead_length = 0;
-    pthread_mutex_unlock(&calling);
+    finish_call();
 }
 
 /* ---- answers */
@@ -261,7 +321,7 @@ static void call(void) {
     answer_end = 4 + size;
     int32_t status;
     memcpy(&status, answer + 4, 4);
-    pthread_mutex_unlock(&calling);
+    finish_call();
     if (status == AIBO_STATUS_END || status == AIBO_STATUS_FAILED) {
         /* the run is over, or a call failed (the simulator reports it): at_exit runs the
          * robot_die functions; in one of them, it ends there */
@@ -315,12 +375,12 @@ static int answered_ahead(enum aibo_op op, int arg) {
         if (entry[0] == (int32_t)op && entry[1] == arg) {
             memcpy(answer + 8, ahead + at + 12, size);
             cursor = 8;
-            pthread_mutex_unlock(&calling);
+            finish_call();
             return 1;
         }
         at += 12 + size;
     }
-    pthread_mutex_unlock(&calling);
+    finish_call();
     return 0;
 }
 
@@ -372,6 +432,7 @@ void robot_live(void (*reset)(void)) {
 
 void robot_die(void (*exit_fn)(void)) {
     if (channel < 0) connect_to_simulator();
+    if (!exit_fn) controller_failed("robot_die(NULL): the exit function must be callable");
     if (die_count == MAX_DIE_FUNCTIONS) binding_failed("more than %d robot_die functions", MAX_DIE_FUNCTIONS);
     die_functions[die_count++] = exit_fn;
 }
@@ -389,8 +450,16 @@ int robot_step(int ms) {
 }
 
 void robot_run(int (*run)(int)) {
+    if (channel < 0) connect_to_simulator();
+    if (!run) controller_failed("robot_run(NULL): the run function must be callable");
     int ms = 0;
-    for (;;) robot_step(ms = run(ms));
+    for (;;) {
+        int returned = run(ms);
+        if (returned <= 0) {
+            controller_failed("run function returned %d: it must return the next step in ms (e.g. TIME_STEP)", returned);
+        }
+        robot_step(ms = returned);
+    }
 }
 
 DeviceTag robot_get_device(const char *name) {

@@ -159,8 +159,8 @@ class _Call:
         return (payload[8 : 8 + size].decode("utf-8", "replace"),)
 
     def answer(self, result) -> bytes:
-        if self.results == "s":
-            text = str(result).encode()
+        if self.results == "s":  # a motion's name is the file's bytes (latin-1), the rest UTF-8
+            text = str(result).encode("latin-1" if self.name == "mtn_get_name" else "utf-8")
             return struct.pack("<IiI", 8 + len(text), STATUS["ok"], len(text)) + text
         values = result if self.results in ("m", "ddd") else (result,)
         return self._answer.pack(self._answer.size - 4, STATUS["ok"], *values)
@@ -281,12 +281,12 @@ class _Server:
                 raise CControllerError(f"unknown call number {number} (a controller built against other headers?)")
             call = self._table[number]
             args = call.arguments(payload)
+            self._child.stop_if_overdue()
             if skipping:  # after a call that failed, until the call that waits: made by no Python controller
                 if call.results:
                     self._send(_Call.FAILED)
                     skipping = False
                 continue
-            self._child.stop_if_overdue()
             if self._child.pending is not None and call.name == "robot_step":
                 self._send(_Call.END)
                 continue
