@@ -23,6 +23,9 @@ SYSTEM_PACKAGES = "EGL: Debian/Ubuntu 'libegl1 libgl1-mesa-dri' (Mesa's software
 
 def choose_gl_backend() -> str | None:
     chosen = os.environ.get("MUJOCO_GL", "").strip().lower()
+    platform = os.environ.get("PYOPENGL_PLATFORM", "").strip().lower()
+    if not chosen and platform in ("egl", "osmesa"):  # PyOpenGL's choice, which MuJoCo's must match
+        chosen = os.environ["MUJOCO_GL"] = platform
     if not chosen:
         chosen = next((name for name, lib in HEADLESS_LIBRARIES if ctypes.util.find_library(lib)), "")
         if chosen:

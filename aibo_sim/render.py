@@ -56,6 +56,12 @@ def gl_backend() -> str:
 
 
 def _context_class(backend: str):
+    platform = os.environ.get("PYOPENGL_PLATFORM", "").strip().lower()
+    if backend in ("egl", "osmesa") and platform and platform != backend:
+        raise RenderingUnavailable(
+            f"MUJOCO_GL={backend} and PYOPENGL_PLATFORM={platform} disagree: unset PYOPENGL_PLATFORM, "
+            "or set both to egl or to osmesa"
+        )
     try:
         if backend == "egl":
             from mujoco.egl import GLContext

@@ -15,6 +15,7 @@ import threading
 from collections.abc import Callable, Iterable
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
+from xml.etree import ElementTree
 
 import mujoco
 import numpy as np
@@ -111,6 +112,7 @@ def load_model(
         raise ModelError(f"{path}: cannot read: {exc.strerror or exc}") from None
     if path.suffix != ".xml":  # MuJoCo's MjSpec (a match, a pink ball, no ball) finds its reader by it
         raise ModelError(f"{path}: not an MJCF file's name: a scene is read by its extension, .xml")
+    _check_included_files(path, path.parent)
     try:
         if ball and ball_type == DEFAULT_BALL_TYPE and not match:
             model = mujoco.MjModel.from_xml_path(str(path))
@@ -140,9 +142,28 @@ def load_model(
         raise ModelError(f"{path}: " + "; ".join(line for line in lines if line)) from None
 
 
+def _check_included_files(path: Path, folder: Path, seen: frozenset = frozenset()) -> None:
+    """ModelError naming ``path`` and the file where a file it includes (``<include file>``,
+    relative to ``folder``, the top scene's) exists but is not a regular file: MuJoCo would wait
+    for good on a FIFO. Other faults are MuJoCo's to name."""
+    try:
+        root = ElementTree.parse(path).getroot()
+    except (ElementTree.ParseError, OSError):
+        return
+    for include in root.iter("include"):
+        included = folder / include.get("file", "")
+        if included in seen or not include.get("file"):
+            continue
+        if included.exists() and not included.is_file():
+            raise ModelError(f"{path}: includes {include.get('file')}: not a regular file")
+        if included.is_file():
+            _check_included_files(included, folder, seen | {included})
+
+
 def check_robot(model: mujoco.MjModel, path, keyframe: str = "stand") -> None:
     """ModelError naming ``path`` unless ``model`` holds the ERS-7 (``models/ers7.xml``: its
-    body, joints, actuators, sensors and head camera) and, when ``keyframe`` is ``"stand"``
+    body, joints, actuators, sensors, head and tracking cameras), a body ``ball`` has its geom
+    ``ball``, and, when ``keyframe`` is ``"stand"``
     (the start pose every command uses), a keyframe of that name. Another keyframe a caller
     asks for is looked up when it is used (``reset``), whose KeyError lists the scene's."""
 
@@ -154,7 +175,7 @@ def check_robot(model: mujoco.MjModel, path, keyframe: str = "stand") -> None:
         "joints": missing(mujoco.mjtObj.mjOBJ_JOINT, [j.name for j in JOINTS]),
         "actuators": missing(mujoco.mjtObj.mjOBJ_ACTUATOR, [j.name for j in JOINTS]),
         "sensors": missing(mujoco.mjtObj.mjOBJ_SENSOR, [s.name for s in SENSORS if s.kind != "camera"]),
-        "camera": missing(mujoco.mjtObj.mjOBJ_CAMERA, [HEAD_CAMERA]),
+        "camera": missing(mujoco.mjtObj.mjOBJ_CAMERA, [HEAD_CAMERA, "tracking"]),  # tracking: render's, the envs'
         "LED geoms": missing(mujoco.mjtObj.mjOBJ_GEOM, list(LED_BY_NAME)),
     }
     absent = {kind: names for kind, names in absent.items() if names}
@@ -167,6 +188,10 @@ def check_robot(model: mujoco.MjModel, path, keyframe: str = "stand") -> None:
             f"{path}: no ERS-7 robot in this scene (missing {listed}); "
             'a scene must <include file="ers7.xml"/> (see models/scene.xml)'
         )
+    ball = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, "ball")
+    geom = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, "ball")
+    if ball >= 0 and (geom < 0 or model.geom_bodyid[geom] != ball):
+        raise ModelError(f"{path}: the body 'ball' needs its geom named 'ball' (its radius places it, labels name it)")
     if keyframe == "stand" and mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_KEY, keyframe) < 0:
         keys = [model.key(i).name for i in range(model.nkey)]
         raise ModelError(

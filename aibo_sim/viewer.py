@@ -13,6 +13,7 @@ from __future__ import annotations
 import os
 import threading
 import time
+import warnings
 
 import mujoco
 import numpy as np
@@ -38,9 +39,14 @@ def check_display() -> None:
         )
     import glfw
 
-    if not glfw.init():
+    with warnings.catch_warnings(record=True) as warned:  # GLFW's errors come as warnings
+        warnings.simplefilter("always")
+        opened = glfw.init()
+    if not opened:
+        why = "; ".join(str(w.message) for w in warned)
         raise ViewerUnavailable(
             f"--view: cannot open the display {os.environ.get('DISPLAY') or os.environ.get('WAYLAND_DISPLAY')!r}"
+            + (f" ({why})" if why else "")
         )
 
 

@@ -7,6 +7,8 @@ import math
 import os
 import re
 import shutil
+import subprocess
+import sys
 import threading
 import time
 from pathlib import Path
@@ -114,6 +116,37 @@ def test_glfw_without_a_display_is_rendering_unavailable_not_the_controllers_fau
     assert not (tmp_path / "out").exists()
 
 
+@pytest.mark.parametrize(
+    "variables, error",
+    [
+        pytest.param(
+            {"PYOPENGL_PLATFORM": "osmesa"},
+            None,
+            marks=pytest.mark.skipif(
+                not __import__("ctypes.util").util.find_library("OSMesa"), reason="needs libOSMesa (CI installs it)"
+            ),
+        ),
+        (
+            {"MUJOCO_GL": "egl", "PYOPENGL_PLATFORM": "glx"},
+            "aibo-sim: error: MUJOCO_GL=egl and PYOPENGL_PLATFORM=glx disagree: unset PYOPENGL_PLATFORM, "
+            "or set both to egl or to osmesa",
+        ),
+    ],
+    ids=["pyopengl osmesa", "disagree"],
+)
+def test_pyopengl_platform_alone_chooses_the_backend_and_against_mujoco_gl_is_one_line(tmp_path, variables, error):
+    """PYOPENGL_PLATFORM=osmesa alone had EGL chosen beside it, and every render failed asking to
+    install what was installed, in MuJoCo's words with a literal '{!r}'."""
+    environment = {k: v for k, v in os.environ.items() if k not in ("MUJOCO_GL", "PYOPENGL_PLATFORM")}
+    command = [sys.executable, "-m", "aibo_sim.cli", "render", "--settle", "0", "--out", str(tmp_path / "out")]
+    result = subprocess.run(command, env={**environment, **variables}, capture_output=True, text=True, timeout=300)
+    if error is None:
+        assert result.returncode == 0 and (tmp_path / "out" / "head_camera.png").exists(), result.stderr
+    else:
+        assert result.returncode == 2 and result.stderr.strip() == error, result.stderr
+        assert not (tmp_path / "out").exists()
+
+
 @pytest.mark.parametrize("match", [[], ["--robot", "red:1:0,0,0:{stick}"]], ids=["alone", "match"])
 @pytest.mark.parametrize("command", ["run", "dump"])
 def test_a_stick_whose_object_is_not_built_is_refused_before_any_folder(tmp_path, capsys, command, match):
@@ -183,6 +216,48 @@ def test_ball_placed_in_a_scene_whose_ball_has_no_free_joint_exits_2(tmp_path, c
     out = ["--out", str(tmp_path / "out")] if command[0] in ("render", "dump") else []
     assert main(command + out + ["--scene", str(scene), "--ball", "0.3", "0"]) == 2
     one_error_line(capsys, "--ball 0.3 0: this scene's body 'ball' cannot be placed: it needs one free joint")
+    assert not (tmp_path / "out").exists()
+
+
+def broken_models(tmp_path: Path, fault: str) -> Path:
+    """A copy of the models with one fault; its scene."""
+    models = tmp_path / "models"
+    shutil.copytree(ROOT / "models", models)
+    scene, robot = models / "scene.xml", models / "ers7.xml"
+    if fault == "ball geom":
+        scene.write_text(scene.read_text().replace('<geom name="ball"', '<geom name="myball"'))
+    elif fault == "tracking camera":
+        robot.write_text(re.sub(r'<camera name="tracking"[^>]*/>', "", robot.read_text()))
+    else:
+        os.mkfifo(models / "extra.xml")
+        scene.write_text(scene.read_text().replace("<worldbody>", '<include file="extra.xml"/><worldbody>', 1))
+    return scene
+
+
+@pytest.mark.parametrize(
+    "fault, error",
+    [
+        ("ball geom", "the body 'ball' needs its geom named 'ball'"),
+        ("tracking camera", "no ERS-7 robot in this scene (missing camera 'tracking')"),
+        ("fifo", "includes extra.xml: not a regular file"),
+    ],
+)
+@pytest.mark.parametrize(
+    "command",
+    [
+        ["run", str(SCRIPTED), "--duration", "0.1"],
+        ["render", "--settle", "0"],
+        ["dump", str(SCRIPTED), "--steps", "2"],
+        ["mtn", "play", "STAND.MTN", "--ball", "0.5", "0.1"],  # without --ball it plays without the ball
+    ],
+)
+def test_a_scene_every_command_cannot_use_is_refused_alike_before_any_folder(tmp_path, command, fault, error, capsys):
+    """A ball whose geom has another name (a KeyError deep in render, dump, --ball), a robot
+    without its tracking camera (render's KeyError; run took it) and an included FIFO (a hang)."""
+    scene = broken_models(tmp_path, fault)
+    out = ["--out", str(tmp_path / "out")] if command[0] in ("render", "dump") else []
+    assert main(command + out + ["--scene", str(scene)]) == 2
+    one_error_line(capsys, str(scene), error)
     assert not (tmp_path / "out").exists()
 
 

@@ -52,6 +52,22 @@ def test_view_without_a_display_says_so(monkeypatch, capsys):
     assert "--view needs a display" in capsys.readouterr().err
 
 
+def test_view_with_a_display_that_cannot_be_opened_is_one_line(tmp_path):
+    """GLFW's own complaint came first, as a Python warning over two lines."""
+    environment = {k: v for k, v in os.environ.items() if k != "WAYLAND_DISPLAY"}
+    command = [sys.executable, "-m", "aibo_sim.cli", "run", str(CONTROLLER), "--duration", "0.1", "--view"]
+    result = subprocess.run(
+        command + ["--out", str(tmp_path / "out")],
+        env={**environment, "DISPLAY": ":99"},
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert result.returncode == 2 and len(result.stderr.splitlines()) == 1, result.stderr
+    assert result.stderr.startswith("aibo-sim: error: --view: cannot open the display ':99' (")
+    assert not (tmp_path / "out").exists()
+
+
 def screen_dump(display: str) -> np.ndarray | None:
     """The virtual screen's pixels, or None while its server refuses (starting, busy)."""
     dump = subprocess.run(["xwd", "-root", "-silent", "-display", display], capture_output=True)
