@@ -17,17 +17,19 @@ Here the same calls, with the C out-parameter returned::
 
 Like the C API, these return an ``OStatus`` and never raise; ``check(status, what)`` turns a
 failure into a ``PrimitiveError`` that names the status. The codes are Sony's (``OStatus.h``).
-Which code Sony returns for each failure is not documented; chosen here:
+Sony's Level2 Reference Guide gives ``ControlPrimitive`` three results: ``oSUCCESS``,
+``oINVALID_PRIMITIVE_ID`` and ``oINVALID_ARG`` ("request and param are invalid"); so here:
 
 - ``OpenPrimitive`` of a locator no primitive has: ``oNOT_FOUND`` (id ``oprimitiveID_UNDEF``);
 - ``ControlPrimitive`` / ``ClosePrimitive`` with an id ``OpenPrimitive`` did not return (or
   one closed since): ``oINVALID_PRIMITIVE_ID``;
-- a request code the camera does not know: ``oINVALID_REQUEST``; a camera request Sony
-  defines but this model does not implement (``GET_CDT_TABLE`` 387, ``AE_ON``/``AE_OFF``
-  388/389, ``AWB_ON``/``AWB_OFF`` 390/391): ``oNOT_SUPPORTED``;
-- a missing parameter, one that is not an ``OPrimitiveControl_CameraParam`` / integer, or a
-  ``paramSize`` other than ``sizeof(OPrimitiveControl_CameraParam)`` (4): ``oINVALID_ARG``;
-- a value outside 1..3 (``ocamparamUNDEF`` = 0 included): ``oOUT_OF_RANGE``.
+- a request code the camera does not know, a missing parameter, one that is not an
+  ``OPrimitiveControl_CameraParam`` / integer, a ``paramSize`` other than
+  ``sizeof(OPrimitiveControl_CameraParam)`` (4), a value outside 1..3 (``ocamparamUNDEF`` = 0
+  included): ``oINVALID_ARG``;
+- a camera request Sony defines but this model does not implement (``GET_CDT_TABLE`` 387,
+  ``AE_ON``/``AE_OFF`` 388/389, ``AWB_ON``/``AWB_OFF`` 390/391): ``oNOT_SUPPORTED`` (an
+  aibo-sim choice: the robot does them).
 
 A failed request changes nothing. A successful one updates ``OCameraPrimitive.settings`` and
 calls its listeners with the change, e.g. ``{"gain": "high"}`` (the simulator passes it to
@@ -133,8 +135,8 @@ class OPrimitive:
     locator: str
 
     def control(self, request: int, param, param_size: int | None) -> int:
-        """What ``ControlPrimitive`` does with ``request``; an OStatus (here ``oINVALID_REQUEST``)."""
-        return oINVALID_REQUEST
+        """What ``ControlPrimitive`` does with ``request``; an OStatus (here ``oINVALID_ARG``)."""
+        return oINVALID_ARG
 
 
 class OCameraPrimitive(OPrimitive):
@@ -166,14 +168,14 @@ class OCameraPrimitive(OPrimitive):
 
         :param param: an ``OPrimitiveControl_CameraParam`` or its ``camparam`` as an int.
         :param param_size: ``sizeof(param)``, 4; None skips the check.
-        :returns: ``oSUCCESS`` (listeners told), ``oOUT_OF_RANGE`` or ``oINVALID_ARG`` for a bad value or
-            size, ``oNOT_SUPPORTED`` for a camera request not modelled, ``oINVALID_REQUEST`` otherwise.
+        :returns: ``oSUCCESS`` (listeners told), ``oNOT_SUPPORTED`` for a camera request not
+            modelled, ``oINVALID_ARG`` for any other request or a bad value or size.
         """
         request = int(request) if _is_integer(request) else None
         if request in _UNSUPPORTED_CAMERA_REQUESTS:
             return oNOT_SUPPORTED
         if request not in CAMERA_REQUESTS:
-            return oINVALID_REQUEST
+            return oINVALID_ARG
         setting, values = CAMERA_REQUESTS[request]
         if isinstance(param, OPrimitiveControl_CameraParam):
             param = param.camparam
@@ -182,7 +184,7 @@ class OCameraPrimitive(OPrimitive):
         if not _is_integer(param):
             return oINVALID_ARG
         if int(param) not in values:
-            return oOUT_OF_RANGE
+            return oINVALID_ARG
         change = {setting: values[int(param)]}
         self._settings.update(change)
         for listener in list(self.listeners):

@@ -44,7 +44,6 @@ from .primitive import (
     allowed_values,
     check,
     oINVALID_ARG,
-    oOUT_OF_RANGE,
     oSUCCESS,
     sizeof,
     status_name,
@@ -133,7 +132,7 @@ class Controller(OObject):
         param = OPrimitiveControl_CameraParam(value)
         status = self.OPENR.ControlPrimitive(self._camera_id, request, param, sizeof(param), 0, 0)
         if status != oSUCCESS:
-            hint = f"; the value must be {allowed_values(setting)}" if status in (oOUT_OF_RANGE, oINVALID_ARG) else ""
+            hint = f"; the value must be {allowed_values(setting)}" if status == oINVALID_ARG else ""
             raise PrimitiveError(
                 f"{function}({value!r}): OPENR::ControlPrimitive(fbkID, {REQUEST_NAMES[request]}, "
                 f"...) returned {status_name(status)} ({status}){hint}",

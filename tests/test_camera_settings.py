@@ -91,12 +91,12 @@ def test_control_primitive_failures_return_the_documented_status_and_change_noth
     openr = system.OPENR
     assert openr.OpenPrimitive("PRM:/r1/c1/c2/c3/i1-FbkImageSensor:F2") == (oNOT_FOUND, oprimitiveID_UNDEF)
     fbk = open_camera(system)
-    assert openr.ControlPrimitive(fbk, 999, 1) == oINVALID_REQUEST
-    assert openr.ControlPrimitive(fbk, 383, 1) == oINVALID_REQUEST
+    assert openr.ControlPrimitive(fbk, 999, 1) == oINVALID_ARG  # Level2 Reference Guide: "request ... invalid"
+    assert openr.ControlPrimitive(fbk, 383, 1) == oINVALID_ARG
     for request in range(387, 392):  # GET_CDT_TABLE, AE_ON/OFF, AWB_ON/OFF: Sony's, not modelled
         assert openr.ControlPrimitive(fbk, request, 0, 0, 0, 0) == oNOT_SUPPORTED
     for value in (4, 0, -1, 2**32 + 2):
-        assert openr.ControlPrimitive(fbk, 385, OPrimitiveControl_CameraParam(value)) == oOUT_OF_RANGE
+        assert openr.ControlPrimitive(fbk, 385, OPrimitiveControl_CameraParam(value)) == oINVALID_ARG
     for value in ("high", 2.0, True, None):
         assert openr.ControlPrimitive(fbk, 385, value) == oINVALID_ARG
     assert openr.ControlPrimitive(fbk, 385, OPrimitiveControl_CameraParam(3), 8, 0, 0) == oINVALID_ARG
@@ -123,11 +123,11 @@ def test_wrapper_camera_functions_call_control_primitive():
     with pytest.raises(
         PrimitiveError,
         match=r"camera_set_gain\(4\): OPENR::ControlPrimitive\(fbkID, "
-        r"oprmreqCAM_SET_GAIN, \.\.\.\) returned oOUT_OF_RANGE \(24\); the value must be "
+        r"oprmreqCAM_SET_GAIN, \.\.\.\) returned oINVALID_ARG \(4\); the value must be "
         r"1 \(ocamparamGAIN_LOW\), 2 \(ocamparamGAIN_MID\) or 3 \(ocamparamGAIN_HIGH\)",
     ) as error:
         wrapper.camera_set_gain(4)
-    assert error.value.status == oOUT_OF_RANGE
+    assert error.value.status == oINVALID_ARG
     with pytest.raises(PrimitiveError, match=r"oINVALID_ARG.*ocamparamWB_FL_MODE"):
         wrapper.camera_set_white_balance("fl")
     assert system.camera.settings == {"white_balance": "outdoor", "gain": "low", "shutter": "slow"}
@@ -147,7 +147,7 @@ def test_control_primitive_385_3_sets_the_simulated_camera_gain_high():
         assert system.OPENR.ControlPrimitive(fbk, 384, 2) == oSUCCESS
         assert system.OPENR.ControlPrimitive(fbk, 386, 1) == oSUCCESS
         assert camera.settings == CameraSettings(white_balance="outdoor", gain="high", shutter="slow")
-        assert system.OPENR.ControlPrimitive(fbk, 385, 4) == oOUT_OF_RANGE
+        assert system.OPENR.ControlPrimitive(fbk, 385, 4) == oINVALID_ARG
         assert camera.settings.gain == "high"
     finally:
         robot.sim.close()

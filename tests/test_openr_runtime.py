@@ -91,6 +91,9 @@ def test_sdk_structures_read_the_encoders_bytes(tmp_path):
     (tmp_path / "read.cc").write_text(r"""
 #include <OPENR/ODataFormats.h>
 #include <OPENR/OFbkImage.h>
+static int kind(const OSensorValue&) { return 0; }
+static int kind(const OAcceleration&) { return 1; }  /* each quantity a type of its own, as Sony's */
+static int kind(const OForce&) { return 2; }
 int main() {
     static byte buffer[300000];
     FILE* file = fopen("image.bin", "rb");
@@ -110,6 +113,7 @@ int main() {
            (unsigned)c.ColorFrequency(ocdtCHANNEL1), (unsigned)y.Skip());
     printf("%u %u %u\n", (unsigned)sizeof(ODataVectorInfo), (unsigned)sizeof(OCdtVectorData),
            (unsigned)sizeof(OSensorFrameData));
+    printf("%d %d %d %u\n", kind(OSensorValue()), kind(OAcceleration()), kind(OForce()), (unsigned)sizeof(OLength));
     return 0;
 }
 """)
@@ -143,6 +147,7 @@ int main() {
         for v in (h_y[33, 17], m_hh[7, 5], c[2, 9], 77, c_band.ColorFrequency(openr_bridge.ocdtCHANNEL1), 5 * 208)
     ]
     assert out[6].split() == ["192", str(192 + 8 * 144), "256"]
+    assert out[7].split() == ["0", "1", "2", "16"]
 
 
 def test_effector_plays_each_vector_and_asks_for_the_next_after_its_last_frame(objects, tmp_path):
@@ -179,6 +184,9 @@ def test_effector_plays_each_vector_and_asks_for_the_next_after_its_last_frame(o
     # Each OCommandInfo's frameNumber, written by the effector: the frame its vector started in
     # (Sony's Level2 reference); vector v, from region v % 2, starts in frame 4v.
     assert started_frames(lines) == [4 * v for v in range(6)]
+    # The command vectors' optional data reach the sensor vectors (Level2 Reference Guide,
+    # ODataVectorInfo): the sensor vector of frames 4v .. 4v + 3 comes after vector v started.
+    assert [s[-3:] for s in sensors] == [["4", "1", chr(ord("A") + min(v, 5))] for v in range(9)]
 
 
 def started_frames(lines: list[str]) -> list[int]:

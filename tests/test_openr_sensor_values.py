@@ -46,6 +46,22 @@ def test_distances_and_accelerations_are_the_simulators_to_the_bit():
         sim.close()
 
 
+def test_a_switch_gives_its_state_in_value_and_signal():
+    """Model Information 3.2.4: the paw and chin switches return oswitchON / oswitchOFF in both
+    OSensorValue fields (signal was always 0)."""
+    sim = Simulation()
+    try:
+        frame = SensorFrame(sim)
+        switches = [i for i, (_, kind) in enumerate(frame.entries) if kind == host_protocol.SENSOR_KINDS["SWITCH"]]
+        for _ in range(60):  # the robot settles onto its paws
+            sim.step_frame()
+        frame.at(60)
+        values = frame._raw[switches, :2]
+        assert np.array_equal(values[:, 0], values[:, 1]) and values[:, 0].sum() == 4, values  # the paws pressed
+    finally:
+        sim.close()
+
+
 def test_a_frame_done_splits_into_the_frame_and_its_foretold_frames():
     def record(kind, payload=b""):
         return struct.pack("<2I", host_protocol.RECORDS[kind], len(payload)) + payload

@@ -71,7 +71,7 @@ def fill(
     for k in range(touch_adr.shape[0]):
         force = sensordata[touch_adr[k]]
         if switch[k]:
-            raw[row, 0], raw[row, 1] = (1.0 if force > threshold[k] else 0.0), 0.0
+            raw[row, 0] = raw[row, 1] = 1.0 if force > threshold[k] else 0.0  # both: Model Information 3.2.4
         else:
             raw[row, 0] = raw[row, 1] = min(touch_ad_max, force * touch_ad_per_newton)
         row += 1

@@ -285,11 +285,30 @@ void Advance(std::vector<Queue>& queues, void (*play)(Playing&)) {
     }
 }
 
+/* The optional data the command and sound vectors bring, for the sensor vectors (Level2 Reference
+ * Guide, ODataVectorInfo: the range optOffset, optSize of a sender's optional[] "is updated, and the
+ * data is copied to optional[] of OSensorFrameVectorData"). When: from the vector's first frame on
+ * (UNCONFIRMED); each sensor vector carries the bytes as the vectors left them, and the range last given. */
+byte optional[odataOPTIONAL_MAX];
+longword optionalOffset = 0, optionalSize = 0;
+
+void TakeOptional(Playing& playing) {
+    const ODataVectorInfo* info = (const ODataVectorInfo*)playing.region->Base();
+    if (info->optSize == 0 || info->optOffset > odataOPTIONAL_MAX
+        || info->optSize > odataOPTIONAL_MAX - info->optOffset) {
+        return;
+    }
+    memcpy(optional + info->optOffset, info->optional + info->optOffset, info->optSize);
+    optionalOffset = info->optOffset;
+    optionalSize = info->optSize;
+}
+
 /* The effector's first frame of a command vector: each OCommandInfo's frameNumber is this frame's
- * (Sony: "the frame sequence number when the first frame is processed by the command"). */
+ * (Sony: "the frame sequence number when the first frame is processed by the command"); its optional data. */
 void StampCommands(Playing& playing) {
     OCommandVectorData* vector = (OCommandVectorData*)playing.region->Base();
     for (longword i = 0; i < vector->vectorInfo.numData; i++) vector->GetInfo((int)i)->frameNumber = FrameNumber();
+    TakeOptional(playing);
 }
 
 /* The effector's frame of a command vector: each joint's and LED's value. */
@@ -405,7 +424,7 @@ public:
     }
 
     void PlayFrame() {
-        PlayQueues(observer[0], speaker, NULL, NULL);
+        PlayQueues(observer[0], speaker, TakeOptional, NULL);
         if (micIndex >= 0 && subject[0]->NumberOfObservers() > 0 && FrameNumber() % AIBO_OPENR_SENSOR_FRAMES == 0) {
             SendSilence();
         }
@@ -623,6 +642,9 @@ void PublishSensors() {
     vector->vectorInfo.infoOffset = sizeof(ODataVectorInfo);
     vector->vectorInfo.infoSize = sizeof(OSensorFrameInfo);
     vector->vectorInfo.maxNumData = vector->vectorInfo.numData = (longword)count;
+    vector->vectorInfo.optOffset = optionalOffset;
+    vector->vectorInfo.optSize = optionalSize;
+    memcpy(vector->vectorInfo.optional, optional, sizeof optional);
     static const ODataType types[] = {odataUNDEF, odataJOINT_VALUE, odataLENGTH, odataACCELERATION, odataSWITCH,
                                       odataNO_DIMENSION};
     for (size_t i = 0; i < count; i++) {
@@ -848,7 +870,7 @@ OStatus OPENR::ClosePrimitive(OPrimitiveID id) {
 static OStatus CameraParam(void* param, size_t size, longword* value) {
     if (param == NULL || size != sizeof(OPrimitiveControl_CameraParam)) return oINVALID_ARG;
     *value = ((OPrimitiveControl_CameraParam*)param)->camparam;
-    return *value >= 1 && *value <= 3 ? oSUCCESS : oOUT_OF_RANGE;
+    return *value >= 1 && *value <= 3 ? oSUCCESS : oINVALID_ARG;
 }
 
 OStatus OPENR::ControlPrimitive(OPrimitiveID id, OPrimitiveRequest request, void* param, size_t paramSize,
@@ -865,7 +887,7 @@ OStatus OPENR::ControlPrimitive(OPrimitiveID id, OPrimitiveRequest request, void
             RecordValues(AIBO_OPENR_RECORD_CAMERA, camera, 2);
             return oSUCCESS;
         }
-        return request >= oprmreqCAM_GET_CDT_TABLE && request <= oprmreqCAM_AWB_OFF ? oNOT_SUPPORTED : oINVALID_REQUEST;
+        return request >= oprmreqCAM_GET_CDT_TABLE && request <= oprmreqCAM_AWB_OFF ? oNOT_SUPPORTED : oINVALID_ARG;
     }
     if (type == oprimitiveSPEAKER) {
         if (request == oprmreqSPEAKER_MUTE_ON || request == oprmreqSPEAKER_MUTE_OFF) {
@@ -891,10 +913,10 @@ OStatus OPENR::ControlPrimitive(OPrimitiveID id, OPrimitiveRequest request, void
             ((OPrimitiveControl_SpeakerSoundType*)out)->type = soundType;
             return oSUCCESS;
         }
-        return oINVALID_REQUEST;
+        return oINVALID_ARG;
     }
     if (type == oprimitiveMIC) {
-        return request >= oprmreqMIC_UNI && request <= oprmreqMIC_ALC_OFF ? oSUCCESS : oINVALID_REQUEST;
+        return request >= oprmreqMIC_UNI && request <= oprmreqMIC_ALC_OFF ? oSUCCESS : oINVALID_ARG;
     }
     if (type == oprimitiveJOINT2 && request == oprmreqJOINT2_SET_COMMAND) {
         if (param == NULL || paramSize < sizeof(OPrimitiveControl_JointCommandValue2)) return oINVALID_ARG;
@@ -921,7 +943,7 @@ OStatus OPENR::ControlPrimitive(OPrimitiveID id, OPrimitiveRequest request, void
         Command((int)id, led.intensity, led.mode);
         return oSUCCESS;
     }
-    return oINVALID_REQUEST;
+    return oINVALID_ARG;
 }
 
 static void FillVectorInfo(ODataVectorInfo* info, MemoryRegionID id, size_t total, ODataType type, size_t infoSize,

@@ -64,6 +64,9 @@ void JointProbe::Send(int vector) {
     OJointCommandValue2* value = (OJointCommandValue2*)data->GetData(0)->value;
     for (int k = 0; k < FRAMES; k++) value[k].value = oradians(10 + 4 * vector + k);
     data->vectorInfo.wait = waits && vector == 2 ? WAIT : 0;
+    data->vectorInfo.optOffset = 4;  // for the sensor vectors: which vector played last
+    data->vectorInfo.optSize = 1;
+    data->vectorInfo.optional[4] = (byte)('A' + vector);
     subject[sbjMove]->SetData(free);
     sent++;
 }
@@ -96,8 +99,10 @@ void JointProbe::NotifySensor(const ONotifyEvent& event) {
     OJointValue* joint = (OJointValue*)sensors->GetData(sensorIndex)->frame;
     OJointValue now;
     OPENR::GetJointValue(pan, &now);
-    OSYSPRINT(("sensor %u %u %d %d %d %d ref %d now %d\n", (unsigned)info->frameNumber, (unsigned)info->numFrames,
-               (int)joint[0].value, (int)joint[1].value, (int)joint[2].value, (int)joint[3].value,
-               (int)joint[3].refValue, (int)now.value));
+    const ODataVectorInfo& vector = sensors->vectorInfo;
+    OSYSPRINT(("sensor %u %u %d %d %d %d ref %d now %d optional %u %u %c\n", (unsigned)info->frameNumber,
+               (unsigned)info->numFrames, (int)joint[0].value, (int)joint[1].value, (int)joint[2].value,
+               (int)joint[3].value, (int)joint[3].refValue, (int)now.value, (unsigned)vector.optOffset,
+               (unsigned)vector.optSize, vector.optional[4] ? vector.optional[4] : '-'));
     observer[event.ObsIndex()]->AssertReady();
 }

@@ -238,12 +238,20 @@ struct OSensorValue {
     word      signal;
     word      padding[5];
 };
-typedef OSensorValue OAcceleration;
-typedef OSensorValue OAngularVelocity;
-typedef OSensorValue OTemperature;
-typedef OSensorValue OForce;
-typedef OSensorValue OPressure;
-typedef OSensorValue OLength;
+/* Each quantity is a type of its own (a program may overload on them), laid out as OSensorValue. */
+#define OPENR_SENSOR_QUANTITY(name) \
+    struct name {                   \
+        slongword value;            \
+        word      signal;           \
+        word      padding[5];       \
+    }
+OPENR_SENSOR_QUANTITY(OAcceleration);
+OPENR_SENSOR_QUANTITY(OAngularVelocity);
+OPENR_SENSOR_QUANTITY(OTemperature);
+OPENR_SENSOR_QUANTITY(OForce);
+OPENR_SENSOR_QUANTITY(OPressure);
+OPENR_SENSOR_QUANTITY(OLength);
+#undef OPENR_SENSOR_QUANTITY
 
 struct OSwitchStatus {
     OSwitchValue value;
