@@ -224,8 +224,10 @@ def robot_get_time() -> float:
 
 
 def robot_get_name() -> str:
-    """The robot's name: ``"ERS-7"``."""
-    return "ERS-7"
+    """The robot's name: ``"ERS-7"``; in a match its team and number, ``"red 2"`` (so that one
+    controller run by several robots knows which it drives)."""
+    spec = current_robot().sim.spec
+    return "ERS-7" if spec.team is None else spec.name
 
 
 def robot_get_mode() -> int:

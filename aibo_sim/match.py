@@ -23,7 +23,7 @@ from pathlib import Path
 from traceback import walk_tb
 
 from . import controller
-from .cbind import compile_controller, controller_sources, is_c_controller
+from .cbind import CompileError, compile_controller, controller_sources, is_c_controller
 from .config import DEFAULT_DURATION_S, CameraConfig, ParameterError, WorldConfig
 from .files import check_atomic_write, make_folder, write_file_atomic
 from .openr.host import MemoryStickRun
@@ -80,12 +80,13 @@ def robot_folder(index: int) -> str:
 
 @contextlib.contextmanager
 def controller_named_as_given(spec):
-    """A missing controller file or a syntax error in it, raised inside, prefixed with where
-    ``spec`` was given (``robots.toml:5: red 2: ...``, ``--robot red:2::ctl.py: red 2: ...``)."""
+    """A missing controller file, a syntax error in it or a C controller that does not compile,
+    raised inside, prefixed with where ``spec`` was given (``robots.toml:5: red 2: ...``,
+    ``--robot red:2::ctl.py: red 2: ...``)."""
     try:
         yield
-    except (FileNotFoundError, ValueError) as exc:
-        if type(exc) not in (FileNotFoundError, ValueError) or not (spec.given and spec.controller):
+    except (FileNotFoundError, ValueError, CompileError) as exc:
+        if type(exc) not in (FileNotFoundError, ValueError, CompileError) or not (spec.given and spec.controller):
             raise
         raise type(exc)(f"{spec.given}: {spec.name}: {exc}") from None
 

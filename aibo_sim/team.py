@@ -277,12 +277,12 @@ def load_robots(path: str | Path) -> tuple[RobotSpec, ...]:
     if not tables:
         raise TeamError(f"{where}: no robots (one [[robot]] table a robot)")
     lines = _header_lines(text)
-    if len(lines) != len(tables):
-        lines = []  # robot = [{...}] inline: no header lines to name
+    if len(lines) != len(tables):  # robot = [{...}] inline: the line of its key names them all
+        lines = [_key_line(text, "robot")] * len(tables)
     folder = Path(path).parent
     robots = []
     for i, table in enumerate(tables):
-        at = f"{where}:{lines[i]}" if lines else where
+        at = where if lines[i] is None else f"{where}:{lines[i]}"
         try:
             robots.append(replace(_table_robot(table, folder), given=at))
         except ValueError as exc:

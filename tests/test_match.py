@@ -250,11 +250,13 @@ def test_a_signal_ends_a_match_whose_python_controller_is_stuck_with_every_run_j
 
     from aibo_sim import match
 
-    stuck = tmp_path / "stuck.py"  # stuck from t = 0.1 s for 10 s of wall time, then steps (and ends)
+    stuck = tmp_path / "stuck.py"  # stuck from t = 0.1 s for 10 s of wall time (or until released), then steps
     stuck.write_text(
-        "import time\nfrom aibo_sim.controller import *\n"
+        "import os.path, time\nfrom aibo_sim.controller import *\n"
         "while robot_get_time() < 0.1:\n    robot_step(8)\n"
-        "until = time.monotonic() + 10\nwhile time.monotonic() < until:\n    time.sleep(0.05)\n"
+        "until = time.monotonic() + 10\n"
+        f"while time.monotonic() < until and not os.path.exists({str(tmp_path / 'release')!r}):\n"
+        "    time.sleep(0.05)\n"
         "robot_step(8)\n"
     )
     robots = [RobotSpec("red", 1, None, str(TRACKER)), RobotSpec("blue", 1, None, str(stuck))]
@@ -269,6 +271,12 @@ def test_a_signal_ends_a_match_whose_python_controller_is_stuck_with_every_run_j
     assert time.monotonic() - started < 2.0 + match.STOP_WAIT_S + 5
     for run_json in (tmp_path / "out" / "run.json", tmp_path / "out" / "robot2" / "run.json"):
         assert json.loads(run_json.read_text())["status"] == "interrupted", run_json
+    # The stuck thread, left running, ends at its next step: released, so that its wait notices
+    # do not land in a later test's output.
+    (tmp_path / "release").touch()
+    deadline = time.monotonic() + 10
+    while any(t.name == "aibo-sim wait notices" for t in threading.enumerate()) and time.monotonic() < deadline:
+        time.sleep(0.05)
 
 
 def test_two_teams_modules_of_one_name_are_refused_before_anything_is_written(tmp_path, capsys):
@@ -371,6 +379,31 @@ def test_bad_robots_exit_2_with_one_line_and_no_folder(arguments, message, tmp_p
     error = capsys.readouterr().err
     assert message in error and error.count("\n") == 1
     assert not out.exists()
+
+
+@pytest.mark.parametrize("command", ["run", "dump"])
+def test_a_c_controller_that_does_not_compile_is_named_by_its_robots_line(command, tmp_path, capsys):
+    """The compiler's error came without the robots file's line and the robot."""
+    (tmp_path / "bad.c").write_text("#include <device/robot.h>\nint main(void) { robot_step(32) return 0; }\n")
+    robots = tmp_path / "robots.toml"
+    robots.write_text(
+        f'[[robot]]\nteam = "red"\nnumber = 4\ncontroller = "{TRACKER}"\n\n'
+        '[[robot]]\nteam = "blue"\nnumber = 4\ncontroller = "bad.c"\n'
+    )
+    length = ["--duration", "0.1"] if command == "run" else ["--steps", "2"]
+    assert main([command, "--robots", str(robots), *length, "--out", str(tmp_path / "out")]) == 2
+    first = capsys.readouterr().err.splitlines()[0]
+    assert first == f"aibo-sim: error: {robots}:6: blue 4: {tmp_path / 'bad.c'}: compiling failed:", first
+    assert not (tmp_path / "out").exists()
+
+
+def test_robots_written_as_an_inline_array_are_named_by_its_line(tmp_path, capsys):
+    robots = tmp_path / "robots.toml"
+    robots.write_text('# two robots\nrobot = [{team = "red", number = 2}, {team = "red", number = 2}]\n')
+    assert main(["run", str(TRACKER), "--duration", "0.1", "--robots", str(robots)]) == 2
+    assert (
+        capsys.readouterr().err == f"aibo-sim: error: {robots}:2: robot 2 (red 2): red 2 is also robot 1 ({robots}:2)\n"
+    )
 
 
 @pytest.mark.parametrize("command", ["run", "dump"])
@@ -489,6 +522,22 @@ def test_every_kind_of_controller_plays_in_one_match(tmp_path):
     assert [r["status"] for r in summary["robots"]] == ["done"] * 3
     assert [r["camera_frames"] for r in summary["robots"]] == [30, 30, 30]
     assert (tmp_path / "out" / "robot1" / "console.log").is_file()
+
+
+def test_robot_get_name_tells_a_shared_controller_which_robot_it_drives(tmp_path):
+    """Every robot was "ERS-7": one controller run by several could not tell its team nor its goal."""
+    python = tmp_path / "names.py"
+    python.write_text("from aibo_sim.controller import *\nopen(robot_get_name() + '.py.txt', 'w').close()\n")
+    c = tmp_path / "names.c"
+    c.write_text(
+        "#include <stdio.h>\n#include <device/robot.h>\nint main(void) {\n  char name[64];\n"
+        '  snprintf(name, sizeof name, "%s.c.txt", robot_get_name());\n  fclose(fopen(name, "w"));\n  return 0;\n}\n'
+    )
+    robots = [RobotSpec("red", 3, None, str(python)), RobotSpec("blue", 2, None, str(c))]
+    run_match(robots, duration=0.05, out=tmp_path / "out", progress=False, camera=CameraConfig("ideal"))
+    run_match([RobotSpec(None, 1, None, str(python))], duration=0.05, out=tmp_path / "alone", progress=False)
+    assert sorted(p.name for p in (tmp_path / "out").glob("*.txt")) == ["blue 2.c.txt", "red 3.py.txt"]
+    assert [p.name for p in (tmp_path / "alone").glob("*.txt")] == ["ERS-7.py.txt"]
 
 
 def test_an_api_call_from_another_thread_of_a_match_controller_says_why_it_has_no_robot(tmp_path):
