@@ -9,7 +9,8 @@
  * simulator answers "end" (the run is over), the controller exits with status 0; at exit, the
  * robot_die functions run, and one that steps past the end ends there, as Python's
  * SimulationEnd ends it. Where the binding cannot go on (the controller closed its end of the
- * socket, then called; a call from a second thread; a call too large), it exits, leaving the
+ * socket, then called; a call from a second thread, or from a signal handler that interrupted
+ * a call; a call too large), it exits, leaving the
  * reason for the simulator in AIBO_SIM_SHM, past the images (serve.py reports it). Standard
  * output is line-buffered and flushed at each call, so what the controller printed shows
  * before its end, in a file or a pipe too. */
@@ -18,13 +19,13 @@
 #include <pthread.h>
 #include <sched.h>
 #include <setjmp.h>
+#include <signal.h>
 #include <stdarg.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/mman.h>
-#include <signal.h>
 #include <sys/socket.h>
 #include <time.h>
 #include <unistd.h>
@@ -110,8 +111,7 @@ static void settle_calls(void);
  * queued before it are settled (a failed one ends the controller, not the next function), then
  * the calls still waiting to be sent. It is registered again first: after a robot_die function
  * that calls exit(), it goes on with the next one there (glibc runs a handler registered during
- * exit). A
- * forked child's exit leaves the controller's connection alone. */
+ * exit). A forked child's exit leaves the controller's connection alone. */
 static void at_exit(void) {
     if (forked) return;
     if (in_call) {
@@ -189,7 +189,6 @@ static void flush_calls(void) {
     if (channel >= 0 && start) write_all(outgoing, start);
     start = outgoing_length = 0;
 }
-
 
 static void put(const void *bytes, size_t size) {
     if (outgoing_length + size > sizeof outgoing) {
