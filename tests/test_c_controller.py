@@ -781,3 +781,51 @@ def test_mtn_get_name_gives_the_files_bytes(tmp_path):
     body += '  FILE *f = fopen("name.bin", "wb");\n  fwrite(name, 1, strlen(name), f);\n  fclose(f);\n  return 0;\n}\n'
     run_controller(c_file(tmp_path, "named.c", body), duration=0.1, out=tmp_path / "out")
     assert (tmp_path / "out" / "name.bin").read_bytes() == b"\xe9" * 200
+
+
+@pytest.mark.parametrize(
+    "die_body, then",
+    [
+        (
+            '  robot_get_device("NoSuchServo");\n',
+            "then its robot_die function's call robot_get_device('NoSuchServo') raised DeviceError",
+        ),
+        ("  robot_die(0);\n", "then robot_die(NULL): the exit function must be callable"),
+    ],
+)
+def test_a_refusal_comes_first_and_a_robot_die_functions_failure_after_it(tmp_path, die_body, then):
+    """The die function's failed call was reported alone, as the controller's error (the refusal
+    was lost); a second refusal overwrote the first's start, leaving its tail."""
+    body = f"static void bye(void) {{\n{die_body}}}\nstatic int calls;\n"
+    body += "static int run(int ms) { return ++calls < 3 ? 8 + 0 * ms : 0; }\n"
+    body += "int main(void) {\n  robot_die(bye);\n  robot_run(run);\n}\n"
+    with pytest.raises(ControllerFailed) as failed:
+        run_controller(c_file(tmp_path, "twice.c", body), duration=1, out=tmp_path / "out")
+    first, second = str(failed.value).split("\n")
+    assert first.endswith(": run function returned 0: it must return the next step in ms (e.g. TIME_STEP)"), first
+    assert second.startswith(then), second
+
+
+def test_exit_in_another_thread_while_the_robot_die_functions_run_waits_for_them(tmp_path):
+    """The second thread ran the next robot_die function itself, and the first, stepping past the
+    end, jumped into that thread's stack."""
+    body = "#include <pthread.h>\n#include <unistd.h>\nstatic pthread_t main_thread;\nstatic volatile int go;\n"
+    body += 'static const char *who(void) { return pthread_equal(pthread_self(), main_thread) ? "main" : "worker"; }\n'
+    body += "static void *worker(void *unused) {\n  (void)unused;\n  while (!go) usleep(1000);\n  exit(3);\n}\n"
+    body += 'static void f1(void) {\n  printf("f1 in %s\\n", who());\n  go = 1;\n  usleep(300000);\n'
+    body += '  robot_step(8);\n  printf("not reached\\n");\n}\n'
+    body += 'static void f2(void) { printf("f2 in %s\\n", who()); }\n'
+    body += "int main(void) {\n  pthread_t t;\n  main_thread = pthread_self();\n  robot_die(f1);\n  robot_die(f2);\n"
+    body += "  pthread_create(&t, 0, worker, 0);\n  for (;;) robot_step(64);\n}\n"
+    run = run_cli(c_file(tmp_path, "threads.c", body), tmp_path / "out")
+    assert run.returncode == 0 and run.stdout_text.splitlines()[:2] == ["f1 in main", "f2 in main"], run.stderr
+
+
+def test_a_child_forked_before_the_first_call_cannot_call(tmp_path):
+    body = "#include <sys/wait.h>\n#include <unistd.h>\nint main(void) {\n  int status;\n  pid_t child = fork();\n"
+    body += "  if (child == 0) { robot_get_time(); exit(3); }\n  waitpid(child, &status, 0);\n"
+    body += '  FILE *f = fopen("child.txt", "w");\n  fprintf(f, "%d\\n", WEXITSTATUS(status));\n  fclose(f);\n'
+    body += "  robot_step(8);\n  return 0;\n}\n"
+    run = run_cli(c_file(tmp_path, "early.c", body), tmp_path / "out")
+    assert run.returncode == 0 and (tmp_path / "out" / "child.txt").read_text() == "70\n", run.stderr
+    assert "robot_get_time called in a child process (fork)" in run.stderr

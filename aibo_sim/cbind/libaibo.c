@@ -63,20 +63,34 @@ static pthread_t caller;          /* the thread that made the first call: the on
 static pthread_mutex_t calling = PTHREAD_MUTEX_INITIALIZER; /* held by a call being made */
 static __thread volatile sig_atomic_t in_call; /* this thread makes a call: one of its signal handler's would deadlock */
 static int forked;                     /* this is a child the controller forked: its calls are refused */
-static char reason_file[4096];         /* AIBO_SIM_SHM, where the binding leaves its reason */
+static char reason_file[4096];         /* AIBO_SIM_SHM, where the binding leaves its reasons */
+static size_t reason_length;           /* of the reasons left there so far */
 
-/* What the controller printed shows before anything ends it, in a file or a pipe too. */
-__attribute__((constructor)) static void line_buffered_output(void) { setvbuf(stdout, NULL, _IOLBF, BUFSIZ); }
+static void in_a_forked_child(void) { forked = 1; }
+
+/* What the controller printed shows before anything ends it, in a file or a pipe too; a child it
+ * forks, even before its first call, is known as one. */
+__attribute__((constructor)) static void prepare(void) {
+    setvbuf(stdout, NULL, _IOLBF, BUFSIZ);
+    pthread_atfork(NULL, NULL, in_a_forked_child);
+}
 
 /* The controller's error as the simulator reports it: in AIBO_SIM_SHM past the images (serve.py
- * reads it), or on stderr where that file cannot be opened. */
+ * reads it, up to AIBO_MAX_REASON_BYTES, NUL-terminated), after the reasons left before (a
+ * robot_die function's), or on stderr where that file cannot be opened. */
 static void leave_reason(const char *format, va_list args) {
-    char why[512];
-    int size = vsnprintf(why, sizeof why, format, args);
-    size = size < 0 ? 0 : size >= (int)sizeof why ? (int)sizeof why - 1 : size;
+    char why[AIBO_MAX_REASON_BYTES];
+    int size = snprintf(why, sizeof why, "%s", reason_length ? "\nthen " : "");
+    int more = vsnprintf(why + size, sizeof why - (size_t)size, format, args);
+    size = more < 0 ? size : size + more;
+    if (size >= (int)sizeof why) size = (int)sizeof why - 1;
+    size_t room = sizeof why - 1 - reason_length; /* the whole text, its NUL included, fits in what serve reads */
+    size_t length = (size_t)size < room ? (size_t)size : room;
+    why[length] = 0;
     int file = reason_file[0] ? open(reason_file, O_WRONLY | O_CLOEXEC) : -1;
-    if (file >= 0 && pwrite(file, why, (size_t)size, AIBO_MAX_IMAGE_BYTES) == size) {
+    if (file >= 0 && pwrite(file, why, length + 1, AIBO_MAX_IMAGE_BYTES + reason_length) == (ssize_t)length + 1) {
         close(file);
+        reason_length += length;
     } else {
         fprintf(stderr, "aibo-sim C binding: %s\n", why);
     }
@@ -119,11 +133,15 @@ static void at_exit(void) {
                        "(exit() is not async-signal-safe: set a flag that the controller's loop reads)",
                        aibo_op_names[current_op]);
     }
+    pthread_mutex_lock(&calling); /* after the call another thread is making */
     if (!exiting) {
-        pthread_mutex_lock(&calling); /* after the call another thread is making */
         caller = pthread_self();
         exiting = 1;
-        pthread_mutex_unlock(&calling);
+    }
+    int ending = pthread_equal(pthread_self(), caller);
+    pthread_mutex_unlock(&calling);
+    if (!ending) {
+        for (;;) pause(); /* another thread's exit() while the controller ends: that ending goes on */
     }
     if (die_count) atexit(at_exit);
     dying = 0; /* here again: the robot_die function that called exit() is over */
@@ -137,8 +155,6 @@ static void at_exit(void) {
     }
     flush_calls();
 }
-
-static void in_a_forked_child(void) { forked = 1; }
 
 static void connect_to_simulator(void) {
     const char *fd = getenv("AIBO_SIM_FD"), *shm = getenv("AIBO_SIM_SHM");
@@ -158,7 +174,6 @@ static void connect_to_simulator(void) {
     unsetenv("AIBO_SIM_FD");
     unsetenv("AIBO_SIM_SHM");
     caller = pthread_self();
-    pthread_atfork(NULL, NULL, in_a_forked_child);
     atexit(at_exit);
 }
 

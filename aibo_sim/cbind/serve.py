@@ -55,7 +55,7 @@ from ..render import RenderingUnavailable
 from ..robot import SimulationEnd, deleted_motion_error
 from ..sim import SimulationDiverged
 from .child import Child
-from .protocol import MAX_ANSWER_BYTES, MAX_IMAGE_BYTES, OPS, PREFETCHED, STATUS
+from .protocol import MAX_ANSWER_BYTES, MAX_IMAGE_BYTES, MAX_REASON_BYTES, OPS, PREFETCHED, STATUS
 
 WAIT_NOTICE_S = 10.0
 SPIN_S = 0.002  # how long this process polls for the controller's next call before it sleeps
@@ -236,11 +236,17 @@ def run_c_controller(executable: Path, name: str) -> None:
             env=environment,
             grace_note="its robot_die functions could not run",
         )
+
+        def binding_reason() -> str:
+            """What the binding left past the images: why it ended the controller, or ''."""
+            left = os.pread(shared.fileno(), MAX_REASON_BYTES, MAX_IMAGE_BYTES)
+            return left.split(b"\0", 1)[0].decode("utf-8", "replace")
+
         try:
             with child, memoryview(image) as view:
                 theirs.close()
                 try:
-                    _Server(ours, view, name, robot, child).serve()
+                    _Server(ours, view, name, robot, child, binding_reason).serve()
                 except SimulationEnd:
                     if child.pending is None:
                         raise
@@ -248,9 +254,9 @@ def run_c_controller(executable: Path, name: str) -> None:
             theirs.close()
             ours.close()
             image.close()
-        reason = os.pread(shared.fileno(), 512, MAX_IMAGE_BYTES)  # the binding's, past the images
+        reason = binding_reason()
     if reason:
-        raise CControllerError(reason.decode("utf-8", "replace"))
+        raise CControllerError(reason)
     status = child.returncode
     if status < 0:
         signal_name = signal.Signals(-status).name
@@ -263,12 +269,12 @@ class _Server:
     """Answers one controller's calls: its motions, the calls it sent and those read ahead, and
     whether it waits for an answer now."""
 
-    def __init__(self, channel: socket.socket, image: memoryview, name: str, robot, child: Child):
+    def __init__(self, channel: socket.socket, image: memoryview, name: str, robot, child: Child, binding_reason):
         handlers = _handlers(image)
         self._table = [_Call(op_name, arguments, results, handlers[op_name]) for op_name, arguments, results in OPS]
         self._channel, self._calls, self._robot = channel, _Calls(channel, name, robot, child), robot
         self._wanted = {}  # the PREFETCHED calls made so far, by (number, arguments): answered with each step
-        self._child = child
+        self._child, self._binding_reason = child, binding_reason
 
     def serve(self) -> None:
         """Answer the controller's calls until it exits; SimulationEnd after a run that ended.
@@ -307,10 +313,10 @@ class _Server:
             except Exception as exc:
                 shown = ", ".join(repr(a) for a in args)
                 error = f"{call.name}({shown}) raised {type(exc).__name__}: {exc}"
-                if failure is None and not ended:
+                if failure is None and not ended and not self._binding_reason():
                     failure = CControllerError(error, self._robot.time_ms)
                     failure.__cause__ = exc
-                else:  # in a robot_die function, which ends there
+                else:  # in a robot_die function, which ends there (after the binding's refusal too)
                     dying.append(error)
                 if call.results:
                     self._send(_Call.FAILED)
@@ -325,7 +331,8 @@ class _Server:
                 )
         self._child.wait(None, WAIT_NOTICE_S, self._calls.announce_wait)  # it may run on after closing its socket
         if failure is not None or dying:
-            errors = ([str(failure)] if failure else []) + [f"its robot_die function's call {e}" for e in dying]
+            first = [str(failure)] if failure else [self._binding_reason()] if self._binding_reason() else []
+            errors = first + [f"its robot_die function's call {e}" for e in dying]
             status = self._child.stop()
             if status < 0:
                 errors.append(f"it crashed in a robot_die function ({signal.Signals(-status).name})")
