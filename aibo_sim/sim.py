@@ -143,21 +143,23 @@ def load_model(
 
 
 def _check_included_files(path: Path, folder: Path, seen: frozenset = frozenset()) -> None:
-    """ModelError naming ``path`` and the file where a file it includes (``<include file>``,
-    relative to ``folder``, the top scene's) exists but is not a regular file: MuJoCo would wait
-    for good on a FIFO. Other faults are MuJoCo's to name."""
+    """ModelError naming ``path`` and the file where a file it includes (``<include file>``, found
+    as MuJoCo finds it: in ``folder``, the top scene's, else beside ``path``) exists but is not a
+    regular file: MuJoCo would wait for good on a FIFO. Other faults are MuJoCo's to name."""
     try:
         root = ElementTree.parse(path).getroot()
     except (ElementTree.ParseError, OSError):
         return
     for include in root.iter("include"):
-        included = folder / include.get("file", "")
-        if included in seen or not include.get("file"):
+        name = include.get("file")
+        if not name:
             continue
-        if included.exists() and not included.is_file():
-            raise ModelError(f"{path}: includes {include.get('file')}: not a regular file")
-        if included.is_file():
-            _check_included_files(included, folder, seen | {included})
+        included = next((f / name for f in (folder, path.parent) if os.path.lexists(f / name)), None)
+        if included is None or included in seen:
+            continue
+        if not included.is_file():
+            raise ModelError(f"{path}: includes {name}: not a regular file")
+        _check_included_files(included, folder, seen | {included})
 
 
 def check_robot(model: mujoco.MjModel, path, keyframe: str = "stand") -> None:

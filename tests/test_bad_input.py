@@ -228,9 +228,14 @@ def broken_models(tmp_path: Path, fault: str) -> Path:
         scene.write_text(scene.read_text().replace('<geom name="ball"', '<geom name="myball"'))
     elif fault == "tracking camera":
         robot.write_text(re.sub(r'<camera name="tracking"[^>]*/>', "", robot.read_text()))
-    else:
+    elif fault == "fifo":
         os.mkfifo(models / "extra.xml")
         scene.write_text(scene.read_text().replace("<worldbody>", '<include file="extra.xml"/><worldbody>', 1))
+    else:  # a FIFO that a file in a subfolder includes, found beside it as MuJoCo finds it
+        (models / "sub" / "parts").mkdir(parents=True)
+        (models / "sub" / "a.xml").write_text('<mujoco><include file="parts/b.xml"/></mujoco>')
+        os.mkfifo(models / "sub" / "parts" / "b.xml")
+        scene.write_text(scene.read_text().replace("<worldbody>", '<include file="sub/a.xml"/><worldbody>', 1))
     return scene
 
 
@@ -240,6 +245,7 @@ def broken_models(tmp_path: Path, fault: str) -> Path:
         ("ball geom", "the body 'ball' needs its geom named 'ball'"),
         ("tracking camera", "no ERS-7 robot in this scene (missing camera 'tracking')"),
         ("fifo", "includes extra.xml: not a regular file"),
+        ("nested fifo", "a.xml: includes parts/b.xml: not a regular file"),
     ],
 )
 @pytest.mark.parametrize(
@@ -257,7 +263,7 @@ def test_a_scene_every_command_cannot_use_is_refused_alike_before_any_folder(tmp
     scene = broken_models(tmp_path, fault)
     out = ["--out", str(tmp_path / "out")] if command[0] in ("render", "dump") else []
     assert main(command + out + ["--scene", str(scene)]) == 2
-    one_error_line(capsys, str(scene), error)
+    one_error_line(capsys, str(scene.parent), error)  # the scene, or the file of its that includes
     assert not (tmp_path / "out").exists()
 
 
