@@ -121,6 +121,11 @@ DISTANCE_SENSORS = tuple(s for s in SENSORS if s.kind == "distance")
 TOUCH_SENSORS = tuple(s for s in SENSORS if s.kind == "touch")
 # a2 and a3 name the same device's other axes.
 ACCELEROMETER_ALIASES = ("PRM:/a2-Sensor:a2", "PRM:/a3-Sensor:a3")
+# What a1, a2, a3 read of the body's acceleration along x (forward), y (left), z (up): a1 is
+# backward, a2 left, a3 down, so a robot standing still reads a3 = -9.8 m/s^2. Sony gives no
+# signs; Tekkotsu does (its ERS7Info: "backward acceleration ... negative if sitting on butt",
+# "downward acceleration ... negative if standing up"; its WorldState takes a1..a3 as they come).
+OPENR_ACCELERATION_SIGNS = (-1, 1, -1)
 
 
 @dataclass(frozen=True)

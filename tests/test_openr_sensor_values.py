@@ -4,6 +4,7 @@ simulator's readings to the bit, and the host protocol's answers split into fram
 import struct
 
 import numpy as np
+import pytest
 
 from aibo_sim import ers7
 from aibo_sim.openr.host import SensorFrame
@@ -38,7 +39,8 @@ def test_distances_and_accelerations_are_the_simulators_to_the_bit():
             silent = frame._silent[tick % 2]
             measured = frame._raw[distances, 0]
             assert np.array_equal(measured[~silent], expected[~silent])
-            assert np.array_equal(frame._raw[accelerations, 0], sim.acceleration() * 1e6)
+            signs = np.array(ers7.OPENR_ACCELERATION_SIGNS)
+            assert np.array_equal(frame._raw[accelerations, 0], signs * (sim.acceleration() * 1e6))
             seen.update(np.round(expected[~silent] / 1e3, 3).tolist())
             sim.step_frame()
         assert len(seen) > 100  # readings of all sorts were compared
@@ -46,9 +48,10 @@ def test_distances_and_accelerations_are_the_simulators_to_the_bit():
         sim.close()
 
 
-def test_a_switch_gives_its_state_in_value_and_signal():
+def test_a_standing_robot_reads_its_switches_and_its_accelerometer_as_a_real_one():
     """Model Information 3.2.4: the paw and chin switches return oswitchON / oswitchOFF in both
-    OSensorValue fields (signal was always 0)."""
+    OSensorValue fields (signal was always 0). The accelerometer's a1 is backward and a3 down
+    (Tekkotsu's ERS7Info): a standing robot read a3 = +1 g, upside down."""
     sim = Simulation()
     try:
         frame = SensorFrame(sim)
@@ -58,6 +61,13 @@ def test_a_switch_gives_its_state_in_value_and_signal():
         frame.at(60)
         values = frame._raw[switches, :2]
         assert np.array_equal(values[:, 0], values[:, 1]) and values[:, 0].sum() == 4, values  # the paws pressed
+        # Standing: a3 (down) reads -1 g, a1 (backward) a little above 0: the body pitched 1 deg nose down
+        # (Tekkotsu: "positive for faceplant")
+        accelerations = [
+            i for i, (_, kind) in enumerate(frame.entries) if kind == host_protocol.SENSOR_KINDS["ACCELERATION"]
+        ]
+        a1, a2, a3 = frame._raw[accelerations, 0] / 1e6
+        assert a3 == pytest.approx(-9.81, abs=0.1) and 0 < a1 < 0.5 and abs(a2) < 0.05, (a1, a2, a3)
     finally:
         sim.close()
 

@@ -182,6 +182,8 @@ def device_table() -> str:
             "const char* const ACCELEROMETER_ALIASES[] = {"
             + ", ".join(map(_c_string, ers7.ACCELEROMETER_ALIASES))
             + "};",
+            "/* What a1, a2, a3 read of the body's x (forward), y (left), z (up) acceleration. */",
+            "const int ACCELERATION_SIGNS[] = {" + ", ".join(map(str, ers7.OPENR_ACCELERATION_SIGNS)) + "};",
             "const char* const LEDS[] = {",
             *(f"    {_c_string(led.locator)}," for led in ers7.LEDS),
             "};",

@@ -191,6 +191,7 @@ class SensorFrame:
             np.array([s.range_mm for s in ers7.DISTANCE_SENSORS], float),
             float(IR_NOISE),
             int(model.sensor(sim.prefix + "accelerometer").adr[0]),
+            np.array(ers7.OPENR_ACCELERATION_SIGNS, float),
             float(ACCEL_RANGE),
             self._touch_adr,
             self.switch,

@@ -3,7 +3,8 @@ thirty-odd values in one call, where numpy takes a call per operation and Python
 microseconds a value).
 
 Rows follow ``SensorFrame.entries``: the joints (angle, -, duty, command), the distance sensors
-(mm, signal), the accelerometer's three axes (one primitive each), the touch sensors and switches,
+(mm, signal), the accelerometer's three axes (one primitive each; ``ers7.OPENR_ACCELERATION_SIGNS``),
+the touch sensors and switches,
 the wireless LAN switch. Values are rounded to OPEN-R's integer units once: micro-radians,
 micrometres, micrometres per second squared; the duty in 1/255 of the motor's force.
 
@@ -34,6 +35,7 @@ def fill(
     distance_ranges,
     ir_noise,
     accel_adr,
+    accel_signs,
     accel_range,
     touch_adr,
     switch,
@@ -65,8 +67,8 @@ def fill(
             raw[row, 0] = mm * 1e3
             raw[row, 1] = min(mm, 65535.0)
         row += 1
-    for axis in range(3):  # the accelerometer's three primitives, one axis each (within +-2 g)
-        raw[row, 0] = min(max(sensordata[accel_adr + axis], -accel_range), accel_range) * 1e6
+    for axis in range(3):  # the accelerometer's three primitives, one axis each (within +-2 g), as Sony's signs
+        raw[row, 0] = accel_signs[axis] * min(max(sensordata[accel_adr + axis], -accel_range), accel_range) * 1e6
         row += 1
     for k in range(touch_adr.shape[0]):
         force = sensordata[touch_adr[k]]

@@ -170,7 +170,9 @@ void Robot::TakeSample(Device& device, const Snapshot& frame, const Image* newes
         device.value[0] = switch_[device.index] ? v[device.index] != 0 : v[device.index] > device.threshold;
         break;
     case ACCELEROMETER:
-        for (int axis = 0; axis < 3; axis++) device.value[axis] = v[device.index + axis] / 1e6;
+        for (int axis = 0; axis < 3; axis++) {  /* Sony's a1 (backward), a2, a3 (down) as x, y, z */
+            device.value[axis] = ers7::ACCELERATION_SIGNS[axis] * v[device.index + axis] / 1e6;
+        }
         break;
     case CAMERA:
         if (newest == 0) return;
