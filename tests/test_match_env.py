@@ -281,6 +281,20 @@ def test_scripted_opponents_env_passes_check_env():
     env.close()
 
 
+@pytest.mark.parametrize("seed", [None, 7])
+def test_a_refused_reset_of_the_scripted_opponents_env_changes_nothing(seed):
+    """It drew from its generator (or took the new seed) before the match refused the ball."""
+    envs = [gym.make(MATCH_VS_SCRIPTED, camera=None).unwrapped for _ in range(2)]
+    for env in envs:
+        env.reset(seed=0)
+    with pytest.raises(ValueError, match="off the carpet"):
+        envs[0].reset(seed=seed, options={"ball": (50.0, 0.0)})
+    observations = [env.reset()[0] for env in envs]
+    for env in envs:
+        env.close()
+    assert all(np.array_equal(observations[0][key], observations[1][key]) for key in observations[0])
+
+
 def test_scripted_robots_chase_the_ball():
     env = gym.make(MATCH_VS_SCRIPTED, camera=None)
     assert env.spec.max_episode_steps == 900

@@ -157,6 +157,23 @@ def test_hybrid_env_reports_errors_from_either_side_and_refuses_once_a_worker_or
         HybridVectorEnv(HEAD_TRACK, 0)
 
 
+def test_hybrid_env_with_a_killed_worker_says_which_and_closes_the_others():
+    """A worker killed (or crashed in MuJoCo or OpenGL) gave BrokenPipeError at step and at close,
+    which left the env open and the other workers running."""
+    envs = HybridVectorEnv(HEAD_TRACK, 3, camera_layer="L")
+    envs.reset(seed=0)
+    killed, other = envs._workers.processes
+    os.kill(killed.pid, signal.SIGKILL)
+    killed.join(10)
+    with pytest.raises(
+        gym.error.ClosedEnvironmentError, match=r"environment 1's worker process ended \(exit code -9\)"
+    ):
+        envs.step(np.zeros(envs.action_space.shape, np.float32))
+    envs.close()
+    other.join(10)
+    assert envs.closed and not other.is_alive()
+
+
 def test_hybrid_env_of_one_runs_in_this_process_as_a_single_env():
     envs, single = HybridVectorEnv(HEAD_TRACK, 1, max_episode_steps=2), gym.make(HEAD_TRACK, max_episode_steps=2)
     try:

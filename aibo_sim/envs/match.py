@@ -771,8 +771,16 @@ class ScriptedOpponentsEnv(gym.Env):
 
         :returns: the learner's ``(observation, info)``.
         """
+        generator, generator_seed = self._np_random, self._np_random_seed
+        state = generator.bit_generator.state if generator is not None else None
         super().reset(seed=seed)
-        observations, infos = self.match.reset(seed=int(self.np_random.integers(2**63)), options=options)
+        try:
+            observations, infos = self.match.reset(seed=int(self.np_random.integers(2**63)), options=options)
+        except ValueError:  # a refused ball: the generator as it was, as MatchEnv leaves its own
+            self._np_random, self._np_random_seed = generator, generator_seed
+            if generator is not None:
+                generator.bit_generator.state = state
+            raise
         return observations[self.learner], infos[self.learner]
 
     def step(self, action):

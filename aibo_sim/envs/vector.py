@@ -168,6 +168,13 @@ class HybridVectorEnv(VectorEnv):
             raise gymnasium.error.ClosedEnvironmentError(
                 f"environment {index}'s worker process ended after the error it raised: make a new HybridVectorEnv"
             )
+        if self._workers is not None:  # killed, or crashed in MuJoCo or OpenGL: its pipe is broken
+            for index, process in enumerate(self._workers.processes, start=1):
+                if process.exitcode is not None:
+                    raise gymnasium.error.ClosedEnvironmentError(
+                        f"environment {index}'s worker process ended (exit code {process.exitcode}): "
+                        "close this HybridVectorEnv and make a new one"
+                    )
         if self._workers is not None and self._workers._state is not AsyncState.DEFAULT:
             self._wait_for_workers()
             {
@@ -296,9 +303,13 @@ class HybridVectorEnv(VectorEnv):
             self._workers.set_attr(name, list(values[1:]))
 
     def close_extras(self, **kwargs) -> None:
-        """Close the workers (each closes its own environment) and the first environment."""
+        """Close the workers (each closes its own environment; where one has died, the others are
+        terminated) and the first environment."""
         try:
             if self._workers is not None:
-                self._workers.close(**kwargs)
+                try:
+                    self._workers.close(**kwargs)
+                except (BrokenPipeError, EOFError, ConnectionResetError):
+                    self._workers.close(terminate=True)
         finally:
             self._env.close()
