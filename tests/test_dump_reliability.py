@@ -165,6 +165,31 @@ def test_a_worker_without_prctl_watches_its_parent(tmp_path):
     _wait_for(lambda: not _alive(pid), GONE_S, "the orphaned worker to end")
 
 
+def test_a_ray_tasks_process_ends_with_the_dumps_command(tmp_path):
+    """A Ray task is no child of the dump's command: killed (SIGKILL), the command left its tasks
+    writing into the dump. Its worker now watches the command's process, as end_with_process does."""
+    dumper = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"])
+    worker = textwrap.dedent(f"""
+        import time
+        from aibo_sim.dump.shards import end_with_process
+        end_with_process({dumper.pid})
+        print("watching", flush=True)
+        time.sleep(60)
+    """)
+    watching = subprocess.Popen([sys.executable, "-c", worker], cwd=ROOT, stdout=subprocess.PIPE, text=True)
+    try:
+        assert watching.stdout.readline() == "watching\n"
+        time.sleep(1)
+        assert watching.poll() is None  # the command still runs: so does the task
+        dumper.kill()
+        dumper.wait()
+        assert watching.wait(GONE_S) == 1
+    finally:
+        for process in (dumper, watching):
+            process.kill()
+            process.wait()
+
+
 # ---------------------------------------------------------------- one writer per folder
 
 

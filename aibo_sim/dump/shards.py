@@ -174,8 +174,31 @@ def _in_shard(error: BaseException, folder: Path) -> BaseException:
     return named.with_traceback(error.__traceback__)
 
 
-def _ray_shard(dump_shard: DumpShard, parameters: dict, folder: Path, command: str) -> DumpSummary:
-    """A Ray task's body: one shard, resumed (a retried task finds its lost attempt's frames)."""
+def end_with_process(pid: int) -> None:
+    """End this process (``os._exit(1)``) once process ``pid`` of this machine has ended, however
+    it ended (SIGKILL too), checked every ``PARENT_POLL_S``."""
+
+    def watch() -> None:
+        while True:
+            try:
+                os.kill(pid, 0)
+            except ProcessLookupError:
+                os._exit(1)
+            except PermissionError:  # alive, another user's
+                pass
+            time.sleep(PARENT_POLL_S)
+
+    threading.Thread(target=watch, name="aibo-sim dump watchdog", daemon=True).start()
+
+
+def _ray_shard(
+    dump_shard: DumpShard, parameters: dict, folder: Path, command: str, dumper: tuple[str, int]
+) -> DumpSummary:
+    """A Ray task's body: one shard, resumed (a retried task finds its lost attempt's frames). On
+    the machine of the dump's command (``dumper``: host name, process id), its worker ends with
+    that command, as a local worker does: a killed dump's task wrote on into its folder."""
+    if dumper[0] == socket.gethostname():
+        end_with_process(dumper[1])
     return dump_shard(parameters, folder, True, lock_wait_s=SHARD_LOCK_WAIT_S, command=command)
 
 
@@ -224,8 +247,9 @@ def _run_ray_shards(
 
     task = ray.remote(num_cpus=1, max_retries=RAY_MAX_RETRIES)(_ray_shard)
     command = command_line()
+    dumper = socket.gethostname(), os.getpid()
     pending = {
-        task.remote(dump_shard, parameters, folder, f"{command} (Ray task: {folder.name})"): k
+        task.remote(dump_shard, parameters, folder, f"{command} (Ray task: {folder.name})", dumper): k
         for k, (parameters, folder) in enumerate(shards)
     }
     results = [None] * len(shards)
