@@ -190,6 +190,20 @@ def test_a_ray_tasks_process_ends_with_the_dumps_command(tmp_path):
             process.wait()
 
 
+def test_what_ray_init_writes_to_stderr_shows_unless_it_failed(capfd):
+    """Refused by a cluster that authenticates, Ray's C++ client logged each of its ~20 retries
+    on stderr before the dump's one line."""
+    from aibo_sim.dump.shards import _stderr_kept_unless_failed
+
+    with pytest.raises(RuntimeError), _stderr_kept_unless_failed():
+        os.write(2, b"retrying\n" * 20)
+        raise RuntimeError("refused")
+    assert capfd.readouterr().err == ""
+    with _stderr_kept_unless_failed():
+        os.write(2, b"connected\n")
+    assert capfd.readouterr().err == "connected\n"
+
+
 # ---------------------------------------------------------------- one writer per folder
 
 

@@ -8,6 +8,8 @@ import contextlib
 import os
 import signal
 import socket
+import sys
+import tempfile
 import threading
 import time
 from collections.abc import Callable
@@ -203,6 +205,23 @@ def _ray_shard(
 
 
 @contextlib.contextmanager
+def _stderr_kept_unless_failed():
+    """What the code inside writes to file descriptor 2 (C++ code too), written there afterwards
+    unless it raised: its error then says it in one line."""
+    with tempfile.TemporaryFile() as kept:
+        sys.stderr.flush()
+        saved = os.dup(2)
+        os.dup2(kept.fileno(), 2)
+        try:
+            yield
+        finally:
+            os.dup2(saved, 2)
+            os.close(saved)
+        kept.seek(0)
+        os.write(2, kept.read())
+
+
+@contextlib.contextmanager
 def ray_session(address: str | None):
     """Ray for a dump: the cluster at ``address`` or a local Ray, stopped after the dump, unless
     this process is connected to one already."""
@@ -218,7 +237,8 @@ def ray_session(address: str | None):
     if started:
         handlers = {number: signal.getsignal(number) for number in (signal.SIGTERM, signal.SIGINT)}
         try:
-            ray.init(address=address, include_dashboard=False, logging_level="warning")
+            with _stderr_kept_unless_failed():  # a refused connection: Ray's C++ client logs each retry
+                ray.init(address=address, include_dashboard=False, logging_level="warning")
             if threading.current_thread() is threading.main_thread():
                 for number, handler in handlers.items():  # Ray's own exit at once, put back: the command stops cleanly
                     signal.signal(number, signal.SIG_DFL if handler is None else handler)
