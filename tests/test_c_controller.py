@@ -489,54 +489,42 @@ def test_ctrl_c_runs_the_c_robot_die_functions_then_exits_130(tmp_path):
 
 
 @pytest.mark.slow
-def test_one_sigterm_ends_a_c_controller_whose_robot_die_function_calls_for_ever(tmp_path):
-    """Only silence was cut short (2 s): a robot_die function looping on robot_get_time kept the run
-    going until a second signal, where a Python controller is stopped STOP_GRACE_S after the first."""
+@pytest.mark.parametrize(
+    "name, body, started, left",
+    [
+        (  # a robot_die function looping on robot_get_time kept the run going until a second signal
+            "poll.c",
+            'static void bye(void) {\n  fclose(fopen("bye.txt", "w"));\n  for (;;) robot_get_time();\n}\n'
+            "int main(void) {\n  robot_die(bye);\n  for (;;) robot_step(8);\n}\n",
+            "frames",
+            "bye.txt",
+        ),
+        (  # after a failed call the simulator skipped the calls without results before it looked at the signal
+            "skips.c",
+            'int main(void) {\n  DeviceTag s = robot_get_device("PRM:/r1/c1-Joint2:11");\n'
+            '  fclose(fopen("failing.txt", "w"));\n  servo_set_position(999, 0.1);\n'
+            "  for (;;) servo_set_position(s, 0.1);\n}\n",
+            "failing.txt",
+            "failing.txt",
+        ),
+    ],
+)
+def test_one_sigterm_ends_a_c_controller_that_calls_for_ever(tmp_path, name, body, started, left):
+    """Only silence was cut short (2 s): a controller still calling after SIGTERM ran on (until a
+    second signal, or SIGKILL), where a Python controller is stopped STOP_GRACE_S after the first."""
     import signal
 
     from aibo_sim.exit_status import STOP_GRACE_S
 
-    source = c_file(
-        tmp_path,
-        "poll.c",
-        'static void bye(void) {\n  fclose(fopen("bye.txt", "w"));\n  for (;;) robot_get_time();\n}\n'
-        "int main(void) {\n  robot_die(bye);\n  for (;;) robot_step(8);\n}\n",
-    )
     out = tmp_path / "out"
-    run = start_long_run(source, out, out / "frames")
+    run = start_long_run(c_file(tmp_path, name, body), out, out / started)
     run.send_signal(signal.SIGTERM)
     try:
         err = run.communicate(timeout=STOP_GRACE_S + 20)[1]
     finally:
         run.kill()
-    assert run.returncode == 143 and (out / "bye.txt").exists()
-    assert f"controller poll.c still calling {STOP_GRACE_S:g} s after SIGTERM: stopped" in err
-
-
-@pytest.mark.slow
-def test_one_sigterm_ends_a_c_controller_that_calls_for_ever_after_a_failed_call(tmp_path):
-    """After a failed call the simulator skipped its calls without results before looking at the
-    signal: one that never waited for an answer again was stopped only by SIGKILL."""
-    import signal
-
-    from aibo_sim.exit_status import STOP_GRACE_S
-
-    source = c_file(
-        tmp_path,
-        "skips.c",
-        'int main(void) {\n  DeviceTag s = robot_get_device("PRM:/r1/c1-Joint2:11");\n'
-        '  fclose(fopen("failing.txt", "w"));\n  servo_set_position(999, 0.1);\n'
-        "  for (;;) servo_set_position(s, 0.1);\n}\n",
-    )
-    out = tmp_path / "out"
-    run = start_long_run(source, out, out / "failing.txt")
-    run.send_signal(signal.SIGTERM)
-    try:
-        err = run.communicate(timeout=STOP_GRACE_S + 20)[1]
-    finally:
-        run.kill()
-    assert run.returncode == 143, err
-    assert f"controller skips.c still calling {STOP_GRACE_S:g} s after SIGTERM: stopped" in err
+    assert run.returncode == 143 and (out / left).exists(), err
+    assert f"controller {name} still calling {STOP_GRACE_S:g} s after SIGTERM: stopped" in err
 
 
 @pytest.mark.slow
