@@ -10,7 +10,9 @@ import time
 import gymnasium as gym
 import numpy as np
 import pytest
+from gymnasium.vector import AutoresetMode
 
+from aibo_sim.envs.threaded import ThreadedVectorEnv
 from aibo_sim.envs.vector import BusyWaitConnection, BusyWaitWorker, HybridVectorEnv
 
 HEAD_TRACK = "aibo_sim/HeadTrackBall-v0"
@@ -172,6 +174,19 @@ def test_hybrid_env_with_a_killed_worker_says_which_and_closes_the_others():
     envs.close()
     other.join(10)
     assert envs.closed and not other.is_alive()
+
+
+@pytest.mark.parametrize("mode", [AutoresetMode.SAME_STEP, AutoresetMode.DISABLED, "sometimes"])
+def test_an_autoreset_mode_other_than_next_step_is_refused_naming_it(mode):
+    """make_vec passed it on to the environment: AiboEnv.__init__()'s TypeError, which named no mode."""
+    for vector_env in (HybridVectorEnv, ThreadedVectorEnv):
+        with pytest.raises(ValueError, match=rf"^autoreset_mode: {vector_env.__name__} resets an ended episode at"):
+            vector_env(HEAD_TRACK, 2, autoreset_mode=mode)
+    with pytest.raises(ValueError, match="autoreset_mode: HybridVectorEnv"):
+        gym.make_vec(HEAD_TRACK, 2, autoreset_mode=mode)
+    envs = HybridVectorEnv(HEAD_TRACK, 1, autoreset_mode="NextStep", camera=None)
+    assert envs.metadata["autoreset_mode"] is AutoresetMode.NEXT_STEP
+    envs.close()
 
 
 def test_hybrid_env_of_one_runs_in_this_process_as_a_single_env():

@@ -59,6 +59,20 @@ def reset_arguments(num_envs: int, seed, options: dict | None) -> tuple[list, di
     return seed, options, mask
 
 
+def check_autoreset_mode(kind: str, mode) -> None:
+    """ValueError unless ``mode`` is ``AutoresetMode.NEXT_STEP`` (or its value), the one these
+    vector envs reset by: Gymnasium's ``make_vec`` passed any other on to the environment."""
+    try:
+        ok = AutoresetMode(mode) is AutoresetMode.NEXT_STEP
+    except ValueError:
+        ok = False
+    if not ok:
+        raise ValueError(
+            f"autoreset_mode: {kind} resets an ended episode at the next step (AutoresetMode.NEXT_STEP), not "
+            f"{mode!r}; for another mode, make_vec(..., vectorization_mode='sync' or 'async')"
+        )
+
+
 def values_per_env(name: str, values, num_envs: int) -> list:
     """``set_attr``'s values: one for each environment, or one value for all of them."""
     if not isinstance(values, (list, tuple)):
@@ -119,7 +133,16 @@ class ThreadedVectorEnv(VectorEnv):
     they come, are dropped.
     """
 
-    def __init__(self, env_id: str, num_envs: int, *, copy: bool = True, **env_kwargs):
+    def __init__(
+        self,
+        env_id: str,
+        num_envs: int,
+        *,
+        copy: bool = True,
+        autoreset_mode: AutoresetMode | str = AutoresetMode.NEXT_STEP,
+        **env_kwargs,
+    ):
+        check_autoreset_mode("ThreadedVectorEnv", autoreset_mode)
         if not isinstance(num_envs, numbers.Integral) or isinstance(num_envs, bool) or num_envs < 1:
             raise ValueError(f"num_envs must be a whole number >= 1, not {num_envs!r}")
         num_envs = int(num_envs)  # numpy's integers too, as Gymnasium's vector envs take them

@@ -45,7 +45,7 @@ from gymnasium.vector import AsyncVectorEnv, AutoresetMode, VectorEnv
 from gymnasium.vector.async_vector_env import AsyncState, _async_worker  # private, but AsyncVectorEnv's own
 from gymnasium.vector.utils import batch_space, concatenate, create_empty_array, iterate
 
-from .threaded import check_actions, reset_arguments, values_per_env, write_row
+from .threaded import check_actions, check_autoreset_mode, reset_arguments, values_per_env, write_row
 
 SPIN_S = 0.005  # a step loop with the camera turns around in well under this
 _yield_core = getattr(os, "sched_yield", lambda: time.sleep(0))  # sched_yield is POSIX-only
@@ -127,7 +127,17 @@ class HybridVectorEnv(VectorEnv):
     the calling script: guard its top level with ``if __name__ == "__main__":``.
     """
 
-    def __init__(self, env_id: str, num_envs: int, *, copy: bool = True, spin_s: float = SPIN_S, **env_kwargs):
+    def __init__(
+        self,
+        env_id: str,
+        num_envs: int,
+        *,
+        copy: bool = True,
+        spin_s: float = SPIN_S,
+        autoreset_mode: AutoresetMode | str = AutoresetMode.NEXT_STEP,
+        **env_kwargs,
+    ):
+        check_autoreset_mode("HybridVectorEnv", autoreset_mode)
         if not isinstance(num_envs, numbers.Integral) or isinstance(num_envs, bool) or num_envs < 1:
             raise ValueError(f"num_envs must be a whole number >= 1, not {num_envs!r}")
         self.num_envs, self.copy, self._spin_s = int(num_envs), copy, BusyWaitWorker(spin_s).spin_s
