@@ -109,6 +109,7 @@ def test_a_lost_ray_worker_is_retried(ray, local_dump, tmp_path):
         killer.join()
     assert killed and killed[0] != os.getpid(), "the shard ended before its worker could be killed"
     assert summary.frames == 12 and _files(out) == _files(local_dump)
+    assert summary.new_frames == 12  # the lost attempt's frames too: the retry counted only its own
 
 
 def test_engine_ray_without_ray_is_one_line_naming_the_extra(tmp_path, capsys, monkeypatch):

@@ -106,6 +106,15 @@ class _ShardProgress(Progress):
         self.update(self.frames / FRAME_RATE_HZ, self.frames)
 
 
+def _listed_frames(folder: Path) -> int:
+    """How many frames the shard's frames.jsonl lists (0 before it has one)."""
+    try:
+        with open(open_file(folder / LINES, os.O_RDONLY), "rb") as file:
+            return file.read().count(b"\n")
+    except FileNotFoundError:
+        return 0
+
+
 def _remove_temporary_files(shards: list[tuple[dict, Path]]) -> None:
     """The temporary files of stopped shards."""
     for parameters, folder in shards:
@@ -268,6 +277,7 @@ def _run_ray_shards(
     task = ray.remote(num_cpus=1, max_retries=RAY_MAX_RETRIES)(_ray_shard)
     command = command_line()
     dumper = socket.gethostname(), os.getpid()
+    listed = [_listed_frames(folder) for _, folder in shards]  # a retried task counts only its own frames
     pending = {
         task.remote(dump_shard, parameters, folder, f"{command} (Ray task: {folder.name})", dumper): k
         for k, (parameters, folder) in enumerate(shards)
@@ -280,7 +290,9 @@ def _run_ray_shards(
                 k = pending.pop(ref)
                 folder = shards[k][1]
                 try:
-                    results[k] = ray.get(ref)
+                    result = ray.get(ref)
+                    result.new_frames = max(result.new_frames, result.frames - listed[k])  # its lost attempts' too
+                    results[k] = result
                 except ray.exceptions.RayTaskError as exc:  # the shard's own error, as the local engine raises it
                     raise (
                         _in_shard(exc.cause, folder) if exc.cause is not None else DumpError(f"{folder}: {exc}")
