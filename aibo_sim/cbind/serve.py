@@ -331,7 +331,8 @@ class _Server:
                 )
         self._child.wait(None, WAIT_NOTICE_S, self._calls.announce_wait)  # it may run on after closing its socket
         if failure is not None or dying:
-            first = [str(failure)] if failure else [self._binding_reason()] if self._binding_reason() else []
+            reason = self._binding_reason()
+            first = [str(failure)] if failure else [reason] if reason else []
             errors = first + [f"its robot_die function's call {e}" for e in dying]
             status = self._child.stop()
             if status < 0:

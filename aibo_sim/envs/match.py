@@ -347,6 +347,23 @@ class MatchEnv(pettingzoo.ParallelEnv):
         except (KeyError, TypeError):
             raise ValueError(f"no agent {agent!r} (agents: {', '.join(self.possible_agents)})") from None
 
+    def ball_option(self, options: dict | None) -> tuple[float, float] | None:
+        """``reset``'s ``options={"ball": (x, y)}``, checked: ValueError for a ball that is not two
+        numbers, or that would start off the field or inside a wall, a goal or a robot;
+        ClosedEnvironmentError after ``close``."""
+        self._check_open("reset")
+        ball = (options or {}).get("ball")
+        if ball is None:
+            return None
+        what = 'reset(options={"ball": (x, y)})'
+        if isinstance(ball, (str, bytes)) or not hasattr(ball, "__len__") or len(ball) != 2:
+            raise ValueError(f"{what}: want two numbers (m), not {ball!r}")
+        ball = placement_values(what, x=ball[0], y=ball[1])
+        problem = ball_start_problem(self.sim, ball, self._kickoff) if self.sim.has_ball else None
+        if problem is not None:
+            raise ValueError(f"{what}: the ball at {ball[0]:g}, {ball[1]:g} {problem}")
+        return ball
+
     def reset(self, seed: int | None = None, options: dict | None = None):
         """Start a match: every robot at its pose in the keyframe's posture, the ball placed, the
         randomisations drawn, every possible agent playing again.
@@ -358,16 +375,7 @@ class MatchEnv(pettingzoo.ParallelEnv):
         :returns: ``(observations, infos)``, dicts by agent.
         :raises gymnasium.error.ClosedEnvironmentError: after ``close``.
         """
-        self._check_open("reset")
-        ball = (options or {}).get("ball")
-        if ball is not None:  # checked before anything changes: a refused reset leaves the match as it was
-            what = 'reset(options={"ball": (x, y)})'
-            if isinstance(ball, (str, bytes)) or not hasattr(ball, "__len__") or len(ball) != 2:
-                raise ValueError(f"{what}: want two numbers (m), not {ball!r}")
-            ball = placement_values(what, x=ball[0], y=ball[1])
-            problem = ball_start_problem(self.sim, ball, self._kickoff) if self.sim.has_ball else None
-            if problem is not None:
-                raise ValueError(f"{what}: the ball at {ball[0]:g}, {ball[1]:g} {problem}")
+        ball = self.ball_option(options)  # checked before anything changes: a refused reset leaves the match as it was
         if seed is not None or self.np_random is None:
             self.np_random, self.np_random_seed = seeding.np_random(seed)
         self.sim.reset(seed=int(self.np_random.integers(2**63)))
@@ -771,16 +779,9 @@ class ScriptedOpponentsEnv(gym.Env):
 
         :returns: the learner's ``(observation, info)``.
         """
-        generator, generator_seed = self._np_random, self._np_random_seed
-        state = generator.bit_generator.state if generator is not None else None
+        self.match.ball_option(options)  # a refused ball changes nothing, the generator included
         super().reset(seed=seed)
-        try:
-            observations, infos = self.match.reset(seed=int(self.np_random.integers(2**63)), options=options)
-        except ValueError:  # a refused ball: the generator as it was, as MatchEnv leaves its own
-            self._np_random, self._np_random_seed = generator, generator_seed
-            if generator is not None:
-                generator.bit_generator.state = state
-            raise
+        observations, infos = self.match.reset(seed=int(self.np_random.integers(2**63)), options=options)
         return observations[self.learner], infos[self.learner]
 
     def step(self, action):

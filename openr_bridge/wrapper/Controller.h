@@ -10,7 +10,8 @@
  * Start (DoStart): motor power on, Sony's standard joint gains (Model Information 2.2), then the
  * controller's main() is called: robot_live(init) calls init, robot_die registers, robot_run
  * stores the run function and leaves main() (its statements after robot_run are never reached,
- * as in Webots; called in the run function, it leaves that and the new one starts at once). robot_step cannot be: an Aperios object is one thread that must
+ * as in Webots; called in the run function, it leaves that and the new one starts at once).
+ * robot_step cannot be: an Aperios object is one thread that must
  * return from each message before the next (the next sensor data) can arrive, so a loop that
  * waits inside a call would never see time pass. robot_step is therefore an explicit error
  * that ends the controller; write the controller with robot_run.
