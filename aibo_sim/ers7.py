@@ -128,15 +128,61 @@ ACCELEROMETER_ALIASES = ("PRM:/a2-Sensor:a2", "PRM:/a3-Sensor:a3")
 OPENR_ACCELERATION_SIGNS = (-1, 1, -1)
 
 
+# The face panel's light spots as Model Information for ERS-7 (A.2) draws them: (across, up) in
+# the drawing's pixels from the middle of its 68 x 58 pixel LED grid, a pair's left spot (the
+# robot's left: the drawing, seen from the front, names no side) given. ``mjcf`` puts them on the
+# visor, FACE_SPOT_PITCH metres a pixel.
+FACE_SPOTS = {
+    "bottom_outer": (27.8, -20.2),
+    "lowest_outer": (27.8, -27.6),
+    "bottom_inner": (16.3, -25.0),
+    "middle_outer": (27.8, -9.5),
+    "middle_inner": (13.8, -9.3),
+    "upper_outer": (27.8, 1.5),
+    "upper_inner": (13.9, 3.1),
+    "top_outer": (27.8, 10.9),
+    "upper_centre": (0.0, 1.6),
+    "centre": (0.0, -9.8),
+}
+FACE_SPOT_PITCH = 0.0005
+
+
+def face_spot_geoms(spot: str, side: str = "lr") -> tuple[str, ...]:
+    """The geoms of a face spot: a centre spot's one, else the pair's on ``side`` (l, r or lr)."""
+    if FACE_SPOTS[spot][0] == 0:
+        return (f"led_face_{spot}",)
+    return tuple(f"led_face_{spot}_{s}" for s in side)
+
+
 @dataclass(frozen=True)
 class Led:
-    """An LED: MJCF geom name, OPEN-R locator, colour when lit (RGB 0..1), and for a face light its
-    colour on the B face (OPEN-R's ``oled3_MODE_B``; Model Information for ERS-7, 3.1.1)."""
+    """An LED: name, OPEN-R locator, colour when lit (RGB 0..1) and the geoms it lights (default
+    the one named ``name``); a face light also has a B face (OPEN-R's ``oled3_MODE_B``; Model
+    Information for ERS-7, 3.1.1): its colour and geoms there."""
 
     name: str
     locator: str
     colour: tuple[float, float, float]
     colour_b: tuple[float, float, float] | None = None
+    geoms: tuple[str, ...] = ()
+    geoms_b: tuple[str, ...] = ()
+
+    def lit_geoms(self, face_b: bool = False) -> tuple[str, ...]:
+        """The geoms it lights on the A face, or on the B face (``face_b``) where it has one."""
+        return (self.geoms_b if face_b and self.colour_b else self.geoms) or (self.name,)
+
+    def lit_colour(self, face_b: bool = False) -> tuple[float, float, float]:
+        """Its colour on the A face, or on the B face (``face_b``) where it has one."""
+        return self.colour_b if face_b and self.colour_b else self.colour
+
+
+def _face_light(number: int, colour, colour_b, spot: str, spot_b: str | None = None, side: str = "") -> Led:
+    """Face light ``number`` (Model Information 3.1.1 and A.2) at ``spot``, and on the B face at
+    ``spot_b`` (default the same): odd numbers a pair's left spot, even the right, unless ``side``."""
+    side = side or ("l" if number % 2 else "r")
+    locator = f"PRM:/r1/c1/c2/c3/l{'abcdefghijklmn'[number - 1]}-LED3:l{'abcdefghijklmn'[number - 1]}"
+    geoms, geoms_b = face_spot_geoms(spot, side), face_spot_geoms(spot_b or spot, side)
+    return Led(f"led_face_{number}", locator, colour, colour_b, geoms, geoms_b)
 
 
 LED_OFF_RGBA = (0.15, 0.15, 0.16, 1.0)
@@ -149,16 +195,21 @@ LEDS: tuple[Led, ...] = (
     Led("led_mode_b", "PRM:/r1/c1/c2/c3/l5-LED2:l5", _BLUE),
     Led("led_wireless", "PRM:/r1/c1/c2/c3/l6-LED2:l6", _BLUE),
     # Face lights 1-12 white and 13-14 red on the A face; on the B face 1-5 green, 6-12 white,
-    # 13-14 blue (where B3, B4 and B13 sit apart from A's, the same geom shows them).
-    *(
-        Led(
-            f"led_face_{i + 1}",
-            f"PRM:/r1/c1/c2/c3/l{c}-LED3:l{c}",
-            _RED if i >= 12 else _WHITE,
-            _BLUE if i >= 12 else _GREEN if i < 5 else _WHITE,
-        )
-        for i, c in enumerate("abcdefghijklmn")
-    ),
+    # 13-14 blue. B3, B4 and B13 sit apart from A's, as do A14 and B14 (each a pair).
+    _face_light(1, _WHITE, _GREEN, "bottom_outer"),
+    _face_light(2, _WHITE, _GREEN, "bottom_outer"),
+    _face_light(3, _WHITE, _GREEN, "middle_outer", "bottom_inner"),
+    _face_light(4, _WHITE, _GREEN, "middle_outer", "bottom_inner"),
+    _face_light(5, _WHITE, _GREEN, "middle_inner"),
+    _face_light(6, _WHITE, _WHITE, "middle_inner"),
+    _face_light(7, _WHITE, _WHITE, "upper_outer"),
+    _face_light(8, _WHITE, _WHITE, "upper_outer"),
+    _face_light(9, _WHITE, _WHITE, "upper_inner"),
+    _face_light(10, _WHITE, _WHITE, "upper_inner"),
+    _face_light(11, _WHITE, _WHITE, "upper_centre"),
+    _face_light(12, _WHITE, _WHITE, "centre"),
+    _face_light(13, _RED, _BLUE, "upper_inner", "bottom_inner", side="lr"),
+    _face_light(14, _RED, _BLUE, "top_outer", "lowest_outer", side="lr"),
     Led("led_back_front_colour", "PRM:/lu-LED3:lu", _BLUE),
     Led("led_back_front_white", "PRM:/lv-LED3:lv", _WHITE),
     Led("led_back_middle_colour", "PRM:/lw-LED3:lw", (1.0, 0.55, 0.0)),
@@ -169,6 +220,11 @@ LEDS: tuple[Led, ...] = (
 
 LED_BY_LOCATOR = {led.locator: led for led in LEDS}
 LED_BY_NAME = {led.name: led for led in LEDS}
+# The LEDs that can light each LED geom, on either face (a face spot can have several: A9 and A13).
+LEDS_BY_GEOM = {
+    geom: tuple(led for led in LEDS if geom in led.lit_geoms() + led.lit_geoms(True))
+    for geom in dict.fromkeys(geom for led in LEDS for face_b in (False, True) for geom in led.lit_geoms(face_b))
+}
 
 
 # OPEN-R primitives the Webots-era API has no device for: the wireless LAN switch, the speaker

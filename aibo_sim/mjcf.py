@@ -17,7 +17,18 @@ import numpy as np
 from openr_bridge import FULL_HEIGHT, FULL_WIDTH, HORIZONTAL_FOV_DEG, VERTICAL_FOV_DEG
 
 from . import field as F
-from .ers7 import HEAD_CAMERA, JOINT_BY_NAME, JOINTS, LED_OFF_RGBA, LEGS, MAX_TORQUE, SENSORS
+from .ers7 import (
+    FACE_SPOT_PITCH,
+    FACE_SPOTS,
+    HEAD_CAMERA,
+    JOINT_BY_NAME,
+    JOINTS,
+    LED_OFF_RGBA,
+    LEGS,
+    MAX_TORQUE,
+    SENSORS,
+    face_spot_geoms,
+)
 from .sim import models_dir
 
 CAMERA_FOCAL = 0.00327  # m (Sony: f = 3.27 mm)
@@ -190,6 +201,22 @@ def _camera() -> ET.Element:
     )
 
 
+VISOR_POS, VISOR_SIZE = (0.046, 0.0, 0.002), (0.03, 0.03, 0.022)  # the face panel, an ellipsoid
+FACE_SPOTS_Z = 0.008  # the middle of the face lights' grid, in the head's frame (4 mm clear of the lens)
+FACE_SPOT_RADIUS = 0.0018
+
+
+def _face_spots() -> list[ET.Element]:
+    """The face lights' spots (``ers7.FACE_SPOTS``), each a sphere centred on the visor's surface."""
+    spots = []
+    for spot, (across, up) in FACE_SPOTS.items():
+        for geom, side in zip(face_spot_geoms(spot), (1, -1)):
+            y, z = side * across * FACE_SPOT_PITCH, FACE_SPOTS_Z + up * FACE_SPOT_PITCH
+            depth = 1 - (y / VISOR_SIZE[1]) ** 2 - ((z - VISOR_POS[2]) / VISOR_SIZE[2]) ** 2
+            spots.append(led(geom, pos=(VISOR_POS[0] + VISOR_SIZE[0] * math.sqrt(depth), y, z), size=FACE_SPOT_RADIUS))
+    return spots
+
+
 def _head() -> ET.Element:
     ears = []
     for side, sign in (("l", 1), ("r", -1)):
@@ -203,10 +230,6 @@ def _head() -> ET.Element:
                 pos=(-0.011, sign * 0.042, 0.0145),
             )
         )
-    face_leds = [
-        led(f"led_face_{i + 1}", pos=(0.062, 0.024 * math.cos(a), 0.016 + 0.012 * math.sin(a)))
-        for i, a in enumerate(np.linspace(math.pi * 0.15, math.pi * 0.85, 14))
-    ]
     head_leds = [
         led("led_head_colour", pos=(0.045, 0, 0.036), size=0.004),
         led("led_head_white", pos=(0.038, 0, 0.039), size=0.003),
@@ -230,7 +253,7 @@ def _head() -> ET.Element:
         inertial(0.18, (0.04, 0, 0), (0.1, 0.07, 0.07)),
         joint("head_tilt", (0, -1, 0)),
         hidden_visual(type="ellipsoid", size=(0.054, 0.036, 0.036), pos=(0.018, 0, 0.008)),
-        hidden_visual(type="ellipsoid", size=(0.03, 0.03, 0.022), pos=(0.046, 0, 0.002), material="visor"),
+        hidden_visual(type="ellipsoid", size=VISOR_SIZE, pos=VISOR_POS, material="visor"),
         hidden_visual(
             type="cylinder", size=(0.0045, 0.004), pos=(0.0765, 0, -0.0146), zaxis=(1, 0, 0), material="lens"
         ),
@@ -240,7 +263,7 @@ def _head() -> ET.Element:
         E("site", name="ir_near", pos=(0.0769, -0.00325, 0), zaxis=(1, 0, 0)),
         E("site", name="ir_far", pos=(0.0769, 0.00695, 0), zaxis=(1, 0, 0)),
         touch_site("touch_head", (0.01, 0, 0.045), 0.02),
-        *face_leds,
+        *_face_spots(),
         *head_leds,
         mouth,
         *ears,

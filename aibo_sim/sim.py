@@ -25,7 +25,16 @@ from openr_bridge import FRAME_RATE_HZ, FRAME_TICK_MS
 from .camera import CameraFrame, HeadCamera, scene_light
 from .camera.head import BEHIND_CAMERA_GROUP, HEAD_CAMERA_GROUPS
 from .config import CameraConfig, is_seed
-from .ers7 import DISTANCE_SENSORS, HEAD_CAMERA, JOINTS, LED_BY_NAME, LED_OFF_RGBA, SENSORS, TOUCH_SENSORS
+from .ers7 import (
+    DISTANCE_SENSORS,
+    HEAD_CAMERA,
+    JOINTS,
+    LED_BY_NAME,
+    LED_OFF_RGBA,
+    LEDS_BY_GEOM,
+    SENSORS,
+    TOUCH_SENSORS,
+)
 from .field import BALL_TYPES, COLOURS, DEFAULT_BALL_TYPE, PINK_BALL_MASS, PINK_BALL_RADIUS, SPECULAR, UNIFORM_COLOURS
 from .lod import add_levels_of_detail
 
@@ -178,7 +187,7 @@ def check_robot(model: mujoco.MjModel, path, keyframe: str = "stand") -> None:
         "actuators": missing(mujoco.mjtObj.mjOBJ_ACTUATOR, [j.name for j in JOINTS]),
         "sensors": missing(mujoco.mjtObj.mjOBJ_SENSOR, [s.name for s in SENSORS if s.kind != "camera"]),
         "camera": missing(mujoco.mjtObj.mjOBJ_CAMERA, [HEAD_CAMERA, "tracking"]),  # tracking: render's, the envs'
-        "LED geoms": missing(mujoco.mjtObj.mjOBJ_GEOM, list(LED_BY_NAME)),
+        "LED geoms": missing(mujoco.mjtObj.mjOBJ_GEOM, list(LEDS_BY_GEOM)),
     }
     absent = {kind: names for kind, names in absent.items() if names}
     if absent:
@@ -537,6 +546,8 @@ class Simulation:
         self._joint_qpos = np.array([model.joint(prefix + j.name).qposadr[0] for j in JOINTS])
         self._body = model.body(prefix + "body").id
         self._root_qpos = model.jnt_qposadr[model.body_jntadr[self._body]]
+        self._led_geoms = {geom: model.geom(prefix + geom).id for geom in LEDS_BY_GEOM}
+        self._lit: dict[str, tuple[float, bool]] = {}  # LED name: (level, B face) as last set
         self.camera = HeadCamera(self, camera.size, camera.profile, camera.settings, camera_name=prefix + HEAD_CAMERA)
 
     # ---------------------------------------------------------------- the world, shared
@@ -579,6 +590,8 @@ class Simulation:
         if reseed:  # the world is made with its seed, so every robot gets one at the start
             self.rng = np.random.default_rng(self.robot_seed)  # IR noise; the camera's noise has its own stream
         self.servos.reset(self.joint_positions())
+        for name in list(self._lit):  # LEDs off
+            self.set_led(name, 0.0)
         self._queued = np.tile(self.servos.command, (self.command_latency_frames, 1))  # set-points on their way
         self.camera.reset(self.robot_seed)
 
@@ -762,11 +775,18 @@ class Simulation:
     # ---------------------------------------------------------------- LEDs
 
     def set_led(self, name: str, level: float, face_b: bool = False) -> None:
-        """Light an LED geom at ``level`` in 0..1 of its colour (0: the unlit material); ``face_b``:
-        a face light's B-face colour."""
+        """Light an LED at ``level`` in 0..1 of its colour (0: off); ``face_b``: a face light on its
+        B face. Lights that share a spot (A9 and A13) add up there (Model Information 3.1.1)."""
         led = LED_BY_NAME[name]
-        off, lit = np.array(LED_OFF_RGBA), np.array([*(led.colour_b if face_b and led.colour_b else led.colour), 1.0])
-        self.model.geom_rgba[self.model.geom(self.prefix + name).id] = off + level * (lit - off)
+        self._lit[name] = (level, face_b)
+        for geom in dict.fromkeys(led.lit_geoms() + led.lit_geoms(True)):
+            rgb = list(LED_OFF_RGBA[:3])
+            for other in LEDS_BY_GEOM[geom]:
+                other_level, other_b = self._lit.get(other.name, (0.0, False))
+                if other_level and geom in other.lit_geoms(other_b):
+                    for k, (lit, off) in enumerate(zip(other.lit_colour(other_b), LED_OFF_RGBA)):
+                        rgb[k] += other_level * (lit - off)
+            self.model.geom_rgba[self._led_geoms[geom], :3] = [min(value, 1.0) for value in rgb]
 
     def close(self) -> None:
         """Free the world's renderers (every robot's camera)."""

@@ -422,7 +422,7 @@ def test_malformed_motions_are_refused_with_the_python_readers_messages(probe, t
 def test_leds_end_lit_as_on_the_openr_backend(probe, tmp_path, monkeypatch):
     """LED2 on or off, LED3 at their intensity (more than 255 is 255), as the Python API sets them."""
     _, _, sim, reference_sim = probe_runs(monkeypatch, probe, tmp_path, "leds", frames=16)
-    names = ("led_head_white", "led_face_1", "led_back_rear_white", "led_head_colour")
+    names = ("led_head_white", "led_face_bottom_outer_l", "led_back_rear_white", "led_head_colour")
     rgba = [np.array([s.model.geom_rgba[s.model.geom(name).id] for name in names]) for s in (sim, reference_sim)]
     assert np.array_equal(rgba[0], rgba[1]) and not np.array_equal(rgba[0][0], rgba[0][3])  # lit, unlit
     assert np.array_equal(sim.model.geom_rgba, reference_sim.model.geom_rgba)

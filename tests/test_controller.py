@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from aibo_sim import controller as api
+from aibo_sim import ers7
 from aibo_sim.mtn import Motion, write_mtn
 from aibo_sim.robot import DeviceError, Robot, SimulationEnd
 from aibo_sim.sim import Simulation
@@ -127,6 +128,49 @@ def test_sensors_read_in_their_units(robot):
     values = api.accelerometer_get_values(accel)
     assert api.accelerometer_value_z(values) == pytest.approx(9.81, abs=0.3)
     assert api.robot_get_device("PRM:/a3-Sensor:a3") == accel
+
+
+def face_rgb(robot, spot: str) -> np.ndarray:
+    return robot.sim.model.geom(f"led_face_{spot}").rgba[:3].copy()
+
+
+def test_face_lights_sit_where_model_information_draws_them_and_blend_where_they_share_a_spot(robot):
+    """A.2: A1 the bottom outer spot on the left, A13 a red pair on A9's and A10's spots (lit with
+    A9, the left one adds up their light), A14 a pair above the outer ones; a reset puts all out."""
+    off, white, red = np.array(ers7.LED_OFF_RGBA[:3]), np.ones(3), np.array([1.0, 0.1, 0.1])
+    face = {n: api.robot_get_device(ers7.LED_BY_NAME[f"led_face_{n}"].locator) for n in (1, 9, 13, 14)}
+    model = robot.sim.model
+    left, right = (model.geom(f"led_face_bottom_outer_{s}").pos for s in "lr")
+    assert left[1] > 0 and np.allclose(left * (1, -1, 1), right)  # the robot's left is +y
+    api.led_set(face[1], 1)
+    assert np.allclose(face_rgb(robot, "bottom_outer_l"), white) and np.allclose(face_rgb(robot, "bottom_outer_r"), off)
+    api.led_set(face[13], 1)
+    assert all(np.allclose(face_rgb(robot, f"upper_inner_{s}"), red) for s in "lr")
+    api.led_set(face[9], 1)
+    both = np.clip(white + red - off, 0, 1)  # (1, 0.95, 0.94)
+    assert np.allclose(face_rgb(robot, "upper_inner_l"), both) and np.allclose(face_rgb(robot, "upper_inner_r"), red)
+    api.led_set(face[13], 0)
+    assert np.allclose(face_rgb(robot, "upper_inner_l"), white) and np.allclose(face_rgb(robot, "upper_inner_r"), off)
+    api.led_set(face[14], 255)
+    top, upper = model.geom("led_face_top_outer_l").pos, model.geom("led_face_upper_outer_l").pos
+    assert np.allclose(face_rgb(robot, "top_outer_r"), red) and top[2] > upper[2] and top[1] == upper[1]
+    robot.sim.reset()
+    leds = [g for g in map(model.geom, range(model.ngeom)) if g.name.startswith("led_")]
+    lit = [g.name for g in leds if not np.allclose(g.rgba[:3], off)]
+    assert len(leds) == 30 and lit == []
+
+
+def test_a_face_lights_b_face_has_its_own_colour_and_for_3_4_13_14_its_own_spots(robot):
+    """Model Information 3.1.1: B3 sits where B13's left does, apart from A3; B14 is a blue pair."""
+    sim, off = robot.sim, np.array(ers7.LED_OFF_RGBA[:3])
+    sim.set_led("led_face_3", 1.0, face_b=True)
+    green = np.array(ers7.LED_BY_NAME["led_face_3"].colour_b)
+    assert np.allclose(face_rgb(robot, "bottom_inner_l"), green) and np.allclose(face_rgb(robot, "middle_outer_l"), off)
+    sim.set_led("led_face_3", 1.0)  # back on the A face: the B spot goes out
+    assert np.allclose(face_rgb(robot, "middle_outer_l"), 1) and np.allclose(face_rgb(robot, "bottom_inner_l"), off)
+    sim.set_led("led_face_14", 0.5, face_b=True)
+    blue = off + 0.5 * (np.array(ers7.LED_BY_NAME["led_face_14"].colour_b) - off)
+    assert all(np.allclose(face_rgb(robot, f"lowest_outer_{s}"), blue) for s in "lr")
 
 
 def test_led_set_colours_the_geom(robot):

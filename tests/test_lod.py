@@ -166,5 +166,5 @@ def test_parts_smaller_than_a_pixel_are_left_out(two):
     renderer.render(two.data, "camera")
     drawn = {g.objid for g in renderer.scene.geoms[: renderer.scene.ngeom]}
     names = {model.geom(g).name for g in drawn}
-    assert "robot2/led_face_1" not in names and any(name.startswith("robot2/") for name in names)
-    assert model.geom("robot2/led_face_1").id in camera_geoms(model, model.body_rootid[blue._body])
+    assert "robot2/led_face_centre" not in names and any(name.startswith("robot2/") for name in names)
+    assert model.geom("robot2/led_face_centre").id in camera_geoms(model, model.body_rootid[blue._body])

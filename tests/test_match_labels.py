@@ -254,7 +254,9 @@ LONE_ROBOT = {
         {"pixel": [102.69014082411618, 42.89488838920831], "visible": True, "distance_m": 2.172604822887163},
     ),
 }
-LONE_CLASSES_SHA256 = "812e71b5c6af9ff0154ec51aeb111fdf9a7d724c937ba5e0603cfe40e614099d"
+# The geom classes of that robot, remade when its 14 face-light geoms became 18 spots (Model
+# Information A.2): every other geom's class the same, the new spots LEDs as the old ones were.
+LONE_CLASSES_SHA256 = "45079ff9c44ca5e6b4ec45f61b55a85b7c704bf797e7b20b1228b6ad62300a5b"
 
 
 def test_a_lone_robots_labels_are_those_before_matches():

@@ -591,12 +591,17 @@ def test_power_status_its_observers_and_the_face_lights(objects, tmp_path):
         f"notified {powered}",
         "unobserve 0",
     ]
-    # the face lights it lit: the B face's colours where it asked for B (Model Information 3.1.1)
+    # the face lights it lit: the B face's colours and spots where it asked for B (Model
+    # Information 3.1.1 and A.2): B1 green on the left, B14 a blue pair at the bottom, A13 a red pair
     model = result.run.sim.model
     for name, colour in (
-        ("led_face_1", ers7.LED_BY_NAME["led_mode_g"].colour),
-        ("led_face_14", (0.2, 0.4, 1.0)),
-        ("led_face_13", (1.0, 0.1, 0.1)),
+        ("led_face_bottom_outer_l", ers7.LED_BY_NAME["led_mode_g"].colour),
+        ("led_face_lowest_outer_l", (0.2, 0.4, 1.0)),
+        ("led_face_lowest_outer_r", (0.2, 0.4, 1.0)),
+        ("led_face_upper_inner_l", (1.0, 0.1, 0.1)),
+        ("led_face_upper_inner_r", (1.0, 0.1, 0.1)),
+        ("led_face_bottom_outer_r", ers7.LED_OFF_RGBA[:3]),
+        ("led_face_top_outer_l", ers7.LED_OFF_RGBA[:3]),  # A14's spot
     ):
         assert np.allclose(model.geom(name).rgba, [*colour, 1.0]), name
 
