@@ -135,8 +135,8 @@ static void at_exit(void) {
     }
     pthread_mutex_lock(&calling); /* after the call another thread is making */
     if (!exiting) {
-        caller = pthread_self();
-        exiting = 1;
+        __atomic_store_n(&caller, pthread_self(), __ATOMIC_RELEASE);
+        __atomic_store_n(&exiting, 1, __ATOMIC_RELEASE);
     }
     int ending = pthread_equal(pthread_self(), caller);
     pthread_mutex_unlock(&calling);
@@ -173,7 +173,7 @@ static void connect_to_simulator(void) {
     fcntl(channel, F_SETFD, FD_CLOEXEC);
     unsetenv("AIBO_SIM_FD");
     unsetenv("AIBO_SIM_SHM");
-    caller = pthread_self();
+    __atomic_store_n(&caller, pthread_self(), __ATOMIC_RELEASE);
     atexit(at_exit);
 }
 
@@ -234,6 +234,12 @@ static void start_call(enum aibo_op call) {
         binding_failed("%s called in a signal handler that interrupted %s: the API is not async-signal-safe (set a "
                        "flag that the controller's loop reads)",
                        aibo_op_names[call], aibo_op_names[current_op]);
+    }
+    /* Known before waiting for `calling`: the caller, calling in a loop, could keep it for good. */
+    if (!__atomic_load_n(&exiting, __ATOMIC_ACQUIRE) &&
+        !pthread_equal(pthread_self(), __atomic_load_n(&caller, __ATOMIC_ACQUIRE))) {
+        binding_failed("%s called from a second thread: a C controller makes its calls from one thread",
+                       aibo_op_names[call]);
     }
     in_call = 1;
     pthread_mutex_lock(&calling);
