@@ -248,7 +248,7 @@ def _motion_file(name: str) -> Path:
     from .robot import find_file
     from .sim import models_dir
 
-    return find_file(name, [models_dir() / "motions"])
+    return find_file(name, [Path("."), models_dir() / "motions"])
 
 
 def _read_motion(name: str):

@@ -296,16 +296,25 @@ def _is_file(path: Path) -> bool:
 
 
 def find_file(path: str | Path, search_dirs) -> Path:
-    """``path`` itself if it exists, else the same name in the first search folder that has
-    it, ignoring case as OPEN-R's memory stick does; ``path`` unchanged when none has it."""
-    candidates = [Path(path)] + [Path(d) / path for d in search_dirs]
-    found = next((c for c in candidates if _is_file(c)), None)
-    if found is None:
-        name = Path(path).name.lower()
-        found = next(
-            (f for d in map(Path, search_dirs) if d.is_dir() for f in d.iterdir() if f.name.lower() == name), None
-        )
-    return found if found is not None else Path(path)
+    """``path`` itself if it is an absolute file's; else the name (of an absolute path, such as a
+    memory stick's ``/MS/OPEN-R/...``, the last part) in the first of ``search_dirs`` (a relative
+    one: the working folder at the call) that has it, ignoring case as OPEN-R's memory stick does
+    when the folder lacks the exact name; ``path`` unchanged when none has it."""
+    path = Path(path)
+    if path.is_absolute() and _is_file(path):
+        return path
+    name = Path(path.name) if path.is_absolute() else path
+    for folder in map(Path, search_dirs):
+        if _is_file(folder / name):
+            return folder / name
+        try:
+            files = sorted((folder / name.parent).iterdir())
+        except OSError:  # no such folder, a name too long, ...
+            continue
+        match = next((f for f in files if f.name.lower() == name.name.lower() and _is_file(f)), None)
+        if match is not None:
+            return match
+    return path
 
 
 def check_memory_stick(backend: str, memory_stick) -> None:

@@ -82,9 +82,14 @@ class RunSummary:
     camera: dict = field(default_factory=dict)  # ``HeadCamera.describe()`` at the start: profile, lens, settings
 
 
-def motion_dirs(controller_path: Path) -> tuple[Path, ...]:
-    """Where ``mtn_new`` looks for relative names: the controller's folder, then the bundled motions."""
-    return (controller_path.parent, models_dir() / "motions")
+def motion_dirs(controller_path: Path, working_folder: bool = True) -> tuple[Path, ...]:
+    """Where ``mtn_new`` looks for relative names: the controller's folder, the working folder
+    (``Path(".")``: ``--out``, where the controller's own files land; a memory stick's build
+    leaves it out), then the bundled motions."""
+    folders = [controller_path.resolve().parent, models_dir() / "motions"]
+    if working_folder:
+        folders.insert(1, Path("."))
+    return tuple(folders)
 
 
 RUN_FILE = "run.json"

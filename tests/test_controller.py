@@ -7,9 +7,10 @@ import pytest
 
 from aibo_sim import controller as api
 from aibo_sim import ers7
-from aibo_sim.mtn import Motion, write_mtn
+from aibo_sim.mtn import Motion, read_mtn, write_mtn
 from aibo_sim.robot import DeviceError, Robot, SimulationEnd
-from aibo_sim.sim import Simulation
+from aibo_sim.runner import motion_dirs
+from aibo_sim.sim import Simulation, models_dir
 
 CAMERA = "PRM:/r1/c1/c2/c3/i1-FbkImageSensor:F1"
 HEAD_PAN = "PRM:/r1/c1/c2-Joint2:12"
@@ -222,6 +223,28 @@ def test_mtn_through_the_api_follows_openr_interpolation(robot, tmp_path):
     np.testing.assert_allclose(np.array(commands) * 1e6, [i * (end // 6) for i in range(6)] + [end], atol=1e-6)
     api.robot_step(8)
     assert api.mtn_is_over(motion)
+
+
+def test_mtn_new_looks_in_the_controllers_folder_then_the_working_folder_then_the_bundled_motions(
+    robot, tmp_path, monkeypatch
+):
+    """Each folder's exact name first, then ignoring case; the shell's folder never hides the
+    controller's file (in Webots the two are one folder)."""
+    controller, working = tmp_path / "controller", tmp_path / "working"
+    for folder, names in ((controller, ("sit.mtn", "OWN.MTN")), (working, ("SIT.MTN", "OWN.MTN", "MINE.MTN"))):
+        folder.mkdir()
+        for name in names:
+            motion = Motion.from_poses(f"{folder.name}#{name}", [LF_J1], np.zeros((2, 1)), [48])
+            write_mtn(motion, folder / name)
+    monkeypatch.chdir(working)
+    robot.search_dirs = motion_dirs(controller / "pick.py")
+    names = {name: api.mtn_get_name(api.mtn_new(name)) for name in ("SIT.MTN", "own.mtn", "mine.mtn", "WALKFWD.MTN")}
+    assert names == {
+        "SIT.MTN": "controller#sit.mtn",  # the controller's, in another case, before the working folder's
+        "own.mtn": "controller#OWN.MTN",
+        "mine.mtn": "working#MINE.MTN",  # a file the controller wrote where it runs (--out)
+        "WALKFWD.MTN": read_mtn(models_dir() / "motions" / "WALKFWD.MTN").name,
+    }
 
 
 def test_mtn_fprint_and_grey(robot, tmp_path, capsys):

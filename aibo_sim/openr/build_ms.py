@@ -109,7 +109,7 @@ def _motions(main: Path, sources) -> dict[tuple[str, ...], Path]:
     where = f"controller {main.parent if main.parent.name == main.stem else main}"
     found: dict[tuple[str, ...], Path] = {}
     for name in motion_names(sources):
-        path = find_file(name, motion_dirs(main))
+        path = find_file(name, motion_dirs(main, working_folder=False))
         if not path.is_file():
             raise BuildMsError(
                 f"{where} opens {name!r}, which is neither in {main.parent} nor among the bundled "

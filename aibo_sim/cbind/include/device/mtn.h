@@ -1,6 +1,7 @@
 /* OPEN-R motion files (WB5-REF section 7.1). mtn_new finds a relative name in the
- * controller's folder, then among the bundled motions, ignoring case as the memory stick's
- * FAT file system did (wwfwd.mtn finds WWFWD.MTN); NULL on failure, mtn_get_error() says why. */
+ * controller's folder, then in the folder it runs in (--out), then among the bundled motions;
+ * in each ignoring case as the memory stick's FAT file system did (wwfwd.mtn finds WWFWD.MTN)
+ * where the exact name is absent; NULL on failure, mtn_get_error() says why. */
 #ifndef AIBO_SIM_DEVICE_MTN_H
 #define AIBO_SIM_DEVICE_MTN_H
 
