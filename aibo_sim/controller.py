@@ -301,7 +301,7 @@ def servo_set_velocity(tag, rad_per_s: float) -> None:
 
 
 def servo_set_acceleration(tag, rad_per_s2: float) -> None:
-    """Acceleration limit in rad/s^2; a negative value (Webots' -1) means unlimited."""
+    """Acceleration limit in rad/s^2, above 0; -1 (Webots') means unlimited."""
     _device(tag, Servo).set_acceleration(rad_per_s2)
 
 
