@@ -82,10 +82,15 @@ def memory_stick_folder(path) -> Path | None:
     return None
 
 
+# What a memory stick's names may hold besides the dot (Sony's Programmer's Guide, A.1).
+NAME_CHARACTERS = frozenset("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789$&#{}~%'()-@^`!_")
+
+
 def is_8_3(name: str) -> bool:
-    """Whether ``name`` fits the memory stick's FAT: up to 8 characters, then up to 3 after one dot."""
+    """Whether the robot's memory stick takes ``name`` (Sony's Programmer's Guide, A.1): up to 8
+    characters, then up to 3 after one dot, each a letter, a digit or one of ``$&#{}~%'()-@^`!_``."""
     base, _, extension = name.partition(".")
-    return 0 < len(base) <= 8 and len(extension) <= 3 and "." not in extension
+    return 0 < len(base) <= 8 and len(extension) <= 3 and set(base + extension) <= NAME_CHARACTERS
 
 
 def stick_path(root: Path, ms_path: str, config: Path, line: int) -> Path:
@@ -102,7 +107,8 @@ def stick_path(root: Path, ms_path: str, config: Path, line: int) -> Path:
             raise ConfigError(f"{_quote(ms_path)} climbs out of the memory stick", config, line)
         if not is_8_3(part):
             raise ConfigError(
-                f"{_quote(ms_path)}: {_quote(part)} is not an 8.3 name (the robot's memory stick has no longer names)",
+                f"{_quote(ms_path)}: {_quote(part)} is not an 8.3 name of letters, digits and $&#{{}}~%'()-@^`!_ "
+                "(the robot's memory stick has no other names)",
                 config,
                 line,
             )

@@ -611,3 +611,10 @@ def test_bad_input_is_refused_naming_the_argument(tmp_path):
     shutil.copy(WALK, tmp_path / "nowhere.mtn")
     with pytest.raises(BuildMsError, match=r"opens '/MS/OPEN-R/LONGFOLDER/X\.MTN': /MS/\.\.\. names must be 8\.3"):
         build_ms(walker, tmp_path / "o6")
+    shutil.copy(WALK, tmp_path / "a+b.mtn")  # a name the robot cannot open (Programmer's Guide A.1)
+    walker.write_text('int main(void) { mtn_new("/MS/OPEN-R/MW/DATA/P/a+b.mtn"); return 0; }')
+    with pytest.raises(
+        BuildMsError, match=r"opens '/MS/OPEN-R/MW/DATA/P/a\+b\.mtn': /MS/\.\.\. names must be 8\.3 names of"
+    ):
+        build_ms(walker, tmp_path / "o6")
+    assert not (tmp_path / "o6").exists()

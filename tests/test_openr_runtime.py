@@ -513,14 +513,20 @@ def test_names_that_are_not_8_3_are_refused_as_the_robot_refuses_them(objects, t
     stick = make_stick(tmp_path / "ms", objects, ["FPROBE"], data={"longer_name.txt": "already there\n"})
     lines = run_stick(stick, 1.0, tmp_path / "out").lines("FileProbe")
     assert "write /MS/OPEN-R/MW/DATA/P/longer_name.txt: refused (errno 13)" in lines
+    assert "write /MS/OPEN-R/MW/DATA/P/A+B.TXT: refused (errno 13)" in lines
+    assert not (stick / "OPEN-R" / "MW" / "DATA" / "P" / "A+B.TXT").exists()
     assert (stick / "OPEN-R" / "MW" / "DATA" / "P" / "longer_name.txt").read_text() == "already there\n"
     objs = stick / "OPEN-R" / "MW" / "OBJS"
     (objs / "FPROBE.BIN").rename(objs / "fileprobe.bin")
     (stick / "OPEN-R" / "MW" / "CONF" / "OBJECT.CFG").write_text("/MS/OPEN-R/MW/OBJS/fileprobe.bin\n")
     with pytest.raises(
         ConfigError,
-        match=r"OBJECT\.CFG:1: '/MS/OPEN-R/MW/OBJS/fileprobe\.bin': 'fileprobe\.bin' is not an 8\.3 name \(the robot's",
+        match=r"OBJECT\.CFG:1: '/MS/OPEN-R/MW/OBJS/fileprobe\.bin': 'fileprobe\.bin' is not an 8\.3 name of letters",
     ):
+        run_stick(stick, 0.1, tmp_path / "out")
+    (objs / "fileprobe.bin").rename(objs / "F+PROBE.BIN")
+    (stick / "OPEN-R" / "MW" / "CONF" / "OBJECT.CFG").write_text("/MS/OPEN-R/MW/OBJS/F+PROBE.BIN\n")
+    with pytest.raises(ConfigError, match=r"OBJECT\.CFG:1: .*'F\+PROBE\.BIN' is not an 8\.3 name of letters, digits"):
         run_stick(stick, 0.1, tmp_path / "out")
 
 

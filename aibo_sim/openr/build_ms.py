@@ -118,7 +118,8 @@ def _motions(main: Path, sources) -> dict[tuple[str, ...], Path]:
         place = _stick_path(name)
         if not all(is_8_3(part) for part in place):
             raise BuildMsError(
-                f"{where} opens {name!r}: /MS/... names must be 8.3 names (the stick's FAT has no longer ones)"
+                f"{where} opens {name!r}: /MS/... names must be 8.3 names of letters, digits and $&#{{}}~%'()-@^`!_ "
+                "(the stick's FAT has no others)"
             )
         if place in found and found[place].resolve() != path.resolve():
             raise BuildMsError(

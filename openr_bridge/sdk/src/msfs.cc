@@ -10,8 +10,10 @@
  * interpose.c puts the C library's file calls through this for the objects' code only (the
  * runtime's own files are opened as they are).
  */
+#include <ctype.h>
 #include <dirent.h>
 #include <errno.h>
+#include <string.h>
 #include <sys/stat.h>
 #include <OPENR/OSyslog.h>
 #include "host.h"
@@ -30,10 +32,18 @@ std::string Upper(const std::string& name) {
     return upper;
 }
 
+/* Up to 8 characters, then up to 3 after one dot, each a letter, a digit or one of the others
+ * Sony's Programmer's Guide (A.1) lists. */
 bool Is83(const std::string& name) {
     size_t dot = name.find('.');
     std::string base = name.substr(0, dot), extension = dot == std::string::npos ? "" : name.substr(dot + 1);
-    return !base.empty() && base.size() <= 8 && extension.size() <= 3 && extension.find('.') == std::string::npos;
+    if (base.empty() || base.size() > 8 || extension.size() > 3) return false;
+    std::string characters = base + extension;
+    for (size_t i = 0; i < characters.size(); i++) {
+        unsigned char c = (unsigned char)characters[i];
+        if (!isalnum(c) && !strchr("$&#{}~%'()-@^`!_", c)) return false;
+    }
+    return true;
 }
 
 /* The entry of `folder` whose name is `name` ignoring case ("" when none). */
@@ -99,7 +109,7 @@ std::string MapPath(const char* path, bool create, std::string* error) {
         std::string name = resolved[i];
         if (stick) {
             if (!Is83(name)) {  /* the robot refuses it, to create or to find (Programmer's Guide A.1) */
-                *error = "not an 8.3 name (the memory stick's FAT has no longer names)";
+                *error = "not an 8.3 name of letters, digits and $&#{}~%'()-@^`!_ (the memory stick's FAT has no others)";
                 return "";
             }
             std::string existing = FindIgnoringCase(mapped, name);

@@ -43,6 +43,7 @@ OStatus FileProbe::DoStart(const OSystemEvent&) {
     Write("/ms/open-r/mw/data/p/probe.txt", "on the stick\n");
     Read("/MS/OPEN-R/MW/DATA/P/PROBE.TXT");
     Write("/MS/OPEN-R/MW/DATA/P/longer_name.txt", "no\n");
+    Write("/MS/OPEN-R/MW/DATA/P/A+B.TXT", "no\n");  // '+' is no character of the stick's names
     Write("here.txt", "in the run's folder\n");
     std::ofstream stream("/MS/OPEN-R/MW/DATA/P/STREAM.TXT");
     stream << "through a C++ stream\n";
