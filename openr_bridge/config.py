@@ -39,7 +39,7 @@ from .errors import ConfigError, NotRegularFile
 
 _NAME = r"[A-Za-z_][A-Za-z0-9_]*"
 _SERVICE_NAME = re.compile(rf"({_NAME})\.({_NAME})\.({_NAME})\.({_NAME})")
-_MEMBER = rf"null|{_NAME}\(\)"
+_MEMBER = rf"null|{_NAME}[ \t]*\(\)"  # Sony's stubgen2 takes "Ready ()" too
 _STUB_LINE = re.compile(
     r"[ \t]*([A-Za-z]+)[ \t]*:(.*)"
 )  # the value is stripped after (a lazy group would backtrack quadratically)
@@ -121,7 +121,7 @@ def parse_stub_cfg(source: bytes | str, path: str = "stub.cfg") -> StubConfig:
     extras: list[str] = []
     first_line: dict[ServiceName, int] = {}  # each service's line, for the repeat check
     for number, line in _lines(source, path):
-        if not line.strip() or line.lstrip().startswith("//"):
+        if not line.strip() or line.lstrip().startswith(("//", "#")):  # comments
             continue
         match = _STUB_LINE.fullmatch(line)
         if not match:
@@ -257,7 +257,7 @@ def _parse_service(value: str, path: str, number: int, first_line: dict[ServiceN
     if name in first_line:
         raise ConfigError(f"service {cut(name)} listed twice (first on line {first_line[name]})", path, number)
     first_line[name] = number
-    connect, notify = (None if member == "null" else member[:-2] for member in match.groups()[1:])
+    connect, notify = (None if member == "null" else member[:-2].rstrip(" \t") for member in match.groups()[1:])
     return Service(name, connect, notify, number)
 
 

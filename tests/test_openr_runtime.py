@@ -18,7 +18,7 @@ import openr_bridge
 from aibo_sim import ers7
 from aibo_sim.files import SymlinkRefused
 from aibo_sim.match import run_match
-from aibo_sim.openr import host
+from aibo_sim.openr import host, mkbin
 from aibo_sim.openr.host import MemoryStickRun, OpenRObjectCrashed
 from aibo_sim.openr.sdk import sdk_root
 from aibo_sim.sim import Simulation
@@ -79,6 +79,31 @@ def test_stubgen2_numbers_entries_as_sony_does():
         "Probe Self;",
     ):
         assert line in stub_cc
+
+
+def test_stubgen2_takes_what_sonys_takes_comments_and_a_space_before_the_parentheses():
+    """Sony's RPlugIn stub.cfg begins with '#' lines; Sony's stubgen2 trims "Ready ()" to Ready."""
+    text = "#\n# comment\nObjectName : P\nNumOfOSubject : 1\nNumOfOObserver : 1\n"
+    text += 'Service : "P.A.X.S", null, Ready ()\nService : "P.B.X.O", Connect\t(), Notify()\n'
+    stub = parse_stub_cfg(text)
+    assert [(s.connect_method, s.notify_method, s.line) for s in stub.services] == [
+        (None, "Ready", 6),
+        ("Connect", "Notify", 7),
+    ]
+    with pytest.raises(ConfigError, match=r"stub\.cfg:3: expected 'Key : value', got 'Object Name P'"):
+        parse_stub_cfg(text.replace("ObjectName :", "Object Name"))
+
+
+def test_mkbin_reads_the_ocf_as_sonys_gensnap_does(tmp_path, capsys):
+    """'object' then 7 or 14 words, '#' comments left out; without one, OUT.ocf (Sony's default)."""
+    (tmp_path / "short.ocf").write_text("object Controller 65536\n")
+    (tmp_path / "good.ocf").write_text("# hints\nobject good 3072 16384 128 # here\ncache tlb user\n")
+    link = "true"  # what the link would run: nothing
+    assert mkbin.main(["-o", str(tmp_path / "a.bin"), str(tmp_path / "short.ocf")], link) == 2
+    assert f"mkbin: {tmp_path / 'short.ocf'}: ocf format error: expected 'object NAME" in capsys.readouterr().err
+    assert mkbin.main(["-o", str(tmp_path / "b.bin"), "x.o"], link) == 2
+    assert f"mkbin: {tmp_path / 'b.ocf'}: No such file or directory" in capsys.readouterr().err
+    assert mkbin.main(["-o", str(tmp_path / "good.bin")], link) == 0
 
 
 def test_sdk_structures_read_the_encoders_bytes(tmp_path):

@@ -3,7 +3,8 @@
 Sony's mkbin links a relocatable MIPS image for Aperios; here the object is a shared library
 that the runtime (``openr-host``) loads. Options as Sony's: ``-o OUT`` (default ``a.bin``),
 ``-p OPENRSDK_ROOT`` (default: the SDK this script belongs to), one ``.ocf`` file (or ``-m
-FILE``; Aperios loader hints, checked for its ``object`` line and otherwise ignored), ``-v``,
+FILE``; default OUT's name with ``.ocf`` for ``.bin``; Aperios loader hints, checked as Sony's
+gensnap reads them, ``object`` then 7 or 14 words, and otherwise ignored), ``-v``,
 ``--nodefaultlib``, ``--nocrt``, ``--vm``, ``--novm`` (accepted, no effect); every other argument
 (objects, archives, ``-L``, ``-l``) goes to the linker, after which come ``-lObjectComm -lOPENR``
 from the SDK. Symbols bind inside the object first (``-Bsymbolic``: two objects may define the
@@ -49,21 +50,25 @@ def parse(argv: list[str]) -> tuple[str, Path | None, Path | None, list[str]]:
 
 
 def check_ocf(ocf: Path) -> None:
-    """ValueError naming the file unless its first non-comment line is ``object NAME ...``."""
+    """ValueError naming the file unless, without its ``#`` comments, it is ``object`` then 7
+    words (NAME stack heap sched cache tlb mode) or 14, as Sony's gensnap requires."""
     try:
-        lines = [line.split() for line in ocf.read_text(errors="replace").splitlines()]
+        text = ocf.read_text(errors="replace")
     except OSError as error:
         raise ValueError(f"{ocf}: {error.strerror or error}") from None
-    words = next((line for line in lines if line and not line[0].startswith("#")), [])
-    if len(words) < 2 or words[0] != "object":
-        raise ValueError(f"{ocf}: expected 'object NAME stack heap sched cache tlb mode', got {' '.join(words)!r}")
+    words = " ".join(line.split("#", 1)[0] for line in text.splitlines()).split()
+    if words[:1] != ["object"] or len(words) - 1 not in (7, 14):
+        got = " ".join(words) if len(words) <= 16 else " ".join(words[:16]) + " ..."
+        raise ValueError(
+            f"{ocf}: ocf format error: expected 'object NAME stack heap sched cache tlb mode' (or 14 words "
+            f"after 'object'), got {got!r}"
+        )
 
 
 def main(argv: list[str], cxx: str) -> int:
     try:
         output, root, ocf, rest = parse(argv)
-        if ocf is not None:
-            check_ocf(ocf)
+        check_ocf(ocf or Path(output.removesuffix(".bin") + ".ocf"))
     except ValueError as error:
         print(f"mkbin: {error}\n{USAGE}", file=sys.stderr)
         return 2
