@@ -12,6 +12,7 @@ Every problem names the file and line.
 """
 
 import gzip
+import struct
 import zlib
 from dataclasses import dataclass
 from pathlib import Path
@@ -174,4 +175,29 @@ def read_object(stick_object: StickObject, config: Path) -> bytes:
             config,
             stick_object.line,
         )
+    extent = _elf_extent(data)
+    if extent > len(data):  # the loader would read past its end (SIGBUS)
+        raise ConfigError(
+            f"{stick_object.ms_path} is cut short: its headers reach byte {extent}, it has {len(data)} "
+            "(rebuild it with make install)",
+            config,
+            stick_object.line,
+        )
     return data
+
+
+def _elf_extent(data: bytes) -> int:
+    """How many bytes an ELF file's headers say it holds: its program and section header tables
+    and its segments' contents (more than it has where even those tables are cut)."""
+    order, wide = "<" if data[5] == 1 else ">", data[4] == 2
+    word, offset_at, size_at = ("Q", 8, 32) if wide else ("I", 4, 16)  # in a program header
+    try:
+        phoff, shoff = struct.unpack_from(order + word * 2, data, 32 if wide else 28)
+        phentsize, phnum, shentsize, shnum = struct.unpack_from(order + "HHHH", data, 54 if wide else 42)
+        extent = max(phoff + phnum * phentsize, shoff + shnum * shentsize)
+        for at in range(phoff, phoff + phnum * phentsize, phentsize):
+            offset, size = (struct.unpack_from(order + word, data, at + k)[0] for k in (offset_at, size_at))
+            extent = max(extent, offset + size)
+    except struct.error:
+        return len(data) + 1
+    return extent

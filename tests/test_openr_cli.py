@@ -219,3 +219,38 @@ def test_console_input_comes_from_standard_input_and_its_end_ends_the_object(obj
     assert "aibo-sim: gets(): the console's input (standard input) has ended" in ended.stderr
     assert "OPEN-R object Asker (entry 1) crashed (SIGABRT" in ended.stderr
     assert (tmp_path / "ended" / "console.log").read_text().count("go on?") == 2
+
+
+def test_a_console_reader_that_left_ends_no_object_and_the_log_keeps_every_line(objects, tmp_path):
+    """`aibo-sim run STICK | head -2`: the runtime died of SIGPIPE, reported as an object's crash,
+    and console.log stopped at the lines the reader took. Now the objects run on, the log is whole
+    and aibo-sim ends quietly as a process whose reader left (141)."""
+    stick = make_stick(tmp_path / "ms", objects, ["CRASH"], f"{SENSOR} Crash.Sensor.OSensorFrameVectorData.O\n")
+    read, write = os.pipe()
+    os.close(read)  # the reader has left before the first line
+    try:
+        run = subprocess.run(
+            [
+                sys.executable,
+                "-m",
+                "aibo_sim.cli",
+                "run",
+                str(stick),
+                "--duration",
+                "0.5",
+                "--out",
+                str(tmp_path / "o"),
+            ],
+            cwd=ROOT,
+            stdout=write,
+            stderr=subprocess.PIPE,
+            text=True,
+            env={**os.environ, "CRASH_HOW": "live"},
+            timeout=300,
+        )
+    finally:
+        os.close(write)
+    assert run.returncode == 141 and run.stderr == ""
+    log = (tmp_path / "o" / "console.log").read_text().splitlines()
+    assert [line.split("] ", 1)[1] for line in log] == [f"Crash: sensor vector {n}" for n in range(1, 16)]
+    assert json.loads((tmp_path / "o" / "run.json").read_text())["status"] == "done"

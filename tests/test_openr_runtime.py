@@ -3,6 +3,7 @@ built by the host SDK with Sony-style Makefiles and run on the simulated ERS-7."
 
 import gzip
 import os
+import shutil
 import signal
 import struct
 import subprocess
@@ -394,6 +395,46 @@ def test_a_crashing_object_is_named_with_the_signal_and_the_time(objects, tmp_pa
         r"simulated t = 0\.088 s$",
     ):
         run_stick(stick, 1.0, tmp_path / "out")
+
+
+@pytest.mark.parametrize(
+    "how, who",
+    [
+        # the runtime died between messages: a BrokenPipeError, exit 2, named nothing
+        ("thread", r"(the OPEN-R runtime|OPEN-R object Crash \(entry 7\))"),
+        # its handler could not run on the overflowed stack: the entry comes from the shared status
+        ("stack", r"OPEN-R object Crash \(entry 7\)"),
+        # 'OPEN-R object the runtime' before
+        ("load", r"OPEN-R object CRASH \(while loading\)"),
+    ],
+)
+def test_a_crash_anywhere_is_named_with_its_object_and_signal(objects, tmp_path, monkeypatch, how, who):
+    monkeypatch.setenv("CRASH_HOW", how)
+    stick = make_stick(tmp_path / "ms", objects, ["CRASH"], f"{SENSOR} Crash.Sensor.OSensorFrameVectorData.O\n")
+    with pytest.raises(OpenRObjectCrashed, match=rf"^{who} crashed \(SIGSEGV: Segmentation fault\) at simulated t = "):
+        run_stick(stick, 2.0, tmp_path / "out")
+
+
+def test_an_object_cut_short_or_named_twice_is_refused_naming_its_object_cfg_line(objects, tmp_path, monkeypatch):
+    """A truncated .BIN crashed the loader (SIGBUS); a second object of one name never got its data."""
+    monkeypatch.setenv("CRASH_HOW", "live")
+    connect = f"{SENSOR} Crash.Sensor.OSensorFrameVectorData.O\n"
+    stick = make_stick(tmp_path / "ms", objects, ["CRASH", "JPROBE"], connect)
+    objs = stick / "OPEN-R" / "MW" / "OBJS"
+    whole = gzip.decompress((objs / "JPROBE.BIN").read_bytes())
+    (objs / "JPROBE.BIN").write_bytes(whole[:5000])
+    with pytest.raises(ConfigError, match=r"OBJECT\.CFG:2: /MS/OPEN-R/MW/OBJS/JPROBE\.BIN is cut short: its headers "):
+        run_stick(stick, 0.1, tmp_path / "out")
+    shutil.copy(objs / "CRASH.BIN", objs / "CRASH2.BIN")
+    (stick / "OPEN-R" / "MW" / "CONF" / "OBJECT.CFG").write_text(
+        "/MS/OPEN-R/MW/OBJS/CRASH.BIN\n/MS/OPEN-R/MW/OBJS/CRASH2.BIN\n"
+    )
+    with pytest.raises(
+        ConfigError,
+        match=r"OBJECT\.CFG:2: /MS/OPEN-R/MW/OBJS/CRASH2\.BIN is an object named Crash, as "
+        r"/MS/OPEN-R/MW/OBJS/CRASH\.BIN on line 1 is: each object's name must be its own$",
+    ):
+        run_stick(stick, 0.1, tmp_path / "out2")
 
 
 def test_what_an_objects_constructor_prints_is_stamped_with_its_name(objects, tmp_path, monkeypatch):

@@ -388,6 +388,16 @@ class MemoryStickRun:
             for _ in range(n):
                 service, offset = protocol.unpack_string(payload, offset)
                 services[service] = name
+        for later, name in enumerate(self.object_names):  # their services would share names
+            first = self.object_names.index(name)
+            if first < later:
+                objects = self.stick.objects
+                raise ConfigError(
+                    f"{objects[later].ms_path} is an object named {name}, as {objects[first].ms_path} on line "
+                    f"{objects[first].line} is: each object's name must be its own",
+                    self.stick.object_cfg,
+                    objects[later].line,
+                )
         return services
 
     def _check(self, connections: tuple[Connection, ...], services: dict[str, str]) -> None:
@@ -623,7 +633,10 @@ class MemoryStickRun:
     # ---------------------------------------------------------------- messages
 
     def _send(self, kind: int, payload: bytes) -> None:
-        self._channel.sendall(_HEADER.pack(len(payload) + 4, kind) + payload)
+        try:
+            self._channel.sendall(_HEADER.pack(len(payload) + 4, kind) + payload)
+        except (BrokenPipeError, ConnectionResetError):  # the runtime died between two messages
+            self._gone()
 
     def _reply(self, expected: int) -> bytes:
         """The next reply's payload if it is ``expected``; raises for FAILED and CRASHED."""
@@ -631,11 +644,11 @@ class MemoryStickRun:
         while len(buffer) < 4 or len(buffer) < 4 + struct.unpack_from("<I", buffer)[0]:
             chunk = self._poll()
             if chunk is None:
-                chunk = (
-                    self._channel.recv(1 << 20)
-                    if self._child.wait(self._channel, protocol.WAIT_NOTICE_S, self._waiting)
-                    else b""
-                )
+                try:
+                    answered = self._child.wait(self._channel, protocol.WAIT_NOTICE_S, self._waiting)
+                    chunk = self._channel.recv(1 << 20) if answered else b""
+                except ConnectionResetError:  # the runtime died
+                    chunk = b""
             if not chunk:
                 self._gone()
             buffer += chunk
@@ -662,6 +675,8 @@ class MemoryStickRun:
         while True:
             try:
                 return self._channel.recv(1 << 20, socket.MSG_DONTWAIT)
+            except ConnectionResetError:  # the runtime died
+                return b""
             except BlockingIOError:
                 if time.perf_counter() > deadline:
                     return None
@@ -676,7 +691,8 @@ class MemoryStickRun:
         where = f"at simulated t = {self.time_ms / 1000:.3f} s"
         if status is not None and status < 0:
             name = signal.Signals(-status).name
-            what = f"OPEN-R object {crashed}" if crashed else "the OPEN-R runtime"
+            # its own word, else the entry the shared status names (a crash its handler could not report)
+            what = f"OPEN-R object {crashed}" if crashed else self._running() or "the OPEN-R runtime"
             raise OpenRObjectCrashed(f"{what} crashed ({name}: {signal.strsignal(-status)}) {where}")
         running = self._running()
         by = f" in {running}" if running else ""  # the object that called exit()

@@ -3,6 +3,7 @@
  * console and simulated time of the aibo-sim OPEN-R runtime.
  */
 #include <deque>
+#include <errno.h>
 #include <stdarg.h>
 #include <unistd.h>
 #include <MCOOP.h>
@@ -55,13 +56,21 @@ void SetStatus(Object* object, Selector selector) {
     statusArea[1] = selector;
 }
 
-void WriteAll(int fd, const std::string& text) {
+bool WriteAll(int fd, const std::string& text) {
     size_t done = 0;
     while (fd >= 0 && done < text.size()) {
         ssize_t n = write(fd, text.data() + done, text.size() - done);
-        if (n <= 0) return;
+        if (n <= 0) return false;
         done += (size_t)n;
     }
+    return true;
+}
+
+/* Console text, in the log, then on standard output until its reader has gone (EPIPE; the
+ * runtime ignores SIGPIPE): the log keeps every line, and the objects run on. */
+void WriteConsole(const std::string& text) {
+    WriteAll(logFd, text);
+    if (!WriteAll(consoleFd, text) && errno == EPIPE) consoleFd = -1;
 }
 
 }  // namespace
@@ -241,15 +250,13 @@ void Print(const char* text) {
         out += *c;
         if (*c == '\n') lineOpen = false;
     }
-    WriteAll(consoleFd, out);
-    WriteAll(logFd, out);
+    WriteConsole(out);
 }
 
 void FlushConsole() {
     if (!lineOpen) return;
     lineOpen = false;
-    WriteAll(consoleFd, "\n");
-    WriteAll(logFd, "\n");
+    WriteConsole("\n");
 }
 
 longword FrameNumber() { return frameNumber; }

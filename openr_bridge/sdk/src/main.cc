@@ -99,13 +99,15 @@ void AppendString(std::string* out, const std::string& text) {
     out->append(text);
 }
 
-/* Before the process dies of a signal: which object, which entry. */
+/* Before the process dies of a signal: which object, which entry (or that it was loading); no
+ * text when no object's code ran. */
 void Crashed(int signal) {
     char text[256];
     size_t used = 0;
     const Object* object = Current();
-    const char* name = object != NULL ? object->name.c_str() : "the runtime";
-    const char* parts[] = {name, object != NULL ? " (entry " : "", ""};
+    const Object* loading = object == NULL ? Constructing() : NULL;
+    const char* name = object != NULL ? object->name.c_str() : loading != NULL ? loading->name.c_str() : "";
+    const char* parts[] = {name, object != NULL ? " (entry " : loading != NULL ? " (while loading)" : "", ""};
     for (int k = 0; k < 2; k++) {
         for (const char* c = parts[k]; *c && used < 200; c++) text[used++] = *c;
     }
@@ -304,6 +306,7 @@ int main() {
     setvbuf(stdout, NULL, _IOLBF, 0);
     const int fatal[] = {SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGABRT};
     for (size_t i = 0; i < sizeof fatal / sizeof fatal[0]; i++) signal(fatal[i], Crashed);
+    signal(SIGPIPE, SIG_IGN); /* a console reader that left: the console's copy stops (kernel.cc) */
 
     size_t sensors = 0;
     longword kind;

@@ -1,5 +1,7 @@
+#include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 #include <OPENR/OSyslog.h>
 #include <OPENR/core_macro.h>
 #include "Crash.h"
@@ -9,8 +11,21 @@ static bool How(const char* how) {
     return chosen != 0 && strcmp(chosen, how) == 0;
 }
 
+static void* CrashLater(void*) {
+    usleep(50000);
+    *(volatile int*)0 = 1;
+    return 0;
+}
+
+static int Deeper(int depth) {
+    volatile char frame[4096];
+    frame[0] = (char)depth;
+    return Deeper(depth + 1) + frame[0];
+}
+
 Crash::Crash() : vectors(0) {
     if (How("say")) OSYSPRINT(("made\n"));
+    if (How("load")) *(volatile int*)0 = 1;
 }
 
 OStatus Crash::DoInit(const OSystemEvent&) {
@@ -29,7 +44,16 @@ OStatus Crash::DoStart(const OSystemEvent&) {
 
 void Crash::NotifySensor(const ONotifyEvent& event) {
     OSYSPRINT(("sensor vector %d\n", ++vectors));
-    if (vectors == 3 && How("exit")) exit(3);
-    if (vectors == 3) *(volatile int*)0 = 1;
+    if (vectors == 3 && !How("live")) {
+        pthread_t later;
+        if (How("exit")) exit(3);
+        if (How("thread")) {
+            pthread_create(&later, 0, CrashLater, 0);
+        } else if (How("stack")) {
+            Deeper(0);
+        } else {
+            *(volatile int*)0 = 1;
+        }
+    }
     observer[event.ObsIndex()]->AssertReady();
 }

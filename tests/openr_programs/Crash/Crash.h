@@ -1,6 +1,8 @@
-// Crash: writes through a null pointer on its third sensor vector (aibo-sim's runtime tests); with
-// CRASH_HOW=exit in the environment it calls exit(3) there instead, with CRASH_HOW=init it never
-// returns from DoInit, with CRASH_HOW=say its constructor prints "made".
+// Crash: writes through a null pointer on its third sensor vector (aibo-sim's runtime tests). With
+// CRASH_HOW in the environment: exit, it calls exit(3) there instead; thread, a thread of its own
+// writes through the null pointer 50 ms later (outside any handler); stack, it recurses without
+// end; live, it runs on; init, it never returns from DoInit; say, its constructor prints "made";
+// load, its constructor writes through the null pointer (while the runtime loads its file).
 #ifndef Crash_h_DEFINED
 #define Crash_h_DEFINED
 
