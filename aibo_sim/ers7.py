@@ -180,7 +180,8 @@ def _face_light(number: int, colour, colour_b, spot: str, spot_b: str | None = N
     """Face light ``number`` (Model Information 3.1.1 and A.2) at ``spot``, and on the B face at
     ``spot_b`` (default the same): odd numbers a pair's left spot, even the right, unless ``side``."""
     side = side or ("l" if number % 2 else "r")
-    locator = f"PRM:/r1/c1/c2/c3/l{'abcdefghijklmn'[number - 1]}-LED3:l{'abcdefghijklmn'[number - 1]}"
+    letter = "abcdefghijklmn"[number - 1]
+    locator = f"PRM:/r1/c1/c2/c3/l{letter}-LED3:l{letter}"
     geoms, geoms_b = face_spot_geoms(spot, side), face_spot_geoms(spot_b or spot, side)
     return Led(f"led_face_{number}", locator, colour, colour_b, geoms, geoms_b)
 
