@@ -296,14 +296,15 @@ def _is_file(path: Path) -> bool:
 
 
 def find_file(path: str | Path, search_dirs) -> Path:
-    """``path`` itself if it is an absolute file's; else the name (of an absolute path, such as a
-    memory stick's ``/MS/OPEN-R/...``, the last part) in the first of ``search_dirs`` (a relative
-    one: the working folder at the call) that has it, ignoring case as OPEN-R's memory stick does
-    when the folder lacks the exact name; ``path`` unchanged when none has it."""
+    """``path`` itself if it is absolute; else the name (of a memory stick's ``/MS/OPEN-R/...``, the
+    last part) in the first of ``search_dirs`` (a relative one: the working folder at the call)
+    that has it, ignoring case as OPEN-R's memory stick does when the folder lacks the exact name;
+    ``path`` unchanged when none has it."""
     path = Path(path)
-    if path.is_absolute() and _is_file(path):
+    on_stick = str(path)[:4].upper() == "/MS/" and not _is_file(path)
+    if path.is_absolute() and not on_stick:
         return path
-    name = Path(path.name) if path.is_absolute() else path
+    name = Path(path.name) if on_stick else path
     for folder in map(Path, search_dirs):
         if _is_file(folder / name):
             return folder / name

@@ -195,7 +195,7 @@ def _elf_extent(data: bytes) -> int:
         phoff, shoff = struct.unpack_from(order + word * 2, data, 32 if wide else 28)
         phentsize, phnum, shentsize, shnum = struct.unpack_from(order + "HHHH", data, 54 if wide else 42)
         extent = max(phoff + phnum * phentsize, shoff + shnum * shentsize)
-        for at in range(phoff, phoff + phnum * phentsize, phentsize):
+        for at in range(phoff, phoff + phnum * phentsize, phentsize or 1):  # a .o has none (size 0)
             offset, size = (struct.unpack_from(order + word, data, at + k)[0] for k in (offset_at, size_at))
             extent = max(extent, offset + size)
     except struct.error:

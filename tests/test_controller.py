@@ -245,6 +245,9 @@ def test_mtn_new_looks_in_the_controllers_folder_then_the_working_folder_then_th
         "mine.mtn": "working#MINE.MTN",  # a file the controller wrote where it runs (--out)
         "WALKFWD.MTN": read_mtn(models_dir() / "motions" / "WALKFWD.MTN").name,
     }
+    # a memory stick's path finds the name; any other absolute path is that file or none
+    assert api.mtn_get_name(api.mtn_new("/MS/OPEN-R/MW/DATA/P/MINE.MTN")) == "working#MINE.MTN"
+    assert api.mtn_new(str(tmp_path / "typo" / "MINE.MTN")) is None and "File not found" in api.mtn_get_error()
 
 
 def test_mtn_fprint_and_grey(robot, tmp_path, capsys):

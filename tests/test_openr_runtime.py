@@ -425,6 +425,11 @@ def test_an_object_cut_short_or_named_twice_is_refused_naming_its_object_cfg_lin
     (objs / "JPROBE.BIN").write_bytes(whole[:5000])
     with pytest.raises(ConfigError, match=r"OBJECT\.CFG:2: /MS/OPEN-R/MW/OBJS/JPROBE\.BIN is cut short: its headers "):
         run_stick(stick, 0.1, tmp_path / "out")
+    relocatable = tmp_path / "x.o"  # a .o copied where the .bin goes: no program headers at all
+    subprocess.run(["cc", "-c", "-x", "c", "-", "-o", str(relocatable)], input=b"int x;\n", check=True)
+    (objs / "JPROBE.BIN").write_bytes(relocatable.read_bytes())
+    with pytest.raises(ConfigError, match=r"OBJECT\.CFG:2: /MS/OPEN-R/MW/OBJS/JPROBE\.BIN: cannot load: "):
+        run_stick(stick, 0.1, tmp_path / "out")
     shutil.copy(objs / "CRASH.BIN", objs / "CRASH2.BIN")
     (stick / "OPEN-R" / "MW" / "CONF" / "OBJECT.CFG").write_text(
         "/MS/OPEN-R/MW/OBJS/CRASH.BIN\n/MS/OPEN-R/MW/OBJS/CRASH2.BIN\n"

@@ -135,8 +135,8 @@ static void at_exit(void) {
     }
     pthread_mutex_lock(&calling); /* after the call another thread is making */
     if (!exiting) {
-        __atomic_store_n(&caller, pthread_self(), __ATOMIC_RELEASE);
         __atomic_store_n(&exiting, 1, __ATOMIC_RELEASE);
+        __atomic_store_n(&caller, pthread_self(), __ATOMIC_RELEASE);
     }
     int ending = pthread_equal(pthread_self(), caller);
     pthread_mutex_unlock(&calling);
@@ -235,9 +235,11 @@ static void start_call(enum aibo_op call) {
                        "flag that the controller's loop reads)",
                        aibo_op_names[call], aibo_op_names[current_op]);
     }
-    /* Known before waiting for `calling`: the caller, calling in a loop, could keep it for good. */
-    if (!__atomic_load_n(&exiting, __ATOMIC_ACQUIRE) &&
-        !pthread_equal(pthread_self(), __atomic_load_n(&caller, __ATOMIC_ACQUIRE))) {
+    /* Known before waiting for `calling`: the caller, calling in a loop, could keep it for good.
+     * The caller is read before `exiting`, which at_exit sets first: a caller changed at exit is
+     * seen with it. */
+    pthread_t calls = __atomic_load_n(&caller, __ATOMIC_ACQUIRE);
+    if (!pthread_equal(pthread_self(), calls) && !__atomic_load_n(&exiting, __ATOMIC_ACQUIRE)) {
         binding_failed("%s called from a second thread: a C controller makes its calls from one thread",
                        aibo_op_names[call]);
     }
