@@ -8,7 +8,8 @@ import mujoco
 import numpy as np
 import pytest
 from gymnasium.utils.env_checker import check_env
-from pettingzoo.test import parallel_api_test
+from pettingzoo.test import parallel_api_test, state_test
+from pettingzoo.utils.conversions import parallel_to_aec
 
 from aibo_sim.envs.match import BALL_PROGRESS_REWARD, FALL_PENALTY, MatchEnv, ScriptedOpponentsEnv
 from aibo_sim.ers7 import JOINT_INDEX
@@ -43,12 +44,16 @@ def team_pixels(image: np.ndarray, team: str) -> int:
     return int(((r > 3 * g) & (r > 3 * b) & (r > 60)).sum())
 
 
-def test_parallel_api_test_passes():
-    env = MatchEnv(STRIKERS, **SMALL)
+def test_parallel_api_test_and_the_state_test_pass():
+    """state_test warned (an error here) of state_space's infinite bounds."""
+    env, other = MatchEnv(STRIKERS, **SMALL), MatchEnv(STRIKERS, **SMALL)
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         parallel_api_test(env, num_cycles=12)
+        state_test(parallel_to_aec(other), other, num_cycles=12)
+    assert np.isfinite(env.state_space.low).all() and np.isfinite(env.state_space.high).all()
     env.close()
+    other.close()
 
 
 def test_four_against_four_at_kickoff():

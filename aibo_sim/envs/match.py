@@ -126,6 +126,21 @@ class _Agent:
         self.sim.servos.set_target(self._actuated, targets)
 
 
+# state()'s bounds, far beyond a field's (6.4 x 4.4 m) and a kicked ball's speed (1-2 m/s): finite,
+# as PettingZoo's state_test asks, and never reached on a field.
+STATE_DISTANCE_LIMIT, STATE_SPEED_LIMIT = 100.0, 20.0  # m, m/s on each axis
+
+
+def _state_space(robots: int) -> gym.spaces.Box:
+    """``state()``'s space: positions within STATE_DISTANCE_LIMIT, the ball's velocity within
+    STATE_SPEED_LIMIT, yaw within +-pi, tilt within 0..pi."""
+    robot = [STATE_DISTANCE_LIMIT] * 3 + [np.pi, np.pi]  # x, y, z, yaw, tilt
+    high = np.array([STATE_DISTANCE_LIMIT] * 3 + [STATE_SPEED_LIMIT] * 3 + robot * robots, np.float32)
+    low = -high
+    low[10::5] = 0.0  # the tilts
+    return gym.spaces.Box(low, high, dtype=np.float32)
+
+
 class MatchEnv(pettingzoo.ParallelEnv):
     """``aibo_sim_match_v0``: red against blue on the RoboCup 2005 field, every robot an agent.
 
@@ -315,8 +330,8 @@ class MatchEnv(pettingzoo.ParallelEnv):
         self.observation_spaces = {name: agent.observation_space for name, agent in self._agents.items()}
         self.action_spaces = {name: agent.action_space for name, agent in self._agents.items()}
         self._scripts = {name: make(self.robots[name]) for name, make in scripted.items()}
-        self.state_space = gym.spaces.Box(-np.inf, np.inf, (6 + 5 * len(names),), np.float32)
         model = self.sim.model
+        self.state_space = _state_space(len(names))
         self._nominal_lights = (
             model.light_diffuse.copy(),
             model.vis.headlight.diffuse.copy(),
@@ -451,7 +466,8 @@ class MatchEnv(pettingzoo.ParallelEnv):
 
     def state(self) -> np.ndarray:
         """The ball (position, m, and velocity, m/s) and every robot's body (x, y, z, yaw, tilt), in
-        the order of ``robots``; float32, zeros for the ball in a scene without one."""
+        the order of ``robots``; float32, zeros for the ball in a scene without one; within
+        ``state_space`` (see ``_state_space``)."""
         self._check_open("state")
         values = [0.0] * 6
         if self.sim.has_ball:
@@ -460,7 +476,8 @@ class MatchEnv(pettingzoo.ParallelEnv):
         for robot in self.robots.values():
             position, yaw, tilt = robot.body_pose()
             values += [*position, yaw, tilt]
-        return np.array(values, np.float32)
+        space = self.state_space
+        return np.clip(np.array(values, np.float32), space.low, space.high)
 
     def render(self):
         """The whole field from above its -Y side line, a (360, 480, 3) uint8 RGB array, with
