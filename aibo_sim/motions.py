@@ -20,7 +20,7 @@ import numpy as np
 
 from .config import CameraConfig, WorldConfig
 from .ers7 import JOINT_BY_LOCATOR, JOINT_INDEX, JOINTS, LEGS, joint_indices
-from .mjcf import HIP_OFFSET, KNEE_OFFSET, PAW_OFFSET, POSES
+from .mjcf import HIP_OFFSET, KNEE_OFFSET, PAW_OFFSET, PAW_RADIUS, POSES
 from .mtn import Motion, MotionPlayer, MtnError, another_robot, printable, read_mtn, write_mtn
 from .placement import place
 from .sim import FRAME_MS, Simulation, models_dir
@@ -245,9 +245,11 @@ def _webots_frames(player: MotionPlayer, repeat: int, step_ms: int):
 
 
 def kinematic_speed(motion: Motion) -> float:
-    """Forward speed (m/s, + = forward) at which the motion's paws push the body if they do not
-    slip: minus the mean body-frame x velocity of each paw while it is in its stance (its
-    lowest quarter of height), averaged over the legs."""
+    """Forward speed (m/s, + = forward) at which a gait's paws push the body if they do not slip:
+    while a paw is in its stance (its lowest quarter of height), minus its ball's body-frame x
+    velocity, plus its rolling (the ball's radius times the lower leg's pitch rate, J1 + J3;
+    J2's tilt and the body's pitch left out), averaged over the legs. It reads a gait, whose
+    stances are its lowest paws; of a posture change (sit, stand) it says nothing."""
     keyframes = motion.positions_rad()
     if len(keyframes) < 2:
         return 0.0
@@ -259,11 +261,14 @@ def kinematic_speed(motion: Motion) -> float:
             continue
         columns = [names.index(f"{leg}_j{i}") for i in (1, 2, 3)]
         paws = np.array([paw_position(leg, angles) for angles in keyframes[:, columns]])
+        front = 1 if LEGS[leg][2] else -1
+        pitch = -front * (keyframes[:, columns[0]] + keyframes[:, columns[2]])  # the lower leg's, about +Y
         z = paws[:, 2]
         low = z <= z.min() + 0.25 * (z.max() - z.min())
         stance = low[:-1] & low[1:]  # segments that start and end in stance
         if stance.any():
-            speeds.append(-np.sum(np.diff(paws[:, 0])[stance]) / np.sum(dt[stance]))
+            pushed = -np.diff(paws[:, 0]) + PAW_RADIUS * np.diff(pitch)
+            speeds.append(np.sum(pushed[stance]) / np.sum(dt[stance]))
     return float(np.mean(speeds)) if speeds else 0.0
 
 

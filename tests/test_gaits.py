@@ -119,7 +119,8 @@ def test_own_trot_converges_with_the_timestep(tmp_path):
     results = walk_grid(tmp_path, read_mtn(models_dir() / "motions" / "WALKFWD.MTN"), 20)
     for r in results:
         assert not r["fell"] and r["paw_stance_share"] > 0.95 and r["peak_leg_joint_speed_rad_s"] < 15, r
-        assert 0.7 <= r["displacement_m"][0] / r["kinematic_distance_m"] <= 1.25, r
+        # its kinematics count the paw balls' rolling, 8.5 % of its sweep: 0.65 of them is 0.7 of the sweep
+        assert 0.65 <= r["displacement_m"][0] / r["kinematic_distance_m"] <= 1.25, r
         assert abs(r["heading_change_deg"]) <= 15 and abs(r["displacement_m"][1]) <= 0.08, r
     for k in (k for k, stiffness in enumerate(STIFFNESS) if stiffness >= 1):
         same_stiffness = results[k :: len(STIFFNESS)]
@@ -128,12 +129,17 @@ def test_own_trot_converges_with_the_timestep(tmp_path):
         assert np.ptp(forward) <= 0.06 and np.ptp(heading) <= 12, (STIFFNESS[k], forward, heading)
 
 
-def test_kinematic_speed_reads_the_paws_in_stance():
+def test_kinematic_speed_reads_the_paws_in_stance_and_their_rolling(monkeypatch):
+    """The paws' sweep is the trot's design (step length a period); the paw balls' rolling, as the
+    lower legs turn back in the stance, adds to it (Sony's walks: 0.57 -> 0.62 m over 8 cycles of
+    WWFWD, which the physics walks 0.63-0.68 m)."""
     walk = read_mtn(models_dir() / "motions" / "WALKFWD.MTN")
-    speed = motions.kinematic_speed(walk)
-    assert speed == pytest.approx(motions.WALK.step_length / (motions.WALK.period_ms / 1000), rel=0.05)
+    speed, designed = motions.kinematic_speed(walk), motions.WALK.step_length / (motions.WALK.period_ms / 1000)
+    assert 1.02 * designed < speed < 1.15 * designed
     backward = dataclasses.replace(walk, keyframes=walk.keyframes[::-1].copy(), attitudes=walk.attitudes[::-1].copy())
     assert motions.kinematic_speed(backward) == pytest.approx(-speed)
+    monkeypatch.setattr(motions, "PAW_RADIUS", 0.0)  # points for paws: the sweep alone
+    assert motions.kinematic_speed(walk) == pytest.approx(designed, rel=0.05)
 
 
 def test_mtn_play_has_no_ball_unless_placed(capsys):
