@@ -27,6 +27,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from aibo_sim import controller as api
 from aibo_sim import ers7, runner
 from aibo_sim.cli import main
 from aibo_sim.config import WorldConfig
@@ -142,6 +143,7 @@ static int inner(int ms) {
 }
 
 static int run(int ms) {
+    if (is("zero step")) return 0;
     if (is("run in run")) {
         fprintf(out, "outer %d %g\n", ms, robot_get_time());
         if (ms) robot_run(inner);
@@ -484,22 +486,29 @@ def test_errors_end_the_controller_with_the_python_apis_message(probe, tmp_path)
         pan.set_control_p(-50)
     with pytest.raises(MtnError) as missing:
         mtn_new("missing.mtn")
+    api.install(robot)
+    try:
+        with pytest.raises(ValueError) as zero_step:
+            api.robot_run(lambda ms: 0)
+    finally:
+        api.install(None)
     cases = {
         "device error": str(device.value),
         "acceleration": str(acceleration.value),
         "control p": str(control_p.value),
         "missing motion": f"mtn_play: MTN is NULL: mtn_new failed ({missing.value})",
         "step": "robot_step(32): not on the robot: an OPEN-R object cannot wait for time to pass inside a call",
+        "zero step": str(zero_step.value),  # the stick said 'step of 0 ms: must be a positive whole multiple'
     }
     for scenario, message in cases.items():
         folder = tmp_path / scenario.replace(" ", "_")
         folder.mkdir()
         (folder / "scenario.txt").write_text(scenario + "\n")
         _, sim, run = run_stick(probe[1], 64, folder)
-        assert sim.time_ms == 0  # shut down before the first frame
+        assert sim.time_ms == (32 if scenario == "zero step" else 0)  # shut down before the first frame or vector
         assert f"controller error at t = 0.000 s: {message}" in (folder / "console.log").read_text()
         assert run.controller_error.startswith(f"controller error at t = 0.000 s: {message}")  # the run failed
-        assert (folder / "died.txt").exists() == (scenario == "step")  # the others fail before robot_die
+        assert (folder / "died.txt").exists() == (scenario in ("step", "zero step"))  # the others fail before robot_die
     assert (tmp_path / "missing_motion" / "probe.txt").read_text() == f"{missing.value}\n"
     out = tmp_path / "cli"  # the command: exit 1 and run.json "failed", as for a Python controller's error
     out.mkdir()

@@ -177,7 +177,8 @@ void Controller::CallRun(void* self) {
     if (setjmp(replaced) != 0) controller.lastStep_ = 0;
     int ms = controller.run_(controller.lastStep_);
     controller.runJump_ = 0;
-    if (ms <= 0 || ms % wrapper::FRAME_MS != 0) {
+    if (ms <= 0) wrapper::Fail("run function returned %d: it must return the next step in ms (e.g. TIME_STEP)", ms);
+    if (ms % wrapper::FRAME_MS != 0) {
         wrapper::Fail("step of %d ms: must be a positive whole multiple of the %d ms joint frame", ms,
                       wrapper::FRAME_MS);
     }
