@@ -53,6 +53,7 @@ BALL = (0.5, 0.1)  # in view, off-centre: the tracker turns the head
 # (in its working folder), so that one build serves every case.
 PROBE = r"""
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 #include <device/accelerometer.h>
 #include <device/camera.h>
@@ -144,6 +145,8 @@ static int inner(int ms) {
 
 static int run(int ms) {
     if (is("zero step")) return 0;
+    if (is("exit 0") && ms) exit(0);
+    if (is("exit 3") && ms) exit(3);
     if (is("run in run")) {
         fprintf(out, "outer %d %g\n", ms, robot_get_time());
         if (ms) robot_run(inner);
@@ -517,6 +520,20 @@ def test_errors_end_the_controller_with_the_python_apis_message(probe, tmp_path)
     run_json = json.loads((out / "run.json").read_text())
     assert run_json["status"] == "failed"
     assert run_json["error"] == f"memory stick MS: controller error at t = 0.000 s: {control_p.value}"
+
+
+@pytest.mark.parametrize("status", [0, 3])
+def test_exit_ends_the_controller_through_its_robot_die_functions_as_in_the_simulator(probe, tmp_path, status):
+    """exit(N) is a Python controller's sys.exit(N) (docs/c-controllers.md). On a stick it ended the
+    OPEN-R runtime: no robot_die function ran, and exit(0) failed the run ('exited with status 0')."""
+    (tmp_path / "scenario.txt").write_text(f"exit {status}\n")
+    _, sim, run = run_stick(probe[1], 64, tmp_path)
+    assert (tmp_path / "died.txt").read_text() == "died\n"
+    assert run.shutdown and sim.time_ms < 64 * 8
+    if status:
+        assert run.controller_error.startswith("controller error at t = 0.032 s: exited with exit(3)")
+    else:
+        assert run.controller_error is None
 
 
 def test_a_memory_stick_is_cross_compiled_and_has_no_keyboard(probe, tmp_path, monkeypatch):

@@ -19,6 +19,8 @@
 extern "C" int aibo_controller_main_c(int, char**) __attribute__((weak));
 int aibo_controller_main_cc() __attribute__((weak));
 int aibo_controller_main_cc(int, char**) __attribute__((weak));
+/* The controller's exit(), renamed by the Makefile (-Dexit=...): Controller::Exit. */
+extern "C" void aibo_controller_exit(int status) { Controller::Exit(status); }
 /* aibo-sim's host runtime: told that the controller failed (the robot has none: null there). */
 extern "C" void aibo_sim_controller_failed(const char* message) __attribute__((weak));
 
@@ -215,6 +217,16 @@ void Controller::Fail(const char* message) {
     if (state_ == RUNNING) End(true);
     if (failJump_ == 0) abort();  /* not called from the controller's code: a bug of the wrapper */
     longjmp(*failJump_, 1);
+}
+
+/* exit() in the controller's code, as a Python controller's sys.exit() in the simulator: exit(0)
+ * ends the controller (its robot_die functions run, the robot shuts down), another status fails
+ * it; in a robot_die function it ends that one. Outside the controller's code, the C library's. */
+void Controller::Exit(int status) {
+    if (instance_ == 0 || instance_->failJump_ == 0) exit(status);
+    if (status != 0) wrapper::Fail("exited with exit(%d)", status);
+    if (instance_->state_ == RUNNING) instance_->End(true);
+    longjmp(*instance_->failJump_, 1);
 }
 
 /* The controller has ended: its robot_die functions run (each once, whatever the others do),

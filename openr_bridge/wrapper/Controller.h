@@ -88,6 +88,7 @@ public:
     void CameraControl(int tag, const char* function, int value);
     void SetControlP(int tag, double p);
     void Fail(const char* message) __attribute__((noreturn));
+    static void Exit(int status) __attribute__((noreturn));
 
 private:
     enum State { LOADED, RUNNING, ENDED };
