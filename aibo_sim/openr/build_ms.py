@@ -62,7 +62,6 @@ CONNECTIONS = (
 )
 # The controller's main() under another name, as the wrapper calls it (Controller.cc).
 MAIN = {".c": "aibo_controller_main_c", ".cc": "aibo_controller_main_cc", ".cpp": "aibo_controller_main_cc"}
-EXIT = "aibo_controller_exit"  # the controller's exit() (Controller.cc): it ends the controller, as in the simulator
 _SAFE_NAME = re.compile(r"[A-Za-z0-9_.+-]+")
 _UNSAFE_IN_MAKE = re.compile(r"[\s'\"`$&|;<>()*?\[\]#~!{}\\]")  # in a folder's path: make and sh split or read it
 _LITERAL = re.compile(r'//[^\n]*|/\*.*?\*/|"((?:[^"\\\n]|\\.)*)"|\'(?:[^\'\\\n]|\\.)*\'', re.S)
@@ -215,7 +214,7 @@ def makefile(sources: list[Path]) -> str:
         compiler, flags = ("$(CC)", "$(CFLAGS)") if source.suffix == ".c" else ("$(CXX)", "$(CXXFLAGS)")
         rules += [
             f"{obj}: controller/{source.name}",
-            f"\t{compiler} {flags} -Dmain={MAIN[source.suffix]} -Dexit={EXIT} -o $@ -c $<",
+            f"\t{compiler} {flags} -Dmain={MAIN[source.suffix]} -o $@ -c $<",
             "",
         ]
     return "\n".join(
@@ -237,6 +236,8 @@ def makefile(sources: list[Path]) -> str:
             "CXXFLAGS=-O2 -Wall $(INCLUDES)",
             "CFLAGS=-O2 -Wall -std=gnu99 $(INCLUDES)",
             "",
+            "# exit() ends the controller as in the simulator (Controller.cc): ld's --wrap, as mkbin hands it to ld",
+            "LDFLAGS=--wrap=exit",
             f"WRAPPER={' '.join(WRAPPER_OBJECTS)}",
             f"CONTROLLER={' '.join(objects)}",
             "",
@@ -255,7 +256,7 @@ def makefile(sources: list[Path]) -> str:
             "",
             *rules,
             "controller.bin: $(WRAPPER) $(CONTROLLER) Controller.ocf",
-            "\t$(MKBIN) $(MKBINFLAGS) -o $@ $(WRAPPER) $(CONTROLLER) Controller.ocf $(LIBS)",
+            "\t$(MKBIN) $(MKBINFLAGS) -o $@ $(WRAPPER) $(CONTROLLER) Controller.ocf $(LDFLAGS) $(LIBS)",
             "\t$(STRIP) $@",
             "",
             "install: controller.bin",

@@ -6,7 +6,8 @@ that the runtime (``openr-host``) loads. Options as Sony's: ``-o OUT`` (default 
 FILE``; default OUT's name with ``.ocf`` for ``.bin``; Aperios loader hints, checked as Sony's
 gensnap reads them, ``object`` then 7 or 14 words, and otherwise ignored), ``-v``,
 ``--nodefaultlib``, ``--nocrt``, ``--vm``, ``--novm`` (accepted, no effect); every other argument
-(objects, archives, ``-L``, ``-l``) goes to the linker, after which come ``-lObjectComm -lOPENR``
+(objects, archives, ``-L``, ``-l``, and ld's own options such as ``--wrap=exit``, which Sony's
+mkbin hands to ld) goes to the linker, after which come ``-lObjectComm -lOPENR``
 from the SDK. Symbols bind inside the object first (``-Bsymbolic``: two objects may define the
 same names, as separate Aperios objects may), and an undefined one is an error at link time,
 not when the robot loads the object.
@@ -44,6 +45,8 @@ def parse(argv: list[str]) -> tuple[str, Path | None, Path | None, list[str]]:
                 if ocf is not None:
                     raise ValueError(".ocf given more than once")
                 ocf = Path(argument)
+            elif argument.startswith("--") and argument not in ("--nodefaultlib", "--nocrt", "--vm", "--novm"):
+                rest.append("-Wl," + argument)  # ld's own option (--wrap=exit): Sony's mkbin hands it to ld
             elif argument not in ("-v", "--nodefaultlib", "--nocrt", "--vm", "--novm"):
                 rest.append(argument)
     return output, root, ocf, rest

@@ -19,8 +19,10 @@
 extern "C" int aibo_controller_main_c(int, char**) __attribute__((weak));
 int aibo_controller_main_cc() __attribute__((weak));
 int aibo_controller_main_cc(int, char**) __attribute__((weak));
-/* The controller's exit(), renamed by the Makefile (-Dexit=...): Controller::Exit. */
-extern "C" void aibo_controller_exit(int status) { Controller::Exit(status); }
+/* exit(), its calls made these (the Makefile links with ld's --wrap=exit): Controller::Exit,
+ * and the C library's. */
+extern "C" void __wrap_exit(int status) { Controller::Exit(status); }
+extern "C" void __real_exit(int status) __attribute__((noreturn));
 /* aibo-sim's host runtime: told that the controller failed (the robot has none: null there). */
 extern "C" void aibo_sim_controller_failed(const char* message) __attribute__((weak));
 
@@ -223,7 +225,7 @@ void Controller::Fail(const char* message) {
  * ends the controller (its robot_die functions run, the robot shuts down), another status fails
  * it; in a robot_die function it ends that one. Outside the controller's code, the C library's. */
 void Controller::Exit(int status) {
-    if (instance_ == 0 || instance_->failJump_ == 0) exit(status);
+    if (instance_ == 0 || instance_->failJump_ == 0) __real_exit(status);
     if (status != 0) wrapper::Fail("exited with exit(%d)", status);
     if (instance_->state_ == RUNNING) instance_->End(true);
     longjmp(*instance_->failJump_, 1);
