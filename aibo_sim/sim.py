@@ -7,6 +7,7 @@ simulated time reaches the next multiple of 1/30 s.
 
 from __future__ import annotations
 
+import collections
 import ctypes
 import logging
 import math
@@ -442,6 +443,8 @@ class World:
                     before_frame()
                 for actuators, commands in plans:
                     data.ctrl[actuators] = commands[k - 1]
+                for robot in self.robots:
+                    robot._light_queued()
                 if nstep:
                     mujoco.mj_step(model, data, nstep=nstep)
                 self.frame += 1
@@ -494,10 +497,11 @@ class Simulation:
     data, time, ball): stepping any of them steps the world. They are checked as
     ``team.check_robots`` does (a TeamError names the robot: a duplicate, a pose off the carpet).
 
-    ``command_latency_frames``: 8 ms frames between a set-point and the servo acting on it. On
-    the robot, OPEN-R plays joint commands from a queue of 4-frame command vectors, so a
-    command waits 32 ms or more; how many vectors the Webots-era wrapper kept in flight is
-    UNCONFIRMED, so the default is 0 (the set-point acts in the next frame)."""
+    ``command_latency_frames``: 8 ms frames between a set-point and the servo acting on it (or
+    an LED command and the LED). On the robot, OPEN-R plays joint and LED commands from a queue
+    of 4-frame command vectors, so a command waits 32 ms or more; how many vectors the Webots-era
+    wrapper kept in flight is UNCONFIRMED, so the default is 0 (the set-point acts in the next
+    frame)."""
 
     def __init__(
         self,
@@ -590,8 +594,9 @@ class Simulation:
         if reseed:  # the world is made with its seed, so every robot gets one at the start
             self.rng = np.random.default_rng(self.robot_seed)  # IR noise; the camera's noise has its own stream
         self.servos.reset(self.joint_positions())
+        self._queued_leds = collections.deque()  # (frame due, set_led's arguments) with a command latency
         for name in list(self._lit):  # LEDs off
-            self.set_led(name, 0.0)
+            self._light(name, 0.0, False)
         self._queued = np.tile(self.servos.command, (self.command_latency_frames, 1))  # set-points on their way
         self.camera.reset(self.robot_seed)
 
@@ -776,7 +781,20 @@ class Simulation:
 
     def set_led(self, name: str, level: float, face_b: bool = False) -> None:
         """Light an LED at ``level`` in 0..1 of its colour (0: off); ``face_b``: a face light on its
-        B face. Lights that share a spot (A9 and A13) add up there (Model Information 3.1.1)."""
+        B face. Lights that share a spot (A9 and A13) add up there (Model Information 3.1.1). With
+        a command latency, it lights ``command_latency_frames`` frames later, as a set-point acts
+        (OPEN-R's LEDs travel in the joints' command vectors)."""
+        if self.command_latency_frames:
+            self._queued_leds.append((self.frame + self.command_latency_frames, name, level, face_b))
+        else:
+            self._light(name, level, face_b)
+
+    def _light_queued(self) -> None:
+        """The LED commands due by the frame about to be simulated."""
+        while self._queued_leds and self._queued_leds[0][0] <= self.frame:
+            self._light(*self._queued_leds.popleft()[1:])
+
+    def _light(self, name: str, level: float, face_b: bool) -> None:
         led = LED_BY_NAME[name]
         self._lit[name] = (level, face_b)
         for geom in dict.fromkeys(led.lit_geoms() + led.lit_geoms(True)):

@@ -192,16 +192,17 @@ def build(controller: Path, project: Path) -> list[str]:
 
 
 class Recorder:
-    """Each frame's qpos and ctrl, and each camera frame's picture by index."""
+    """Each frame's qpos, ctrl and LED colours, and each camera frame's picture by index."""
 
     def __init__(self):
-        self.qpos, self.ctrl, self.frames = [], [], {}
+        self.qpos, self.ctrl, self.leds, self.frames = [], [], [], {}
         self.sim = None
 
     def __call__(self, sim) -> None:
         self.sim = sim
         self.qpos.append(sim.data.qpos.copy())
         self.ctrl.append(sim.data.ctrl.copy())
+        self.leds.append(sim.model.geom_rgba[[sim.model.geom(name).id for name in ers7.LEDS_BY_GEOM]].copy())
         index = sim.camera_frame_index()
         if index not in self.frames:
             self.frames[index] = sim.camera.frame().rgb.copy()
@@ -424,13 +425,22 @@ def test_malformed_motions_are_refused_with_the_python_readers_messages(probe, t
     )
 
 
-def test_leds_end_lit_as_on_the_openr_backend(probe, tmp_path, monkeypatch):
-    """LED2 on or off, LED3 at their intensity (more than 255 is 255), as the Python API sets them."""
-    _, _, sim, reference_sim = probe_runs(monkeypatch, probe, tmp_path, "leds", frames=16)
+def test_leds_light_as_on_the_openr_backend_frame_for_frame(probe, tmp_path, monkeypatch):
+    """LED2 on or off, LED3 at their intensity (more than 255 is 255), as the Python API sets them,
+    32 ms after the controller's time on both (the latency did not delay the reference's LEDs)."""
+    controller, project = probe
+    for folder in (tmp_path / "stick", tmp_path / "reference"):
+        folder.mkdir()
+        (folder / "scenario.txt").write_text("leds\n")
+        (folder / "locators.txt").write_text("".join(locator + "\n" for locator in ers7.all_locators()))
+    stick, sim, _ = run_stick(project, 16, tmp_path / "stick")
+    reference = run_reference(monkeypatch, controller, 15, tmp_path / "out", workdir=tmp_path / "reference")
+    assert np.array_equal(np.array(stick.leds[:-1]), np.array(reference.leds))
+    lit = [not np.allclose(leds, ers7.LED_OFF_RGBA) for leds in stick.leds]
+    assert lit.index(True) == LATENCY_FRAMES  # lit in the frame that begins 32 ms after t = 0, the 5th
     names = ("led_head_white", "led_face_bottom_outer_l", "led_back_rear_white", "led_head_colour")
-    rgba = [np.array([s.model.geom_rgba[s.model.geom(name).id] for name in names]) for s in (sim, reference_sim)]
+    rgba = [np.array([s.model.geom_rgba[s.model.geom(name).id] for name in names]) for s in (sim, reference.sim)]
     assert np.array_equal(rgba[0], rgba[1]) and not np.array_equal(rgba[0][0], rgba[0][3])  # lit, unlit
-    assert np.array_equal(sim.model.geom_rgba, reference_sim.model.geom_rgba)
 
 
 def test_an_ear_held_up_is_flicked_for_128_ms_then_let_down(probe, tmp_path):
