@@ -487,7 +487,9 @@ def run_controller(
                 log_path=out and out / CONSOLE_FILE,
                 sound_path=out and out / SOUND_FILE,
             )
-            camera_listeners, described = program.camera_listeners, {**sim.camera.describe(), "full": camera.full}
+            # its pictures: layer H, as the objects got them
+            size = openr_bridge.LAYER_SIZE[openr_bridge.ofbkimageLAYER_H]
+            camera_listeners, described = program.camera_listeners, {**sim.camera.describe(size), "full": camera.full}
         if out is not None:
             writer = FrameWriter(out, controller=path, backend=backend)
     except BaseException:

@@ -68,7 +68,9 @@ value; ``CDT`` an ``OCdtVectorData`` (1344 bytes); ``SOUND`` start sample (at 16
 16-bit samples; ``SHUTDOWN`` none; ``NEXT_FRAME`` none (the records after it are the next
 frame's, foretold: see Lookahead); ``IMAGE_SLOT`` the shared memory's area for the next image;
 ``CONTROLLER_FAILED`` the wrapper's error message (UTF-8): its controller failed (an aibo-sim
-extension, ``aibo_sim_controller_failed``, which the wrapper calls where the runtime has it).
+extension, ``aibo_sim_controller_failed``, which the wrapper calls where the runtime has it);
+``CAMERA_CAPTURED`` uint32 frame number of the image the wrapper's controller's camera took (the
+extension ``aibo_sim_camera_captured``: what the run writes to ``--out``).
 """
 
 import struct
@@ -90,6 +92,7 @@ RECORDS = {
     "NEXT_FRAME": 9,
     "IMAGE_SLOT": 10,
     "CONTROLLER_FAILED": 11,
+    "CAMERA_CAPTURED": 12,
 }
 FRAME_FLAGS = {"IMAGE": 1, "POWER": 2, "RAW_IMAGE": 4}
 # What each sensor vector entry holds (the runtime gives each its ODataType).

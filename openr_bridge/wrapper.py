@@ -25,6 +25,8 @@ raises ``PrimitiveError`` (its ``status``; the message names the call and, for a
 the allowed ones). The camera exposes its next frame with the new setting.
 """
 
+from pathlib import Path
+
 import numpy as np
 
 from .colour import ycrcb_to_rgb
@@ -50,6 +52,7 @@ from .primitive import (
 )
 from .wiring import DATA_DIR, OObject
 
+WRAPPER_SOURCES = Path(__file__).resolve().parent / "wrapper"  # the wrapper as a C++ OPEN-R object (build-ms)
 IMAGE_SERVICE = "Controller.Image.OFbkImageVectorData.O"
 CAMERA_CONNECTION = f"OVirtualRobotComm.FbkImageSensor.OFbkImageVectorData.S {IMAGE_SERVICE}"
 
@@ -60,6 +63,20 @@ CAMERA_SETTING_FUNCTIONS = {
     "camera_set_gain": (oprmreqCAM_SET_GAIN, "gain"),
     "camera_set_shutter_speed": (oprmreqCAM_SET_SHUTTER_SPEED, "shutter"),
 }
+
+
+def layer_h_rgb(y: np.ndarray, cr: np.ndarray, cb: np.ndarray, restore_tag: bool = False) -> np.ndarray:
+    """The (h, w, 3) RGB picture of layer H's bands, as ``camera_get_image`` serves it (Sony's
+    YCrCb2RGB; the tag pixels as they are, unless ``restore_tag``)."""
+    return ycrcb_to_rgb(restore_tag_pixels(y) if restore_tag else y, cr, cb)
+
+
+def message_rgb(image) -> np.ndarray:
+    """The picture ``camera_get_image`` serves of an ``OFbkImageVectorData``, (h, w, 3)."""
+    info, data = image.GetInfo(ofbkimageLAYER_H), image.GetData(ofbkimageLAYER_H)
+    return layer_h_rgb(
+        *(OFbkImage(info, data, band).array for band in (ofbkimageBAND_Y, ofbkimageBAND_Cr, ofbkimageBAND_Cb))
+    )
 
 
 class Controller(OObject):
@@ -96,11 +113,8 @@ class Controller(OObject):
 
     def camera_get_image(self) -> np.ndarray:
         """Layer H as RGB, 3 bytes a pixel, row-major: a flat uint8 array of height * width * 3."""
-        y = self._band(ofbkimageBAND_Y).array
-        if self.restore_tag:
-            y = restore_tag_pixels(y)
-        rgb = ycrcb_to_rgb(y, self._band(ofbkimageBAND_Cr).array, self._band(ofbkimageBAND_Cb).array)
-        return rgb.reshape(-1)
+        bands = [self._band(band).array for band in (ofbkimageBAND_Y, ofbkimageBAND_Cr, ofbkimageBAND_Cb)]
+        return layer_h_rgb(*bands, restore_tag=self.restore_tag).reshape(-1)
 
     def camera_get_fov(self) -> float:
         """The report's horizontal field of view in radians (``FIELD_OF_VIEW``)."""

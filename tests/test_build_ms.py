@@ -24,6 +24,7 @@ import struct
 import subprocess
 from pathlib import Path
 
+import cv2
 import numpy as np
 import pytest
 
@@ -32,13 +33,14 @@ from aibo_sim import ers7, runner
 from aibo_sim.cli import main
 from aibo_sim.config import WorldConfig
 from aibo_sim.mtn import Motion, MtnError, mtn_new, serialize_mtn
-from aibo_sim.openr.build_ms import WRAPPER, BuildMsError, build_ms, short_name
+from aibo_sim.openr.build_ms import BuildMsError, build_ms, short_name
 from aibo_sim.openr.host import MemoryStickRun
 from aibo_sim.openr.sdk import sdk_root
 from aibo_sim.placement import place
 from aibo_sim.robot import DeviceError, Robot
 from aibo_sim.sim import Servos, Simulation, load_model, models_dir
 from openr_bridge.memory_stick import load_memory_stick
+from openr_bridge.wrapper import WRAPPER_SOURCES
 
 pytestmark = pytest.mark.slow  # heavy: run by CI and by python -m pytest -m slow
 
@@ -381,6 +383,31 @@ def test_camera_get_image_is_the_openr_backends_byte_for_byte(probe, tmp_path, m
     assert np.array_equal(sim.model.geom_rgba, reference_sim.model.geom_rgba)
 
 
+def test_a_stick_runs_out_holds_the_pictures_its_controller_took_as_the_openr_backends(probe, tmp_path, monkeypatch):
+    """--out's frames: each picture the controller's camera took, as camera_get_image gave it (layer
+    H, its tag pixels kept), as the latency-4 openr run writes them. It wrote every 30 fps frame, as
+    rendered (untagged; 416 x 320 with --camera-full), whatever the camera took."""
+    controller, project = probe
+    folders = {name: tmp_path / name for name in ("stick", "reference")}
+    for folder in folders.values():
+        folder.mkdir()
+        (folder / "scenario.txt").write_text("camera\n")
+        (folder / "locators.txt").write_text("".join(locator + "\n" for locator in ers7.all_locators()))
+    frames = 64
+    stick = runner.run_controller(
+        project / "MS", duration=frames * 8 / 1000, out=tmp_path / "o1", progress=False, workdir=folders["stick"]
+    )
+    run_reference(monkeypatch, controller, frames - 1, tmp_path / "o2", workdir=folders["reference"])
+    written = [sorted((tmp_path / out / "frames").glob("*.png")) for out in ("o1", "o2")]
+    assert [p.name for p in written[0]] == [p.name for p in written[1]] and stick.camera_frames == len(written[0])
+    assert 10 <= len(written[0]) < 16  # a camera at 32 ms takes some 30 fps frames, not all 16
+    for ours, theirs in zip(*written):
+        assert np.array_equal(cv2.imread(str(ours)), cv2.imread(str(theirs))), ours.name
+    assert cv2.imread(str(written[0][0])).shape == (160, 208, 3)
+    run_json = json.loads((tmp_path / "o1" / "run.json").read_text())
+    assert (run_json["camera"]["width"], run_json["camera"]["height"]) == (208, 160)
+
+
 def test_devices_tags_and_motions_are_the_python_apis(probe, tmp_path, monkeypatch):
     for scenario in ("devices", "motion"):
         stick, reference, _, _ = probe_runs(monkeypatch, probe, tmp_path / scenario, scenario)
@@ -614,7 +641,7 @@ def test_the_wrapper_ships_as_package_data():
     tomllib = pytest.importorskip("tomllib")  # Python 3.11+
     setuptools = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]
     patterns = setuptools["package-data"]["openr_bridge"]
-    for path in WRAPPER.iterdir():
+    for path in WRAPPER_SOURCES.iterdir():
         assert any(fnmatch.fnmatch(f"wrapper/{path.name}", pattern) for pattern in patterns), path.name
 
 

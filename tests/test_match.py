@@ -520,7 +520,8 @@ def test_every_kind_of_controller_plays_in_one_match(tmp_path):
     summary = run_match(robots, duration=1.0, out=tmp_path / "out", progress=False, world=WorldConfig(ball=(0.0, 0.1)))
     assert [r["backend"] for r in summary["robots"]] == ["memory stick", "c", "python"]
     assert [r["status"] for r in summary["robots"]] == ["done"] * 3
-    assert [r["camera_frames"] for r in summary["robots"]] == [30, 30, 30]
+    # the pictures each controller took; the stick's controller sees them 32 ms late (docs/openr.md)
+    assert [r["camera_frames"] for r in summary["robots"]] == [29, 30, 30]
     assert (tmp_path / "out" / "robot1" / "console.log").is_file()
 
 

@@ -10,6 +10,7 @@ import sys
 import time
 from pathlib import Path
 
+import cv2
 import pytest
 from openr_support import build_programs, make_stick
 
@@ -21,6 +22,7 @@ pytestmark = pytest.mark.slow  # heavy: run by CI and by python -m pytest -m slo
 
 ROOT = Path(__file__).resolve().parents[1]
 SENSOR = "OVirtualRobotComm.Sensor.OSensorFrameVectorData.S"
+IMAGE_PROBE = "OVirtualRobotComm.FbkImageSensor.OFbkImageVectorData.S CdtProbe.Image.OFbkImageVectorData.O\n"
 JOINT_PROBE = (
     "JointProbe.Move.OCommandVectorData.S OVirtualRobotComm.Effector.OCommandVectorData.O\n"
     f"{SENSOR} JointProbe.Sensor.OSensorFrameVectorData.O\n"
@@ -49,7 +51,7 @@ def test_openr_sdk_prints_a_root_that_sonys_makefiles_use(capsys):
 
 
 def test_run_writes_frames_console_and_run_json(objects, tmp_path, capfd):
-    stick = make_stick(tmp_path / "program" / "MS", objects, ["JPROBE"], JOINT_PROBE)
+    stick = make_stick(tmp_path / "program" / "MS", objects, ["JPROBE", "CDTPROBE"], JOINT_PROBE + IMAGE_PROBE)
     out = tmp_path / "out"
     assert (
         main(
@@ -81,16 +83,19 @@ def test_run_writes_frames_console_and_run_json(objects, tmp_path, capfd):
         "pink",
     )
     assert run["camera"]["profile"] == "ideal" and run["simulated_s"] == 0.2
-    assert len(list((out / "frames").glob("*.png"))) == run["camera_frames"] == 6  # at frames 0, 5, 9, ..., 21
+    # the frames CdtProbe observed, at joint frames 0, 5, 9, ..., 21: layer H
+    assert len(list((out / "frames").glob("*.png"))) == run["camera_frames"] == 6
+    assert cv2.imread(str(out / "frames" / "000000.png")).shape == (160, 208, 3)
     console = (out / "console.log").read_text()
-    assert console.splitlines()[:2] == [
+    assert [line for line in console.splitlines() if "JointProbe" in line][:2] == [
         "[    0.000 s] JointProbe: ready before start",
         "[    0.000 s] JointProbe: mode []",
     ]
 
 
 def test_a_crash_exits_1_keeping_the_frames_and_saying_so_in_run_json(objects, tmp_path, capsys):
-    stick = make_stick(tmp_path / "ms", objects, ["CRASH"], f"{SENSOR} Crash.Sensor.OSensorFrameVectorData.O\n")
+    connect = f"{SENSOR} Crash.Sensor.OSensorFrameVectorData.O\n" + IMAGE_PROBE
+    stick = make_stick(tmp_path / "ms", objects, ["CRASH", "CDTPROBE"], connect)
     out = tmp_path / "out"
     assert main(["run", str(stick), "--out", str(out)]) == 1
     assert capsys.readouterr().err.strip() == (
@@ -167,7 +172,7 @@ def test_a_full_disk_ends_a_stick_run_with_exit_2_and_run_json_failed(objects, t
         return real(path, *args, **kwargs)
 
     monkeypatch.setattr(runner, "write_file_atomic", full_from_frame_3)
-    stick = make_stick(tmp_path / "ms", objects, ["JPROBE"], JOINT_PROBE)
+    stick = make_stick(tmp_path / "ms", objects, ["JPROBE", "CDTPROBE"], JOINT_PROBE + IMAGE_PROBE)
     for match in ([], ["--robot", f"red:1:0,0,0:{stick}"]):
         out = tmp_path / f"out{len(match)}"
         assert main(["run", str(stick), *match, "--duration", "1", "--out", str(out)]) == 2

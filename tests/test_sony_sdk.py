@@ -17,8 +17,9 @@ from pathlib import Path
 import pytest
 from openr_support import PROGRAMS, SAMPLES
 
-from aibo_sim.openr.build_ms import WRAPPER, WRAPPER_OBJECTS, build_ms
+from aibo_sim.openr.build_ms import WRAPPER_OBJECTS, build_ms
 from aibo_sim.openr.sdk import sdk_root
+from openr_bridge.wrapper import WRAPPER_SOURCES
 
 SONY = Path(os.environ.get("OPENRSDK_ROOT", "/usr/local/OPEN_R_SDK")) / "OPEN_R"
 SONY_CXX = SONY.parent / "bin" / "mipsel-linux-g++"
@@ -45,7 +46,7 @@ def declarations(header: str) -> str:
 
 @pytest.mark.parametrize(
     "stub_cfg",
-    [WRAPPER / "stub.cfg", *sorted(PROGRAMS.glob("*/stub.cfg")), *sorted(SAMPLES.rglob("stub.cfg"))],
+    [WRAPPER_SOURCES / "stub.cfg", *sorted(PROGRAMS.glob("*/stub.cfg")), *sorted(SAMPLES.rglob("stub.cfg"))],
     ids=lambda path: path.parent.name,  # Sony's samples where the test data has them
 )
 def test_our_stubgen2_declares_what_sonys_declares(stub_cfg, tmp_path):

@@ -39,6 +39,7 @@ from pathlib import Path
 import openr_bridge
 from openr_bridge.memory_stick import is_8_3
 from openr_bridge.primitive import REQUEST_NAMES, allowed_values
+from openr_bridge.wrapper import WRAPPER_SOURCES
 
 from .. import ers7
 from ..cbind.build import C_SUFFIXES, INCLUDE, controller_sources, is_c_controller
@@ -49,7 +50,6 @@ from ..runner import motion_dirs
 from ..sim import Servos, load_model
 from .host import STANDARD_PSHIFT, TOUCH_AD_PER_NEWTON
 
-WRAPPER = Path(openr_bridge.__file__).resolve().parent / "wrapper"
 WRAPPER_OBJECTS = ("ControllerStub.o", "Controller.o", "Robot.o", "Mtn.o", "WebotsApi.o")
 STANDARD_SHIFTS = (STANDARD_PSHIFT, 0x02, 0x0F)  # Sony's fixed PSHIFT, ISHIFT, DSHIFT (Model Information 2.2)
 OBJECT_FILE = "CONTROLL.BIN"  # the wrapper object's name on the stick, as Webots named it
@@ -350,7 +350,7 @@ def _write_project(out: Path, files, sources, motions: dict, table: str) -> None
     """The project's files in ``out``: the wrapper object with the controller, the stick."""
     project = out / "Controller"
     (project / "controller").mkdir(parents=True)
-    for item in sorted(WRAPPER.iterdir()):
+    for item in sorted(WRAPPER_SOURCES.iterdir()):
         if item.is_file():
             shutil.copyfile(item, project / item.name)
     (project / "Ers7Table.h").write_text(table)

@@ -57,12 +57,14 @@ import numpy as np
 
 import openr_bridge
 from openr_bridge import host_protocol as protocol
-from openr_bridge.config import ConfigError, Connection, cut
+from openr_bridge.config import ConfigError, Connection, cut, load_stub_cfg
 from openr_bridge.errors import CdtError
 from openr_bridge.ers7_camera import CAMERA_SETTINGS, openr_frame_number
 from openr_bridge.memory_stick import MemoryStick, read_object
+from openr_bridge.wrapper import WRAPPER_SOURCES, message_rgb
 
 from .. import ers7
+from ..camera import CameraFrame
 from ..cbind.child import Child
 from ..files import SymlinkRefused, create_file, write_file_atomic
 from ..robot import SimulationEnd
@@ -81,6 +83,7 @@ SYSTEM_SERVICES = {
     ),
 }
 SPIN_S = 0.005  # how long _reply polls before it blocks
+SENT_FRAMES_KEPT = 8  # camera frames kept for the wrapper to say it took one (it takes the newest)
 CRASH_EXIT_S = 5.0  # how long a runtime that reported a crash has to die of its signal (a core dump may take long)
 OLED3_MODE_B = 1  # OPEN-R's oled3_MODE_B: a face light shows its B face
 STANDARD_PSHIFT = 0x0E  # Sony's fixed PSHIFT (Model Information 2.2): the P register's scale
@@ -224,7 +227,10 @@ class MemoryStickRun:
     """Runs a memory stick's objects on ``sim`` until ``end_ms`` or their Shutdown.
 
     ``frame_listeners`` are called with this run after every 8 ms frame (``sim``, ``time_ms``),
-    ``camera_listeners`` with (camera frame index, RGB picture) of every frame the camera sends.
+    ``camera_listeners`` with (camera frame index, RGB picture) of each picture the objects took:
+    with the Webots wrapper (a ``build-ms`` stick), each its controller's camera took, as its
+    ``camera_get_image`` served it; else each camera frame the objects observed, layer H as
+    Sony's YCrCb2RGB decodes it.
     Console text goes to standard output and, when given, ``log_path``; the speaker's sound to
     ``sound_path`` (a 16 kHz WAV file) when the objects played any.
     """
@@ -263,6 +269,8 @@ class MemoryStickRun:
         self._cdt_usable = True  # no table, or tables the runtime's encoding takes as encode_ycrcb does
         self._sound: dict[int, np.ndarray] = {}
         self._camera_index = -1
+        self._sent: dict[int, CameraFrame] = {}  # the newest frames the objects got, by OPEN-R frame number
+        self._wrapper = False  # the Webots wrapper object runs: it says which pictures its camera takes
         self._image_slot = 0  # the shared memory's area for the next image (the runtime names it)
         self._image_observed = any(str(c.subject) == SYSTEM_SERVICES["OVirtualRobotComm"][2] for c in stick.connections)
         self._apply_gains()
@@ -379,15 +387,19 @@ class MemoryStickRun:
     def _services(self, payload: bytes) -> dict[str, str]:
         """Each registered service's object, from the SERVICES reply (plus the system's)."""
         services = {name: system for system, names in SYSTEM_SERVICES.items() for name in names}
+        wrapper_services = {str(service.name) for service in load_stub_cfg(WRAPPER_SOURCES / "stub.cfg").services}
         count, offset = struct.unpack_from("<I", payload)[0], 4
         self.object_names = []
         for _ in range(count):
             name, offset = protocol.unpack_string(payload, offset)
             self.object_names.append(name)
             n, offset = struct.unpack_from("<I", payload, offset)[0], offset + 4
+            own = set()
             for _ in range(n):
                 service, offset = protocol.unpack_string(payload, offset)
                 services[service] = name
+                own.add(service)
+            self._wrapper |= own == wrapper_services
         for later, name in enumerate(self.object_names):  # their services would share names
             first = self.object_names.index(name)
             if first < later:
@@ -467,8 +479,12 @@ class MemoryStickRun:
                 size = self._write_image(message, self._image_slot)
                 flags |= protocol.FRAME_FLAGS["IMAGE"]
                 extra += _FIELDS2.pack(self._image_slot, size)
-            for listener in self.camera_listeners:
-                listener(frame.index, frame.rgb)
+            if self._image_observed and self.camera_listeners:
+                self._sent[openr_frame_number(frame.frame_number)] = frame
+                for number in list(self._sent)[:-SENT_FRAMES_KEPT]:
+                    del self._sent[number]
+                if not self._wrapper:
+                    self._took(frame)
         if self._update_power():
             flags |= protocol.FRAME_FLAGS["POWER"]
             extra += self._power_fields()
@@ -600,6 +616,16 @@ class MemoryStickRun:
             self.controller_error = self.controller_error or bytes(data).decode("utf-8", "replace")
         elif kind == protocol.RECORDS["IMAGE_SLOT"]:
             self._image_slot = _U32.unpack(data)[0]
+        elif kind == protocol.RECORDS["CAMERA_CAPTURED"]:
+            frame = self._sent.get(_U32.unpack(data)[0])
+            if frame is not None:  # else written already, or not asked for (no listener)
+                self._took(frame)
+
+    def _took(self, frame: CameraFrame) -> None:
+        """The camera's listeners told of ``frame``, the picture the objects got."""
+        picture = message_rgb(frame.message)
+        for listener in self.camera_listeners:
+            listener(frame.index, picture)
 
     def _apply_gains(self) -> None:
         """Each actuator's stiffness: its gain when powered, none otherwise; a joint whose

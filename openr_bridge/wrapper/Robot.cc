@@ -8,6 +8,10 @@
 #include "Robot.h"
 #include "Ers7Table.h"
 
+/* aibo-sim's host runtime: told the frame number of each image the controller's camera takes
+ * (the run writes those pictures; the robot has none: null there). */
+extern "C" void aibo_sim_camera_captured(longword frameNumber) __attribute__((weak));
+
 namespace wrapper {
 namespace {
 
@@ -180,6 +184,10 @@ void Robot::TakeSample(Device& device, const Snapshot& frame, const Image* newes
         if (device.hasValue) device.image.region->RemoveReference();
         device.image = *newest;
         device.decoded = false;
+        if (aibo_sim_camera_captured != 0) {
+            OFbkImageVectorData* taken = (OFbkImageVectorData*)newest->region->Base();
+            aibo_sim_camera_captured(taken->GetInfo(ofbkimageLAYER_H)->frameNumber);
+        }
         break;
     case LED:
         return;

@@ -773,6 +773,11 @@ extern "C" void aibo_sim_controller_failed(const char* message) {
     Record(AIBO_OPENR_RECORD_CONTROLLER_FAILED, message, strlen(message));
 }
 
+/* Another: its controller's camera took the image of this frame number (the run's --out writes it). */
+extern "C" void aibo_sim_camera_captured(longword frameNumber) {
+    Record(AIBO_OPENR_RECORD_CAMERA_CAPTURED, &frameNumber, sizeof frameNumber);
+}
+
 std::vector<std::string> Lookahead(longword frame, size_t limit) {
     std::vector<std::string> frames;
     if (stopped || !MailboxEmpty()) return frames;
