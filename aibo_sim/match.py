@@ -26,7 +26,7 @@ from . import controller
 from .cbind import CompileError, compile_controller, controller_sources, is_c_controller
 from .config import DEFAULT_DURATION_S, CameraConfig, ParameterError, WorldConfig
 from .files import check_atomic_write, make_folder, write_file_atomic
-from .openr.host import MemoryStickRun
+from .openr.host import PICTURE_SIZE, MemoryStickRun
 from .placement import make_out_folder, place_match
 from .render import check_rendering
 from .robot import Robot, SimulationEnd
@@ -457,7 +457,7 @@ def _summary(sim, players, seed, scene, ball, ball_type, wall: float, interrupte
                 **({"error": str(player.error)} if player.error is not None else {}),
                 "camera_frames": player.writer.count if player.writer else 0,
                 "robot_pose": [float(position[0]), float(position[1]), math.degrees(yaw)],
-                "camera": player.robot.camera.describe(),
+                "camera": player.robot.camera.describe(PICTURE_SIZE if player.kind == MEMORY_STICK else None),
             }
         )
     ball_end = sim.ball_position()

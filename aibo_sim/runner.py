@@ -33,7 +33,7 @@ from .cbind import (
 from .config import DEFAULT_DURATION_S, CameraConfig, WorldConfig
 from .field import DEFAULT_BALL_TYPE
 from .files import FolderLock, SymlinkRefused, check_atomic_write, make_folder, png, read_file, write_file_atomic
-from .openr.host import MemoryStickRun, OpenRObjectCrashed
+from .openr.host import PICTURE_SIZE, MemoryStickRun, OpenRObjectCrashed
 from .placement import make_out_folder, out_path, place
 from .render import RenderingUnavailable, check_rendering
 from .robot import Robot, SimulationEnd
@@ -487,9 +487,8 @@ def run_controller(
                 log_path=out and out / CONSOLE_FILE,
                 sound_path=out and out / SOUND_FILE,
             )
-            # its pictures: layer H, as the objects got them
-            size = openr_bridge.LAYER_SIZE[openr_bridge.ofbkimageLAYER_H]
-            camera_listeners, described = program.camera_listeners, {**sim.camera.describe(size), "full": camera.full}
+            camera_listeners = program.camera_listeners
+            described = {**sim.camera.describe(PICTURE_SIZE), "full": camera.full}
         if out is not None:
             writer = FrameWriter(out, controller=path, backend=backend)
     except BaseException:

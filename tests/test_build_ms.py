@@ -18,6 +18,7 @@ What the memory stick does differently, and what these tests hold it to:
 
 import fnmatch
 import functools
+import gzip
 import json
 import shutil
 import struct
@@ -406,6 +407,15 @@ def test_a_stick_runs_out_holds_the_pictures_its_controller_took_as_the_openr_ba
     assert cv2.imread(str(written[0][0])).shape == (160, 208, 3)
     run_json = json.loads((tmp_path / "o1" / "run.json").read_text())
     assert (run_json["camera"]["width"], run_json["camera"]["height"]) == (208, 160)
+    # a wrapper built before it told which pictures it took (here: its hook's name changed): every
+    # frame it observed is written, where none was
+    old = tmp_path / "old"
+    shutil.copytree(project / "MS", old)
+    binary = old / "OPEN-R" / "MW" / "OBJS" / "CONTROLL.BIN"
+    code = gzip.decompress(binary.read_bytes())
+    binary.write_bytes(gzip.compress(code.replace(b"aibo_sim_camera_captured", b"aibo_sim_camera_xaptured")))
+    old_run = runner.run_controller(old, duration=frames * 8 / 1000, out=tmp_path / "o3", workdir=folders["stick"])
+    assert old_run.camera_frames == len(list((tmp_path / "o3" / "frames").glob("*.png"))) >= len(written[0])
 
 
 def test_devices_tags_and_motions_are_the_python_apis(probe, tmp_path, monkeypatch):

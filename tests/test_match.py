@@ -517,8 +517,19 @@ def test_every_kind_of_controller_plays_in_one_match(tmp_path):
         RobotSpec("blue", 4, (0.5, 0.0, 180.0), str(ROOT / "controllers" / "ball_tracker_c")),
         RobotSpec("red", 2, None, str(TRACKER)),
     ]
-    summary = run_match(robots, duration=1.0, out=tmp_path / "out", progress=False, world=WorldConfig(ball=(0.0, 0.1)))
+    summary = run_match(
+        robots,
+        duration=1.0,
+        out=tmp_path / "out",
+        progress=False,
+        world=WorldConfig(ball=(0.0, 0.1)),
+        camera=CameraConfig(full=True),
+    )
     assert [r["backend"] for r in summary["robots"]] == ["memory stick", "c", "python"]
+    # each robot's pictures: the stick's layer H, as its controller took them; the others' the full frame
+    sizes = [(r["camera"]["width"], r["camera"]["height"]) for r in summary["robots"]]
+    assert sizes == [(208, 160), (416, 320), (416, 320)]
+    assert cv2.imread(str(next((tmp_path / "out" / "robot1" / "frames").glob("*.png")))).shape == (160, 208, 3)
     assert [r["status"] for r in summary["robots"]] == ["done"] * 3
     # the pictures each controller took; the stick's controller sees them 32 ms late (docs/openr.md)
     assert [r["camera_frames"] for r in summary["robots"]] == [29, 30, 30]

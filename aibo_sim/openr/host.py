@@ -57,11 +57,11 @@ import numpy as np
 
 import openr_bridge
 from openr_bridge import host_protocol as protocol
-from openr_bridge.config import ConfigError, Connection, cut, load_stub_cfg
+from openr_bridge.config import ConfigError, Connection, cut
 from openr_bridge.errors import CdtError
 from openr_bridge.ers7_camera import CAMERA_SETTINGS, openr_frame_number
 from openr_bridge.memory_stick import MemoryStick, read_object
-from openr_bridge.wrapper import WRAPPER_SOURCES, message_rgb
+from openr_bridge.wrapper import message_rgb
 
 from .. import ers7
 from ..camera import CameraFrame
@@ -83,6 +83,8 @@ SYSTEM_SERVICES = {
     ),
 }
 SPIN_S = 0.005  # how long _reply polls before it blocks
+CAPTURE_HOOK = b"\0aibo_sim_camera_captured\0"  # in the dynamic symbols of an object that calls it
+PICTURE_SIZE = openr_bridge.LAYER_SIZE[openr_bridge.ofbkimageLAYER_H]  # a stick's pictures (camera_listeners)
 SENT_FRAMES_KEPT = 8  # camera frames kept for the wrapper to say it took one (it takes the newest)
 CRASH_EXIT_S = 5.0  # how long a runtime that reported a crash has to die of its signal (a core dump may take long)
 OLED3_MODE_B = 1  # OPEN-R's oled3_MODE_B: a face light shows its B face
@@ -270,7 +272,7 @@ class MemoryStickRun:
         self._sound: dict[int, np.ndarray] = {}
         self._camera_index = -1
         self._sent: dict[int, CameraFrame] = {}  # the newest frames the objects got, by OPEN-R frame number
-        self._wrapper = False  # the Webots wrapper object runs: it says which pictures its camera takes
+        self._wrapper = False  # an object says which pictures its camera takes: the Webots wrapper
         self._image_slot = 0  # the shared memory's area for the next image (the runtime names it)
         self._image_observed = any(str(c.subject) == SYSTEM_SERVICES["OVirtualRobotComm"][2] for c in stick.connections)
         self._apply_gains()
@@ -288,7 +290,9 @@ class MemoryStickRun:
             libraries = []
             for number, stick_object in enumerate(self.stick.objects):
                 library = scratch / f"{number}_{stick_object.name}.so"
-                library.write_bytes(read_object(stick_object, self.stick.object_cfg))
+                code = read_object(stick_object, self.stick.object_cfg)
+                self._wrapper |= CAPTURE_HOOK in code  # a wrapper built before it has the name nowhere
+                library.write_bytes(code)
                 libraries.append((library, stick_object))
             shared = scratch / "shared"
             with open(shared, "wb") as block:
@@ -387,19 +391,15 @@ class MemoryStickRun:
     def _services(self, payload: bytes) -> dict[str, str]:
         """Each registered service's object, from the SERVICES reply (plus the system's)."""
         services = {name: system for system, names in SYSTEM_SERVICES.items() for name in names}
-        wrapper_services = {str(service.name) for service in load_stub_cfg(WRAPPER_SOURCES / "stub.cfg").services}
         count, offset = struct.unpack_from("<I", payload)[0], 4
         self.object_names = []
         for _ in range(count):
             name, offset = protocol.unpack_string(payload, offset)
             self.object_names.append(name)
             n, offset = struct.unpack_from("<I", payload, offset)[0], offset + 4
-            own = set()
             for _ in range(n):
                 service, offset = protocol.unpack_string(payload, offset)
                 services[service] = name
-                own.add(service)
-            self._wrapper |= own == wrapper_services
         for later, name in enumerate(self.object_names):  # their services would share names
             first = self.object_names.index(name)
             if first < later:
