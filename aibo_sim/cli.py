@@ -542,7 +542,11 @@ def main(argv: list[str] | None = None) -> int:
     for stream in (sys.stdout, sys.stderr):  # text a terminal's encoding lacks (a motion's latin-1 name) escaped
         if isinstance(stream, io.TextIOWrapper):
             stream.reconfigure(errors="backslashreplace")
-    args = build_parser().parse_args(argv)
+    try:
+        args = build_parser().parse_args(argv)
+    except KeyboardInterrupt:  # Ctrl-C while the arguments are read
+        print("\naibo-sim: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
     signals = _SignalsStopCleanly()
     try:
         with signals:

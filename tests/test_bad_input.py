@@ -737,6 +737,18 @@ def test_ctrl_c_while_the_program_loads_its_modules_is_an_interruption(tmp_path)
     assert process.returncode == 130 and err == "\naibo-sim: interrupted\n", err
 
 
+def test_ctrl_c_while_the_arguments_are_read_is_an_interruption(monkeypatch, capsys):
+    """Ctrl-C in parse_args (1 start in about 18, a reviewer found) printed a traceback."""
+    from aibo_sim import cli
+
+    def interrupted():
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(cli, "build_parser", interrupted)
+    assert cli.main(["run", "x.py"]) == 130
+    assert capsys.readouterr().err == "\naibo-sim: interrupted\n"
+
+
 def test_ctrl_c_while_a_program_imports_aibo_sim_is_not_taken_for_a_missing_opengl(tmp_path):
     """MuJoCo's module turns the KeyboardInterrupt into "ImportError: initialization failed",
     which read as an OpenGL backend that cannot load."""

@@ -713,6 +713,34 @@ def test_the_speaker_plays_sound_vectors_one_after_the_other_into_a_wav_file(obj
     assert started_frames(lines) == [4 * k for k in range(10)]  # each OSoundInfo's frameNumber
 
 
+def test_the_sound_so_far_is_kept_when_a_run_ends_early_and_a_link_at_its_temporary_file_is_refused_first(
+    objects, tmp_path
+):
+    """A signal, a crash or a frame not written threw the sound away; a link at .speaker.wav.tmp
+    was found only after the whole run."""
+    stick = make_stick(
+        tmp_path / "ms",
+        objects,
+        ["SPROBE"],
+        "SoundProbe.Speaker.OSoundVectorData.S OVirtualRobotAudioComm.Speaker.OSoundVectorData.O\n",
+    )
+
+    def stop_at_frame_60(run):
+        if run.sim.frame == 60:  # the ten vectors, 40 frames of sound, are played by then
+            raise RuntimeError("stopped")
+
+    with pytest.raises(RuntimeError, match="stopped"):
+        run_stick(stick, 10.0, tmp_path / "out", stop_at_frame_60)
+    with wave.open(str(tmp_path / "out" / "speaker.wav")) as sound:
+        assert sound.getnframes() == 5120
+    planted = tmp_path / "planted"
+    planted.mkdir()
+    (planted / ".speaker.wav.tmp").symlink_to(tmp_path / "victim")
+    with pytest.raises(SymlinkRefused):
+        run_stick(stick, 0.5, planted)
+    assert not (tmp_path / "victim").exists() and not (planted / "console.log").exists()
+
+
 def test_a_sound_vectors_wait_delays_its_output(objects, tmp_path):
     """The third vector waits 10 frames (ODataVectorInfo::wait): 1280 samples of silence at 16 kHz
     before it, its frameNumber 10 frames later, the vectors after it as much later."""

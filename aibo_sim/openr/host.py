@@ -41,6 +41,7 @@ frames, far on odd), the battery (``BATTERY``, draining 1 % a minute from 100 %)
 
 from __future__ import annotations
 
+import contextlib
 import io
 import mmap
 import os
@@ -66,7 +67,7 @@ from openr_bridge.wrapper import message_rgb
 from .. import ers7
 from ..camera import CameraFrame
 from ..cbind.child import Child
-from ..files import SymlinkRefused, create_file, write_file_atomic
+from ..files import SymlinkRefused, check_atomic_write, create_file, write_file_atomic
 from ..robot import SimulationEnd
 from ..sim import ACCEL_RANGE, FRAME_MS, IR_NOISE, Simulation
 from .sdk import sdk_root
@@ -250,6 +251,8 @@ class MemoryStickRun:
         self.log_path, self.sound_path = log_path, sound_path
         if log_path is not None and os.path.islink(log_path):  # refused before a run prepares its folder
             raise SymlinkRefused.at(log_path)
+        if sound_path is not None:  # a link at its temporary file: refused now, not after the run
+            check_atomic_write(sound_path)
         self.frame_listeners, self.camera_listeners = [], []
         self.end_ms: int | None = None
         self.lookahead = protocol.LOOKAHEAD_FRAMES  # frames an answer may foretell (0: a message every frame)
@@ -299,7 +302,12 @@ class MemoryStickRun:
                 block.truncate(protocol.SHM_SIZE)  # zeros, written only where used
             with open(shared, "r+b") as block, mmap.mmap(block.fileno(), 0) as memory:
                 self._memory = memory
-                self._serve(libraries, shared)
+                try:
+                    self._serve(libraries, shared)
+                except BaseException:  # a signal, a crash, a frame not written: the sound so far is kept
+                    with contextlib.suppress(OSError):
+                        self._write_sound()
+                    raise
         self._write_sound()
 
     def _serve(self, libraries, shared: Path) -> None:
