@@ -443,8 +443,9 @@ class World:
                     before_frame()
                 for actuators, commands in plans:
                     data.ctrl[actuators] = commands[k - 1]
-                for robot in self.robots:
-                    robot._light_queued()
+                if self.command_latency_frames:  # LED commands on their way (none without a latency)
+                    for robot in self.robots:
+                        robot._light_queued()
                 if nstep:
                     mujoco.mj_step(model, data, nstep=nstep)
                 self.frame += 1
