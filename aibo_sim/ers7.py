@@ -171,6 +171,11 @@ class Led:
         """The geoms it lights on the A face, or on the B face (``face_b``) where it has one."""
         return (self.geoms_b if face_b and self.colour_b else self.geoms) or (self.name,)
 
+    @property
+    def all_geoms(self) -> tuple[str, ...]:
+        """Every geom it can light, on either face, each once."""
+        return tuple(dict.fromkeys(self.lit_geoms() + self.lit_geoms(True)))
+
     def lit_colour(self, face_b: bool = False) -> tuple[float, float, float]:
         """Its colour on the A face, or on the B face (``face_b``) where it has one."""
         return self.colour_b if face_b and self.colour_b else self.colour
@@ -223,8 +228,8 @@ LED_BY_LOCATOR = {led.locator: led for led in LEDS}
 LED_BY_NAME = {led.name: led for led in LEDS}
 # The LEDs that can light each LED geom, on either face (a face spot can have several: A9 and A13).
 LEDS_BY_GEOM = {
-    geom: tuple(led for led in LEDS if geom in led.lit_geoms() + led.lit_geoms(True))
-    for geom in dict.fromkeys(geom for led in LEDS for face_b in (False, True) for geom in led.lit_geoms(face_b))
+    geom: tuple(led for led in LEDS if geom in led.all_geoms)
+    for geom in dict.fromkeys(g for led in LEDS for g in led.all_geoms)
 }
 
 

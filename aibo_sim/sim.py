@@ -798,7 +798,7 @@ class Simulation:
     def _light(self, name: str, level: float, face_b: bool) -> None:
         led = LED_BY_NAME[name]
         self._lit[name] = (level, face_b)
-        for geom in dict.fromkeys(led.lit_geoms() + led.lit_geoms(True)):
+        for geom in led.all_geoms:
             rgb = list(LED_OFF_RGBA[:3])
             for other in LEDS_BY_GEOM[geom]:
                 other_level, other_b = self._lit.get(other.name, (0.0, False))
