@@ -17,6 +17,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+NO_EFFECT = ("-v", "--nodefaultlib", "--nocrt", "--vm", "--novm")  # Sony's options, accepted
 USAGE = "usage: mkbin [-p OPENRSDK_ROOT] -o OUTPUT.bin OBJECT.o ... [OBJECT.ocf] [-L DIR] [-l LIB]"
 
 
@@ -45,9 +46,11 @@ def parse(argv: list[str]) -> tuple[str, Path | None, Path | None, list[str]]:
                 if ocf is not None:
                     raise ValueError(".ocf given more than once")
                 ocf = Path(argument)
-            elif argument.startswith("--") and argument not in ("--nodefaultlib", "--nocrt", "--vm", "--novm"):
+            elif argument in NO_EFFECT:
+                continue
+            elif argument.startswith("--"):
                 rest.append("-Wl," + argument)  # ld's own option (--wrap=exit): Sony's mkbin hands it to ld
-            elif argument not in ("-v", "--nodefaultlib", "--nocrt", "--vm", "--novm"):
+            else:
                 rest.append(argument)
     return output, root, ocf, rest
 
