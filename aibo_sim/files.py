@@ -3,8 +3,10 @@ bytes every writer of pictures uses.
 
 Where aibo-sim writes (a run's, a dump's or a render's folder) it creates, appends to, locks
 and reads only its own files: a symbolic link planted in the place of one of them, or of a
-folder it writes in, is refused (``SymlinkRefused``, one line naming it), never followed. The
-folder the user names (``--out``) is resolved once at the start, so it may itself be a link."""
+folder it writes in, is refused (``SymlinkRefused``, one line naming it), never followed: each
+write reaches its folder part by part (``open_folder``), so a link put in a folder's place during
+a run is refused too. The folder the user names (``--out``) is resolved once at the start, so it
+may itself be a link."""
 
 from __future__ import annotations
 
@@ -28,6 +30,7 @@ except ImportError:  # not POSIX: folders are not locked there
     fcntl = None
 
 _NO_FOLLOW = getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_CLOEXEC", 0)
+_FOLDER_FLAGS = os.O_RDONLY | getattr(os, "O_DIRECTORY", 0) | _NO_FOLLOW
 HOLDER_COMMAND_CHARS = 300  # a lock holder's command line is cut to this in messages
 
 
@@ -43,14 +46,80 @@ class SymlinkRefused(OSError):
         )
 
 
-def open_file(path, flags: int, mode: int = 0o666) -> int:
-    """``os.open`` that never follows a symbolic link at ``path`` (``SymlinkRefused``)."""
+def _named(exc: OSError, path) -> OSError:
+    """``exc`` naming ``path``: a call relative to a folder's descriptor names only the last part."""
+    return type(exc)(exc.errno, exc.strerror, str(path))
+
+
+def _is_link(folder_fd: int, name: str) -> bool:
     try:
-        return os.open(path, flags | _NO_FOLLOW, mode)
-    except OSError as exc:
-        if exc.errno in (errno.ELOOP, errno.EEXIST) and os.path.islink(path):
-            raise SymlinkRefused.at(path) from None
+        return stat.S_ISLNK(os.stat(name, dir_fd=folder_fd, follow_symlinks=False).st_mode)
+    except OSError:
+        return False
+
+
+def open_folder(folder, create: bool = False) -> int:
+    """A descriptor of ``folder``, reached part by part without following a symbolic link
+    (``SymlinkRefused`` names the first part that is one): what is written through it stays in
+    the folder aibo-sim made or checked, even where a link takes its place during a run (a
+    relative ``folder`` is reached from the working folder). ``create``: missing parts are made."""
+    folder = Path(folder)
+    fd = os.open(folder.anchor or ".", _FOLDER_FLAGS)
+    try:
+        for depth in range(len(folder.parts)):
+            if depth == 0 and folder.anchor:
+                continue
+            name, reached = folder.parts[depth], Path(*folder.parts[: depth + 1])
+            try:
+                inner = _open_folder_in(fd, name, reached)
+            except FileNotFoundError:
+                if not create:
+                    raise
+                with contextlib.suppress(FileExistsError):  # made by another process meanwhile
+                    os.mkdir(name, dir_fd=fd)
+                inner = _open_folder_in(fd, name, reached)
+            os.close(fd)
+            fd = inner
+    except BaseException:
+        os.close(fd)
         raise
+    return fd
+
+
+def _open_folder_in(folder_fd: int, name: str, path: Path) -> int:
+    """The descriptor of the folder ``name`` (at ``path``) in the folder open at ``folder_fd``."""
+    try:
+        return os.open(name, _FOLDER_FLAGS, dir_fd=folder_fd)
+    except OSError as exc:
+        raise (SymlinkRefused.at(path) if _is_link(folder_fd, name) else _named(exc, path)) from None
+
+
+@contextlib.contextmanager
+def _folder_of(path: Path):
+    """The descriptor of ``path``'s folder (``open_folder``), closed after the block."""
+    fd = open_folder(path.parent)
+    try:
+        yield fd
+    finally:
+        os.close(fd)
+
+
+def _open_in(folder_fd: int, path: Path, flags: int, mode: int = 0o666) -> int:
+    """``os.open`` of ``path``'s name in the folder open at ``folder_fd``, never following a link."""
+    try:
+        return os.open(path.name, flags | _NO_FOLLOW, mode, dir_fd=folder_fd)
+    except OSError as exc:
+        if exc.errno in (errno.ELOOP, errno.EEXIST) and _is_link(folder_fd, path.name):
+            raise SymlinkRefused.at(path) from None
+        raise _named(exc, path) from None
+
+
+def open_file(path, flags: int, mode: int = 0o666) -> int:
+    """``os.open`` that follows no symbolic link, neither at ``path`` nor at a folder on its way
+    (``SymlinkRefused``)."""
+    path = Path(path)
+    with _folder_of(path) as folder_fd:
+        return _open_in(folder_fd, path, flags, mode)
 
 
 class HardLinkRefused(OSError):
@@ -75,31 +144,26 @@ def read_file(path) -> bytes:
 
 
 def make_folder(path) -> Path:
-    """The folder ``path``, made with its parents if missing; ``SymlinkRefused`` when it is a
-    link, NotADirectoryError naming it when it is a file."""
-    path = Path(path)
-    try:
-        path.mkdir(parents=True, exist_ok=True)
-    except FileExistsError:
-        pass
-    mode = os.lstat(path).st_mode
-    if stat.S_ISLNK(mode):
-        raise SymlinkRefused.at(path)
-    if not stat.S_ISDIR(mode):
-        raise NotADirectoryError(errno.ENOTDIR, "not a folder", str(path))
-    return path
+    """The folder ``path``, made with its parents if missing; ``SymlinkRefused`` when it, or a
+    folder above it, is a link, NotADirectoryError naming it when it is a file."""
+    os.close(open_folder(path, create=True))
+    return Path(path)
 
 
-def create_file(temp: Path) -> int:
+def create_file(temp: Path, folder_fd: int | None = None) -> int:
     """A new file at ``temp``, opened for writing; a regular file already there (the temporary
     file of a writer that was killed, an earlier run's log) is replaced, never written through
-    (a hard link to another file stays as it was), a symbolic link refused."""
+    (a hard link to another file stays as it was), a symbolic link refused. ``folder_fd``: its
+    folder's descriptor, when the caller holds one."""
+    if folder_fd is None:
+        with _folder_of(temp) as folder_fd:
+            return create_file(temp, folder_fd)
     flags = os.O_WRONLY | os.O_CREAT | os.O_EXCL
     try:
-        return open_file(temp, flags)
+        return _open_in(folder_fd, temp, flags)
     except FileExistsError:
-        os.unlink(temp)
-        return open_file(temp, flags)
+        os.unlink(temp.name, dir_fd=folder_fd)
+        return _open_in(folder_fd, temp, flags)
 
 
 def temporary_path(path: Path) -> Path:
@@ -133,28 +197,42 @@ def check_atomic_write(path: Path) -> None:
 def write_files_atomic(files: dict[Path, bytes], temps: dict[Path, Path] | None = None, durable: bool = False) -> None:
     """Write several files as one set, each as ``write_file_atomic`` writes one: all of them are
     renamed into place once every one is on disk and no target is a folder, so a write that
-    fails (a full disk) leaves the earlier set as it was."""
+    fails (a full disk) leaves the earlier set as it was. Each folder is reached once
+    (``open_folder``) and written through its descriptor: a link put in its place meanwhile is
+    neither followed nor written through."""
     temps = {path: (temps or {}).get(path) or temporary_path(path) for path in files}
+    folders: dict[Path, int] = {}
+
+    def folder(path: Path) -> int:
+        if path.parent not in folders:
+            folders[path.parent] = open_folder(path.parent)
+        return folders[path.parent]
+
     path, created = None, []
     try:
         for path, data in files.items():
-            created.append(temps[path])  # before it exists: a signal right after it is made still finds it
-            fd = create_file(temps[path])
-            with open(fd, "wb") as file:
+            temp = temps[path]
+            folder_fd = folder(temp)
+            created.append(temp)  # before it exists: a signal right after it is made still finds it
+            with open(create_file(temp, folder_fd), "wb") as file:
                 file.write(data)
                 if durable:
                     file.flush()
                     os.fsync(file.fileno())
         for path in files:
-            if path.is_dir():  # os.replace would refuse it after renaming the others
-                raise IsADirectoryError(errno.EISDIR, os.strerror(errno.EISDIR), str(path))
+            with contextlib.suppress(FileNotFoundError):  # os.replace would refuse a folder after renaming the others
+                if stat.S_ISDIR(os.stat(path.name, dir_fd=folder(path), follow_symlinks=False).st_mode):
+                    raise IsADirectoryError(errno.EISDIR, os.strerror(errno.EISDIR), str(path))
         for path, temp in temps.items():
-            os.replace(temp, path)
+            try:
+                os.replace(temp.name, path.name, src_dir_fd=folder(temp), dst_dir_fd=folder(path))
+            except OSError as exc:
+                raise _named(exc, path) from None
     except BaseException as exc:
         for temp in created:
             with contextlib.suppress(OSError):
-                if not temp.is_symlink():  # ours never is: a link refused stays
-                    temp.unlink()
+                if temp.parent in folders and not _is_link(folders[temp.parent], temp.name):  # ours never is
+                    os.unlink(temp.name, dir_fd=folders[temp.parent])
         if not isinstance(exc, OSError) or isinstance(exc, SymlinkRefused):
             raise
         in_the_way = exc.filename not in (None, str(path)) and os.path.lexists(exc.filename)
@@ -162,6 +240,9 @@ def write_files_atomic(files: dict[Path, bytes], temps: dict[Path, Path] | None 
         error = type(exc)(f"cannot write {path}: {where}{exc.strerror or exc}")  # FileNotFoundError...
         error.errno = exc.errno
         raise error from exc
+    finally:
+        for fd in folders.values():
+            os.close(fd)
 
 
 def command_line() -> str:

@@ -320,7 +320,11 @@ def run_match(
         progress_bar.close()
         _blame_thread_errors(thread_errors)
         summary = _summary(sim, players, seed, scene, ball, ball_type, time.perf_counter() - start, interrupted)
-        unwritten = [p.writer.error for p in players if p.writer is not None and p.writer.error is not None]
+        unwritten = [  # a frame, or a memory stick's console.log or sound, that could not be written
+            p.error
+            for p in players
+            if isinstance(p.error, OSError) and (p.kind == MEMORY_STICK or p.error is getattr(p.writer, "error", None))
+        ]
         try:
             if out is not None:
                 _write_summaries(out, players, summary)
@@ -480,8 +484,15 @@ def _summary(sim, players, seed, scene, ball, ball_type, wall: float, interrupte
 
 
 def _write_summaries(out: Path, players, summary: dict) -> None:
-    """``out/run.json`` (the match) and each robot's ``run.json`` (its entry)."""
+    """``out/run.json`` (the match) and each robot's ``run.json`` (its entry); one that cannot be
+    written (its folder now a link) stops no other, its error raised after them."""
+    errors = []
     for player, entry in zip(players, summary.get("robots", [])):
         if player.writer is not None:
-            player.writer.write_run_json(entry)
+            try:
+                player.writer.write_run_json(entry)
+            except OSError as error:
+                errors.append(error)
     write_file_atomic(out / RUN_FILE, (json.dumps({"match": True, **summary}, indent=2) + "\n").encode())
+    if errors:
+        raise errors[0]

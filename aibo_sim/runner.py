@@ -32,7 +32,16 @@ from .cbind import (
 )
 from .config import DEFAULT_DURATION_S, CameraConfig, WorldConfig
 from .field import DEFAULT_BALL_TYPE
-from .files import FolderLock, SymlinkRefused, check_atomic_write, make_folder, png, read_file, write_file_atomic
+from .files import (
+    FolderLock,
+    SymlinkRefused,
+    check_atomic_write,
+    make_folder,
+    open_folder,
+    png,
+    read_file,
+    write_file_atomic,
+)
 from .openr.host import PICTURE_SIZE, MemoryStickRun, OpenRObjectCrashed
 from .placement import make_out_folder, out_path, place
 from .render import RenderingUnavailable, check_rendering
@@ -172,6 +181,7 @@ class FrameWriter:
         (a match checks every robot's folder before it changes any)."""
         self.out, self.directory = make_out_folder(directory), directory / "frames"
         self.error: OSError | None = None
+        self._written = 0
         self._marker = {"controller": controller and str(controller), "backend": backend, "status": "incomplete"}
         self._check()  # before the lock file is made: a folder refused is left as it was
         self.lock = FolderLock(directory, LOCK_FILE, "run", "wait for it to end or stop it, or choose another --out")
@@ -253,12 +263,21 @@ class FrameWriter:
         except OSError as exc:
             self.error = exc
             raise SimulationEnd() from exc  # raised in the controller's call: ends the run
+        self._written += 1
 
     @property
     def count(self) -> int:
         """The frames written, counted in the folder: a signal (SIGTERM, Ctrl-C) that ends the run
-        between a frame's rename and a counter's increment cannot make run.json disagree with it."""
-        return sum(1 for name in os.listdir(self.directory) if FRAME_FILE.fullmatch(name))
+        between a frame's rename and a counter's increment cannot make run.json disagree with it.
+        The frames this writer wrote where the folder cannot be reached (a link now in its place)."""
+        try:
+            folder = open_folder(self.directory)
+        except OSError:
+            return self._written
+        try:
+            return sum(1 for name in os.listdir(folder) if FRAME_FILE.fullmatch(name))
+        finally:
+            os.close(folder)
 
     def check(self) -> None:
         """Raise the write error that ended the run, if one did."""

@@ -71,6 +71,8 @@ frame's, foretold: see Lookahead); ``IMAGE_SLOT`` the shared memory's area for t
 extension, ``aibo_sim_controller_failed``, which the wrapper calls where the runtime has it);
 ``CAMERA_CAPTURED`` uint32 frame number of the image the wrapper's controller's camera took (the
 extension ``aibo_sim_camera_captured``: what the run writes to ``--out``).
+``LOG_FAILED`` int32 errno: the console's log could not be written (a full disk); the runtime
+writes it no more, and the run ends naming the file.
 """
 
 import struct
@@ -93,6 +95,7 @@ RECORDS = {
     "IMAGE_SLOT": 10,
     "CONTROLLER_FAILED": 11,
     "CAMERA_CAPTURED": 12,
+    "LOG_FAILED": 13,
 }
 FRAME_FLAGS = {"IMAGE": 1, "POWER": 2, "RAW_IMAGE": 4}
 # What each sensor vector entry holds (the runtime gives each its ODataType).

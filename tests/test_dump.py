@@ -4,7 +4,6 @@ import argparse
 import errno
 import json
 import math
-import os
 import shutil
 import subprocess
 from pathlib import Path
@@ -12,6 +11,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 import pytest
+from rename_support import watch_renames
 
 import openr_bridge
 from aibo_sim.camera import HEAD_CAMERA_GROUPS
@@ -355,14 +355,8 @@ def test_unwritable_destination_is_one_clear_error(tmp_path):
 
 def test_full_disk_leaves_only_complete_frames_and_resumes(tmp_path, monkeypatch):
     out = tmp_path / "out"
-    real_replace = os.replace
-
-    def replace(source, target):
-        if Path(target).name == "000003.yuv":
-            raise OSError(errno.ENOSPC, "No space left on device")
-        real_replace(source, target)
-
-    monkeypatch.setattr(os, "replace", replace)
+    full = OSError(errno.ENOSPC, "No space left on device")
+    watch_renames(monkeypatch, lambda source, target: full if target.name == "000003.yuv" else None)
     with pytest.raises(
         DumpError,
         match=f"cannot write {out / 'yuv420' / '000003.yuv'}: No space left on device; "
@@ -371,7 +365,7 @@ def test_full_disk_leaves_only_complete_frames_and_resumes(tmp_path, monkeypatch
         dump(out, controller=TRACKER, frames=6)
     assert not list(out.rglob(".tmp.*")) and not (out / "video.mp4").exists()
     assert len(load_dump(out)) == 3 and (out / "rgb" / "000003.png").exists()  # written, but not complete
-    monkeypatch.setattr(os, "replace", real_replace)
+    monkeypatch.undo()
     assert dump(out, controller=TRACKER, frames=6, resume=True).new_frames == 3
     assert len(load_dump(out)) == 6
 

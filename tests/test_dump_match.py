@@ -6,12 +6,12 @@ options a match does not take refused with one line."""
 
 import errno
 import json
-import os
 from pathlib import Path
 
 import numpy as np
 import pytest
 from pycocotools.coco import COCO
+from rename_support import watch_renames
 
 from aibo_sim.cli import main
 from aibo_sim.config import CameraConfig, WorldConfig
@@ -241,14 +241,11 @@ def test_a_lone_robots_dump_may_hold_robots_images_and_its_meta_stays_as_it_was(
 
 def test_a_write_that_fails_stops_every_robot_and_is_the_error(tmp_path, monkeypatch):
     out = tmp_path / "full"
-    real_replace = os.replace
-
-    def replace(source, target):
-        if Path(target).parent.parent.name == "robot2" and Path(target).name == "000003.png":
-            raise OSError(errno.ENOSPC, "No space left on device")
-        real_replace(source, target)
-
-    monkeypatch.setattr(os, "replace", replace)
+    full = OSError(errno.ENOSPC, "No space left on device")
+    watch_renames(
+        monkeypatch,
+        lambda source, target: full if (target.parent.parent.name, target.name) == ("robot2", "000003.png") else None,
+    )
     with pytest.raises(DumpError, match=f"cannot write {out / 'robot2' / 'rgb' / '000003.png'}: No space left"):
         dump(out, robots=SPECS, controller=TRACKER, frames=30, formats=("rgb",), camera=CameraConfig("ideal"))
     assert not list(out.rglob(".tmp.*"))

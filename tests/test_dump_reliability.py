@@ -17,6 +17,7 @@ import time
 from pathlib import Path
 
 import pytest
+from rename_support import watch_renames
 
 from aibo_sim.cli import main
 from aibo_sim.config import WorldConfig
@@ -409,14 +410,7 @@ def test_load_dump_names_a_damaged_file(small_dump, tmp_path):
 
 
 def test_run_frames_are_written_under_names_no_frame_pattern_matches(tmp_path, monkeypatch):
-    renamed = []
-    real_replace = os.replace
-
-    def replace(source, target):
-        renamed.append((Path(source), Path(target)))
-        real_replace(source, target)
-
-    monkeypatch.setattr(os, "replace", replace)
+    renamed = watch_renames(monkeypatch)
     summary = run_controller(TRACKER, duration=0.2, out=tmp_path)
     frames = [(s, t) for s, t in renamed if t.parent == tmp_path / "frames"]
     assert len(frames) == summary.camera_frames >= 3
@@ -532,14 +526,14 @@ def test_render_on_a_full_disk_leaves_the_earlier_set_whole(tmp_path, monkeypatc
     out = tmp_path / "render"
     assert main(["render", "--settle", "0", "--out", str(out)]) == 0
     before = _snapshot(out)
-    real_open = aibo_sim.files.open_file
+    real_create = aibo_sim.files.create_file
 
-    def open_until_full(path, *args, **kwargs):
+    def create_until_full(path, *args, **kwargs):
         if "tracking" in Path(path).name:
             raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
-        return real_open(path, *args, **kwargs)
+        return real_create(path, *args, **kwargs)
 
-    monkeypatch.setattr(aibo_sim.files, "open_file", open_until_full)
+    monkeypatch.setattr(aibo_sim.files, "create_file", create_until_full)
     capsys.readouterr()
     assert main(["render", "--settle", "0", "--seed", "5", "--pose", "0.2", "0", "30", "--out", str(out)]) == 2
     assert capsys.readouterr().err == f"aibo-sim: error: cannot write {out / 'tracking.png'}: No space left on device\n"

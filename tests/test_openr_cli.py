@@ -17,6 +17,7 @@ from openr_support import build_programs, make_stick
 from aibo_sim import runner
 from aibo_sim.cli import main
 from aibo_sim.dump import load_dump
+from aibo_sim.openr import host
 
 pytestmark = pytest.mark.slow  # heavy: run by CI and by python -m pytest -m slow
 
@@ -180,6 +181,20 @@ def test_a_full_disk_ends_a_stick_run_with_exit_2_and_run_json_failed(objects, t
         assert error.startswith("aibo-sim: error: ") and error.count("\n") == 1 and "No space left" in error
         record = json.loads(((out / "robot1") if match else out).joinpath("run.json").read_text())
         assert record["status"] == "failed" and "No space left" in record["error"]
+
+
+def test_a_console_log_the_disk_refuses_ends_a_stick_run_with_exit_2(objects, tmp_path, monkeypatch, capsys):
+    """The runtime went on without its log (a full disk), every later line lost and the run "done"."""
+    monkeypatch.setattr(host, "create_file", lambda path: os.open("/dev/full", os.O_WRONLY))
+    stick = make_stick(tmp_path / "ms", objects, ["JPROBE"], JOINT_PROBE)
+    for match in ([], ["--robot", f"red:1:0,0,0:{stick}"]):
+        out = tmp_path / f"out{len(match)}"
+        assert main(["run", str(stick), *match, "--duration", "1", "--out", str(out)]) == 2
+        log = (out / "robot1" if match else out) / "console.log"
+        assert capsys.readouterr().err == f"aibo-sim: error: cannot write {log}: No space left on device\n"
+        record = json.loads(log.with_name("run.json").read_text())
+        assert record["status"] == "failed" and "No space left on device" in record["error"]
+        assert json.loads((out / "run.json").read_text())["simulated_s"] < 0.1  # ended at the first line
 
 
 def test_dump_of_a_stick_records_frames_and_resumes(objects, tmp_path, capsys):

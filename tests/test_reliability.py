@@ -145,6 +145,67 @@ def test_a_link_planted_where_aibo_sim_writes_is_refused_naming_it(tmp_path, cap
     assert victim.read_bytes() == VICTIM and (out / name).is_symlink()
 
 
+SWAPPING = """# Test controller: after 0.1 s it moves {folder!r} away and puts a link to {theirs!r} in its place.
+import os
+from aibo_sim.controller import *  # noqa: F403
+
+
+def init():
+    camera_enable(robot_get_device("PRM:/r1/c1/c2/c3/i1-FbkImageSensor:F1"), 32)
+
+
+def run(ms):
+    if robot_get_time() > 0.1 and not os.path.islink({folder!r}):
+        try:
+            os.rename({folder!r}, {moved!r})
+            os.symlink({theirs!r}, {folder!r})
+        except OSError:
+            pass  # another robot's controller did it
+    return 32
+
+
+robot_live(init)
+robot_run(run)
+"""
+
+
+@pytest.mark.parametrize(
+    "folder, options",
+    [
+        ("frames", []),
+        ("robot2", ["--robot", "red:1", "--robot", "blue:1"]),
+        ("rgb", ["dump"]),
+    ],
+    ids=["a run's frames", "a match's robot folder", "a dump's format folder"],
+)
+def test_a_folder_swapped_for_a_link_during_a_run_is_not_written_through(tmp_path, capsys, folder, options):
+    """The folders are reached without following a link at each write: the run ends, exit 2, naming
+    the link; the folder it points to gets nothing."""
+    out, theirs, controller = tmp_path / "out", tmp_path / "theirs", tmp_path / "swapping.py"
+    theirs.mkdir()
+    controller.write_text(SWAPPING.format(folder=str(out / folder), moved=str(out / "moved"), theirs=str(theirs)))
+    if options[:1] == ["dump"]:
+        command = ["dump", str(controller), "--steps", "40", "--formats", "rgb", "--camera-profile", "ideal"]
+    else:
+        command = ["run", str(controller), "--duration", "0.6", *options]
+    assert main(command + ["--out", str(out)]) == 2
+    one_error_line(capsys, f"{out / folder} is a symbolic link: refusing to follow it")
+    assert list(theirs.iterdir()) == [] and (out / folder).is_symlink() and (out / "moved").is_dir()
+    if folder == "robot2":  # the match's run.json is written all the same
+        assert json.loads((out / "run.json").read_text())["status"] == "failed"
+
+
+def test_no_folder_is_made_through_a_link_above_it(tmp_path):
+    from aibo_sim.files import SymlinkRefused, make_folder
+
+    (tmp_path / "theirs").mkdir()
+    (tmp_path / "link").symlink_to(tmp_path / "theirs")
+    with pytest.raises(SymlinkRefused, match=f"^{re.escape(str(tmp_path / 'link'))} is a symbolic link"):
+        make_folder(tmp_path / "link" / "robot1" / "frames")
+    assert list((tmp_path / "theirs").iterdir()) == []
+    assert make_folder(tmp_path / "mine" / "frames").is_dir()
+
+
 @pytest.mark.parametrize(
     "command",
     [
@@ -277,8 +338,8 @@ def test_a_signal_right_after_a_temporary_file_is_made_leaves_none(tmp_path, mon
 
     create = files.create_file
 
-    def create_then_interrupt(temp):
-        os.close(create(temp))
+    def create_then_interrupt(temp, *folder):
+        os.close(create(temp, *folder))
         raise KeyboardInterrupt
 
     monkeypatch.setattr(files, "create_file", create_then_interrupt)

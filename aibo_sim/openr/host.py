@@ -258,6 +258,7 @@ class MemoryStickRun:
         self.lookahead = protocol.LOOKAHEAD_FRAMES  # frames an answer may foretell (0: a message every frame)
         self.shutdown = False
         self.controller_error: str | None = None  # the wrapper's, when its controller failed
+        self.log_error: OSError | None = None  # console.log could not be written: the run ends
         self.object_names: list[str] = []  # the objects' own names, in OBJECT.CFG's order
         self._sensors = SensorFrame(sim)
         self._locators = primitives()
@@ -335,7 +336,7 @@ class MemoryStickRun:
                 ended = None
                 try:
                     while not self.shutdown and (self.end_ms is None or self.time_ms < self.end_ms):
-                        if child.pending is not None:
+                        if child.pending is not None or self.log_error is not None:
                             break
                         self._frame()
                 except SimulationEnd as end:  # a match's stop, a frame its writer could not write
@@ -352,6 +353,8 @@ class MemoryStickRun:
                 child.wait(None, protocol.WAIT_NOTICE_S, self._waiting)
                 if ended is not None:
                     raise ended
+                if self.log_error is not None:
+                    raise self.log_error
         finally:
             theirs.close()
             if log is not None:
@@ -622,6 +625,10 @@ class MemoryStickRun:
             self.shutdown = True
         elif kind == protocol.RECORDS["CONTROLLER_FAILED"]:
             self.controller_error = self.controller_error or bytes(data).decode("utf-8", "replace")
+        elif kind == protocol.RECORDS["LOG_FAILED"]:
+            code = struct.unpack("<i", data)[0]
+            self.log_error = OSError(f"cannot write {self.log_path}: {os.strerror(code)}")
+            self.log_error.errno = code
         elif kind == protocol.RECORDS["IMAGE_SLOT"]:
             self._image_slot = _U32.unpack(data)[0]
         elif kind == protocol.RECORDS["CAMERA_CAPTURED"]:

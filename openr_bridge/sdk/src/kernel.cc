@@ -9,6 +9,7 @@
 #include <MCOOP.h>
 #include <OPENR/OSyslog.h>
 #include <OPENR/ObjcommMessages.h>
+#include <openr_host_protocol.h>
 #include "host.h"
 
 namespace host {
@@ -60,6 +61,7 @@ bool WriteAll(int fd, const std::string& text) {
     size_t done = 0;
     while (fd >= 0 && done < text.size()) {
         ssize_t n = write(fd, text.data() + done, text.size() - done);
+        if (n == 0) errno = EIO;
         if (n <= 0) return false;
         done += (size_t)n;
     }
@@ -67,9 +69,14 @@ bool WriteAll(int fd, const std::string& text) {
 }
 
 /* Console text, in the log, then on standard output until its reader has gone (EPIPE; the
- * runtime ignores SIGPIPE): the log keeps every line, and the objects run on. */
+ * runtime ignores SIGPIPE): the log keeps every line, and the objects run on. A log that cannot
+ * be written (a full disk) is written no more and told to the simulator, which ends the run. */
 void WriteConsole(const std::string& text) {
-    WriteAll(logFd, text);
+    if (!WriteAll(logFd, text)) {
+        longword error = errno;
+        Record(AIBO_OPENR_RECORD_LOG_FAILED, &error, sizeof error);
+        logFd = -1;
+    }
     if (!WriteAll(consoleFd, text) && errno == EPIPE) consoleFd = -1;
 }
 
