@@ -150,9 +150,9 @@ def _render(args) -> int:
         sim.close()
     if args.side_by_side is not None:
         images["side_by_side.png"] = _side_by_side(args)
-    make_out_folder(out)
-    files = {out / name: png(np.ascontiguousarray(rgb[:, :, ::-1])) for name, rgb in images.items()}
-    files[out / "head_camera.json"] = (json.dumps(description, indent=2) + "\n").encode()
+    folder = make_out_folder(out)  # resolved: --out may be a link, or lie under one
+    files = {folder / name: png(np.ascontiguousarray(rgb[:, :, ::-1])) for name, rgb in images.items()}
+    files[folder / "head_camera.json"] = (json.dumps(description, indent=2) + "\n").encode()
     write_files_atomic(files)  # all of them or, on a full disk, none: an earlier set stays whole
     for name, rgb in images.items():
         print(f"wrote {out / name} ({rgb.shape[1]}x{rgb.shape[0]})")

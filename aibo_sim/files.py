@@ -51,6 +51,13 @@ def _named(exc: OSError, path) -> OSError:
     return type(exc)(exc.errno, exc.strerror, str(path))
 
 
+def named_file(path) -> Path:
+    """The file a user named, its folder resolved once: a link to a folder on its way is the
+    user's choice (as ``--out`` is), the file itself is never followed."""
+    path = Path(path)
+    return path.absolute().parent.resolve() / path.name
+
+
 def _is_link(folder_fd: int, name: str) -> bool:
     try:
         return stat.S_ISLNK(os.stat(name, dir_fd=folder_fd, follow_symlinks=False).st_mode)

@@ -32,6 +32,7 @@ from .render import check_rendering
 from .robot import Robot, SimulationEnd
 from .runner import (
     CONSOLE_FILE,
+    LOCK_FILE,
     MEMORY_STICK,
     RUN_FILE,
     SOUND_FILE,
@@ -229,6 +230,7 @@ def run_match(
     sim = Simulation(scene, seed=seed, camera=camera, ball_type=ball_type, robots=robots)
     world, compiled = sim.world, {}
     players: list[_Player] = []
+    made: list[Path] = []  # the robots' folders this match made: removed again if it is refused
     try:
         place_match(sim, ball)
         check_rendering(sim.model)
@@ -254,6 +256,8 @@ def run_match(
                 player.program = Robot(player.robot, search_dirs=motion_dirs(player.path))
                 listeners = player.program.camera_source.listeners
             if folder is not None:
+                if not os.path.lexists(folder):
+                    made.append(folder)
                 make_folder(folder)
                 player.writer = FrameWriter(folder, controller=player.path, backend=player.kind, prepare=False)
                 listeners.append(player.writer)
@@ -268,6 +272,10 @@ def run_match(
         for player in players:
             if player.writer is not None:
                 player.writer.lock.release()
+        for folder in made:  # a refused match leaves --out as it was
+            with contextlib.suppress(OSError):
+                (folder / LOCK_FILE).unlink(missing_ok=True)
+                folder.rmdir()
         sim.close()
         raise
     players[0].program.frame_listeners.extend(frame_listeners)

@@ -48,7 +48,6 @@ import os
 import struct
 from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 
@@ -57,7 +56,7 @@ from openr_bridge.config import read_regular_file
 from openr_bridge.errors import NotRegularFile
 
 from . import ers7
-from .files import write_file_atomic
+from .files import named_file, write_file_atomic
 
 MAGIC = b"OMTN"
 ODA_MAGIC, ODA_HEADER_SIZE, ODA_ENTRY_SIZE = b"ODAR", 64, 144  # Sony's archives of motions and sounds (ODA.h)
@@ -464,8 +463,9 @@ def serialize_mtn(motion: Motion) -> bytes:
 
 def write_mtn(motion: Motion, path: str | os.PathLike) -> None:
     """Write ``motion`` to ``path`` whole or not at all (``files.write_file_atomic``: the bytes
-    built first, then a temporary file, on the disk, renamed over ``path``; never through a link)."""
-    write_file_atomic(Path(path), serialize_mtn(motion), durable=True)
+    built first, then a temporary file, on the disk, renamed over ``path``; never through a link
+    at it, while a link to a folder on its way is followed: ``files.named_file``)."""
+    write_file_atomic(named_file(path), serialize_mtn(motion), durable=True)
 
 
 # ----------------------------------------------------------------------------- playback

@@ -179,7 +179,8 @@ class FrameWriter:
     ):
         """``prepare=False``: the folder checked and locked only; ``prepare()`` then clears it
         (a match checks every robot's folder before it changes any)."""
-        self.out, self.directory = make_out_folder(directory), directory / "frames"
+        self.out = make_out_folder(directory)
+        self.directory = self.out / "frames"
         self.error: OSError | None = None
         self._written = 0
         self._marker = {"controller": controller and str(controller), "backend": backend, "status": "incomplete"}

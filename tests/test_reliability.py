@@ -227,6 +227,43 @@ def test_an_out_that_is_a_link_to_nothing_is_refused_and_nothing_made_through_it
     assert not (tmp_path / "missing").exists()
 
 
+@pytest.mark.parametrize(
+    "command",
+    [
+        ["run", str(SCRIPTED), "--duration", "0.1"],
+        ["run", str(SCRIPTED), "--duration", "0.1", "--robot", "red:1", "--robot", "blue:1"],
+        ["dump", str(SCRIPTED), "--steps", "2", "--formats", "rgb"],
+        ["render", "--settle", "0"],
+    ],
+    ids=["run", "match", "dump", "render"],
+)
+def test_an_out_under_a_link_to_a_folder_is_written_there(tmp_path, capsys, command, monkeypatch):
+    """``--out`` is resolved once: a link the user put on its way is followed (only links met
+    later, under it, are refused)."""
+    (tmp_path / "real").mkdir()
+    (tmp_path / "link").symlink_to("real")
+    monkeypatch.chdir(tmp_path)
+    assert main(command + ["--out", "link/out"]) == 0, capsys.readouterr().err
+    written = sorted(p.name for p in (tmp_path / "real" / "out").rglob("*.png"))
+    assert written and written == sorted(p.name for p in (tmp_path / "link" / "out").rglob("*.png"))
+    if command[0] == "dump":  # and read back through the link, resumed through it
+        assert len(load_dump("link/out")) == 2
+        _cut_to_first_frame(tmp_path / "link" / "out")
+        assert main(command + ["--resume", "--out", "link/out"]) == 0
+        assert len(load_dump(tmp_path / "link" / "out")) == 2
+
+
+def test_a_motion_file_is_written_through_a_link_to_its_folder(tmp_path):
+    from aibo_sim.motions import motions
+    from aibo_sim.mtn import read_mtn, write_mtn
+
+    (tmp_path / "real").mkdir()
+    (tmp_path / "link").symlink_to(tmp_path / "real")
+    motion = motions()["SIT.MTN"]
+    write_mtn(motion, tmp_path / "link" / "SIT.MTN")
+    assert read_mtn(tmp_path / "real" / "SIT.MTN") == motion
+
+
 def test_a_match_refused_at_a_later_robots_folder_leaves_the_earlier_ones_as_they_were(tmp_path, capsys):
     out, elsewhere = tmp_path / "out", tmp_path / "elsewhere"
     args = ["run", str(SCRIPTED), "--robot", "red:1", "--robot", "blue:1", "--duration", "0.1", "--out", str(out)]
@@ -239,6 +276,17 @@ def test_a_match_refused_at_a_later_robots_folder_leaves_the_earlier_ones_as_the
     one_error_line(capsys, f"{out / 'robot2'} is a symbolic link: refusing to follow it")
     assert {p: p.read_bytes() for p in (out / "robot1").rglob("*") if p.is_file() and p.name != ".run.lock"} == before
     assert list(elsewhere.iterdir()) == []
+
+
+def test_a_match_refused_at_a_robots_folder_makes_none_of_the_others(tmp_path, capsys):
+    out, elsewhere = tmp_path / "out", tmp_path / "elsewhere"
+    out.mkdir()
+    elsewhere.mkdir()
+    (out / "robot2").symlink_to(elsewhere)
+    args = ["run", str(SCRIPTED), "--robot", "red:1", "--robot", "blue:1", "--duration", "0.1", "--out", str(out)]
+    assert main(args) == 2
+    one_error_line(capsys, f"{out / 'robot2'} is a symbolic link: refusing to follow it")
+    assert [p.name for p in out.iterdir()] == ["robot2"] and list(elsewhere.iterdir()) == []
 
 
 @pytest.mark.parametrize("match", [False, True], ids=["one robot", "a match"])

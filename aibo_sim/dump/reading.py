@@ -310,5 +310,7 @@ class Dump:
 
 def load_dump(folder: str | Path) -> Dump:
     """Open a dump folder written by ``aibo-sim dump`` (or ``dump``); DumpError (an OSError)
-    when it is not one or its meta.json or frames.jsonl is corrupt (naming the file and line)."""
-    return Dump(folder)
+    when it is not one or its meta.json or frames.jsonl is corrupt (naming the file and line).
+    ``folder`` is resolved once, so it (or a folder above it) may be a link; a link inside the
+    dump is not followed."""
+    return Dump(Path(folder).resolve())

@@ -16,12 +16,11 @@ from __future__ import annotations
 import argparse
 import io
 import time
-from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
 
-from ..files import write_file_atomic
+from ..files import named_file, write_file_atomic
 
 ENV_ID = "aibo_sim.envs:aibo_sim/HeadTrackBall-v0"  # names the module, so workers register it too
 EVAL_SEED = 10_000  # evaluation episodes use seeds EVAL_SEED, EVAL_SEED + 1, ...
@@ -76,7 +75,7 @@ def plot_learning_curve(
     axes.legend(loc="lower right")
     buffer = io.BytesIO()
     figure.savefig(buffer, format="png")
-    write_file_atomic(Path(path), buffer.getvalue())
+    write_file_atomic(named_file(path), buffer.getvalue())
 
 
 def main(argv: list[str] | None = None) -> None:
