@@ -28,6 +28,7 @@ from .exit_status import (
     EXIT_INTERRUPTED,
     EXIT_TERMINATED,
     STOP_GRACE_S,
+    exit_now,
 )
 from .mtn import MODES as MTN_MODES
 from .options import (
@@ -508,7 +509,7 @@ class _SignalsStopCleanly:
 
 def _stop_now(status: int, why: str) -> None:
     print(f"\naibo-sim: {why} (files being written may be left as they were)", file=sys.stderr, flush=True)
-    os._exit(status)
+    exit_now(status)
 
 
 def _reader_gone(stream) -> bool:
@@ -610,7 +611,7 @@ def program() -> int:
     print(f"aibo-sim: the run is over; not waiting for threads still running: {', '.join(left)}", file=sys.stderr)
     sys.stdout.flush()
     sys.stderr.flush()
-    os._exit(status)
+    exit_now(status)
 
 
 if __name__ == "__main__":

@@ -162,6 +162,34 @@ def test_one_sigterm_ends_a_stick_run_with_143_and_an_honest_run_json(objects, t
     assert record["status"] == "interrupted" and record["camera_frames"] == len(list((out / "frames").glob("*.png")))
 
 
+@pytest.mark.parametrize("signals", [1, 2])
+def test_a_match_whose_sticks_hang_ends_at_a_signal_leaving_no_scratch_folder(objects, tmp_path, signals):
+    """Their threads are not waited for (os._exit): the runtimes' folders in /tmp were left."""
+    stick = make_stick(tmp_path / "ms", objects, ["SPIN"], f"{SENSOR} Spin.Sensor.OSensorFrameVectorData.O\n")
+    scratch = tmp_path / "tmp"
+    scratch.mkdir()
+    command = [sys.executable, "-m", "aibo_sim.cli", "run", str(stick), "--robot", "red:1", "--robot", "blue:1"]
+    run = subprocess.Popen(
+        command + ["--duration", "100", "--out", str(tmp_path / "out")],
+        env={**os.environ, "TMPDIR": str(scratch)},
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    try:
+        deadline = time.monotonic() + 120
+        while len(list(scratch.glob("aibo-sim-openr-*/*.so"))) < 2 and time.monotonic() < deadline:
+            time.sleep(0.1)
+        time.sleep(1)  # both Spin objects spinning
+        for _ in range(signals):
+            run.send_signal(signal.SIGTERM)
+            time.sleep(0.5)
+        assert run.wait(60) == 143
+    finally:
+        run.kill()
+    assert "terminated (SIGTERM)" in run.stderr.read() and list(scratch.iterdir()) == []
+
+
 def test_a_full_disk_ends_a_stick_run_with_exit_2_and_run_json_failed(objects, tmp_path, monkeypatch, capsys):
     """The frame writer ends the run (SimulationEnd) as in a controller's: it reached the caller
     as a bare traceback; in a match it was a failure with an empty error."""

@@ -15,10 +15,10 @@ import os
 import re
 import shutil
 import subprocess
-import tempfile
 from functools import cache
 from pathlib import Path
 
+from ..exit_status import scratch_folder
 from .protocol import c_header
 
 C_SUFFIXES = (".c", ".cc", ".cpp")
@@ -139,8 +139,7 @@ def compile_controller(path: str | os.PathLike) -> Path:
     if executable.is_file():
         return executable
     folder.parent.mkdir(parents=True, exist_ok=True)
-    with tempfile.TemporaryDirectory(dir=folder.parent, prefix=".build-") as build:
-        build = Path(build)
+    with scratch_folder(".build-", folder.parent) as build:
         (build / "aibo_ops.h").write_text(header)
         objects = []
         for source in [LIBRARY, *sources]:

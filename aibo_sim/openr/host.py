@@ -49,7 +49,6 @@ import signal
 import socket
 import struct
 import sys
-import tempfile
 import time
 import wave
 from pathlib import Path
@@ -67,6 +66,7 @@ from openr_bridge.wrapper import message_rgb
 from .. import ers7
 from ..camera import CameraFrame
 from ..cbind.child import Child
+from ..exit_status import scratch_folder
 from ..files import SymlinkRefused, check_atomic_write, create_file, write_file_atomic
 from ..robot import SimulationEnd
 from ..sim import ACCEL_RANGE, FRAME_MS, IR_NOISE, Simulation
@@ -289,8 +289,7 @@ class MemoryStickRun:
     def run(self) -> None:
         """Load, connect and start the objects, then run frames until the end; ConfigError for a
         stick that cannot run, OpenRObjectCrashed when an object crashed."""
-        with tempfile.TemporaryDirectory(prefix="aibo-sim-openr-") as scratch:
-            scratch = Path(scratch)
+        with scratch_folder("aibo-sim-openr-") as scratch:
             libraries = []
             for number, stick_object in enumerate(self.stick.objects):
                 library = scratch / f"{number}_{stick_object.name}.so"

@@ -26,13 +26,13 @@ import os
 import shutil
 import stat
 import sys
-import tempfile
 from pathlib import Path
 
 import openr_bridge
 from openr_bridge.host_protocol import c_header
 
 from ..cbind.build import _compiler, _run, _version
+from ..exit_status import scratch_folder
 
 SOURCES = Path(openr_bridge.__file__).resolve().parent / "sdk"
 # What every object and the library are compiled with: Sony's SDK compiled C++98 (GCC 3.3), whose
@@ -99,8 +99,7 @@ def sdk_root() -> Path:
     if (root / "OPEN_R" / "bin" / "openr-host").is_file():
         return root
     root.parent.mkdir(parents=True, exist_ok=True)
-    with tempfile.TemporaryDirectory(dir=root.parent, prefix=".build-") as build:
-        build = Path(build)
+    with scratch_folder(".build-", root.parent) as build:
         _build(build, root, cxx, cc)
         try:
             os.replace(build, root)  # whole or not at all; a racing build of the same key may have won
