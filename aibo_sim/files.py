@@ -30,7 +30,8 @@ except ImportError:  # not POSIX: folders are not locked there
     fcntl = None
 
 _NO_FOLLOW = getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_CLOEXEC", 0)
-_FOLDER_FLAGS = os.O_RDONLY | getattr(os, "O_DIRECTORY", 0) | _NO_FOLLOW
+# A folder on the way is only passed through (O_PATH: no read permission needed, as a path's folders).
+_FOLDER_FLAGS = getattr(os, "O_PATH", os.O_RDONLY) | getattr(os, "O_DIRECTORY", 0) | _NO_FOLLOW
 HOLDER_COMMAND_CHARS = 300  # a lock holder's command line is cut to this in messages
 
 
@@ -58,11 +59,17 @@ def named_file(path) -> Path:
     return path.absolute().parent.resolve() / path.name
 
 
-def _is_link(folder_fd: int, name: str) -> bool:
+def _mode(folder_fd: int, name: str) -> int:
+    """The kind and permissions of ``name`` in the folder open at ``folder_fd`` (a link's own); 0
+    where there is none (or it cannot be looked at)."""
     try:
-        return stat.S_ISLNK(os.stat(name, dir_fd=folder_fd, follow_symlinks=False).st_mode)
+        return os.stat(name, dir_fd=folder_fd, follow_symlinks=False).st_mode
     except OSError:
-        return False
+        return 0
+
+
+def _is_link(folder_fd: int, name: str) -> bool:
+    return stat.S_ISLNK(_mode(folder_fd, name))
 
 
 def open_folder(folder, create: bool = False) -> int:
@@ -82,8 +89,12 @@ def open_folder(folder, create: bool = False) -> int:
             except FileNotFoundError:
                 if not create:
                     raise
-                with contextlib.suppress(FileExistsError):  # made by another process meanwhile
+                try:
                     os.mkdir(name, dir_fd=fd)
+                except FileExistsError:
+                    pass  # made by another process meanwhile
+                except OSError as exc:
+                    raise _named(exc, reached) from None
                 inner = _open_folder_in(fd, name, reached)
             os.close(fd)
             fd = inner
@@ -157,6 +168,50 @@ def make_folder(path) -> Path:
     return Path(path)
 
 
+def list_folder(folder) -> list[str]:
+    """The names in ``folder``, reached as ``open_folder`` reaches it (never through a link)."""
+    fd = open_folder(folder)
+    try:
+        listed = os.open(".", os.O_RDONLY | getattr(os, "O_DIRECTORY", 0) | _NO_FOLLOW, dir_fd=fd)
+    except OSError as exc:
+        raise _named(exc, folder) from None
+    finally:
+        os.close(fd)
+    try:
+        return os.listdir(listed)
+    finally:
+        os.close(listed)
+
+
+def remove_in(folder, names) -> None:
+    """Remove the regular files ``names`` in ``folder`` (reached as ``open_folder`` reaches it):
+    where a link has taken the folder's place, nothing is removed where it points; a link, a
+    folder or anything else of such a name is left, as is what cannot be removed."""
+    try:
+        fd = open_folder(folder)
+    except OSError:
+        return
+    try:
+        for name in names:
+            if stat.S_ISREG(_mode(fd, name)):
+                with contextlib.suppress(OSError):
+                    os.unlink(name, dir_fd=fd)
+    finally:
+        os.close(fd)
+
+
+def rename_in(folder, name: str, new_name: str) -> None:
+    """Rename ``name`` to ``new_name`` (replacing it) in ``folder``, reached as ``open_folder``
+    reaches it; an OSError names the new path."""
+    fd = open_folder(folder)
+    try:
+        os.replace(name, new_name, src_dir_fd=fd, dst_dir_fd=fd)
+    except OSError as exc:
+        raise _named(exc, Path(folder, new_name)) from None
+    finally:
+        os.close(fd)
+
+
 def create_file(temp: Path, folder_fd: int | None = None) -> int:
     """A new file at ``temp``, opened for writing; a regular file already there (the temporary
     file of a writer that was killed, an earlier run's log) is replaced, never written through
@@ -169,7 +224,10 @@ def create_file(temp: Path, folder_fd: int | None = None) -> int:
     try:
         return _open_in(folder_fd, temp, flags)
     except FileExistsError:
-        os.unlink(temp.name, dir_fd=folder_fd)
+        try:
+            os.unlink(temp.name, dir_fd=folder_fd)
+        except OSError as exc:
+            raise _named(exc, temp) from None
         return _open_in(folder_fd, temp, flags)
 
 
@@ -226,10 +284,9 @@ def write_files_atomic(files: dict[Path, bytes], temps: dict[Path, Path] | None 
                 if durable:
                     file.flush()
                     os.fsync(file.fileno())
-        for path in files:
-            with contextlib.suppress(FileNotFoundError):  # os.replace would refuse a folder after renaming the others
-                if stat.S_ISDIR(os.stat(path.name, dir_fd=folder(path), follow_symlinks=False).st_mode):
-                    raise IsADirectoryError(errno.EISDIR, os.strerror(errno.EISDIR), str(path))
+        for path in files:  # os.replace would refuse a folder after renaming the others
+            if stat.S_ISDIR(_mode(folder(path), path.name)):
+                raise IsADirectoryError(errno.EISDIR, os.strerror(errno.EISDIR), str(path))
         for path, temp in temps.items():
             try:
                 os.replace(temp.name, path.name, src_dir_fd=folder(temp), dst_dir_fd=folder(path))

@@ -25,7 +25,7 @@ from traceback import walk_tb
 from . import controller
 from .cbind import CompileError, compile_controller, controller_sources, is_c_controller
 from .config import DEFAULT_DURATION_S, CameraConfig, ParameterError, WorldConfig
-from .files import check_atomic_write, make_folder, write_file_atomic
+from .files import check_atomic_write, make_folder, remove_in, write_file_atomic
 from .openr.host import PICTURE_SIZE, MemoryStickRun
 from .placement import make_out_folder, place_match
 from .render import check_rendering
@@ -273,9 +273,9 @@ def run_match(
             if player.writer is not None:
                 player.writer.lock.release()
         for folder in made:  # a refused match leaves --out as it was
-            with contextlib.suppress(OSError):
-                (folder / LOCK_FILE).unlink(missing_ok=True)
-                folder.rmdir()
+            remove_in(folder, [LOCK_FILE])
+            with contextlib.suppress(OSError):  # a link now in its place is not removed
+                os.rmdir(folder)
         sim.close()
         raise
     players[0].program.frame_listeners.extend(frame_listeners)

@@ -36,8 +36,8 @@ from .files import (
     FolderLock,
     SymlinkRefused,
     check_atomic_write,
+    list_folder,
     make_folder,
-    open_folder,
     png,
     read_file,
     write_file_atomic,
@@ -185,7 +185,7 @@ class FrameWriter:
         self._written = 0
         self._marker = {"controller": controller and str(controller), "backend": backend, "status": "incomplete"}
         self._check()  # before the lock file is made: a folder refused is left as it was
-        self.lock = FolderLock(directory, LOCK_FILE, "run", "wait for it to end or stop it, or choose another --out")
+        self.lock = FolderLock(self.out, LOCK_FILE, "run", "wait for it to end or stop it, or choose another --out")
         if prepare:
             self.prepare()
 
@@ -272,13 +272,9 @@ class FrameWriter:
         between a frame's rename and a counter's increment cannot make run.json disagree with it.
         The frames this writer wrote where the folder cannot be reached (a link now in its place)."""
         try:
-            folder = open_folder(self.directory)
+            return sum(1 for name in list_folder(self.directory) if FRAME_FILE.fullmatch(name))
         except OSError:
             return self._written
-        try:
-            return sum(1 for name in os.listdir(folder) if FRAME_FILE.fullmatch(name))
-        finally:
-            os.close(folder)
 
     def check(self) -> None:
         """Raise the write error that ended the run, if one did."""

@@ -4,6 +4,7 @@ start more dump workers than memory holds, break on a controller thread that rea
 and the smaller promises (a scene that starts the robot in a wall, wait notices for Python
 controllers, a closed socket, memory after closing envs, long arguments, run.json's status)."""
 
+import ctypes
 import errno
 import fnmatch
 import json
@@ -16,6 +17,7 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from aibo_sim import runner
@@ -175,24 +177,88 @@ robot_run(run)
         ("frames", []),
         ("robot2", ["--robot", "red:1", "--robot", "blue:1"]),
         ("rgb", ["dump"]),
+        ("", ["dump"]),
     ],
-    ids=["a run's frames", "a match's robot folder", "a dump's format folder"],
+    ids=["a run's frames", "a match's robot folder", "a dump's format folder", "a dump's folder"],
 )
 def test_a_folder_swapped_for_a_link_during_a_run_is_not_written_through(tmp_path, capsys, folder, options):
     """The folders are reached without following a link at each write: the run ends, exit 2, naming
-    the link; the folder it points to gets nothing."""
+    the link; the folder it points to gets nothing, and loses nothing (files named as the dump's
+    temporary files, which a refused dump removes in its own folders)."""
     out, theirs, controller = tmp_path / "out", tmp_path / "theirs", tmp_path / "swapping.py"
-    theirs.mkdir()
-    controller.write_text(SWAPPING.format(folder=str(out / folder), moved=str(out / "moved"), theirs=str(theirs)))
+    theirs_files = {theirs / ".tmp.meta.json", theirs / ".tmp.000010.png", theirs / "rgb" / ".tmp.000010.png"}
+    for path in theirs_files:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_bytes(VICTIM)
+    moved = tmp_path / "moved"
+    controller.write_text(SWAPPING.format(folder=str(out / folder), moved=str(moved), theirs=str(theirs)))
     if options[:1] == ["dump"]:
         command = ["dump", str(controller), "--steps", "40", "--formats", "rgb", "--camera-profile", "ideal"]
     else:
         command = ["run", str(controller), "--duration", "0.6", *options]
     assert main(command + ["--out", str(out)]) == 2
     one_error_line(capsys, f"{out / folder} is a symbolic link: refusing to follow it")
-    assert list(theirs.iterdir()) == [] and (out / folder).is_symlink() and (out / "moved").is_dir()
+    assert {p for p in theirs.rglob("*") if p.is_file()} == theirs_files
+    assert all(p.read_bytes() == VICTIM for p in theirs_files)
+    assert (out / folder).is_symlink() and moved.is_dir()
     if folder == "robot2":  # the match's run.json is written all the same
         assert json.loads((out / "run.json").read_text())["status"] == "failed"
+
+
+def _no_permission_override() -> None:
+    """Run in a child before its exec: root loses the capabilities that let it ignore permissions."""
+    libc = ctypes.CDLL(None, use_errno=True)
+    for capability in (1, 2):  # CAP_DAC_OVERRIDE, CAP_DAC_READ_SEARCH
+        libc.prctl(24, capability, 0, 0, 0)  # PR_CAPBSET_DROP: fails, harmlessly, where not root
+
+
+def test_folders_on_the_way_need_no_read_permission_and_one_not_made_is_named_whole(tmp_path):
+    """Folders above are only passed through, as a path's are (shared storage often has
+    drwx--x--x folders above a user's own): reading them each was "Permission denied"."""
+    above = tmp_path / "above"
+    (above / "mine").mkdir(parents=True)
+    (above / "theirs").mkdir()
+    (above / "theirs").chmod(0o555)
+    above.chmod(0o311)
+    code = f"""
+import os
+from pathlib import Path
+from aibo_sim.files import make_folder, write_file_atomic
+try:
+    os.listdir({str(above)!r})
+    print("permissions not enforced")
+except PermissionError:
+    write_file_atomic(make_folder(Path({str(above / "mine")!r}) / "out") / "frame.png", b"picture")
+    make_folder(Path({str(above / "theirs")!r}) / "robot1")
+"""
+    try:
+        child = subprocess.run(
+            [sys.executable, "-c", code],
+            preexec_fn=_no_permission_override,
+            capture_output=True,
+            text=True,
+            cwd=tmp_path,
+        )
+    finally:
+        above.chmod(0o755)
+    if "permissions not enforced" in child.stdout:
+        pytest.skip("this process reads any folder (root without a way to drop the capability)")
+    assert child.stderr.strip().endswith(
+        f"PermissionError: [Errno 13] Permission denied: '{above / 'theirs' / 'robot1'}'"
+    )
+    assert (above / "mine" / "out" / "frame.png").read_bytes() == b"picture"
+
+
+def test_a_folder_in_place_of_the_temporary_file_is_named(tmp_path):
+    from aibo_sim.files import write_file_atomic
+
+    (tmp_path / ".frame.png.tmp" / "sub").mkdir(parents=True)
+    with pytest.raises(
+        OSError,
+        match=f"^cannot write {re.escape(str(tmp_path / 'frame.png'))}: "
+        f"{re.escape(str(tmp_path / '.frame.png.tmp'))}: Is a directory$",
+    ):
+        write_file_atomic(tmp_path / "frame.png", b"picture")
 
 
 def test_no_folder_is_made_through_a_link_above_it(tmp_path):
@@ -251,6 +317,22 @@ def test_an_out_under_a_link_to_a_folder_is_written_there(tmp_path, capsys, comm
         _cut_to_first_frame(tmp_path / "link" / "out")
         assert main(command + ["--resume", "--out", "link/out"]) == 0
         assert len(load_dump(tmp_path / "link" / "out")) == 2
+
+
+def test_the_writers_and_readers_of_the_python_api_follow_a_link_the_user_chose(tmp_path, monkeypatch):
+    from aibo_sim.dump import Dump
+
+    (tmp_path / "real").mkdir()
+    (tmp_path / "link").symlink_to("real")
+    monkeypatch.chdir(tmp_path)
+    _small_dump(tmp_path / "real" / "dump")
+    assert len(Dump("link/dump")) == 3
+    writer = FrameWriter(Path("link/run"), controller=SCRIPTED, backend="sim")
+    try:
+        writer(0, np.zeros((160, 208, 3), np.uint8))
+    finally:
+        writer.lock.release()
+    assert (tmp_path / "real" / "run" / "frames" / "000000.png").is_file() and writer.count == 1
 
 
 def test_a_motion_file_is_written_through_a_link_to_its_folder(tmp_path):

@@ -127,7 +127,7 @@ from .formats import (
 )
 from .reading import Dump, DumpFrame, load_dump
 from .running import POLICIES, dump
-from .writing import DumpSummary, DumpWriter, write_atomic
+from .writing import DumpSummary, DumpWriter
 
 __all__ = [
     "DEFAULT_FORMATS",
@@ -148,7 +148,6 @@ __all__ = [
     "geom_classes",
     "load_dump",
     "rgb_to_yuv_bt601",
-    "write_atomic",
     "yuv420_bytes",
     "yuv444_bytes",
 ]

@@ -275,7 +275,7 @@ class Dump:
     has not started yet holds none)."""
 
     def __init__(self, folder: str | Path):
-        self.folder = Path(folder)
+        self.folder = Path(folder).resolve()  # once: it, or a folder above it, may be a link
         meta_path = self.folder / META
         self.meta = read_meta(meta_path)
         shards = self.meta.get("shards", [])
@@ -313,4 +313,4 @@ def load_dump(folder: str | Path) -> Dump:
     when it is not one or its meta.json or frames.jsonl is corrupt (naming the file and line).
     ``folder`` is resolved once, so it (or a folder above it) may be a link; a link inside the
     dump is not followed."""
-    return Dump(Path(folder).resolve())
+    return Dump(folder)

@@ -22,13 +22,17 @@ from ..field import SEGMENTATION_CLASSES
 from ..files import (
     HardLinkRefused,
     SymlinkRefused,
+    list_folder,
     make_folder,
     open_file,
     png,
     read_file,
     refuse_hard_link,
+    remove_in,
+    rename_in,
     write_file_atomic,
 )
+from ..placement import out_path
 from ..sim import Simulation
 from .coco import Objects, coco_bytes
 from .formats import (
@@ -90,17 +94,11 @@ def remove_temporary_files(out: Path, layouts: dict) -> None:
     for layout in layouts.values():
         folder, name = os.path.split(layout["path"])
         patterns.setdefault(folder, []).append(_temporary_name(name))
-    for name in OWN_TOP_FILES - {LOCK_NAME}:
-        with contextlib.suppress(OSError):
-            (out / name).unlink()
+    remove_in(out, OWN_TOP_FILES - {LOCK_NAME})
     for folder, names in patterns.items():
-        if not folder:
-            continue
-        with contextlib.suppress(OSError), os.scandir(out / folder) as entries:
-            for entry in entries:
-                if any(p.fullmatch(entry.name) for p in names) and entry.is_file(follow_symlinks=False):
-                    with contextlib.suppress(OSError):
-                        os.unlink(entry.path)
+        if folder:
+            with contextlib.suppress(OSError):
+                remove_in(out / folder, [n for n in list_folder(out / folder) if any(p.fullmatch(n) for p in names)])
 
 
 # ---------------------------------------------------------------- the lock
@@ -291,8 +289,9 @@ class DumpWriter:
         robots: dict | None = None,
     ):
         """``robots``: meta.json's "robots" (``formats.robots_meta``) in a match's dump; None for a lone
-        robot, whose meta.json has none."""
-        self.out, self.formats = out, tuple(formats)
+        robot, whose meta.json has none. ``out`` is resolved once (``placement.out_path``): a link on
+        its way is the user's; one put under it later is not followed."""
+        self.out, self.formats = out_path(out), tuple(formats)
         width, height = camera["width"], camera["height"]
         self.layouts = file_layouts(self.formats, width, height)
         meta = {
@@ -420,7 +419,7 @@ class DumpWriter:
                 final = self.out / VIDEO
                 try:
                     mp4_faststart(self._video_path)  # its index ahead of the frames (or left as written)
-                    os.replace(self._video_path, final)
+                    rename_in(self.out, self._video_path.name, VIDEO)
                 except OSError as exc:
                     remove_temporary_files(self.out, self.layouts)
                     raise dump_error(exc, f"cannot write {final}: {exc.strerror or exc}") from exc
