@@ -290,6 +290,24 @@ def servo_get_position(tag) -> float:
     return _device(tag, Servo).get_position()
 
 
+def servo_enable_motor_force_feedback(tag, ms: int) -> None:
+    """Sample the torque the servo's motor applies every ``ms`` milliseconds."""
+    _device(tag, Servo).force_feedback.enable(ms)
+
+
+def servo_disable_motor_force_feedback(tag) -> None:
+    """Stop sampling the servo's motor torque."""
+    _device(tag, Servo).force_feedback.disable()
+
+
+def servo_get_motor_force_feedback(tag) -> float:
+    """The torque in N m the servo's motor applied at the last sample (signed along the joint).
+
+    :raises DeviceError: not enabled, or before its first sample.
+    """
+    return _device(tag, Servo).force_feedback.value()
+
+
 def servo_set_position(tag, radians: float) -> None:
     """Target angle in radians, clipped to the joint's range."""
     _device(tag, Servo).set_position(radians)

@@ -59,6 +59,10 @@ def _leg_joints() -> list[Joint]:
 
 
 MAX_TORQUE = 5.4542  # N m, Webots maxForce for every servo (carried over from the ERS-210)
+# OJointValue.pwmDuty at the motor's full torque, MAX_TORQUE: the scale of the duty the OPEN-R
+# runtime reports and a memory stick's servo_get_motor_force_feedback reads (UNCONFIRMED: Sony's
+# manuals give no range; aibo-sim's choice).
+PWM_DUTY_FULL_SCALE = 255
 
 # Order: Sony's MTN/locator order (11, 12, 13, 14, 15, 16, 21..53, 61, 62).
 # Ears are binary Joint4 flappers on the robot; here they are position joints over 0..15 deg.

@@ -77,9 +77,11 @@ class Device:
 
     kind = "device"
     enable_call = ""  # the API function that enables it, when not ``<kind>_enable``
+    sampled = ""  # what it samples, where a device samples more than one thing: keys ``enabled_devices``
 
     def __init__(self, robot: Robot, locator: str, name: str):
         self.robot, self.locator, self.name = robot, locator, name
+        self.key = f"{locator} {self.sampled}" if self.sampled else locator
         self.period: int | None = None
         self._next_sample_ms = 0
         self._value = None
@@ -92,12 +94,12 @@ class Device:
         ms = sampling_period(ms, self.locator)
         self.period, self._value = ms, None
         self._next_sample_ms = self.robot.time_ms + ms
-        self.robot.enabled_devices[self.locator] = self
+        self.robot.enabled_devices[self.key] = self
 
     def disable(self) -> None:
         """Stop sampling and forget the last value."""
         self.period, self._value = None, None
-        self.robot.enabled_devices.pop(self.locator, None)
+        self.robot.enabled_devices.pop(self.key, None)
 
     def _after_frame(self, time_ms: int) -> None:
         if self.period is not None and time_ms >= self._next_sample_ms:
@@ -115,7 +117,7 @@ class Device:
         """
         if self.period is None:
             call = self.enable_call or f"{self.kind}_enable"
-            raise DeviceError(f"{self.locator}: {self.kind} is not enabled (call {call} first)")
+            raise DeviceError(f"{self.locator}: {self.sampled or self.kind} is not enabled (call {call} first)")
         if self._value is None:
             raise DeviceError(
                 f"{self.locator}: no sample yet: enabled with a {self.period} ms period, first value at "
@@ -134,6 +136,7 @@ class Servo(Device):
         super().__init__(robot, locator, name)
         self.index = ers7.JOINT_INDEX[name]
         self._actuator = robot.sim.servos.ctrl.start + self.index  # in the world's model: after the robots before
+        self.force_feedback = MotorForceFeedback(self)
 
     def _number(self, value, what: str) -> float:
         return finite_number(value, f"{self.locator}: {what}")
@@ -174,6 +177,22 @@ class Servo(Device):
     def get_position(self) -> float:
         """The joint angle in radians at the last sample (``value``)."""
         return self.value()
+
+
+class MotorForceFeedback(Device):
+    """A servo's motor force feedback (Webots 5's ``servo_enable_motor_force_feedback``): the
+    torque in N m its actuator applies along the joint, sampled on a period of its own."""
+
+    kind = "servo"
+    enable_call = "servo_enable_motor_force_feedback"
+    sampled = "motor force feedback"
+
+    def __init__(self, servo: Servo):
+        super().__init__(servo.robot, servo.locator, servo.name)
+        self._actuator = servo._actuator
+
+    def _sample(self) -> float:
+        return float(self.robot.sim.data.actuator_force[self._actuator])
 
 
 class DistanceSensor(Device):

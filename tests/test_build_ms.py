@@ -91,13 +91,14 @@ static void init(void) {
         camera = robot_get_device("PRM:/r1/c1/c2/c3/i1-FbkImageSensor:F1");
         camera_enable(camera, 32);
         fprintf(out, "%d %d %.9g\n", camera_get_width(camera), camera_get_height(camera), camera_get_fov(camera));
-    } else if (is("sensors") || is("devices")) {
+    } else if (is("sensors") || is("torques") || is("devices")) {
         char line[128];
         FILE *list = fopen("locators.txt", "r");
         while (fgets(line, sizeof line, list)) {
             line[strcspn(line, "\n")] = 0;
             joints[joint_count] = robot_get_device(line);
             if (is("devices")) fprintf(out, "%s %d\n", line, joints[joint_count]);
+            else if (is("torques")) servo_enable_motor_force_feedback(joints[joint_count], 32);
             else servo_enable_position(joints[joint_count], 32);
             joint_count++;
         }
@@ -162,6 +163,9 @@ static int run(int ms) {
         for (int j = 0; j < joint_count; j++) fprintf(out, "%.9f ", servo_get_position(joints[j]));
         const float *a = accelerometer_get_values(accelerometer);
         fprintf(out, "%.6f %.6f %.6f %g\n", a[0], a[1], a[2], touch_sensor_get_value(paw));
+    } else if (is("torques") && ms) {
+        for (int j = 0; j < joint_count; j++) fprintf(out, "%.9f ", servo_get_motor_force_feedback(joints[j]));
+        fprintf(out, "\n");
     } else if (is("motion")) {
         if (mtn_is_over(walk) && plays < 2) {
             mtn_play(walk);
@@ -365,7 +369,7 @@ def probe_runs(monkeypatch, probe, tmp_path, scenario: str, frames: int = 128):
         (folder / "scenario.txt").write_text(scenario + "\n")
         locators = (
             [j.locator for j in ers7.JOINTS if "-Joint2:" in j.locator]
-            if scenario == "sensors"
+            if scenario in ("sensors", "torques")
             else ers7.all_locators()
         )
         (folder / "locators.txt").write_text("".join(locator + "\n" for locator in locators))
@@ -516,6 +520,17 @@ def test_sensor_values_are_the_python_apis_to_the_micro_unit(probe, tmp_path, mo
     assert np.abs(values[0][:, joints] - values[1][:, joints]).max() <= 0.5e-6 + 1e-9  # micro-radians
     assert np.abs(values[0][:, accelerations] - values[1][:, accelerations]).max() <= 1.5e-6  # um/s^2, floats
     assert np.array_equal(values[0][:, 21], values[1][:, 21])  # the paw switch
+
+
+def test_motor_force_feedback_is_the_python_apis_to_the_pwm_dutys_step(probe, tmp_path, monkeypatch):
+    """The stick reads each joint's torque off its PWM duty (ers7.PWM_DUTY_FULL_SCALE of
+    ers7.MAX_TORQUE), where the Python API reads MuJoCo's actuator force."""
+    stick, reference, _, _ = probe_runs(monkeypatch, probe, tmp_path, "torques")
+    values = [np.loadtxt(folder / "probe.txt") for folder in (stick, reference)]
+    step = ers7.MAX_TORQUE / ers7.PWM_DUTY_FULL_SCALE
+    assert values[0].shape == values[1].shape == (31, 18) and np.abs(values[1]).max() > 5 * step
+    assert np.abs(values[0] - values[1]).max() <= step / 2 + 1e-9
+    assert np.abs(values[0] / step - np.round(values[0] / step)).max() < 1e-6  # whole duties
 
 
 def test_a_motion_under_a_long_name_is_found_on_the_stick_by_its_short_name(probe, tmp_path, monkeypatch):

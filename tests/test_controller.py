@@ -59,6 +59,27 @@ def test_reading_before_enable_or_first_sample_is_an_error(robot):
         api.servo_get_position(pan)
 
 
+def test_motor_force_feedback_is_the_actuators_torque_sampled_on_its_own_period(robot):
+    pan, knee = api.robot_get_device(HEAD_PAN), api.robot_get_device("PRM:/r2/c1/c2/c3-Joint2:23")
+    with pytest.raises(DeviceError, match=r"^PRM:/r1/c1/c2-Joint2:12: motor force feedback is not enabled "):
+        api.servo_get_motor_force_feedback(pan)
+    api.servo_enable_motor_force_feedback(knee, 64)
+    api.servo_enable_position(knee, 32)
+    api.servo_set_position(pan, 1.0)
+    api.robot_step(64)
+    actuator = robot.sim.servos.ctrl.start + ers7.JOINT_INDEX["lf_j3"]
+    torque = robot.sim.data.actuator_force[actuator]
+    assert api.servo_get_motor_force_feedback(knee) == torque != 0  # the knee holds the body up
+    api.robot_step(32)  # between samples: the position is new, the torque not
+    assert api.servo_get_motor_force_feedback(knee) == torque != robot.sim.data.actuator_force[actuator]
+    api.servo_disable_motor_force_feedback(knee)
+    assert api.servo_get_position(knee) != 0  # the position's sampling goes on
+    with pytest.raises(DeviceError, match="call servo_enable_motor_force_feedback first"):
+        api.servo_get_motor_force_feedback(knee)
+    with pytest.raises(DeviceError, match="is a camera, not a servo"):
+        api.servo_enable_motor_force_feedback(api.robot_get_device("PRM:/r1/c1/c2/c3/i1-FbkImageSensor:F1"), 32)
+
+
 def test_values_refresh_only_at_multiples_of_the_period(robot):
     pan = api.robot_get_device(HEAD_PAN)
     api.servo_enable_position(pan, 64)

@@ -544,6 +544,11 @@ void servo_set_velocity(DeviceTag s, double v) { send_tag_double(AIBO_OP_servo_s
 void servo_set_acceleration(DeviceTag s, double v) { send_tag_double(AIBO_OP_servo_set_acceleration, s, v); }
 void servo_set_motor_force(DeviceTag s, double v) { send_tag_double(AIBO_OP_servo_set_motor_force, s, v); }
 void servo_set_control_p(DeviceTag s, double v) { send_tag_double(AIBO_OP_servo_set_control_p, s, v); }
+void servo_enable_motor_force_feedback(DeviceTag s, unsigned short ms) {
+    send_tag_int(AIBO_OP_servo_enable_motor_force_feedback, s, ms);
+}
+void servo_disable_motor_force_feedback(DeviceTag s) { send_tag(AIBO_OP_servo_disable_motor_force_feedback, s); }
+double servo_get_motor_force_feedback(DeviceTag s) { return get_tag_double(AIBO_OP_servo_get_motor_force_feedback, s); }
 
 /* ---- camera */
 

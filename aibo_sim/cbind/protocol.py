@@ -29,6 +29,9 @@ OPS = (
     ("servo_set_acceleration", "id", ""),
     ("servo_set_motor_force", "id", ""),
     ("servo_set_control_p", "id", ""),
+    ("servo_enable_motor_force_feedback", "ii", ""),
+    ("servo_disable_motor_force_feedback", "i", ""),
+    ("servo_get_motor_force_feedback", "i", "d"),
     ("camera_enable", "ii", ""),
     ("camera_disable", "i", ""),
     ("camera_get_image", "i", "m"),
@@ -67,6 +70,7 @@ OPS = (
 PREFETCHED = (
     "robot_get_time",
     "servo_get_position",
+    "servo_get_motor_force_feedback",
     "camera_get_width",
     "camera_get_height",
     "camera_get_fov",

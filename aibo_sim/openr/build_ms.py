@@ -174,6 +174,8 @@ def device_table() -> str:
             f"const word PSHIFT = {STANDARD_SHIFTS[0]:#04x}, ISHIFT = {STANDARD_SHIFTS[1]:#04x}, "
             f"DSHIFT = {STANDARD_SHIFTS[2]:#04x};",
             f"const double KP_PER_SONY_P = {KP_PER_SONY_P!r};  /* N m/rad per unit of the P register */",
+            f"const double MAX_TORQUE = {ers7.MAX_TORQUE!r};  /* N m: a joint's torque at PWM_DUTY_FULL_SCALE */",
+            f"const int PWM_DUTY_FULL_SCALE = {ers7.PWM_DUTY_FULL_SCALE};",
             "",
             "/* Sensors: locator, kind, touch threshold (AD units, for the pressure sensors). */",
             "struct Sensor { const char* locator; const char* kind; double touchThreshold; };",

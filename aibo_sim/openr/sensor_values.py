@@ -6,7 +6,8 @@ Rows follow ``SensorFrame.entries``: the joints (angle, -, duty, command), the d
 (mm, signal), the accelerometer's three axes (one primitive each; ``ers7.OPENR_ACCELERATION_SIGNS``),
 the touch sensors and switches,
 the wireless LAN switch. Values are rounded to OPEN-R's integer units once: micro-radians,
-micrometres, micrometres per second squared; the duty in 1/255 of the motor's force.
+micrometres, micrometres per second squared; the duty in ``ers7.PWM_DUTY_FULL_SCALE``ths of the
+motor's full force.
 
 The distances and accelerations are ``Simulation.distances_mm`` and ``Simulation.acceleration``
 computed here, operation for operation in the same order and in doubles (numba, like Python,
@@ -16,6 +17,7 @@ neither reorders nor fuses them), from the same noise draws: the same values to 
 
 import numpy as np
 
+from ..ers7 import PWM_DUTY_FULL_SCALE
 from ..jit import compiled
 
 
@@ -52,7 +54,7 @@ def fill(
     for k in range(n):
         duty = actuator_force[force_index[k]] / max_force[k]
         raw[k, 0] = qpos[qpos_adr[k]] * 1e6
-        raw[k, 2] = min(max(duty, -1.0), 1.0) * 255
+        raw[k, 2] = min(max(duty, -1.0), 1.0) * PWM_DUTY_FULL_SCALE
         raw[k, 3] = command[joints[k]] * 1e6
     row = n
     for k in range(distance_adr.shape[0]):

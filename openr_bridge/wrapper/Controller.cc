@@ -315,9 +315,16 @@ void Controller::NotifySensor(const ONotifyEvent& event) {
                 next.tick = snapshots_.empty() ? nextTick_ : snapshots_.back().tick + 1;
                 next.values = snapshots_.empty() ? std::vector<slongword>(robot_.NumSlots(), 0)
                                                  : snapshots_.back().values;
+                next.duties = snapshots_.empty() ? std::vector<sword>(robot_.NumSlots(), 0)
+                                                 : snapshots_.back().duties;
                 snapshots_.push_back(next);
             }
-            snapshots_[tick - snapshots_.front().tick].values[slot->second] = data->frame[f].value;
+            wrapper::Snapshot& snapshot = snapshots_[tick - snapshots_.front().tick];
+            snapshot.values[slot->second] = data->frame[f].value;
+            if (info->type == odataJOINT_VALUE) {  /* a joint's frames are OJointValues, as Sony's samples read them */
+                const OJointValue* joint = (const OJointValue*)data->frame;
+                snapshot.duties[slot->second] = joint[f].pwmDuty;
+            }
             if (tick > newestTick_) newestTick_ = tick;
         }
     }

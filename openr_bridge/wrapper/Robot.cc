@@ -16,9 +16,11 @@ namespace wrapper {
 namespace {
 
 const double DT = FRAME_MS / 1000.0;
-const char* const KIND_NAMES[] = {"servo", "camera", "distance_sensor", "touch_sensor", "accelerometer", "led"};
+const char* const KIND_NAMES[] = {"servo",         "camera", "distance_sensor",     "touch_sensor",
+                                  "accelerometer", "led",    "motor force feedback"};
 const char* const ENABLE_CALLS[] = {"servo_enable_position", "camera_enable", "distance_sensor_enable",
-                                    "touch_sensor_enable", "accelerometer_enable", "led_enable"};
+                                    "touch_sensor_enable", "accelerometer_enable", "led_enable",
+                                    "servo_enable_motor_force_feedback"};
 const char DATA_FOLDER[] = "/MS/OPEN-R/MW/DATA/P/";
 
 template <class T, size_t N> size_t Count(const T (&)[N]) { return N; }
@@ -105,6 +107,11 @@ Robot::Robot() : numSlots_(0), tick_(0) {
             }
         }
     }
+    forceFeedback_ = devices_.size();  /* after the named devices: reached through a servo's tag */
+    for (size_t j = 0; j < Count(ers7::JOINTS); j++) {
+        Device device = {ers7::JOINTS[j].locator, FORCE_FEEDBACK, (int)j, 0, 0, false, {0, 0, 0}, {0, 0}, false, 0};
+        devices_.push_back(device);
+    }
     switch_.assign(numSlots_, false);
     const size_t joints = Count(ers7::JOINTS);
     velocity_ = maxVelocity_;
@@ -166,6 +173,9 @@ void Robot::TakeSample(Device& device, const Snapshot& frame, const Image* newes
     switch (device.kind) {
     case SERVO:
         device.value[0] = IsJoint4(device.locator) ? command_[device.index] : v[device.index] / 1e6;
+        break;
+    case FORCE_FEEDBACK:
+        device.value[0] = frame.duties[device.index] * ers7::MAX_TORQUE / ers7::PWM_DUTY_FULL_SCALE;
         break;
     case DISTANCE:
         device.value[0] = v[device.index] / 1000.0;  /* micrometres to millimetres */
@@ -308,8 +318,9 @@ std::string Robot::DeviceLocator(int tag, Kind kind) { return Tagged(tag, kind).
 
 int Robot::JointOf(int tag, Kind kind) { return Tagged(tag, kind).index; }
 
-void Robot::Enable(int tag, Kind kind, int ms) {
-    Device& device = Tagged(tag, kind);
+void Robot::Enable(int tag, Kind kind, int ms) { EnableDevice(Tagged(tag, kind), ms); }
+
+void Robot::EnableDevice(Device& device, int ms) {
     if (ms <= 0) Fail("%s: sampling period must be a positive whole number of ms, not %d", device.locator.c_str(), ms);
     if (device.kind == CAMERA && device.hasValue) device.image.region->RemoveReference();
     device.period = ms;
@@ -317,17 +328,20 @@ void Robot::Enable(int tag, Kind kind, int ms) {
     device.nextSampleMs = TimeMs() + ms;
 }
 
-void Robot::Disable(int tag, Kind kind) {
-    Device& device = Tagged(tag, kind);
+void Robot::Disable(int tag, Kind kind) { DisableDevice(Tagged(tag, kind)); }
+
+void Robot::DisableDevice(Device& device) {
     if (device.kind == CAMERA && device.hasValue) device.image.region->RemoveReference();
     device.period = 0;
     device.hasValue = false;
 }
 
-double Robot::Value(int tag, Kind kind, int axis) {
-    Device& device = Tagged(tag, kind);
+double Robot::Value(int tag, Kind kind, int axis) { return DeviceValue(Tagged(tag, kind), axis); }
+
+double Robot::DeviceValue(Device& device, int axis) {
     if (device.period == 0) {
-        Fail("%s: %s is not enabled (call %s first)", device.locator.c_str(), KIND_NAMES[kind], ENABLE_CALLS[kind]);
+        Fail("%s: %s is not enabled (call %s first)", device.locator.c_str(), KIND_NAMES[device.kind],
+             ENABLE_CALLS[device.kind]);
     }
     if (!device.hasValue) {
         Fail("%s: no sample yet: enabled with a %d ms period, first value at t = %ld ms (now %ld ms)",

@@ -37,6 +37,7 @@ void Fail(const char* format, ...) __attribute__((format(printf, 1, 2), noreturn
 struct Snapshot {
     long tick;
     std::vector<slongword> values;
+    std::vector<sword> duties;  /* each joint slot's PWM duty (ers7::PWM_DUTY_FULL_SCALE: MAX_TORQUE) */
 };
 
 /* An image received, with the frame it was taken at. */
@@ -56,7 +57,7 @@ struct FrameCommand {
 
 class Robot {
 public:
-    enum Kind { SERVO, CAMERA, DISTANCE, TOUCH, ACCELEROMETER, LED };
+    enum Kind { SERVO, CAMERA, DISTANCE, TOUCH, ACCELEROMETER, LED, FORCE_FEEDBACK };
 
     Robot();
 
@@ -85,6 +86,10 @@ public:
     void Enable(int tag, Kind kind, int ms);
     void Disable(int tag, Kind kind);
     double Value(int tag, Kind kind, int axis);
+    /* A servo's motor force feedback, sampled on a period of its own (a device without a name). */
+    void EnableForceFeedback(int tag, int ms) { EnableDevice(ForceFeedbackOf(tag), ms); }
+    void DisableForceFeedback(int tag) { DisableDevice(ForceFeedbackOf(tag)); }
+    double ForceFeedback(int tag) { return DeviceValue(ForceFeedbackOf(tag), 0); }
     void SetPosition(int tag, double radians);
     void SetVelocity(int tag, double value);
     void SetAcceleration(int tag, double value);
@@ -119,6 +124,10 @@ private:
     };
 
     Device& Tagged(int tag, Kind kind);
+    Device& ForceFeedbackOf(int tag) { return devices_[forceFeedback_ + Tagged(tag, SERVO).index]; }
+    void EnableDevice(Device& device, int ms);
+    void DisableDevice(Device& device);
+    double DeviceValue(Device& device, int axis);
     void TakeSample(Device& device, const Snapshot& frame, const Image* newest);
     void SetTarget(int joint, double position);
     void Advance();
@@ -129,6 +138,7 @@ private:
     std::vector<int> tags_;              /* tag k + 1's device */
     std::vector<std::string> locators_;
     int numSlots_;
+    size_t forceFeedback_;  /* the first joint's force feedback device in devices_ */
     std::vector<bool> switch_;
     long tick_;
 

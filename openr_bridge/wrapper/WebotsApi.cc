@@ -80,6 +80,10 @@ void servo_set_position(DeviceTag servo, double radians) { Api().SetPosition(ser
 void servo_set_velocity(DeviceTag servo, double rad_per_s) { Api().SetVelocity(servo, rad_per_s); }
 void servo_set_acceleration(DeviceTag servo, double rad_per_s2) { Api().SetAcceleration(servo, rad_per_s2); }
 void servo_set_control_p(DeviceTag servo, double p) { Controller::Instance().SetControlP(servo, p); }
+void servo_enable_motor_force_feedback(DeviceTag servo, unsigned short ms) { Api().EnableForceFeedback(servo, ms); }
+void servo_disable_motor_force_feedback(DeviceTag servo) { Api().DisableForceFeedback(servo); }
+/* The torque from the joint's PWM duty (the robot reports no torque; the duty is its share of it). */
+double servo_get_motor_force_feedback(DeviceTag servo) { return Api().ForceFeedback(servo); }
 
 /* The robot's servos have no torque limit to set: the call is checked, and said once. */
 void servo_set_motor_force(DeviceTag servo, double newton_metres) {

@@ -47,6 +47,7 @@ static void reset(void) {
     put_int("robot_keyboard_get_key", "0", robot_keyboard_get_key());
     robot_keyboard_disable();
     servo_enable_position(pan, 32);
+    servo_enable_motor_force_feedback(pan, 32);
     camera_enable(camera, 32);
     distance_sensor_enable(ir, 32);
     touch_sensor_enable(paw, 32);
@@ -76,6 +77,7 @@ static void reset(void) {
 static void sample(void) {
     put_double("robot_get_time", 0, robot_get_time());
     put_double("servo_get_position", pan, servo_get_position(pan));
+    put_double("servo_get_motor_force_feedback", pan, servo_get_motor_force_feedback(pan));
     put_double("distance_sensor_get_value", ir, distance_sensor_get_value(ir));
     put_double("touch_sensor_get_value", paw, touch_sensor_get_value(paw));
     const float *a = accelerometer_get_values(acc);
@@ -111,11 +113,13 @@ int main() {
         sample();
         if (k == 1) {
             servo_disable_position(pan);
+            servo_disable_motor_force_feedback(pan);
             camera_disable(camera);
             distance_sensor_disable(ir);
             touch_sensor_disable(paw);
             accelerometer_disable(acc);
             servo_enable_position(pan, 32);
+            servo_enable_motor_force_feedback(pan, 32);
             camera_enable(camera, 32);
             distance_sensor_enable(ir, 32);
             touch_sensor_enable(paw, 32);

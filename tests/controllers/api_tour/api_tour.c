@@ -26,6 +26,7 @@ static void reset(void) {
     fprintf(out, "mode %d key %d\n", robot_get_mode(), robot_keyboard_get_key());
     robot_keyboard_disable();
     servo_enable_position(pan, 32);
+    servo_enable_motor_force_feedback(pan, 64);
     camera_enable(camera, 32);
     distance_sensor_enable(near_ir, 32);
     touch_sensor_enable(paw, 32);
@@ -61,8 +62,9 @@ static int run(int ms) {
     long sum = 0;
     for (int k = 0; k < w * h * 3; k++) sum += image[k];
     const float *a = accelerometer_get_values(accelerometer);
-    fprintf(out, "t %.3f ms %d pan %.9f ir %.6f paw %.1f acc %.3f %.3f %.3f image %dx%d fov %.6f sum %ld rgb %d %d %d grey %d mtn %d %d\n",
-            robot_get_time(), ms, servo_get_position(pan), distance_sensor_get_value(near_ir),
+    fprintf(out, "t %.3f ms %d pan %.9f torque %.9f ir %.6f paw %.1f acc %.3f %.3f %.3f image %dx%d fov %.6f sum %ld rgb %d %d %d grey %d mtn %d %d\n",
+            robot_get_time(), ms, servo_get_position(pan), servo_get_motor_force_feedback(pan),
+            distance_sensor_get_value(near_ir),
             touch_sensor_get_value(paw), accelerometer_value_x(a), accelerometer_value_y(a), accelerometer_value_z(a),
             w, h, camera_get_fov(camera), sum, camera_image_get_red(image, w, 10, 20),
             camera_image_get_green(image, w, 10, 20), camera_image_get_blue(image, w, 10, 20),
@@ -70,11 +72,13 @@ static int run(int ms) {
     robot_console_printf("step %d\n", ++calls);
     if (calls == 3) {
         servo_disable_position(pan);
+        servo_disable_motor_force_feedback(pan);
         camera_disable(camera);
         distance_sensor_disable(near_ir);
         touch_sensor_disable(paw);
         accelerometer_disable(accelerometer);
         servo_enable_position(pan, 32);
+        servo_enable_motor_force_feedback(pan, 32);
         camera_enable(camera, 32);
         distance_sensor_enable(near_ir, 32);
         touch_sensor_enable(paw, 32);

@@ -22,6 +22,7 @@ def reset():
     out.write(f"mode {robot_get_mode()} key {robot_keyboard_get_key()}\n")
     robot_keyboard_disable()
     servo_enable_position(pan, 32)
+    servo_enable_motor_force_feedback(pan, 64)
     camera_enable(camera, 32)
     distance_sensor_enable(near_ir, 32)
     touch_sensor_enable(paw, 32)
@@ -58,6 +59,7 @@ def run(ms):
     a = [float(np.float32(v)) for v in accelerometer_get_values(accelerometer)]  # C: const float *
     out.write(
         f"t {robot_get_time():.3f} ms {ms} pan {servo_get_position(pan):.9f} "
+        f"torque {servo_get_motor_force_feedback(pan):.9f} "
         f"ir {distance_sensor_get_value(near_ir):.6f} paw {touch_sensor_get_value(paw):.1f} "
         f"acc {accelerometer_value_x(a):.3f} {accelerometer_value_y(a):.3f} {accelerometer_value_z(a):.3f} "
         f"image {w}x{h} fov {float(np.float32(camera_get_fov(camera))):.6f} sum {int(image.astype(int).sum())} "
@@ -69,11 +71,13 @@ def run(ms):
     robot_console_printf("step %d\n", calls)
     if calls == 3:
         servo_disable_position(pan)
+        servo_disable_motor_force_feedback(pan)
         camera_disable(camera)
         distance_sensor_disable(near_ir)
         touch_sensor_disable(paw)
         accelerometer_disable(accelerometer)
         servo_enable_position(pan, 32)
+        servo_enable_motor_force_feedback(pan, 32)
         camera_enable(camera, 32)
         distance_sensor_enable(near_ir, 32)
         touch_sensor_enable(paw, 32)
