@@ -59,6 +59,7 @@ from .robot import (
     short_repr,
     whole_ms,
 )
+from .sim import FRAME_MS
 
 
 class _Installed:
@@ -236,6 +237,19 @@ def robot_get_mode() -> int:
     answers, on the robot and on aibo-sim's OPEN-R runtime alike."""
     current_robot()
     return 0
+
+
+def robot_get_basic_time_step() -> float:
+    """The simulation's step in ms, of which every ``robot_step`` is a whole number: the 8 ms joint frame."""
+    current_robot()
+    return float(FRAME_MS)
+
+
+def robot_get_synchronization() -> int:
+    """1: the simulation waits for the controller at every step (Webots' synchronized mode); a
+    memory stick's build answers 0, as the robot, whose time goes on, does."""
+    current_robot()
+    return 1
 
 
 def robot_keyboard_enable(ms: int) -> None:

@@ -109,7 +109,7 @@ def test_each_c_call_returns_what_the_python_api_returned_in_the_same_run(tmp_pa
             assert value == _as_received(name, result), line
         if name == "robot_step":
             now += int(argument)
-    assert len(lines) == 68 and len(images) == 4
+    assert len(lines) == 70 and len(images) == 4
     assert (tmp_path / "images.bin").read_bytes() == b"".join(i.tobytes() for i in images)
     assert (tmp_path / "fprint.txt").read_text() == returned[0, "mtn_fprint", "mtn"]
     pixel = (

@@ -512,6 +512,18 @@ int robot_get_mode(void) {
     return get_int();
 }
 
+double robot_get_basic_time_step(void) {
+    begin(AIBO_OP_robot_get_basic_time_step);
+    call();
+    return get_double();
+}
+
+int robot_get_synchronization(void) {
+    begin(AIBO_OP_robot_get_synchronization);
+    call();
+    return get_int();
+}
+
 void robot_keyboard_enable(unsigned short ms) { send_tag(AIBO_OP_robot_keyboard_enable, ms); }
 
 void robot_keyboard_disable(void) {

@@ -18,6 +18,8 @@ OPS = (
     ("robot_get_time", "", "d"),
     ("robot_get_name", "", "s"),
     ("robot_get_mode", "", "i"),
+    ("robot_get_basic_time_step", "", "d"),
+    ("robot_get_synchronization", "", "i"),
     ("robot_keyboard_enable", "i", ""),
     ("robot_keyboard_disable", "", ""),
     ("robot_keyboard_get_key", "", "i"),

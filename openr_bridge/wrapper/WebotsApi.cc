@@ -54,6 +54,10 @@ const char* robot_get_name(void) {
 
 int robot_get_mode(void) { return 1; }  /* Webots 5: cross-compiled, on the robot */
 
+double robot_get_basic_time_step(void) { return wrapper::FRAME_MS; }
+
+int robot_get_synchronization(void) { return 0; }  /* the robot's time goes on while the controller computes */
+
 void robot_keyboard_enable(unsigned short ms) {
     if (ms == 0) wrapper::Fail("robot_keyboard_enable: sampling period must be a positive whole number of ms, not 0");
 }

@@ -44,6 +44,8 @@ static void reset(void) {
     put_text("robot_get_name", "0", robot_get_name());
     robot_keyboard_enable(64);
     put_int("robot_get_mode", "0", robot_get_mode());
+    put_double("robot_get_basic_time_step", 0, robot_get_basic_time_step());
+    put_int("robot_get_synchronization", "0", robot_get_synchronization());
     put_int("robot_keyboard_get_key", "0", robot_keyboard_get_key());
     robot_keyboard_disable();
     servo_enable_position(pan, 32);

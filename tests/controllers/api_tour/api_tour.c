@@ -23,7 +23,8 @@ static void reset(void) {
     led = robot_get_device("PRM:/r1/c1/c2/c3/l1-LED2:l1");
     fprintf(out, "name %s tags %d %d %d %d %d %d\n", robot_get_name(), pan, camera, near_ir, paw, accelerometer, led);
     robot_keyboard_enable(64);
-    fprintf(out, "mode %d key %d\n", robot_get_mode(), robot_keyboard_get_key());
+    fprintf(out, "mode %d key %d step %g synchronized %d\n", robot_get_mode(), robot_keyboard_get_key(),
+            robot_get_basic_time_step(), robot_get_synchronization());
     robot_keyboard_disable();
     servo_enable_position(pan, 32);
     servo_enable_motor_force_feedback(pan, 64);

@@ -19,7 +19,10 @@ def reset():
     led = robot_get_device("PRM:/r1/c1/c2/c3/l1-LED2:l1")
     out.write(f"name {robot_get_name()} tags {pan} {camera} {near_ir} {paw} {accelerometer} {led}\n")
     robot_keyboard_enable(64)
-    out.write(f"mode {robot_get_mode()} key {robot_keyboard_get_key()}\n")
+    out.write(
+        f"mode {robot_get_mode()} key {robot_keyboard_get_key()} step {robot_get_basic_time_step():g} "
+        f"synchronized {robot_get_synchronization()}\n"
+    )
     robot_keyboard_disable()
     servo_enable_position(pan, 32)
     servo_enable_motor_force_feedback(pan, 64)

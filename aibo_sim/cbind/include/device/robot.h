@@ -32,6 +32,10 @@ void robot_console_printf(const char *format, ...);
 /* 0: in the simulator (aibo-sim run); 1: cross-compiled on the robot (a build-ms memory stick,
  * on the robot or on aibo-sim's OPEN-R runtime). */
 int robot_get_mode(void);
+/* The simulation's step, of which every robot_step is a whole number: the 8 ms joint frame. */
+double robot_get_basic_time_step(void);
+/* 1: the simulation waits for the controller at each step; 0 on the robot (a build-ms memory stick). */
+int robot_get_synchronization(void);
 /* The keyboard: runs are headless and a robot has none, so robot_keyboard_get_key() is 0 (no key). */
 void robot_keyboard_enable(unsigned short ms);
 void robot_keyboard_disable(void);
