@@ -370,6 +370,36 @@ def test_full_disk_leaves_only_complete_frames_and_resumes(tmp_path, monkeypatch
     assert len(load_dump(out)) == 6
 
 
+def test_a_shards_drawn_ball_lies_ahead_of_the_pose_and_is_checked_before_anything_is_written(tmp_path):
+    """The balls were drawn ahead of the default start whatever --pose, and checked only by the
+    shard: one on the robot failed the dump after its folders were made, at every --resume."""
+    from aibo_sim.config import ParameterError
+    from aibo_sim.dump.shards import SHARD_BALL_X, SHARD_BALL_Y, shard_balls
+
+    pose = (0.880639462230231, 0.3904636963259353, 90.0)
+    balls = shard_balls(WorldConfig(pose=pose), 2)
+    for bx, by in balls:  # ahead of the robot facing +y: x within SHARD_BALL_Y of it, y SHARD_BALL_X beyond
+        assert SHARD_BALL_Y[0] <= bx - pose[0] <= SHARD_BALL_Y[1] and SHARD_BALL_X[0] <= by - pose[1] <= SHARD_BALL_X[1]
+    assert shard_balls(WorldConfig(), 2) == [  # without a pose: the draws of before, unchanged
+        [float(r.uniform(*SHARD_BALL_X)), float(r.uniform(*SHARD_BALL_Y))]
+        for r in (np.random.default_rng(0), np.random.default_rng(1))
+    ]
+    out = tmp_path / "out"
+    with pytest.raises(ParameterError, match=r"^shard_0: none of 20 balls drawn from its seed 0 ahead of the robot "):
+        dump(out, controller=TRACKER, frames=2, workers=2, world=WorldConfig(pose=(2.75, 0.0, 0.0)))
+    assert not out.exists()
+
+
+def test_a_dump_without_frames_has_no_video(tmp_path):
+    """OpenCV's writer left a container without a stream, which players (and OpenCV) refuse."""
+    quits = tmp_path / "quits.py"
+    quits.write_text("from aibo_sim.controller import *\n\nrobot_get_time()\n")
+    out = tmp_path / "out"
+    assert dump(out, controller=quits, frames=30, formats=("rgb", "mp4")).frames == 0
+    assert not (out / "video.mp4").exists() and not list(out.glob(".tmp.*")) and (out / "meta.json").is_file()
+    assert load_dump(out).videos == []
+
+
 @pytest.mark.slow
 def test_workers_write_shards_with_their_own_seeds(tmp_path):
     out = tmp_path / "sharded"

@@ -30,7 +30,7 @@ from ..robot import BACKENDS, SimulationEnd, check_memory_stick
 from ..runner import MEMORY_STICK, Progress, check_python_controller, refuse_controller_options, run_controller
 from ..sim import ModelError, ball_joint, is_seed, load_model
 from .formats import DEFAULT_FORMATS, FORMATS, DumpError, is_match, robots_meta
-from .shards import dump_sharded, ray_session
+from .shards import dump_sharded, ray_session, shard_balls
 from .writing import CONTROLLER_FILES, DumpSummary, DumpWriter
 
 POLICIES = ("random", "scripted", "zero")
@@ -479,7 +479,9 @@ def dump(
     parameters = recorded_parameters(world_parameters(frames, world, camera, formats, model), run)
     if workers == 1:
         return dump_one(parameters, out, resume)
+    drawn = controller is not None and ball is None and placeable_ball  # each shard's ball drawn, checked now
+    balls = shard_balls(world, workers) if drawn else [parameters["ball"]] * workers
     if engine == "local":
-        return dump_sharded(dump_one, parameters, out, resume, workers, engine, placeable_ball)
+        return dump_sharded(dump_one, parameters, out, resume, workers, engine, balls)
     with ray_session(ray_address):  # before the folder is touched: a Ray that cannot start changes nothing
-        return dump_sharded(dump_one, parameters, out, resume, workers, engine, placeable_ball)
+        return dump_sharded(dump_one, parameters, out, resume, workers, engine, balls)

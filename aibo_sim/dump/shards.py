@@ -5,6 +5,7 @@ dumped by the function ``dump_sharded`` is given (``running.dump_one``)."""
 from __future__ import annotations
 
 import contextlib
+import math
 import os
 import signal
 import socket
@@ -21,8 +22,11 @@ import numpy as np
 from openr_bridge import FRAME_RATE_HZ
 
 from ..cbind.child import die_with_parent_thread
+from ..config import CameraConfig, ParameterError, WorldConfig
 from ..files import command_line, open_file
+from ..placement import place
 from ..runner import Progress
+from ..sim import Simulation
 from .coco import coco_bytes
 from .formats import DUMP_FORMAT, PATHS, DumpError
 from .reading import LINES
@@ -34,6 +38,7 @@ RAY_MAX_RETRIES = 3  # a shard whose Ray worker is lost runs again (resuming its
 RAY_CONNECT_S = 5.0  # an --ray-address that does not answer in this is refused (ray.init would wait minutes)
 PROGRESS_POLL_S = 0.5  # a sharded dump counts its shards' frames this often
 SHARD_BALL_X, SHARD_BALL_Y = (0.3, 1.2), (-0.5, 0.5)  # metres: ahead of the robot's start
+SHARD_BALL_DRAWS = 20  # draws of a shard's ball, each checked: one the scene cannot place is drawn again
 PARENT_POLL_S = 0.5  # a worker's check that its parent still lives (where PR_SET_PDEATHSIG is missing)
 SHARD_LOCK_WAIT_S = 5.0  # a shard's lock may still be held by a worker of a killed dump, dying
 WORKER_STOP_S = 5.0  # SIGTERM, then SIGKILL after this
@@ -311,11 +316,48 @@ def _run_ray_shards(
             _remove_temporary_files(shards)
 
 
+def shard_balls(world: WorldConfig, workers: int) -> list[list[float]]:
+    """Each shard's ball, for a controller dump without one (``world.ball`` None) in a scene whose
+    ball can be placed: drawn from the shard's seed (shard k: ``world.seed + k``) in
+    ``SHARD_BALL_X/Y`` ahead of the robot (of ``world.pose``; without one, of the origin, the
+    default field's start), again where it cannot be placed there (a wall, the robot, off the
+    field), checked before the dump writes anything. A ParameterError naming the shard where none
+    of ``SHARD_BALL_DRAWS`` draws can be placed."""
+    x, y, yaw = world.pose or (0.0, 0.0, 0.0)
+    cos, sin = math.cos(math.radians(yaw)), math.sin(math.radians(yaw))
+    sim = Simulation(world.scene, camera=CameraConfig("ideal"), ball_type=world.ball_type)
+    try:
+        balls = []
+        for k in range(workers):
+            rng = np.random.default_rng(world.seed + k)
+            for _ in range(SHARD_BALL_DRAWS):
+                ahead, side = float(rng.uniform(*SHARD_BALL_X)), float(rng.uniform(*SHARD_BALL_Y))
+                ball = (
+                    [ahead, side]
+                    if world.pose is None
+                    else [x + ahead * cos - side * sin, y + ahead * sin + side * cos]
+                )
+                try:
+                    place(sim, world.pose, ball)
+                    break
+                except ParameterError:
+                    continue
+            else:
+                raise ParameterError(
+                    f"shard_{k}: none of {SHARD_BALL_DRAWS} balls drawn from its seed {world.seed + k} ahead of the "
+                    "robot can be placed in the scene: give --ball"
+                )
+            balls.append(ball)
+        return balls
+    finally:
+        sim.close()
+
+
 def dump_sharded(
-    dump_shard: DumpShard, parameters: dict, out: Path, resume: bool, workers: int, engine: str, placeable_ball: bool
+    dump_shard: DumpShard, parameters: dict, out: Path, resume: bool, workers: int, engine: str, balls: list
 ) -> DumpSummary:
-    """The dump as ``workers`` shards, each dumped by ``dump_shard``; in a controller dump without
-    a ball position, each shard's ball is drawn from its seed where the scene's ball can be placed."""
+    """The dump as ``workers`` shards, each dumped by ``dump_shard``, shard k with ``balls[k]``
+    (``shard_balls``, or the dump's ball)."""
     start = time.perf_counter()
     meta = {
         "format": DUMP_FORMAT,
@@ -327,12 +369,8 @@ def dump_sharded(
         shards = []
         for k in range(workers):
             seed = parameters["seed"] + k
-            ball = parameters["ball"]
-            if parameters["controller"] and ball is None and placeable_ball:
-                rng = np.random.default_rng(seed)
-                ball = [float(rng.uniform(*SHARD_BALL_X)), float(rng.uniform(*SHARD_BALL_Y))]
             frames = parameters["frames"] // workers + (k < parameters["frames"] % workers)
-            shard = {**parameters, "seed": seed, "ball": ball, "frames": frames, "progress": False}
+            shard = {**parameters, "seed": seed, "ball": balls[k], "frames": frames, "progress": False}
             shards.append((shard, out / f"shard_{k}"))
             check_destination(out / f"shard_{k}", shard_of=out)
         progress = _ShardProgress([folder for _, folder in shards], parameters["frames"])

@@ -306,6 +306,7 @@ class DumpWriter:
         self._lock, self.complete, self.missing = prepared.lock, prepared.complete, prepared.missing
         self.new_frames = self.repaired_frames = self.bytes_written = 0
         self._lines = self._video = self._video_path = None
+        self._video_frames = 0
         try:
             self._classes = geom_classes(model) if "seg" in self.formats else None
             self._instances = geom_robots(model) if "robots" in self.formats else None  # formats.robot_labels
@@ -349,6 +350,7 @@ class DumpWriter:
         rgb = sim.camera.frame().rgb
         if self._video is not None:
             self._video.write(np.ascontiguousarray(rgb[..., ::-1]))
+            self._video_frames += 1
         if index in self.complete and index not in self.missing:
             return
         # The frame's geom ids, rendered once for the seg and robots files and for coco's goals and beacons.
@@ -412,10 +414,13 @@ class DumpWriter:
             self.abort()
 
     def finish(self) -> None:
-        """Close the files; the video takes its final name only now, coco.json is written now."""
+        """Close the files; the video takes its final name only now (none without a frame: a
+        container without a stream, which players refuse), coco.json is written now."""
         try:
             self._close()
-            if self._video_path is not None:
+            if self._video_path is not None and not self._video_frames:
+                remove_in(self.out, [self._video_path.name])
+            elif self._video_path is not None:
                 final = self.out / VIDEO
                 try:
                     mp4_faststart(self._video_path)  # its index ahead of the frames (or left as written)
