@@ -138,10 +138,11 @@ def _render(args) -> int:
     out = Path(args.out)
     sim = _settled_simulation(args, args.camera_profile)
     try:
-        images = {"head_camera.png": sim.camera.frame().rgb}
+        camera_frame = sim.camera.frame()
+        images = {"head_camera.png": camera_frame.rgb}
         # The picture's camera as run.json and a dump's meta.json record it (profile, lens, settings)
         # and its frame as frames.jsonl does (camera pose, joints, the ball's pixel).
-        description = {"camera": sim.camera.describe(), "frame": frame_metadata(sim, 0)}
+        description = {"camera": sim.camera.describe(), "frame": frame_metadata(sim, camera_frame.index)}
         third = Renderer(sim.model, 640, 480, quality="high")
         try:
             images["tracking.png"] = third.render(sim.camera.exposure_data(), "tracking")  # the same instant
@@ -178,7 +179,7 @@ def _settled_simulation(args, profile: str):
         raise ValueError(f"--keyframe {args.keyframe!r}: {exc.args[0] if exc.args else exc}") from None
     try:
         place(sim, world.pose, world.ball)
-        frames = round(args.settle * 1000 / FRAME_MS)
+        frames = int(args.settle * 1000 / FRAME_MS + 0.5)  # half a frame up: 0.5 s is 63 frames, its 30 fps frame 15
         if frames:
             sim.step_frames(frames)
     except BaseException:

@@ -100,6 +100,11 @@ def models_dir() -> Path:
     raise ModelError(f"bundled models not found next to {here}")
 
 
+def default_scene() -> Path:
+    """The bundled RoboCup field, ``models/scene.xml``: the scene where none is given."""
+    return models_dir() / "scene.xml"
+
+
 def load_model(
     scene: str | Path | None = None, ball: bool = True, ball_type: str = DEFAULT_BALL_TYPE, robots=None
 ) -> mujoco.MjModel:
@@ -112,7 +117,7 @@ def load_model(
     match = robots is not None and (len(robots) > 1 or any(robot.team is not None for robot in robots))
     if ball_type not in BALL_TYPES:
         raise ValueError(f"--ball-type must be one of {', '.join(BALL_TYPES)}, not {ball_type!r}")
-    path = Path(scene) if scene is not None else models_dir() / "scene.xml"
+    path = Path(scene) if scene is not None else default_scene()
     try:
         if not path.is_file():
             raise ModelError(f"{path}: " + ("not a regular file" if path.exists() else "no such model file"))
@@ -373,7 +378,7 @@ class World:
         self.scene = scene  # as given: None for the RoboCup field
         self.robot_specs = tuple(robots)
         self.model = load_model(scene, ball, ball_type, self.robot_specs)
-        check_robot(self.model, scene if scene is not None else models_dir() / "scene.xml", keyframe)
+        check_robot(self.model, scene if scene is not None else default_scene(), keyframe)
         self.data = mujoco.MjData(self.model)
         self.keyframe = keyframe
         self.steps_per_frame = round(FRAME_MS / 1000 / self.model.opt.timestep)

@@ -388,6 +388,9 @@ PLACED = [
 
 @pytest.mark.parametrize("command", PLACED + [["mtn", "play", "STAND.MTN"]])
 @pytest.mark.parametrize(
+    "scene", [[], ["--scene", str(Path(__file__).parents[1] / "models" / "scene.xml")]], ids=["", "field named"]
+)
+@pytest.mark.parametrize(
     "placement, message",
     [
         (["--pose", "3", "0", "0"], r"--pose 3 0 0: the robot would overlap wall_skyblue by \d+\.\d cm"),
@@ -396,11 +399,14 @@ PLACED = [
         (["--ball", "0", "2.5"], r"--ball 0 2.5: off the carpet \(\|y\| <= 2 m\) of the default field"),
     ],
 )
-def test_a_robot_or_ball_placed_into_something_exits_2_naming_the_option(tmp_path, command, placement, message, capsys):
+def test_a_robot_or_ball_placed_into_something_exits_2_naming_the_option(
+    tmp_path, command, scene, placement, message, capsys
+):
     """Placed into a wall or into each other, the robot and ball would be flung apart at the
-    first step: one line naming the option, exit 2, no output folder."""
+    first step: one line naming the option, exit 2, no output folder. The field named with
+    --scene is the default field (off its carpet went unchecked then)."""
     out = ["--out", str(tmp_path / "out")] if command[0] in ("render", "dump") else []
-    assert main(command + out + placement) == 2
+    assert main(command + out + scene + placement) == 2
     assert re.fullmatch(rf"aibo-sim: error: {message}\n", capsys.readouterr().err)
     assert not (tmp_path / "out").exists()
 

@@ -400,6 +400,22 @@ def test_a_dumps_and_a_renders_records_read_back_as_configs(tmp_path):
     assert CameraConfig.from_dict(recorded["camera"]) == CameraConfig("ideal", True, camera.settings)
 
 
+def test_render_shows_the_camera_frame_at_settle_as_a_dump_lists_it(tmp_path):
+    """--settle 0.5 (62.5 joint frames) rounded half to even to 0.496 s, an earlier camera frame,
+    and head_camera.json gave it index 0 where a dump of the same start lists it as 15."""
+    from aibo_sim.dump import dump, load_dump
+
+    idle = tmp_path / "idle.py"
+    idle.write_text("from aibo_sim.controller import *\n\nwhile robot_step(32) != -1:\n    pass\n")
+    dump(tmp_path / "dump", controller=idle, frames=16, formats=("rgb",), world=WorldConfig(seed=4))
+    assert main(["render", "--out", str(tmp_path / "render"), "--seed", "4"]) == 0
+    recorded = json.loads((tmp_path / "render" / "head_camera.json").read_text())["frame"]
+    listed = load_dump(tmp_path / "dump")[15]
+    assert recorded == listed.meta and recorded["index"] == 15
+    picture = cv2.imread(str(tmp_path / "render" / "head_camera.png"))[..., ::-1]
+    assert np.array_equal(picture, listed.rgb)
+
+
 def test_mtn_play_takes_runs_mtn_mode_option(capsys):
     reports = []
     for option in ("--mtn-mode", "--mode"):  # run's and dump's name, and mtn play's earlier one
