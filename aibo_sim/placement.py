@@ -34,12 +34,17 @@ def out_path(path) -> Path:
     return path.resolve()
 
 
-def make_out_folder(path) -> Path:
-    """The output folder ``out`` (``out_path``), made with its parents; a ``ParameterError`` naming
-    it if it is a file."""
+def checked_out_path(path) -> Path:
+    """``out_path``, and a ``ParameterError`` naming ``out`` if it is a file."""
     path = out_path(path)
     if path.exists() and not path.is_dir():
         raise ParameterError.at("out", path, "not a folder")
+    return path
+
+
+def make_out_folder(path) -> Path:
+    """The output folder ``out`` (``checked_out_path``), made with its parents."""
+    path = checked_out_path(path)
     path.mkdir(parents=True, exist_ok=True)
     return path
 

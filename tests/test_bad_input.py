@@ -900,6 +900,8 @@ def test_an_out_that_is_a_file_and_a_missing_side_by_side_frame_are_named(tmp_pa
     one_error_line(capsys, f"--out {taken}: not a folder")
     assert main(["run", str(SCRIPTED), "--duration", "0.1", "--out", str(taken)]) == 2
     one_error_line(capsys, f"--out {taken}: not a folder")
+    assert main(["dump", str(SCRIPTED), "--steps", "2", "--out", str(taken)]) == 2  # "cannot create the dump folder"
+    one_error_line(capsys, f"--out {taken}: not a folder")
     assert taken.read_text() == "keep"
     assert main(["render", "--side-by-side", str(tmp_path / "real.png"), "--out", str(tmp_path / "out")]) == 2
     one_error_line(capsys, f"--side-by-side {tmp_path / 'real.png'}: no such file")

@@ -24,7 +24,7 @@ from ..config import DEFAULT_DURATION_S, CameraConfig, WorldConfig
 from ..field import DEFAULT_BALL_TYPE
 from ..files import make_folder
 from ..mtn import MODES as MTN_MODES
-from ..placement import check_place, out_path
+from ..placement import check_place, checked_out_path
 from ..render import check_rendering
 from ..robot import BACKENDS, SimulationEnd, check_memory_stick
 from ..runner import MEMORY_STICK, Progress, check_python_controller, refuse_controller_options, run_controller
@@ -464,7 +464,7 @@ def dump(
     if controller is not None:
         controller = Path(controller).resolve()
         source_sha256 = controller_sha256(controller)
-    out = out_path(out)
+    out = checked_out_path(out)
     run = {
         "controller": controller and str(controller),
         "env": env,
