@@ -31,6 +31,11 @@ class Joint:
     default_deg: float = 0.0  # Webots default position
 
     @property
+    def is_ear(self) -> bool:
+        """An ear: a Joint4 (up or down) on the robot, outside its sensor vector."""
+        return "-Joint4:" in self.locator
+
+    @property
     def range(self) -> tuple[float, float]:
         """Hardware range in radians: the MJCF joint range."""
         return (self.hw_range_deg[0] * DEG, self.hw_range_deg[1] * DEG)

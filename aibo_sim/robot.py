@@ -191,6 +191,12 @@ class MotorForceFeedback(Device):
         super().__init__(servo.robot, servo.locator, servo.name)
         self._actuator = servo._actuator
 
+    def enable(self, ms: int) -> None:
+        """As ``Device.enable``; DeviceError for an ear (Joint4): the robot reports no PWM duty for it."""
+        if ers7.JOINTS[ers7.JOINT_INDEX[self.name]].is_ear:
+            raise DeviceError(f"{self.locator}: an ear (Joint4) has no motor force feedback: the robot reports no duty")
+        super().enable(ms)
+
     def _sample(self) -> float:
         return float(self.robot.sim.data.actuator_force[self._actuator])
 

@@ -129,6 +129,8 @@ static void init(void) {
         servo_set_acceleration(robot_get_device("PRM:/r1/c1/c2-Joint2:12"), 0);
     } else if (is("control p")) {
         servo_set_control_p(robot_get_device("PRM:/r1/c1/c2-Joint2:12"), -50);
+    } else if (is("ear torque")) {
+        servo_enable_motor_force_feedback(robot_get_device("PRM:/r1/c1/c2/c3/e5-Joint4:15"), 32);
     } else if (is("mode")) {
         robot_keyboard_enable(32);
         fprintf(out, "mode %d key %d step %g synchronized %d\n", robot_get_mode(), robot_keyboard_get_key(),
@@ -550,6 +552,8 @@ def test_errors_end_the_controller_with_the_python_apis_message(probe, tmp_path)
         pan.set_acceleration(0)
     with pytest.raises(DeviceError) as control_p:
         pan.set_control_p(-50)
+    with pytest.raises(DeviceError) as ear_torque:
+        robot.get_device("PRM:/r1/c1/c2/c3/e5-Joint4:15").force_feedback.enable(32)
     with pytest.raises(MtnError) as missing:
         mtn_new("missing.mtn")
     api.install(robot)
@@ -562,6 +566,7 @@ def test_errors_end_the_controller_with_the_python_apis_message(probe, tmp_path)
         "device error": str(device.value),
         "acceleration": str(acceleration.value),
         "control p": str(control_p.value),
+        "ear torque": str(ear_torque.value),
         "missing motion": f"mtn_play: MTN is NULL: mtn_new failed ({missing.value})",
         "step": "robot_step(32): not on the robot: an OPEN-R object cannot wait for time to pass inside a call",
         "zero step": str(zero_step.value),  # the stick said 'step of 0 ms: must be a positive whole multiple'

@@ -78,6 +78,8 @@ def test_motor_force_feedback_is_the_actuators_torque_sampled_on_its_own_period(
         api.servo_get_motor_force_feedback(knee)
     with pytest.raises(DeviceError, match="is a camera, not a servo"):
         api.servo_enable_motor_force_feedback(api.robot_get_device("PRM:/r1/c1/c2/c3/i1-FbkImageSensor:F1"), 32)
+    with pytest.raises(DeviceError, match=r"e5-Joint4:15: an ear \(Joint4\) has no motor force feedback"):
+        api.servo_enable_motor_force_feedback(api.robot_get_device("PRM:/r1/c1/c2/c3/e5-Joint4:15"), 32)
 
 
 def test_values_refresh_only_at_multiples_of_the_period(robot):

@@ -370,10 +370,10 @@ def test_full_disk_leaves_only_complete_frames_and_resumes(tmp_path, monkeypatch
     assert len(load_dump(out)) == 6
 
 
-def test_a_shards_drawn_ball_lies_ahead_of_the_pose_and_is_checked_before_anything_is_written(tmp_path):
+def test_a_shards_drawn_ball_lies_ahead_of_the_pose_and_is_checked_before_anything_is_written(tmp_path, capsys):
     """The balls were drawn ahead of the default start whatever --pose, and checked only by the
     shard: one on the robot failed the dump after its folders were made, at every --resume."""
-    from aibo_sim.config import ParameterError
+    from aibo_sim.cli import main
     from aibo_sim.dump.shards import SHARD_BALL_X, SHARD_BALL_Y, shard_balls
 
     pose = (0.880639462230231, 0.3904636963259353, 90.0)
@@ -385,8 +385,14 @@ def test_a_shards_drawn_ball_lies_ahead_of_the_pose_and_is_checked_before_anythi
         for r in (np.random.default_rng(0), np.random.default_rng(1))
     ]
     out = tmp_path / "out"
-    with pytest.raises(ParameterError, match=r"^shard_0: none of 20 balls drawn from its seed 0 ahead of the robot "):
+    with pytest.raises(ValueError, match=r"^shard_0: none of 20 balls drawn from its seed 0 ahead of the robot "):
         dump(out, controller=TRACKER, frames=2, workers=2, world=WorldConfig(pose=(2.75, 0.0, 0.0)))
+    command = ["dump", str(TRACKER), "--steps", "2", "--workers", "2", "--pose", "2.75", "0", "0", "--out", str(out)]
+    assert main(command) == 2  # one line (a ParameterError without its parameter was a traceback, exit 1)
+    assert capsys.readouterr().err == (
+        "aibo-sim: error: shard_0: none of 20 balls drawn from its seed 0 ahead of the robot can be placed in the "
+        "scene: give --ball\n"
+    )
     assert not out.exists()
 
 

@@ -321,8 +321,8 @@ def shard_balls(world: WorldConfig, workers: int) -> list[list[float]]:
     ball can be placed: drawn from the shard's seed (shard k: ``world.seed + k``) in
     ``SHARD_BALL_X/Y`` ahead of the robot (of ``world.pose``; without one, of the origin, the
     default field's start), again where it cannot be placed there (a wall, the robot, off the
-    field), checked before the dump writes anything. A ParameterError naming the shard where none
-    of ``SHARD_BALL_DRAWS`` draws can be placed."""
+    field), checked before the dump writes anything. A ValueError naming the shard where none of
+    ``SHARD_BALL_DRAWS`` draws can be placed."""
     x, y, yaw = world.pose or (0.0, 0.0, 0.0)
     cos, sin = math.cos(math.radians(yaw)), math.sin(math.radians(yaw))
     sim = Simulation(world.scene, camera=CameraConfig("ideal"), ball_type=world.ball_type)
@@ -343,7 +343,7 @@ def shard_balls(world: WorldConfig, workers: int) -> list[list[float]]:
                 except ParameterError:
                     continue
             else:
-                raise ParameterError(
+                raise ValueError(
                     f"shard_{k}: none of {SHARD_BALL_DRAWS} balls drawn from its seed {world.seed + k} ahead of the "
                     "robot can be placed in the scene: give --ball"
                 )

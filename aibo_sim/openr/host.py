@@ -152,7 +152,7 @@ class SensorFrame:
         self.sim = sim
         index = {locator: i for i, locator in enumerate(primitives())}
         kinds = protocol.SENSOR_KINDS
-        self.joints = [i for i, j in enumerate(ers7.JOINTS) if "-Joint2:" in j.locator]
+        self.joints = [i for i, j in enumerate(ers7.JOINTS) if not j.is_ear]
         touches = list(ers7.TOUCH_SENSORS)
         self.switch = np.array([s.name.startswith(("touch_paw", "touch_chin")) for s in touches])
         self.entries = (
@@ -264,7 +264,7 @@ class MemoryStickRun:
         self._locators = primitives()
         self._joint_of = {self._locators.index(j.locator): i for i, j in enumerate(ers7.JOINTS)}
         self._led_of = {self._locators.index(led.locator): led.name for led in ers7.LEDS}
-        self._ears = [i for i, j in enumerate(ers7.JOINTS) if "-Joint4:" in j.locator]
+        self._ears = [i for i, j in enumerate(ers7.JOINTS) if j.is_ear]
         self._kp = np.zeros(len(ers7.JOINTS))  # each joint's stiffness when powered (0: gain off)
         self._standard_kp = sim.model.actuator_gainprm[sim.servos.ctrl, 0].copy()
         self._kp[self._ears] = self._standard_kp[self._ears]

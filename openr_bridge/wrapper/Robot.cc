@@ -328,6 +328,14 @@ void Robot::EnableDevice(Device& device, int ms) {
     device.nextSampleMs = TimeMs() + ms;
 }
 
+void Robot::EnableForceFeedback(int tag, int ms) {
+    Device& device = ForceFeedbackOf(tag);
+    if (IsJoint4(device.locator)) {  /* aibo_sim.robot.MotorForceFeedback.enable */
+        Fail("%s: an ear (Joint4) has no motor force feedback: the robot reports no duty", device.locator.c_str());
+    }
+    EnableDevice(device, ms);
+}
+
 void Robot::Disable(int tag, Kind kind) { DisableDevice(Tagged(tag, kind)); }
 
 void Robot::DisableDevice(Device& device) {

@@ -87,7 +87,7 @@ public:
     void Disable(int tag, Kind kind);
     double Value(int tag, Kind kind, int axis);
     /* A servo's motor force feedback, sampled on a period of its own (a device without a name). */
-    void EnableForceFeedback(int tag, int ms) { EnableDevice(ForceFeedbackOf(tag), ms); }
+    void EnableForceFeedback(int tag, int ms);
     void DisableForceFeedback(int tag) { DisableDevice(ForceFeedbackOf(tag)); }
     double ForceFeedback(int tag) { return DeviceValue(ForceFeedbackOf(tag), 0); }
     void SetPosition(int tag, double radians);
