@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 import numbers
+import reprlib
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
@@ -154,3 +155,16 @@ class WorldConfig:
     def from_dict(cls, recorded: dict) -> WorldConfig:
         """The config ``as_dict`` (or a run's ``run.json``) recorded."""
         return cls(**{key: recorded.get(key, default) for key, default in cls().as_dict().items()})
+
+
+def configs(world=None, camera=None) -> tuple[WorldConfig, CameraConfig]:
+    """``world`` and ``camera``, the defaults for None; a TypeError naming the one that is not a
+    ``WorldConfig`` or ``CameraConfig`` (``from_dict`` reads a recorded dict)."""
+    world, camera = world if world is not None else WorldConfig(), camera if camera is not None else CameraConfig()
+    for value, kind, name in ((world, WorldConfig, "world"), (camera, CameraConfig, "camera")):
+        if not isinstance(value, kind):
+            kind_name = kind.__name__
+            raise TypeError(
+                f"{name} must be a {kind_name} ({kind_name}.from_dict reads a recorded dict), not {reprlib.repr(value)}"
+            )
+    return world, camera

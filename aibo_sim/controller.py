@@ -131,7 +131,7 @@ def _device(tag, kind: type) -> Device:
     state = installed()
     state.last_call_s = time.monotonic()
     tags = state.tags
-    if not isinstance(tag, (int, np.integer)) or not 0 < tag <= len(tags):
+    if isinstance(tag, bool) or not isinstance(tag, (int, np.integer)) or not 0 < tag <= len(tags):
         raise DeviceError(f"invalid device tag {tag!r}: use the value robot_get_device returned")
     device = tags[tag - 1]
     if not isinstance(device, kind):

@@ -24,7 +24,7 @@ from traceback import walk_tb
 
 from . import controller
 from .cbind import CompileError, compile_controller, controller_sources, is_c_controller
-from .config import DEFAULT_DURATION_S, CameraConfig, ParameterError, WorldConfig
+from .config import DEFAULT_DURATION_S, CameraConfig, ParameterError, WorldConfig, configs
 from .files import check_atomic_write, make_folder, remove_in, write_file_atomic
 from .openr.host import PICTURE_SIZE, MemoryStickRun
 from .placement import make_out_folder, place_match
@@ -219,7 +219,7 @@ def run_match(
         SimulationDiverged: the physics diverged (every robot stopped there).
     """
     robots = check_robots(robots, "--robots")
-    world, camera = world or WorldConfig(), camera or CameraConfig()
+    world, camera = configs(world, camera)
     if world.pose is not None:
         raise ParameterError.at(
             "pose", " ".join(map(str, world.pose)), "applies to a run of one robot: each robot's pose is its spec's"

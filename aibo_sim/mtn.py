@@ -381,6 +381,8 @@ def oda_motions(data: bytes, source: str = "<bytes>") -> dict[str, bytes]:
 
 
 def _read_file(source: str) -> bytes:
+    if "\0" in source:  # no file has such a name (open() would raise a bare ValueError)
+        raise MtnError(source, None, "a file name cannot hold a NUL character")
     try:
         return read_regular_file(source)
     except NotRegularFile as error:

@@ -67,9 +67,12 @@ def sampling_period(ms, what: str) -> int:
 def finite_number(value, what: str) -> float:
     """``value`` as a float; DeviceError naming ``what`` unless it is a finite real number (a bool
     or a string is not one, as they are not in C)."""
-    if isinstance(value, bool) or not isinstance(value, numbers.Real) or not math.isfinite(value):
-        raise DeviceError(f"{what} must be a finite number, not {short_repr(value)}")
-    return float(value)
+    try:
+        if not isinstance(value, bool) and isinstance(value, numbers.Real) and math.isfinite(value):
+            return float(value)
+    except OverflowError:  # an int beyond a float's range (10**400)
+        pass
+    raise DeviceError(f"{what} must be a finite number, not {short_repr(value)}")
 
 
 class Device:

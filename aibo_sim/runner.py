@@ -30,7 +30,7 @@ from .cbind import (
     run_c_controller,
     serve,
 )
-from .config import DEFAULT_DURATION_S, CameraConfig, WorldConfig
+from .config import DEFAULT_DURATION_S, CameraConfig, WorldConfig, configs
 from .field import DEFAULT_BALL_TYPE
 from .files import (
     FolderLock,
@@ -403,9 +403,10 @@ class Progress:
     real-time factor and the time left, both from the progress since the first update;
     silent otherwise."""
 
-    def __init__(self, duration_s: float, stream=sys.stderr, enabled: bool = True):
-        self.duration_s, self.stream = duration_s, stream
-        self.enabled = enabled and stream.isatty()
+    def __init__(self, duration_s: float, stream=None, enabled: bool = True):
+        """``stream``: standard error (the one at the call, not at import) by default."""
+        self.duration_s, self.stream = duration_s, stream or sys.stderr
+        self.enabled = enabled and self.stream.isatty()
         self._last, self._origin = 0.0, None
 
     def __call__(self, robot: Robot) -> None:
@@ -478,7 +479,7 @@ def run_controller(
         else:
             check_python_controller(path)
     check_duration(duration)
-    world, camera = world or WorldConfig(), camera or CameraConfig()
+    world, camera = configs(world, camera)
     scene = world.scene
     sim = Simulation(scene, seed=world.seed, camera=camera, ball_type=world.ball_type)
     writer = None

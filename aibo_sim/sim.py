@@ -25,7 +25,7 @@ from openr_bridge import FRAME_RATE_HZ, FRAME_TICK_MS
 
 from .camera import CameraFrame, HeadCamera, scene_light
 from .camera.head import BEHIND_CAMERA_GROUP, HEAD_CAMERA_GROUPS
-from .config import CameraConfig, is_seed
+from .config import CameraConfig, configs, is_seed
 from .ers7 import (
     DISTANCE_SENSORS,
     HEAD_CAMERA,
@@ -529,7 +529,7 @@ class Simulation:
             DEFAULT_ROBOTS if robots is None else check_robots(robots, "robots"),
             seed=seed,
             keyframe=keyframe,
-            camera=camera or CameraConfig(),
+            camera=configs(camera=camera)[1],
             ball=ball,
             ball_type=ball_type,
             latency=command_latency_frames,

@@ -17,8 +17,10 @@ goal, blue the +X (sky-blue) one.
 from __future__ import annotations
 
 import math
+import os
 import re
-from collections.abc import Sequence
+import reprlib
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
@@ -156,11 +158,17 @@ def _team_and_number(team, number) -> str | None:
     return None
 
 
-def check_robots(robots: Sequence[RobotSpec], where: str) -> tuple[RobotSpec, ...]:
+def check_robots(robots: Sequence[RobotSpec] | str | os.PathLike, where: str) -> tuple[RobotSpec, ...]:
     """The checks across robots (how many, a team's numbers given twice, separation), with each
     robot's kickoff pose filled in where it has none. An error names the robot where it was
     described (``RobotSpec.given``: a robots file's line, a ``--robot`` argument), else ``where``
-    (the description: a file, ``--robot``); TeamError otherwise."""
+    (the description: a file, ``--robot``); TeamError otherwise. A path is a robots file
+    (``load_robots``); anything but it or ``RobotSpec``s is a TeamError naming ``where``."""
+    if isinstance(robots, (str, os.PathLike)):
+        return load_robots(robots)
+    given, robots = robots, tuple(robots) if isinstance(robots, Iterable) else None
+    if robots is None or not all(isinstance(robot, RobotSpec) for robot in robots):
+        raise TeamError(f"{where}: robots are a robots file or RobotSpecs, not {reprlib.repr(given)}")
 
     def fail(i: int, message: str):
         raise TeamError(f"{robots[i].given or where}: {_label(i, robots[i].team, robots[i].number)}: {message}")

@@ -25,6 +25,7 @@ raises ``PrimitiveError`` (its ``status``; the message names the call and, for a
 the allowed ones). The camera exposes its next frame with the new setting.
 """
 
+import operator
 from pathlib import Path
 
 import numpy as np
@@ -182,6 +183,11 @@ def camera_image_get_blue(image, width: int, x: int, y: int) -> int:
 
 
 def _component(image, width: int, x: int, y: int, channel: int) -> int:
+    function = f"camera_image_get_{('red', 'green', 'blue')[channel]}"
+    try:  # whole numbers as C's int arguments are, computed as Python ints (numpy's uint8 would wrap)
+        width, x, y = operator.index(width), operator.index(x), operator.index(y)
+    except TypeError:
+        raise TypeError(f"{function}: width, x and y must be ints, not {width!r}, {x!r}, {y!r}") from None
     index = 3 * (y * width + x) + channel
     if not (0 <= x < width and 0 <= index < len(image)):
         raise ImageAccessError(f"pixel ({x}, {y}) outside an image {width} wide of {len(image) // 3} pixels")

@@ -6,6 +6,7 @@ import json
 import math
 import sys
 import time
+from pathlib import Path
 
 import gymnasium
 import numpy as np
@@ -18,6 +19,8 @@ from aibo_sim.cli import main
 from aibo_sim.mtn import Motion, MtnError, write_mtn
 from aibo_sim.robot import DeviceError, Robot
 from aibo_sim.sim import Simulation, models_dir
+
+SCRIPTED = Path(__file__).parent / "controllers" / "scripted_head.py"
 
 LF_J1 = "PRM:/r2/c1-Joint2:21"
 HEAD_PAN = "PRM:/r1/c1/c2-Joint2:12"
@@ -296,3 +299,80 @@ def test_an_environment_keeps_no_stepping_after_close():
 def test_robot_functions_refuse_what_is_not_callable_naming_the_call(robot, call):
     with pytest.raises(TypeError, match=rf"^{call}\(5\): the \w+ function must be callable"):
         getattr(api, call)(5)
+
+
+# ---------------------------------------------------------------- the Python API's arguments (a reviewer's list)
+
+
+@pytest.mark.parametrize(
+    "arguments, message",
+    [
+        ({"frames": 2.5}, r"the number of frames \(or steps\) must be a whole number of at least 1, not 2\.5"),
+        ({"frames": float("inf")}, r"the number of frames .* not inf"),  # it named --duration, after writing
+        ({"frames": None}, r"the number of frames .* not None"),
+        ({"frames": True}, r"the number of frames .* not True"),
+        ({"frames": 3, "workers": 1.5}, r"--workers must be a whole number from 1 to the number of frames \(3\)"),
+        ({"frames": 3, "formats": None}, r"--formats: a sequence of format names, not None"),
+    ],
+)
+def test_dump_refuses_a_count_or_formats_of_the_wrong_kind_before_writing(tmp_path, arguments, message):
+    from aibo_sim.dump import dump
+
+    with pytest.raises(ValueError, match=message):
+        dump(tmp_path / "out", controller=SCRIPTED, **arguments)
+    assert not (tmp_path / "out").exists()
+
+
+def test_dump_takes_a_numpy_count(tmp_path):
+    from aibo_sim.dump import dump, load_dump
+
+    dump(tmp_path / "out", controller=SCRIPTED, frames=np.int64(2), formats=("rgb",))  # json.dumps refused int64
+    assert len(load_dump(tmp_path / "out")) == 2
+
+
+def test_configs_robots_and_match_actions_of_the_wrong_kind_are_named(tmp_path, monkeypatch):
+    from aibo_sim.config import WorldConfig
+    from aibo_sim.envs.match import MatchEnv
+    from aibo_sim.match import run_match
+    from aibo_sim.runner import run_controller
+    from aibo_sim.team import RobotSpec, TeamError, check_robots
+
+    with pytest.raises(
+        TypeError, match=r"^world must be a WorldConfig \(WorldConfig.from_dict reads a recorded dict\)"
+    ):
+        run_controller(SCRIPTED, duration=0.1, world={"seed": 1})
+    with pytest.raises(TypeError, match=r"^camera must be a CameraConfig"):
+        Simulation(camera="ers7")
+    with pytest.raises(
+        TeamError, match=r"^--robots: robots are a robots file or RobotSpecs, not \[\{'number': 1, 'team': 'red'\}\]$"
+    ):
+        run_match([{"team": "red", "number": 1}], controller_path=SCRIPTED, duration=0.1)
+    monkeypatch.chdir(tmp_path)  # the match's controllers write their joints.txt there
+    robots = tmp_path / "robots.toml"
+    robots.write_text('[[robot]]\nteam = "red"\nnumber = 1\n\n[[robot]]\nteam = "blue"\nnumber = 1\n')
+    assert [(r.team, r.number) for r in check_robots(robots, "robots")] == [("red", 1), ("blue", 1)]
+    assert run_match(str(robots), controller_path=SCRIPTED, duration=0.1, world=WorldConfig())["status"] == "done"
+    env = MatchEnv(robots=[RobotSpec("red", 1), RobotSpec("blue", 1)], camera=None)
+    try:
+        env.reset(seed=0)
+        with pytest.raises(TypeError, match="^actions must be a dict of agent name to action, not list$"):
+            env.step([np.zeros(15)])
+    finally:
+        env.close()
+
+
+def test_pixel_helpers_take_whole_numbers_as_python_ints():
+    image = np.arange(208 * 160 * 3, dtype=np.uint8)
+    with pytest.raises(TypeError, match=r"^camera_image_get_red: width, x and y must be ints, not 208, 104\.0, 80$"):
+        api.camera_image_get_red(image, 208, 208 / 2, 80)
+    # numpy's uint8 wrapped 3 * (100 * 200 + 100) round: a pixel of another place
+    assert api.camera_image_get_red(image, np.uint8(200), np.uint8(100), np.uint8(100)) == image[3 * (100 * 200 + 100)]
+
+
+def test_small_api_edges_a_reviewer_found(robot):
+    assert api.mtn_new("a\0b") is None and "cannot hold a NUL character" in api.mtn_get_error()
+    pan = api.robot_get_device("PRM:/r1/c1/c2-Joint2:12")
+    with pytest.raises(DeviceError, match=r"position must be a finite number, not 1000"):
+        api.servo_set_position(pan, 10**400)  # an OverflowError before
+    with pytest.raises(DeviceError, match="invalid device tag True"):
+        api.servo_enable_position(True, 32)  # tag 1 before

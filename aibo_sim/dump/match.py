@@ -23,7 +23,7 @@ from openr_bridge import FRAME_RATE_HZ
 from openr_bridge.memory_stick import memory_stick_folder
 
 from ..camera import describe_camera, scene_light
-from ..config import DEFAULT_DURATION_S, CameraConfig, WorldConfig
+from ..config import DEFAULT_DURATION_S, CameraConfig, WorldConfig, configs
 from ..files import make_folder
 from ..match import controller_named_as_given, refuse_single_robot_options, robot_folder, run_match
 from ..placement import out_path, place_match
@@ -111,14 +111,12 @@ def dump_match(
     controller, or ``controller``) for ``frames`` camera frames, one dump per robot in
     ``out/robotN``. Everything is checked before a folder is made: the options a match does not take
     (ValueError saying why), the robots (TeamError), the controllers (compiled), the places."""
-    world, camera = world or WorldConfig(), camera or CameraConfig()
+    world, camera = configs(world, camera)
     scene, ball, ball_type = world.scene, world.ball, world.ball_type
     _refuse(env, workers, world.pose, backend, mtn_mode, memory_stick, policy, engine, ray_address)
     robots = check_robots(robots, "--robots")
     robots = _controllers(robots, controller)
     check_formats(formats)
-    if frames < 1:
-        raise ValueError(f"the number of frames must be positive, not {frames}")
     model = load_model(scene, ball_type=ball_type, robots=robots)
     check_rendering(model)
     _check_places(scene, robots, ball, ball_type)

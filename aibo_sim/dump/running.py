@@ -6,6 +6,7 @@ from __future__ import annotations
 import contextlib
 import hashlib
 import time
+from collections.abc import Iterable
 from pathlib import Path
 
 import gymnasium
@@ -20,13 +21,13 @@ from openr_bridge.memory_stick import load_memory_stick, memory_stick_folder
 from ..camera import CameraProfile, CameraSettings, camera_size, describe_camera, scene_light
 from ..camera import camera_profile as resolve_profile  # dump's argument of that name shadows it
 from ..cbind.build import compile_controller, controller_sources, is_c_controller, own_files
-from ..config import DEFAULT_DURATION_S, CameraConfig, WorldConfig
+from ..config import DEFAULT_DURATION_S, CameraConfig, WorldConfig, configs
 from ..field import DEFAULT_BALL_TYPE
 from ..files import make_folder
 from ..mtn import MODES as MTN_MODES
 from ..placement import check_place, checked_out_path
 from ..render import check_rendering
-from ..robot import BACKENDS, SimulationEnd, check_memory_stick
+from ..robot import BACKENDS, SimulationEnd, check_memory_stick, whole_ms
 from ..runner import MEMORY_STICK, Progress, check_python_controller, refuse_controller_options, run_controller
 from ..sim import ModelError, ball_joint, is_seed, load_model
 from .formats import DEFAULT_FORMATS, FORMATS, DumpError, is_match, robots_meta
@@ -331,6 +332,8 @@ def controller_sha256(path: Path) -> str:
 
 def check_formats(formats) -> None:
     """ValueError for no formats, an unknown one, or coco without the rgb files it annotates."""
+    if isinstance(formats, (str, bytes)) or not isinstance(formats, Iterable):
+        raise ValueError(f"--formats: a sequence of format names, not {formats!r}; known: {', '.join(FORMATS)}")
     unknown = sorted(set(formats) - set(FORMATS))
     if unknown or not formats:
         raise ValueError(f"--formats: unknown formats {unknown or '(none given)'}; known: {', '.join(FORMATS)}")
@@ -369,7 +372,13 @@ def dump(
 
     ``robots`` (``team.RobotSpec``s): a match, each robot running its spec's controller or
     ``controller``, dumped one robot a shard (``out/robot1``, ...: ``match.dump_match``)."""
-    world, camera = world or WorldConfig(), camera or CameraConfig()
+    world, camera = configs(world, camera)
+    count, shards = whole_ms(frames), whole_ms(workers)  # whole numbers (not bools, nor 2.5), else None
+    if count is None or count < 1:
+        raise ValueError(f"the number of frames (or steps) must be a whole number of at least 1, not {frames!r}")
+    if shards is None or not 1 <= shards <= count:
+        raise ValueError(f"--workers must be a whole number from 1 to the number of frames ({count}), not {workers!r}")
+    frames, workers = count, shards
     if robots is not None:
         from .match import dump_match  # it imports this module
 
@@ -406,10 +415,6 @@ def dump(
     policy = policy or "random"
     if policy not in POLICIES:
         raise ValueError(f"policy must be one of {POLICIES}, not {policy!r}")
-    if frames < 1:
-        raise ValueError(f"the number of frames (or steps) must be positive, not {frames}")
-    if not 1 <= workers <= frames:
-        raise ValueError(f"--workers must be between 1 and the number of frames ({frames}), not {workers}")
     available = available_memory_mb() if engine == "local" and workers > 1 else None
     if available is not None and workers * WORKER_MEMORY_MB > available:
         raise ValueError(

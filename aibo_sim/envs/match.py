@@ -27,7 +27,6 @@ import copy
 import functools
 import math
 import numbers
-import os
 from collections.abc import Callable, Mapping
 
 import gymnasium as gym
@@ -54,7 +53,7 @@ from ..sim import (
     models_dir,
     placement_values,
 )
-from ..team import PLAYERS_PER_TEAM, TEAMS, RobotSpec, check_robots, load_robots
+from ..team import PLAYERS_PER_TEAM, TEAMS, RobotSpec, check_robots
 from .base import HEAD_JOINTS, LAYERS, LEG_JOINTS, RENDER_SIZE, AiboEnv, check_options
 
 MAX_CYCLES = 900  # steps (camera frames at 30 fps): 30 s of play
@@ -77,14 +76,10 @@ def match_robots(robots=None) -> tuple[RobotSpec, ...]:
     (``team.TeamError``, a ValueError of one line, otherwise)."""
     if robots is None:
         robots = [RobotSpec(team, number) for team in TEAMS for number in range(1, PLAYERS_PER_TEAM + 1)]
-    elif isinstance(robots, (str, os.PathLike)):
-        return load_robots(robots)
-    robots = tuple(robots)
-    if not all(isinstance(robot, RobotSpec) for robot in robots):
-        raise TypeError(f"robots must be None, a robots file or RobotSpecs, not {robots!r}")
+    robots = check_robots(robots, "robots")
     if any(robot.team is None for robot in robots):
         raise ValueError("robots: every robot of a match needs a team (red or blue)")
-    return check_robots(robots, "robots")
+    return robots
 
 
 class _Agent:
@@ -418,6 +413,7 @@ class MatchEnv(pettingzoo.ParallelEnv):
         :returns: ``(observations, rewards, terminations, truncations, infos)``, dicts by the
             agents live before the step; the ones terminated or truncated then leave ``agents``.
         :raises ValueError: an action for a robot that is no live agent, or a bad action.
+        :raises TypeError: ``actions`` not a dict, or an action of the wrong type.
         :raises gymnasium.error.ResetNeeded: no agent left (before ``reset``, or all done).
         :raises gymnasium.error.ClosedEnvironmentError: after ``close``.
         """
@@ -426,6 +422,8 @@ class MatchEnv(pettingzoo.ParallelEnv):
             raise gym.error.ResetNeeded(
                 f"{type(self).__name__}.step with no agent left (before reset, or every agent done): reset first"
             )
+        if not isinstance(actions, Mapping):
+            raise TypeError(f"actions must be a dict of agent name to action, not {type(actions).__name__}")
         extra = [name for name in actions if name not in self.agents]
         if extra:
             why = "is done" if extra[0] in self.possible_agents else "is no agent"
@@ -434,8 +432,8 @@ class MatchEnv(pettingzoo.ParallelEnv):
         for name, action in actions.items():
             try:
                 targets[name] = self._agents[name].action_to_targets(action)
-            except ValueError as exc:
-                raise ValueError(f"{name}'s {exc}") from None
+            except (TypeError, ValueError) as exc:
+                raise type(exc)(f"{name}'s {exc}") from None
         for name, joint_targets in targets.items():  # every action checked before any is given
             self._agents[name].act(joint_targets)
         self._advance(self.sim.frames_to_camera_frame())
