@@ -61,6 +61,11 @@ def start_values(name: str, values, count: int) -> tuple[float, ...] | None:
     if values is None:
         return None
     try:
+        if isinstance(values, (str, bytes)):
+            raise TypeError  # "123" is not three numbers
+        values = tuple(values)
+        if any(isinstance(v, (str, bytes, bool)) for v in values):
+            raise TypeError  # nor True one
         numbers = tuple(float(v) for v in values)
     except (TypeError, ValueError):
         raise ParameterError.at(name, repr(values), f"must be {count} numbers") from None
@@ -114,7 +119,9 @@ class CameraConfig:
         (``HeadCamera.describe``) describes (``full`` then from its size)."""
         full = recorded.get("full", (recorded.get("width"), recorded.get("height")) == (FULL_WIDTH, FULL_HEIGHT))
         settings = CameraSettings(**{k: recorded[k] for k in CameraSettings().as_dict() if k in recorded})
-        return cls(camera_profile(recorded["profile"], recorded.get("profile_options")), bool(full), settings)
+        if not isinstance(full, bool):
+            raise ParameterError.at("full", repr(full), "must be true or false")
+        return cls(camera_profile(recorded["profile"], recorded.get("profile_options")), full, settings)
 
 
 @dataclass(frozen=True)

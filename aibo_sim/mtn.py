@@ -44,6 +44,7 @@ Decisions where the spec leaves room (also listed in the report that came with t
 
 from __future__ import annotations
 
+import math
 import os
 import struct
 from collections.abc import Iterable, Iterator, Sequence
@@ -537,8 +538,8 @@ class MotionPlayer:
     def step(self, ms: int) -> dict[str, float] | None:
         """One ``mtn_step(ms)``: the commands issued (locator -> rad) or None."""
         self._need("webots")
-        if ms < 0:
-            raise ValueError("ms must be >= 0")
+        if not ms >= 0 or not math.isfinite(ms):  # NaN too: the motion would never end
+            raise ValueError(f"ms must be a finite number >= 0, not {ms!r}")
         if self._over:
             return None
         m = self.motion

@@ -11,6 +11,7 @@ import collections
 import ctypes
 import logging
 import math
+import numbers
 import os
 import threading
 from collections.abc import Callable, Iterable
@@ -789,7 +790,11 @@ class Simulation:
         """Light an LED at ``level`` in 0..1 of its colour (0: off); ``face_b``: a face light on its
         B face. Lights that share a spot (A9 and A13) add up there (Model Information 3.1.1). With
         a command latency, it lights ``command_latency_frames`` frames later, as a set-point acts
-        (OPEN-R's LEDs travel in the joints' command vectors)."""
+        (OPEN-R's LEDs travel in the joints' command vectors). A ValueError for a ``level`` that is
+        no finite number (it would colour the geom NaN); it is clipped to 0..1."""
+        if isinstance(level, bool) or not isinstance(level, numbers.Real) or not math.isfinite(level):
+            raise ValueError(f"set_led({name!r}): level must be a finite number in 0..1, not {level!r}")
+        level = min(max(float(level), 0.0), 1.0)
         if self.command_latency_frames:
             self._queued_leds.append((self.frame + self.command_latency_frames, name, level, face_b))
         else:

@@ -376,3 +376,35 @@ def test_small_api_edges_a_reviewer_found(robot):
         api.servo_set_position(pan, 10**400)  # an OverflowError before
     with pytest.raises(DeviceError, match="invalid device tag True"):
         api.servo_enable_position(True, 32)  # tag 1 before
+
+
+def test_values_that_were_taken_silently_are_refused():
+    """Each was accepted and went on wrong: "123" a pose of (1, 2, 3), "no" a full-size camera, a
+    NaN LED level a NaN colour, a NaN step a motion that never ends, NaN targets a NaN action."""
+    from aibo_sim.config import CameraConfig, ParameterError, WorldConfig
+    from aibo_sim.mtn import MotionPlayer
+
+    for pose in ("123", (True, False, True)):
+        with pytest.raises(ParameterError, match="must be 3 numbers"):
+            WorldConfig(pose=pose)
+    assert WorldConfig(pose=(n for n in (1, 2, 3))).pose == (1.0, 2.0, 3.0)
+    with pytest.raises(ParameterError, match="^full 'no': must be true or false$"):
+        CameraConfig.from_dict({"profile": "ers7", "full": "no"})
+    sim = Simulation()
+    try:
+        with pytest.raises(ValueError, match="level must be a finite number in 0..1, not nan"):
+            sim.set_led(ers7.LEDS[0].name, float("nan"))
+        sim.set_led(ers7.LEDS[0].name, -5.0)  # clipped: off, where the colour went negative
+        geoms = [sim.model.geom(name).id for name in ers7.LEDS[0].all_geoms]
+        assert (sim.model.geom_rgba[geoms] >= 0).all()
+    finally:
+        sim.close()
+    player = MotionPlayer(ramp(), "webots")
+    with pytest.raises(ValueError, match="ms must be a finite number >= 0, not nan"):
+        player.step(float("nan"))
+    env = gymnasium.make("aibo_sim/HeadTrackBall-v0", camera_profile="ideal").unwrapped
+    try:
+        with pytest.raises(ValueError, match=r"^targets\[0\] \(neck_tilt\) is nan: targets must be finite$"):
+            env.targets_to_action(np.full(3, np.nan))
+    finally:
+        env.close()

@@ -324,19 +324,28 @@ class AiboEnv(gym.Env):
 
     def action_to_targets(self, action) -> np.ndarray:
         """Joint targets (rad) for a normalised action; NaN or infinity raises ValueError."""
-        action = np.asarray(action, dtype=np.float64)
-        if action.shape != self.action_space.shape:
-            raise ValueError(f"action has shape {action.shape}, expected {self.action_space.shape}")
-        if not np.isfinite(action).all():
-            i = np.flatnonzero(~np.isfinite(action))[0]
-            raise ValueError(f"action[{i}] ({self.actuated_joints[i]}) is {action[i]}: actions must be finite")
+        action = self._per_joint(action, "action", "actions")
         action = np.minimum(np.maximum(action, -1.0), 1.0)
         return self._target_low + (action + 1) / 2 * self._target_span
 
     def targets_to_action(self, targets) -> np.ndarray:
-        """The normalised action that commands ``targets`` (rad, clipped to the joint ranges)."""
-        scaled = 2 * (np.asarray(targets, dtype=np.float64) - self._target_low) / self._target_span - 1
+        """The normalised action that commands ``targets`` (rad, clipped to the joint ranges);
+        NaN or infinity raises ValueError."""
+        scaled = 2 * (self._per_joint(targets, "targets", "targets") - self._target_low) / self._target_span - 1
         return np.clip(scaled, -1, 1).astype(np.float32)
+
+    def _per_joint(self, values, what: str, all_of_them: str) -> np.ndarray:
+        """``values`` as floats, one per actuated joint; ValueError naming ``what`` otherwise."""
+        try:
+            values = np.asarray(values, dtype=np.float64)
+        except (TypeError, ValueError):
+            raise ValueError(f"{what} must be numbers, one per actuated joint, not {values!r}") from None
+        if values.shape != self.action_space.shape:
+            raise ValueError(f"{what} has shape {values.shape}, expected {self.action_space.shape}")
+        if not np.isfinite(values).all():
+            i = np.flatnonzero(~np.isfinite(values))[0]
+            raise ValueError(f"{what}[{i}] ({self.actuated_joints[i]}) is {values[i]}: {all_of_them} must be finite")
+        return values
 
     # ---------------------------------------------------------------- scene
 

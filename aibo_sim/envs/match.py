@@ -91,6 +91,7 @@ class _Agent:
     _camera_image = AiboEnv._camera_image
     action_to_targets = AiboEnv.action_to_targets
     targets_to_action = AiboEnv.targets_to_action
+    _per_joint = AiboEnv._per_joint
     image_position = AiboEnv.image_position
 
     def __init__(self, env: MatchEnv, sim: Simulation):
