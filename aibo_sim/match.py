@@ -43,6 +43,7 @@ from .runner import (
     _run_controller_program,
     _run_memory_stick,
     check_duration,
+    check_listeners,
     check_python_controller,
     earlier_run,
     motion_dirs,
@@ -220,6 +221,9 @@ def run_match(
     """
     robots = check_robots(robots, "--robots")
     world, camera = configs(world, camera)
+    check_listeners(frame_listeners, "frame_listeners")
+    if robot_listeners is not None and not callable(robot_listeners):
+        raise TypeError(f"robot_listeners must be a callable (or None), not {robot_listeners!r}")
     if world.pose is not None:
         raise ParameterError.at(
             "pose", " ".join(map(str, world.pose)), "applies to a run of one robot: each robot's pose is its spec's"

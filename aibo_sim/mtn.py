@@ -45,6 +45,7 @@ Decisions where the spec leaves room (also listed in the report that came with t
 from __future__ import annotations
 
 import math
+import numbers
 import os
 import struct
 from collections.abc import Iterable, Iterator, Sequence
@@ -214,16 +215,31 @@ class Motion:
         even); attitudes are zero."""
         if locators is None:
             locators = [j.locator for j in ers7.JOINTS]
-        poses = np.asarray(poses_rad, dtype=np.float64)
+        if isinstance(locators, str):  # its characters would be the locators
+            raise MtnError(name, None, f"locators must be a sequence of locators, not the string {locators!r}")
+        try:
+            poses = np.asarray(poses_rad, dtype=np.float64)
+        except (TypeError, ValueError):  # ragged rows, None
+            poses = np.empty(0)
         if poses.ndim != 2 or not np.isfinite(poses).all():
             raise MtnError(name, None, "poses must be a finite (N, J) array")
         n = len(poses)
-        seg = np.asarray(segment_ms)
+        try:
+            seg = np.asarray(segment_ms)
+        except (TypeError, ValueError):  # ragged
+            seg = np.full(1, np.nan)
+        if seg.dtype.kind not in "iuf":  # None, strings, bools
+            seg = np.full(seg.shape, np.nan)
         if seg.ndim == 0:
             seg = np.full(max(n - 1, 0), seg)
         if seg.shape != (max(n - 1, 0),):
             raise MtnError(name, None, f"{seg.size} segment durations for {n} poses (want {n - 1})")
-        if frame_time_ms <= 0 or any(int(s) != s or s <= 0 or int(s) % frame_time_ms for s in seg.tolist()):
+        frame_ok = isinstance(frame_time_ms, numbers.Integral) and not isinstance(frame_time_ms, bool)
+        if not frame_ok or frame_time_ms <= 0 or not np.isfinite(seg).all() or (seg > _S32_MAX).any():
+            raise MtnError(
+                name, None, f"segment durations {seg.tolist()} must be positive multiples of {frame_time_ms!r} ms"
+            )
+        if any(int(s) != s or s <= 0 or int(s) % frame_time_ms for s in seg.tolist()):
             raise MtnError(
                 name, None, f"segment durations {seg.tolist()} must be positive multiples of {frame_time_ms} ms"
             )

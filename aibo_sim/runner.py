@@ -479,6 +479,7 @@ def run_controller(
         else:
             check_python_controller(path)
     check_duration(duration)
+    check_listeners(frame_listeners, "frame_listeners")
     world, camera = configs(world, camera)
     scene = world.scene
     sim = Simulation(scene, seed=world.seed, camera=camera, ball_type=world.ball_type)
@@ -588,6 +589,13 @@ def run_controller(
         if writer is not None:
             writer.lock.release()
     return summary
+
+
+def check_listeners(listeners, what: str) -> None:
+    """A TypeError naming ``what`` unless ``listeners`` is a sequence of callables (a listener
+    that is none failed the run at its first call, as the controller's error)."""
+    if isinstance(listeners, (str, bytes)) or not all(callable(listener) for listener in listeners):
+        raise TypeError(f"{what} must be a sequence of callables, not {listeners!r}")
 
 
 def check_duration(duration) -> None:

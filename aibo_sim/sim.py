@@ -101,6 +101,14 @@ def models_dir() -> Path:
     raise ModelError(f"bundled models not found next to {here}")
 
 
+def _named_in(table: dict, name, what: str):
+    """``table[name]``; a ValueError listing the names of the ``what``s for an unknown one."""
+    try:
+        return table[name]
+    except (KeyError, TypeError):  # TypeError: a name that cannot be a key (a list)
+        raise ValueError(f"no {what} named {name!r}; the {what}s: {', '.join(table)}") from None
+
+
 def default_scene() -> Path:
     """The bundled RoboCup field, ``models/scene.xml``: the scene where none is given."""
     return models_dir() / "scene.xml"
@@ -739,7 +747,7 @@ class Simulation:
 
     def sensor(self, name: str) -> np.ndarray:
         """The MuJoCo sensor ``name``'s reading, a view of ``data.sensordata``."""
-        return self.data.sensordata[self._sensor_slices[name]]
+        return self.data.sensordata[_named_in(self._sensor_slices, name, "sensor")]
 
     def distances_mm(self, which: slice = slice(None)) -> list[float]:
         """IR ranges in mm of ``ers7.DISTANCE_SENSORS[which]`` as Webots' lookup tables give them:
@@ -756,7 +764,7 @@ class Simulation:
 
     def distance_mm(self, name: str) -> float:
         """One IR range in mm (see ``distances_mm``)."""
-        i = self._distance_index[name]
+        i = _named_in(self._distance_index, name, "distance sensor")
         return self.distances_mm(slice(i, i + 1))[0]
 
     def touches(self) -> np.ndarray:
@@ -792,6 +800,7 @@ class Simulation:
         a command latency, it lights ``command_latency_frames`` frames later, as a set-point acts
         (OPEN-R's LEDs travel in the joints' command vectors). A ValueError for a ``level`` that is
         no finite number (it would colour the geom NaN); it is clipped to 0..1."""
+        _named_in(LED_BY_NAME, name, "LED")
         if isinstance(level, bool) or not isinstance(level, numbers.Real) or not math.isfinite(level):
             raise ValueError(f"set_led({name!r}): level must be a finite number in 0..1, not {level!r}")
         level = min(max(float(level), 0.0), 1.0)

@@ -408,3 +408,33 @@ def test_values_that_were_taken_silently_are_refused():
             env.targets_to_action(np.full(3, np.nan))
     finally:
         env.close()
+
+
+def test_names_listeners_and_motions_of_the_wrong_kind_are_named():
+    from aibo_sim.match import run_match
+    from aibo_sim.runner import run_controller
+    from aibo_sim.team import RobotSpec
+
+    sim = Simulation()
+    try:
+        for call in (lambda: sim.sensor("nope"), lambda: sim.distance_mm("nope"), lambda: sim.touched("nope", 0.5)):
+            with pytest.raises(
+                ValueError, match=r"^no (distance )?sensor named 'nope'; the (distance )?sensors: ir_near, "
+            ):
+                call()
+        with pytest.raises(ValueError, match=r"^no LED named 'nope'; the LEDs: led_head_colour, "):
+            sim.set_led("nope", 1.0)
+    finally:
+        sim.close()
+    with pytest.raises(TypeError, match=r"^frame_listeners must be a sequence of callables, not \[5\]$"):
+        run_controller(SCRIPTED, duration=0.1, frame_listeners=[5])  # "controller ... raised", blaming it
+    with pytest.raises(TypeError, match=r"^robot_listeners must be a callable \(or None\), not 5$"):
+        run_match([RobotSpec("red", 1), RobotSpec("blue", 1)], controller_path=SCRIPTED, robot_listeners=5)
+    poses = np.zeros((2, 20))
+    for segment in (float("nan"), float("inf"), None, 16 * 10**30):  # ValueError, OverflowError, TypeError before
+        with pytest.raises(MtnError, match=r"^x: segment durations \[.*\] must be positive multiples of 16 ms$"):
+            Motion.from_poses("x", None, poses, segment)
+    with pytest.raises(MtnError, match="^x: poses must be a finite"):
+        Motion.from_poses("x", None, [[0] * 20, [0]], 64)  # a ragged array: numpy's ValueError
+    with pytest.raises(MtnError, match="^x: locators must be a sequence of locators, not the string"):
+        Motion.from_poses("x", "PRM:/r1/c1-Joint2:11", np.zeros((2, 1)), 64)  # "duplicate locator" before
