@@ -10,7 +10,7 @@ from __future__ import annotations
 import math
 import numbers
 import reprlib
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 
 from openr_bridge import FULL_HEIGHT, FULL_WIDTH
@@ -117,6 +117,7 @@ class CameraConfig:
     def from_dict(cls, recorded: dict) -> CameraConfig:
         """The config ``as_dict`` recorded, or the one a ``run.json``/``meta.json`` camera entry
         (``HeadCamera.describe``) describes (``full`` then from its size)."""
+        _check_recorded(recorded, "camera", "profile")
         full = recorded.get("full", (recorded.get("width"), recorded.get("height")) == (FULL_WIDTH, FULL_HEIGHT))
         settings = CameraSettings(**{k: recorded[k] for k in CameraSettings().as_dict() if k in recorded})
         if not isinstance(full, bool):
@@ -161,7 +162,17 @@ class WorldConfig:
     @classmethod
     def from_dict(cls, recorded: dict) -> WorldConfig:
         """The config ``as_dict`` (or a run's ``run.json``) recorded."""
+        _check_recorded(recorded, "world")
         return cls(**{key: recorded.get(key, default) for key, default in cls().as_dict().items()})
+
+
+def _check_recorded(recorded, what: str, *required: str) -> None:
+    """A ParameterError unless ``recorded`` is a dict holding the ``required`` keys."""
+    if not isinstance(recorded, Mapping):
+        raise ParameterError.at(what, reprlib.repr(recorded), "a recorded config is a dict (as_dict's, run.json's)")
+    missing = [key for key in required if key not in recorded]
+    if missing:
+        raise ParameterError.at(what, reprlib.repr(recorded), f"has no {missing[0]!r}")
 
 
 def configs(world=None, camera=None) -> tuple[WorldConfig, CameraConfig]:

@@ -44,6 +44,7 @@ holdable block, so any other luma comes back within 2 levels per pixel (and with
 root-sum-square over a block).
 """
 
+import numbers
 import struct
 from functools import cache
 from itertools import accumulate
@@ -113,7 +114,17 @@ def encode_ycrcb(
     )
 
 
+U32_MAX = 2**32 - 1  # a message's 32-bit fields
+
+
 def _encode(frame, fill_h, frame_number, field_counter, cdt, primitive_id) -> OFbkImageVectorData:
+    limits = (("frame_number", frame_number, None), ("field_counter", field_counter, U32_MAX))
+    for name, value, most in (*limits, ("primitive_id", primitive_id, U32_MAX)):  # frame numbers wrap
+        if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < 0 or value > (most or value):
+            span = f"from 0 to {most}" if most else "of at least 0"
+            raise FrameError(f"{name} must be a whole number {span}, not {value!r}")
+    if cdt is not None and not isinstance(cdt, OCdtVectorData):
+        raise FrameError(f"cdt must be an OCdtVectorData (or None), not {type(cdt).__name__}")
     message = bytearray(_OFFSETS[-1] + _SIZES[-1])
     message[: _OFFSETS[0]] = _PREAMBLE
     for index in range(len(_SIZES)):

@@ -438,3 +438,23 @@ def test_names_listeners_and_motions_of_the_wrong_kind_are_named():
         Motion.from_poses("x", None, [[0] * 20, [0]], 64)  # a ragged array: numpy's ValueError
     with pytest.raises(MtnError, match="^x: locators must be a sequence of locators, not the string"):
         Motion.from_poses("x", "PRM:/r1/c1-Joint2:11", np.zeros((2, 1)), 64)  # "duplicate locator" before
+
+
+def test_encoder_arguments_and_recorded_configs_of_the_wrong_kind_are_named():
+    from aibo_sim.config import CameraConfig, ParameterError, WorldConfig
+    from openr_bridge.encoder import encode_frame
+    from openr_bridge.errors import FrameError
+
+    rgb = np.zeros((160, 208, 3), np.uint8)
+    for arguments, message in (  # struct.error, a TypeError of string formatting, an AttributeError before
+        ({"frame_number": -1}, "^frame_number must be a whole number of at least 0, not -1$"),
+        ({"primitive_id": 2**33}, "^primitive_id must be a whole number from 0 to 4294967295, not 8589934592$"),
+        ({"field_counter": "x"}, "^field_counter must be a whole number from 0 to 4294967295, not 'x'$"),
+        ({"cdt": "x"}, r"^cdt must be an OCdtVectorData \(or None\), not str$"),
+    ):
+        with pytest.raises(FrameError, match=message):
+            encode_frame(rgb, **arguments)
+    with pytest.raises(ParameterError, match="^camera {}: has no 'profile'$"):  # KeyError before
+        CameraConfig.from_dict({})
+    with pytest.raises(ParameterError, match=r"^world \[\]: a recorded config is a dict"):  # AttributeError before
+        WorldConfig.from_dict([])
