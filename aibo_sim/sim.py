@@ -41,6 +41,7 @@ from .field import BALL_TYPES, COLOURS, DEFAULT_BALL_TYPE, PINK_BALL_MASS, PINK_
 from .lod import add_levels_of_detail
 
 FRAME_MS = FRAME_TICK_MS  # OPEN-R joint frame, 8 ms
+MAX_LATENCY_FRAMES = 125  # command_latency_frames: at most a second (OPEN-R's is 4 frames)
 GRAVITY = 9.80665
 ACCEL_RANGE = 2 * GRAVITY  # Sony: +-19 613 300 um/s^2
 IR_NOISE = 0.1  # Webots lookup tables: 10 % noise at mid-range, none at the ends
@@ -381,15 +382,18 @@ class World:
     view of it). Made by ``Simulation``; ``robots`` lists the views, the first being robot 1."""
 
     def __init__(self, first: Simulation, scene, robots, *, seed, keyframe, camera, ball, ball_type, latency):
-        if not isinstance(latency, int) or latency < 0:
-            raise ValueError(f"command_latency_frames must be a whole number >= 0, not {latency!r}")
+        if isinstance(latency, bool) or not isinstance(latency, int) or not 0 <= latency <= MAX_LATENCY_FRAMES:
+            raise ValueError(
+                f"command_latency_frames must be a whole number from 0 to {MAX_LATENCY_FRAMES}, not {latency!r}"
+            )
         self.command_latency_frames = latency
         self.scene = scene  # as given: None for the RoboCup field
         self.robot_specs = tuple(robots)
         self.model = load_model(scene, ball, ball_type, self.robot_specs)
         check_robot(self.model, scene if scene is not None else default_scene(), keyframe)
-        self.data = mujoco.MjData(self.model)
         self.keyframe = keyframe
+        self._keyframe_id(keyframe)  # a ValueError naming the scene's keyframes, before any work
+        self.data = mujoco.MjData(self.model)
         self.steps_per_frame = round(FRAME_MS / 1000 / self.model.opt.timestep)
         # Views of the divergence counters, read after every frame (bad positions and velocities:
         # MuJoCo resets the state silently and counts them here).
@@ -417,6 +421,14 @@ class World:
             self.robots.append(robot)
         self.reset(seed)
 
+    def _keyframe_id(self, name) -> int:
+        """The id of the scene's keyframe ``name``; a ValueError naming the keyframes there are."""
+        key = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_KEY, name) if isinstance(name, str) else -1
+        if key < 0:
+            names = [self.model.key(k).name for k in range(self.model.nkey)]
+            raise ValueError(f"--keyframe {name!r}: no such keyframe; the scene's: {', '.join(names) or 'none'}")
+        return key
+
     def reset(self, seed: int | None = None, keyframe: str | None = None) -> None:
         """Every robot back to the keyframe (robot 1 where the keyframe has it, the others beside it
         in the same posture at their own poses); a new ``seed`` restarts the noise streams."""
@@ -424,8 +436,7 @@ class World:
             if not is_seed(seed):
                 raise ValueError(f"seed must be a whole number from 0 to 2**64 - 1, not {seed!r}")
             self.seed = int(seed)
-        key = self.model.key(keyframe or self.keyframe).id
-        mujoco.mj_resetDataKeyframe(self.model, self.data, key)
+        mujoco.mj_resetDataKeyframe(self.model, self.data, self._keyframe_id(keyframe or self.keyframe))
         first = self.robots[0]
         for robot in self.robots:
             robot._take_posture(first)

@@ -458,3 +458,21 @@ def test_encoder_arguments_and_recorded_configs_of_the_wrong_kind_are_named():
         CameraConfig.from_dict({})
     with pytest.raises(ParameterError, match=r"^world \[\]: a recorded config is a dict"):  # AttributeError before
         WorldConfig.from_dict([])
+
+
+def test_a_keyframe_and_a_latency_out_of_reach_are_named_before_any_work():
+    for keyframe in (None, "lying"):  # a pybind11 TypeError, and MuJoCo's KeyError at reset
+        with pytest.raises(
+            ValueError, match=rf"^--keyframe {keyframe!r}: no such keyframe; the scene's: home, stand, sit$"
+        ):
+            Simulation(keyframe=keyframe)
+    sim = Simulation()
+    try:
+        with pytest.raises(ValueError, match="^--keyframe 'x': no such keyframe"):
+            sim.reset(keyframe="x")
+    finally:
+        sim.close()
+    with pytest.raises(
+        ValueError, match="^command_latency_frames must be a whole number from 0 to 125, not 1000000000$"
+    ):
+        Simulation(command_latency_frames=10**9)  # a MemoryError of 149 GiB before
