@@ -527,7 +527,7 @@ class Simulation:
     an LED command and the LED). On the robot, OPEN-R plays joint and LED commands from a queue
     of 4-frame command vectors, so a command waits 32 ms or more; how many vectors the Webots-era
     wrapper kept in flight is UNCONFIRMED, so the default is 0 (the set-point acts in the next
-    frame)."""
+    frame); at most ``MAX_LATENCY_FRAMES``."""
 
     def __init__(
         self,
