@@ -46,6 +46,7 @@ from __future__ import annotations
 
 import math
 import numbers
+import operator
 import os
 import struct
 from collections.abc import Iterable, Iterator, Sequence
@@ -140,12 +141,20 @@ class Motion:
     source: str | None = None
 
     def __post_init__(self) -> None:
+        texts = (self.name, self.creator, self.design)
+        if not all(isinstance(text, str) for text in texts):  # a None name failed only in write_mtn
+            raise MtnError(str(self.source or self.name), None, "name, creator and design must be strings")
         self.locators = tuple(self.locators)
+        if not all(isinstance(locator, str) for locator in self.locators):
+            raise MtnError(self.name, None, f"locators must be strings, not {self.locators!r}")
         self.keyframes = np.asarray(self.keyframes, dtype=np.int64)
         self.attitudes = np.asarray(self.attitudes, dtype=np.int64)
         self.interpolate = np.asarray(self.interpolate, dtype=np.int64).reshape(-1)
         self.source = self.name if self.source is None else self.source
         n, j = len(self.keyframes), len(self.locators)
+        time = self.frame_time_ms  # 16.5 was cut to 16
+        whole_time = isinstance(time, numbers.Real) and not isinstance(time, bool)
+        whole_time = whole_time and float(time).is_integer() and time > 0
         _check(
             self.source,
             [
@@ -159,7 +168,7 @@ class Motion:
                     f"interpolate has {self.interpolate.size} counts, want {n - 1}",
                 ),
                 (bool((self.interpolate < 0).any()), "negative interpolation count"),
-                (int(self.frame_time_ms) <= 0, f"frame time {self.frame_time_ms} ms is not positive"),
+                (not whole_time, f"frame time {self.frame_time_ms!r} ms is not a positive whole number"),
             ],
         )
         self.frame_time_ms = int(self.frame_time_ms)
@@ -533,6 +542,7 @@ class MotionPlayer:
     def frame(self, i: int) -> np.ndarray:
         """Target of 8 ms frame ``i`` (time ``8*i`` ms), (J,) int64 micro-radians."""
         self._need("openr")
+        i = operator.index(i)  # a TypeError for 1.5: frames are whole
         if not 0 <= i < self.num_frames:
             raise IndexError(f"frame {i} out of 0..{self.num_frames - 1}")
         k = int(np.searchsorted(self._start, i, side="right")) - 1
@@ -546,8 +556,11 @@ class MotionPlayer:
 
     def targets_rad_at(self, t_ms: float) -> np.ndarray:
         """Target in radians at time ``t_ms``: the 8 ms frame in force then (held before 0 and
-        after the end)."""
-        i = min(max(int(t_ms // SUBFRAME_MS), 0), self.num_frames - 1)
+        after the end); a ValueError for NaN."""
+        if math.isnan(t_ms):
+            raise ValueError("t_ms must be a number of ms, not nan")
+        t_ms = min(max(t_ms, 0), (self.num_frames - 1) * SUBFRAME_MS)  # before //: inf // 8 is nan
+        i = int(t_ms // SUBFRAME_MS)
         return self.frame(i) / 1e6
 
     # -- Webots mode

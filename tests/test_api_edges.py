@@ -476,3 +476,33 @@ def test_a_keyframe_and_a_latency_out_of_reach_are_named_before_any_work():
         ValueError, match="^command_latency_frames must be a whole number from 0 to 125, not 1000000000$"
     ):
         Simulation(command_latency_frames=10**9)  # a MemoryError of 149 GiB before
+
+
+def test_match_env_motion_player_and_motion_arguments_of_the_wrong_kind_are_named():
+    from aibo_sim.envs.match import MatchEnv
+    from aibo_sim.mtn import MotionPlayer
+    from aibo_sim.team import RobotSpec
+
+    robots = [RobotSpec("red", 1), RobotSpec("blue", 1)]
+    with pytest.raises(TypeError, match=r"^scripted must be a dict of robot name to factory, not \['red_1'\]$"):
+        MatchEnv(robots=robots, scripted=["red_1"], camera=None)  # dict()'s ValueError before
+    with pytest.raises(TypeError, match=r"^scripted\['red_1'\] made None, not a scripted policy"):
+        MatchEnv(robots=robots, scripted={"red_1": lambda sim: None}, camera=None)  # AttributeError at reset
+    env = MatchEnv(robots=robots, camera=None)
+    try:
+        with pytest.raises(TypeError, match=r"^reset options must be a dict"):
+            env.reset(options=[("ball", (0, 0))])
+        with pytest.raises(ValueError, match=r"^no robot \[\] \(robots: red_1, blue_1\)$"):
+            env.robot([])  # unhashable
+    finally:
+        env.close()
+    player = MotionPlayer(ramp())
+    assert np.array_equal(player.targets_rad_at(float("inf")), player.frame(player.num_frames - 1) / 1e6)  # held
+    with pytest.raises(ValueError, match="t_ms must be a number of ms, not nan"):
+        player.targets_rad_at(float("nan"))
+    with pytest.raises(TypeError):
+        player.frame(1.5)  # a frame between frames was given
+    with pytest.raises(MtnError, match="name, creator and design must be strings"):
+        Motion.from_poses(None, None, np.zeros((2, 20)), 64)  # failed only in write_mtn
+    with pytest.raises(MtnError, match=r"^x: frame time 16\.5 ms is not a positive whole number$"):
+        Motion("x", "c", "d", 16.5, ("PRM:/r1/c1-Joint2:11",), [[0]], [[0, 0, 0]], [])  # cut to 16 before

@@ -293,6 +293,8 @@ class MatchEnv(pettingzoo.ParallelEnv):
         self.max_cycles = int(max_cycles)
         specs = match_robots(robots)
         names = [agent_name(spec) for spec in specs]
+        if scripted is not None and not isinstance(scripted, Mapping):
+            raise TypeError(f"scripted must be a dict of robot name to factory, not {short_repr(scripted)}")
         scripted = dict(scripted or {})
         unknown = [name for name in scripted if name not in names]
         if unknown:
@@ -326,6 +328,13 @@ class MatchEnv(pettingzoo.ParallelEnv):
         self.observation_spaces = {name: agent.observation_space for name, agent in self._agents.items()}
         self.action_spaces = {name: agent.action_space for name, agent in self._agents.items()}
         self._scripts = {name: make(self.robots[name]) for name, make in scripted.items()}
+        for name, script in self._scripts.items():
+            if not (callable(getattr(script, "plan", None)) and callable(getattr(script, "reset", None))):
+                self.sim.close()
+                raise TypeError(
+                    f"scripted[{name!r}] made {short_repr(script)}, not a scripted policy (with plan and reset, "
+                    "as BallChaser)"
+                )
         model = self.sim.model
         self.state_space = _state_space(len(names))
         self._nominal_lights = (
@@ -363,6 +372,8 @@ class MatchEnv(pettingzoo.ParallelEnv):
         numbers, or that would start off the field or inside a wall, a goal or a robot;
         ClosedEnvironmentError after ``close``."""
         self._check_open("reset")
+        if options is not None and not isinstance(options, Mapping):
+            raise TypeError(f'reset options must be a dict (such as {{"ball": (x, y)}}), not {short_repr(options)}')
         ball = (options or {}).get("ball")
         if ball is None:
             return None
@@ -505,7 +516,7 @@ class MatchEnv(pettingzoo.ParallelEnv):
     def robot(self, name: str) -> Simulation:
         """The ``Simulation`` view of robot ``name`` (an agent or a scripted robot)."""
         self._check_open("robot")
-        if name not in self.robots:
+        if not isinstance(name, str) or name not in self.robots:
             raise ValueError(f"no robot {name!r} (robots: {', '.join(self.robots)})")
         return self.robots[name]
 
