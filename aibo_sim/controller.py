@@ -274,7 +274,9 @@ def robot_keyboard_get_key() -> int:
 
 def robot_console_printf(fmt: str, *args) -> None:
     """Write ``fmt % args`` to stdout, as C's printf (``%%`` is ``%`` without ``args`` too), and
-    flush it; a format its ``args`` do not fill is a TypeError naming it."""
+    flush it; a format its ``args`` do not fill, or one that is not a str, is a TypeError naming it."""
+    if not isinstance(fmt, str):  # b"..." % () is bytes, which stdout refuses
+        raise TypeError(f"robot_console_printf({short_repr(fmt)}): the format must be a str")
     try:
         text = fmt % args
     except (TypeError, ValueError) as exc:
@@ -541,8 +543,12 @@ def mtn_get_time(motion) -> int:
 
 def mtn_fprint(file, motion) -> None:
     """A debug dump of a motion (aibo-sim's layout, not Webots'): name, creator, design, frame
-    time, keyframes, length, locators (control characters in them escaped)."""
-    file.write(format_motion_info(motion_info(_motion(motion, "mtn_fprint"))) + "\n")
+    time, keyframes, length, locators (control characters in them escaped); a TypeError for a
+    ``file`` that cannot be written (C's FILE *: ``sys.stdout``, or a file opened for writing)."""
+    text = format_motion_info(motion_info(_motion(motion, "mtn_fprint"))) + "\n"
+    if not callable(getattr(file, "write", None)):
+        raise TypeError(f"mtn_fprint({short_repr(file)}, ...): the file must be writable (sys.stdout, an open file)")
+    file.write(text)
 
 
 def mtn_get_name(motion) -> str:

@@ -493,6 +493,8 @@ def write_mtn(motion: Motion, path: str | os.PathLike) -> None:
     """Write ``motion`` to ``path`` whole or not at all (``files.write_file_atomic``: the bytes
     built first, then a temporary file, on the disk, renamed over ``path``; never through a link
     at it, while a link to a folder on its way is followed: ``files.named_file``)."""
+    if not isinstance(motion, Motion):
+        raise TypeError(f"write_mtn: the motion must be a Motion, not {type(motion).__name__}")
     write_file_atomic(named_file(path), serialize_mtn(motion), durable=True)
 
 

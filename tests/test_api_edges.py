@@ -506,3 +506,15 @@ def test_match_env_motion_player_and_motion_arguments_of_the_wrong_kind_are_name
         Motion.from_poses(None, None, np.zeros((2, 20)), 64)  # failed only in write_mtn
     with pytest.raises(MtnError, match=r"^x: frame time 16\.5 ms is not a positive whole number$"):
         Motion("x", "c", "d", 16.5, ("PRM:/r1/c1-Joint2:11",), [[0]], [[0, 0, 0]], [])  # cut to 16 before
+
+
+def test_console_motion_dump_and_motion_file_arguments_of_the_wrong_kind_are_named(robot, tmp_path):
+    with pytest.raises(TypeError, match=r"^robot_console_printf\(b'hi\\n'\): the format must be a str$"):
+        api.robot_console_printf(b"hi\n")  # stdout's "write() argument must be str"
+    write_mtn(ramp(), tmp_path / "ramp.mtn")
+    motion = api.mtn_new(str(tmp_path / "ramp.mtn"))
+    with pytest.raises(TypeError, match=r"^mtn_fprint\(None, \.\.\.\): the file must be writable"):
+        api.mtn_fprint(None, motion)  # an AttributeError before
+    with pytest.raises(TypeError, match="^write_mtn: the motion must be a Motion, not NoneType$"):
+        write_mtn(None, tmp_path / "a.mtn")
+    assert not (tmp_path / "a.mtn").exists()
