@@ -16,7 +16,7 @@ import mujoco
 
 from .config import CameraConfig, ParameterError
 from .field import DEFAULT_BALL_TYPE
-from .sim import ModelError, Simulation, ball_joint, default_scene
+from .sim import ModelError, Simulation, ball_joint
 from .team import off_the_carpet
 
 PLACEMENT_OVERLAP_M = 0.005  # a placed robot or ball sunk deeper than this into something is an error
@@ -65,15 +65,10 @@ def _given(values) -> str:
     return " ".join(f"{v:g}" for v in values)
 
 
-def on_the_default_field(sim) -> bool:
-    """Whether ``sim``'s scene is the bundled field: none given, or ``models/scene.xml`` named."""
-    return sim.scene is None or Path(sim.scene).resolve() == default_scene().resolve()
-
-
 def ball_off_the_field(sim, ball) -> str | None:
     """``off the carpet (|x| <= 3 m) of the default field`` where the ball at ``ball`` (x, y) would
     lie beyond the default field's walls; None inside them, and anywhere in a scene of one's own."""
-    problem = off_the_carpet(*ball) if on_the_default_field(sim) else None
+    problem = off_the_carpet(*ball) if sim.default_field else None
     return None if problem is None else f"{problem} of the default field"
 
 
@@ -116,7 +111,7 @@ def place(sim, pose: tuple[float, float, float] | None = None, ball: tuple[float
     first step would fling apart; naming ``scene`` when the scene's own start does."""
     if pose is not None:
         x, y, yaw_deg = pose
-        problem = off_the_carpet(x, y) if on_the_default_field(sim) else None  # a scene of one's own may be larger
+        problem = off_the_carpet(x, y) if sim.default_field else None  # a scene of one's own may be larger
         if problem is not None:
             raise ParameterError.at("pose", _given(pose), f"{problem} of the default field")
         sim.place_robot(x, y, math.radians(yaw_deg))

@@ -388,6 +388,8 @@ class World:
             )
         self.command_latency_frames = latency
         self.scene = scene  # as given: None for the RoboCup field
+        # The bundled field, named or not: its carpet bounds a pose and a ball (placement.place).
+        self.default_field = scene is None or Path(scene).resolve() == default_scene().resolve()
         self.robot_specs = tuple(robots)
         self.model = load_model(scene, ball, ball_type, self.robot_specs)
         check_robot(self.model, scene if scene is not None else default_scene(), keyframe)
@@ -586,6 +588,7 @@ class Simulation:
     data = property(lambda self: self.world.data)
     frame = property(lambda self: self.world.frame)
     scene = property(lambda self: self.world.scene)
+    default_field = property(lambda self: self.world.default_field)
     keyframe = property(lambda self: self.world.keyframe)
     steps_per_frame = property(lambda self: self.world.steps_per_frame)
     command_latency_frames = property(lambda self: self.world.command_latency_frames)
