@@ -193,11 +193,17 @@ def remove_in(folder, names) -> None:
         return
     try:
         for name in names:
-            if stat.S_ISREG(_mode(fd, name)):
-                with contextlib.suppress(OSError):
-                    os.unlink(name, dir_fd=fd)
+            _remove_file(fd, name)
     finally:
         os.close(fd)
+
+
+def _remove_file(folder_fd: int, name: str) -> None:
+    """Unlink ``name`` in the folder open at ``folder_fd`` where it is a regular file (a link or a
+    folder of that name is not ours); what cannot be removed is left."""
+    if stat.S_ISREG(_mode(folder_fd, name)):
+        with contextlib.suppress(OSError):
+            os.unlink(name, dir_fd=folder_fd)
 
 
 def rename_in(folder, name: str, new_name: str) -> None:
@@ -294,9 +300,8 @@ def write_files_atomic(files: dict[Path, bytes], temps: dict[Path, Path] | None 
                 raise _named(exc, path) from None
     except BaseException as exc:
         for temp in created:
-            with contextlib.suppress(OSError):
-                if temp.parent in folders and not _is_link(folders[temp.parent], temp.name):  # ours never is
-                    os.unlink(temp.name, dir_fd=folders[temp.parent])
+            if temp.parent in folders:
+                _remove_file(folders[temp.parent], temp.name)
         if not isinstance(exc, OSError) or isinstance(exc, SymlinkRefused):
             raise
         in_the_way = exc.filename not in (None, str(path)) and os.path.lexists(exc.filename)
