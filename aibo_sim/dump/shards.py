@@ -332,11 +332,7 @@ def shard_balls(world: WorldConfig, workers: int) -> list[list[float]]:
             rng = np.random.default_rng(world.seed + k)
             for _ in range(SHARD_BALL_DRAWS):
                 ahead, side = float(rng.uniform(*SHARD_BALL_X)), float(rng.uniform(*SHARD_BALL_Y))
-                ball = (
-                    [ahead, side]
-                    if world.pose is None
-                    else [x + ahead * cos - side * sin, y + ahead * sin + side * cos]
-                )
+                ball = [x + ahead * cos - side * sin, y + ahead * sin + side * cos]  # (ahead, side) at yaw 0
                 try:
                     place(sim, world.pose, ball)
                     break
