@@ -113,6 +113,13 @@ def _beyond_limits(
     return None
 
 
+def _positive_whole(value) -> bool:
+    """Whether ``value`` is a positive whole number (16 or 16.0; not True, 16.5 or "16")."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        return False
+    return value > 0 and (isinstance(value, numbers.Integral) or float(value).is_integer())
+
+
 def _check(source: str, checks) -> None:
     """Raise the MtnError of the first (bad, message) pair whose ``bad`` is true."""
     for bad, message in checks:
@@ -152,9 +159,7 @@ class Motion:
         self.interpolate = np.asarray(self.interpolate, dtype=np.int64).reshape(-1)
         self.source = self.name if self.source is None else self.source
         n, j = len(self.keyframes), len(self.locators)
-        time = self.frame_time_ms  # 16.5 was cut to 16
-        whole_time = isinstance(time, numbers.Real) and not isinstance(time, bool)
-        whole_time = whole_time and float(time).is_integer() and time > 0
+        whole_time = _positive_whole(self.frame_time_ms)  # 16.5 was cut to 16
         _check(
             self.source,
             [
@@ -243,11 +248,11 @@ class Motion:
             seg = np.full(max(n - 1, 0), seg)
         if seg.shape != (max(n - 1, 0),):
             raise MtnError(name, None, f"{seg.size} segment durations for {n} poses (want {n - 1})")
-        frame_ok = isinstance(frame_time_ms, numbers.Integral) and not isinstance(frame_time_ms, bool)
-        if not frame_ok or frame_time_ms <= 0 or not np.isfinite(seg).all() or (seg > _S32_MAX).any():
+        if not _positive_whole(frame_time_ms) or not np.isfinite(seg).all() or (seg > _S32_MAX).any():
             raise MtnError(
                 name, None, f"segment durations {seg.tolist()} must be positive multiples of {frame_time_ms!r} ms"
             )
+        frame_time_ms = int(frame_time_ms)
         if any(int(s) != s or s <= 0 or int(s) % frame_time_ms for s in seg.tolist()):
             raise MtnError(
                 name, None, f"segment durations {seg.tolist()} must be positive multiples of {frame_time_ms} ms"

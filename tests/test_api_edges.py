@@ -506,6 +506,13 @@ def test_match_env_motion_player_and_motion_arguments_of_the_wrong_kind_are_name
         Motion.from_poses(None, None, np.zeros((2, 20)), 64)  # failed only in write_mtn
     with pytest.raises(MtnError, match=r"^x: frame time 16\.5 ms is not a positive whole number$"):
         Motion("x", "c", "d", 16.5, ("PRM:/r1/c1-Joint2:11",), [[0]], [[0, 0, 0]], [])  # cut to 16 before
+    whole = Motion.from_poses("w", None, np.zeros((2, 20)), 64, frame_time_ms=16.0)  # as Motion takes it
+    assert whole == Motion.from_poses("w", None, np.zeros((2, 20)), 64) and type(whole.frame_time_ms) is int
+    for frame_time in (16.5, True, "16"):
+        with pytest.raises(
+            MtnError, match=rf"^w: segment durations \[64\] must be positive multiples of {frame_time!r} ms$"
+        ):
+            Motion.from_poses("w", None, np.zeros((2, 20)), 64, frame_time_ms=frame_time)
 
 
 def test_console_motion_dump_and_motion_file_arguments_of_the_wrong_kind_are_named(robot, tmp_path):
