@@ -113,11 +113,15 @@ def _beyond_limits(
     return None
 
 
-def _positive_whole(value) -> bool:
-    """Whether ``value`` is a positive whole number (16 or 16.0; not True, 16.5 or "16")."""
+def whole_ms(value) -> int | None:
+    """``value`` as an int when it is a whole number (an int, or a float such as 16.0), else
+    None: 8.9 ms is not silently 8 ms, nor a bool or a string a duration."""
     if isinstance(value, bool) or not isinstance(value, numbers.Real):
-        return False
-    return value > 0 and (isinstance(value, numbers.Integral) or float(value).is_integer())
+        return None
+    if isinstance(value, numbers.Integral):
+        return int(value)
+    value = float(value)
+    return int(value) if value.is_integer() else None
 
 
 def _check(source: str, checks) -> None:
@@ -159,7 +163,7 @@ class Motion:
         self.interpolate = np.asarray(self.interpolate, dtype=np.int64).reshape(-1)
         self.source = self.name if self.source is None else self.source
         n, j = len(self.keyframes), len(self.locators)
-        whole_time = _positive_whole(self.frame_time_ms)  # 16.5 was cut to 16
+        whole_time = (whole_ms(self.frame_time_ms) or 0) > 0  # 16.5 was cut to 16
         _check(
             self.source,
             [
@@ -248,7 +252,7 @@ class Motion:
             seg = np.full(max(n - 1, 0), seg)
         if seg.shape != (max(n - 1, 0),):
             raise MtnError(name, None, f"{seg.size} segment durations for {n} poses (want {n - 1})")
-        if not _positive_whole(frame_time_ms) or not np.isfinite(seg).all() or (seg > _S32_MAX).any():
+        if (whole_ms(frame_time_ms) or 0) <= 0 or not np.isfinite(seg).all() or (seg > _S32_MAX).any():
             raise MtnError(
                 name, None, f"segment durations {seg.tolist()} must be positive multiples of {frame_time_ms!r} ms"
             )

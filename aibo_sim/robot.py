@@ -26,7 +26,7 @@ import numpy as np
 
 from . import ers7
 from .mtn import MODES as MTN_MODES
-from .mtn import Motion, MotionPlayer, MtnError, check_joint, mtn_new
+from .mtn import Motion, MotionPlayer, MtnError, check_joint, mtn_new, whole_ms
 from .sim import FRAME_MS, Simulation
 
 BACKENDS = ("sim", "openr")
@@ -40,17 +40,6 @@ class DeviceError(RuntimeError):
 class SimulationEnd(BaseException):
     """Raised inside the controller when the run's duration is over (Webots ends it too). Not an
     ``Exception``, as ``SystemExit`` is not: a controller's ``except Exception`` lets it through."""
-
-
-def whole_ms(value) -> int | None:
-    """``value`` as an int when it is a whole number (an int, or a float such as 16.0), else
-    None: 8.9 ms is not silently 8 ms, nor a bool or a string a duration."""
-    if isinstance(value, bool) or not isinstance(value, numbers.Real):
-        return None
-    if isinstance(value, numbers.Integral):
-        return int(value)
-    value = float(value)
-    return int(value) if value.is_integer() else None
 
 
 def sampling_period(ms, what: str) -> int:
