@@ -372,6 +372,16 @@ def camera_get_image(tag) -> np.ndarray:
     return _device(tag, Camera).get_image()
 
 
+def camera_save_image(tag, filename: str, quality: int) -> int:
+    """Write the last picture to ``filename``: PNG, or JPEG of ``quality`` 1-100 (.jpg, .jpeg).
+
+    :returns: 0 when written, -1 when the file cannot be (the reason on stderr), as in Webots.
+    :raises DeviceError: not enabled, before its first picture, another suffix or quality.
+    """
+    _rendering("camera_save_image")
+    return _device(tag, Camera).save_image(filename, quality)
+
+
 def camera_get_width(tag) -> int:
     """Image width in pixels."""
     return _device(tag, Camera).width

@@ -18,13 +18,16 @@ import difflib
 import math
 import numbers
 import os
+import sys
 import weakref
 from dataclasses import dataclass
 from pathlib import Path
 
+import cv2
 import numpy as np
 
 from . import ers7
+from .files import named_file, png, write_file_atomic
 from .mtn import MODES as MTN_MODES
 from .mtn import Motion, MotionPlayer, MtnError, check_joint, mtn_new, whole_ms
 from .sim import FRAME_MS, Simulation
@@ -241,6 +244,34 @@ class Camera(Device):
     def get_image(self) -> np.ndarray:
         """Row-major RGB, 3 bytes a pixel (what the OPEN-R wrapper's camera_get_image fills)."""
         return self.value()
+
+    def save_image(self, filename, quality) -> int:
+        """Webots' camera_save_image: the last picture into ``filename`` (relative to the working
+        folder), a PNG, or a JPEG of ``quality`` 1-100 when it ends in .jpg or .jpeg, written whole
+        or not at all (a link at ``filename`` is replaced, not followed). 0 when written; -1 when the
+        file system refuses it, the reason on stderr (Webots' answer); DeviceError for the call's own
+        mistakes."""
+        call = f"{self.locator}: camera_save_image({filename!r}, {quality!r})"
+        if not isinstance(filename, (str, os.PathLike)) or not str(filename):
+            raise DeviceError(f"{call}: the file name must be a non-empty string")
+        suffix = Path(filename).suffix.lower()
+        if suffix not in (".png", ".jpg", ".jpeg"):
+            raise DeviceError(f"{call}: the file name must end in .png, .jpg or .jpeg")
+        if isinstance(quality, bool) or not isinstance(quality, numbers.Integral):
+            raise DeviceError(f"{call}: the quality must be a whole number")
+        if suffix != ".png" and not 1 <= quality <= 100:
+            raise DeviceError(f"{call}: a JPEG's quality must be 1-100")
+        bgr = self.get_image().reshape(self.height, self.width, 3)[:, :, ::-1]
+        if suffix == ".png":
+            data = png(bgr)
+        else:
+            data = cv2.imencode(".jpg", bgr, [cv2.IMWRITE_JPEG_QUALITY, int(quality)])[1].tobytes()
+        try:
+            write_file_atomic(named_file(filename), data)
+        except OSError as error:
+            print(f"aibo-sim: {call}: {error}", file=sys.stderr)
+            return -1
+        return 0
 
     @property
     def width(self) -> int:

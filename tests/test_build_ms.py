@@ -68,7 +68,7 @@ PROBE = r"""
 
 static char scenario[32];
 static DeviceTag camera, accelerometer, paw, joints[128];
-static int joint_count, plays;
+static int joint_count, plays, pictures;
 static MTN *walk;
 static FILE *out;
 
@@ -129,6 +129,9 @@ static void init(void) {
         servo_set_acceleration(robot_get_device("PRM:/r1/c1/c2-Joint2:12"), 0);
     } else if (is("control p")) {
         servo_set_control_p(robot_get_device("PRM:/r1/c1/c2-Joint2:12"), -50);
+    } else if (is("save gif") || is("save jpeg")) {
+        camera = robot_get_device("PRM:/r1/c1/c2/c3/i1-FbkImageSensor:F1");
+        camera_save_image(camera, is("save gif") ? "a.gif" : "a.jpg", 90);
     } else if (is("ear torque")) {
         servo_enable_motor_force_feedback(robot_get_device("PRM:/r1/c1/c2/c3/e5-Joint4:15"), 32);
     } else if (is("mode")) {
@@ -162,6 +165,12 @@ static int run(int ms) {
     }
     if (is("camera") && ms) {
         fwrite(camera_get_image(camera), 3, camera_get_width(camera) * camera_get_height(camera), out);
+        if (++pictures == 10) {  /* the 10th picture as a file; and one where no folder is */
+            FILE *saved = fopen("saved.txt", "w");
+            int written = camera_save_image(camera, "shot.png", 0);
+            fprintf(saved, "%d %d\n", written, camera_save_image(camera, "no/a.png", 0));
+            fclose(saved);
+        }
     } else if (is("sensors") && ms) {
         for (int j = 0; j < joint_count; j++) fprintf(out, "%.9f ", servo_get_position(joints[j]));
         const float *a = accelerometer_get_values(accelerometer);
@@ -387,6 +396,12 @@ def test_camera_get_image_is_the_openr_backends_byte_for_byte(probe, tmp_path, m
     assert data.startswith(b"208 160 0.993092") and len(data) > 30 * 208 * 160 * 3
     assert data == (reference / "probe.txt").read_bytes()
     assert (stick / "died.txt").read_text() == (reference / "died.txt").read_text() == "died\n"
+    # camera_save_image: the 10th picture, as a PNG (the stick's uncompressed: no zlib on the robot)
+    tenth = data.index(b"\n") + 1 + 9 * 208 * 160 * 3
+    for folder in (stick, reference):
+        assert (folder / "saved.txt").read_text() == "0 -1\n" and not (folder / "no").exists()
+        saved = cv2.imread(str(folder / "shot.png"), cv2.IMREAD_UNCHANGED)[:, :, ::-1]
+        assert saved.tobytes() == data[tenth : tenth + 208 * 160 * 3], folder.name
     # The LED the wrapper commands when the controller commands nothing stays as it was.
     assert np.array_equal(sim.model.geom_rgba, reference_sim.model.geom_rgba)
 
@@ -554,6 +569,8 @@ def test_errors_end_the_controller_with_the_python_apis_message(probe, tmp_path)
         pan.set_control_p(-50)
     with pytest.raises(DeviceError) as ear_torque:
         robot.get_device("PRM:/r1/c1/c2/c3/e5-Joint4:15").force_feedback.enable(32)
+    with pytest.raises(DeviceError) as save_gif:
+        robot.get_device("PRM:/r1/c1/c2/c3/i1-FbkImageSensor:F1").save_image("a.gif", 90)
     with pytest.raises(MtnError) as missing:
         mtn_new("missing.mtn")
     api.install(robot)
@@ -567,6 +584,9 @@ def test_errors_end_the_controller_with_the_python_apis_message(probe, tmp_path)
         "acceleration": str(acceleration.value),
         "control p": str(control_p.value),
         "ear torque": str(ear_torque.value),
+        "save gif": str(save_gif.value),
+        "save jpeg": "PRM:/r1/c1/c2/c3/i1-FbkImageSensor:F1: camera_save_image('a.jpg', 90): a memory stick's "
+        "controller saves PNG only (no JPEG encoder on the robot)",
         "missing motion": f"mtn_play: MTN is NULL: mtn_new failed ({missing.value})",
         "step": "robot_step(32): not on the robot: an OPEN-R object cannot wait for time to pass inside a call",
         "zero step": str(zero_step.value),  # the stick said 'step of 0 ms: must be a positive whole multiple'

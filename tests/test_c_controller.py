@@ -7,6 +7,7 @@ import re
 import shutil
 from pathlib import Path
 
+import cv2
 import numpy as np
 import pytest
 
@@ -53,6 +54,13 @@ def test_every_api_function_gives_in_c_what_it_gives_in_python(tmp_path):
     assert tour == (tmp_path / "python" / "tour.txt").read_text()
     assert "missing 1 error File not found: no_such_motion.mtn" in tour and "walk a_walk#walk_fwd length 320" in tour
     assert tour.count("\nt ") == 8 and tour.endswith("die at 0.504\n")
+    assert "\nsaved 0 0\n" in tour
+    third = tour.split("\nt ")[3]
+    png = cv2.imread(str(tmp_path / "c" / "tour.png"))
+    assert int(third.split(" sum ")[1].split()[0]) == int(png.astype(int).sum())  # the picture of the third step
+    for name in ("tour.png", "tour.jpg"):
+        assert (tmp_path / "c" / name).read_bytes() == (tmp_path / "python" / name).read_bytes(), name
+    assert np.abs(cv2.imread(str(tmp_path / "c" / "tour.jpg")).astype(int) - png).mean() < 3  # quality 75
     assert runs["c"].robot_pose == runs["python"].robot_pose and runs["c"].camera_frames == 15
     for frame in sorted((tmp_path / "python" / "frames").iterdir()):
         assert (tmp_path / "c" / "frames" / frame.name).read_bytes() == frame.read_bytes(), frame.name
@@ -109,8 +117,9 @@ def test_each_c_call_returns_what_the_python_api_returned_in_the_same_run(tmp_pa
             assert value == _as_received(name, result), line
         if name == "robot_step":
             now += int(argument)
-    assert len(lines) == 70 and len(images) == 4
+    assert len(lines) == 74 and len(images) == 4
     assert (tmp_path / "images.bin").read_bytes() == b"".join(i.tobytes() for i in images)
+    assert np.array_equal(cv2.imread(str(tmp_path / "echo.png"))[:, :, ::-1].reshape(-1), images[-1])  # the last
     assert (tmp_path / "fprint.txt").read_text() == returned[0, "mtn_fprint", "mtn"]
     pixel = (
         controller.camera_image_get_red,

@@ -1,7 +1,9 @@
 """The Webots-era controller API, sampling rules, MTN playback through it, both backends (issue 4)."""
 
+import re
 import sys
 
+import cv2
 import numpy as np
 import pytest
 
@@ -132,6 +134,44 @@ def test_camera_delivers_at_most_30_frames_a_second(robot):
     assert len(images[0]) == 208 * 160 * 3
     assert api.camera_get_width(camera) == 208 and api.camera_get_height(camera) == 160
     assert api.camera_get_fov(camera) == pytest.approx(0.993092)
+
+
+def test_camera_save_image_writes_the_last_picture_as_webots_did(robot, tmp_path, capsys):
+    camera = api.robot_get_device(CAMERA)
+    with pytest.raises(DeviceError, match="not enabled"):
+        api.camera_save_image(camera, str(tmp_path / "a.png"), 0)
+    api.camera_enable(camera, 32)
+    api.robot_step(64)
+    picture = api.camera_get_image(camera).reshape(160, 208, 3)
+    assert api.camera_save_image(camera, str(tmp_path / "a.PNG"), 0) == 0  # quality: for JPEGs only
+    assert np.array_equal(cv2.imread(str(tmp_path / "a.PNG"))[:, :, ::-1], picture)
+    assert api.camera_save_image(camera, tmp_path / "b.jpeg", 100) == 0
+    assert (tmp_path / "b.jpeg").read_bytes()[:2] == b"\xff\xd8"  # a JPEG, near the picture (4:2:0 colour)
+    assert np.abs(cv2.imread(str(tmp_path / "b.jpeg"))[:, :, ::-1].astype(int) - picture).mean() < 4
+    (tmp_path / "elsewhere").write_bytes(b"kept")
+    (tmp_path / "link.png").symlink_to(tmp_path / "elsewhere")  # replaced, not written through
+    assert api.camera_save_image(camera, str(tmp_path / "link.png"), 0) == 0
+    assert (tmp_path / "elsewhere").read_bytes() == b"kept" and not (tmp_path / "link.png").is_symlink()
+    capsys.readouterr()
+    assert api.camera_save_image(camera, str(tmp_path / "no" / "c.png"), 0) == -1  # Webots' answer
+    assert capsys.readouterr().err == (
+        f"aibo-sim: {CAMERA}: camera_save_image('{tmp_path}/no/c.png', 0): cannot write {tmp_path}/no/c.png: "
+        "No such file or directory\n"
+    )
+    call = re.escape(f"{CAMERA}: camera_save_image(")
+    for filename, quality, reason in [
+        ("a.gif", 0, "the file name must end in .png, .jpg or .jpeg"),
+        ("png", 0, "the file name must end in .png, .jpg or .jpeg"),
+        ("", 0, "the file name must be a non-empty string"),
+        (None, 0, "the file name must be a non-empty string"),
+        ("a.jpg", 0, "a JPEG's quality must be 1-100"),
+        ("a.jpg", 101, "a JPEG's quality must be 1-100"),
+        ("a.png", 1.5, "the quality must be a whole number"),
+        ("a.png", True, "the quality must be a whole number"),
+    ]:
+        with pytest.raises(DeviceError, match=rf"^{call}.*\): {reason}$"):
+            api.camera_save_image(camera, filename, quality)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.PNG", "b.jpeg", "elsewhere", "link.png"]
 
 
 def test_sensors_read_in_their_units(robot):

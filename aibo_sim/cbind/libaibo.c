@@ -578,6 +578,15 @@ unsigned char *camera_get_image(DeviceTag c) {
     return copy;
 }
 
+int camera_save_image(DeviceTag c, const char *filename, int quality) {
+    begin(AIBO_OP_camera_save_image);
+    put_int(c);
+    put_string(filename);
+    put_int(quality);
+    call();
+    return get_int();
+}
+
 /* A camera's size and field of view are fixed for the run: asked once per tag, not at every call
  * (a pixel loop's bounds would cost a round trip each). */
 #define CAMERA_CONSTANT(type, name, getter)                            \

@@ -37,6 +37,7 @@ OPS = (
     ("camera_enable", "ii", ""),
     ("camera_disable", "i", ""),
     ("camera_get_image", "i", "m"),
+    ("camera_save_image", "isi", "i"),
     ("camera_get_width", "i", "i"),
     ("camera_get_height", "i", "i"),
     ("camera_get_fov", "i", "d"),

@@ -146,17 +146,25 @@ class _Call:
     FAILED = struct.pack("<Ii", 4, STATUS["failed"])
 
     def __init__(self, name: str, arguments: str, results: str, function):
-        assert "s" not in arguments or arguments == "s"  # a string comes alone
         self.name, self.function, self.results = name, function, results
         self.ahead = name in PREFETCHED
-        self._arguments = None if arguments == "s" else struct.Struct("<i" + arguments)
+        self._kinds = arguments
+        self._arguments = None if "s" in arguments else struct.Struct("<i" + arguments)
         self._answer = None if results in ("", "s") else struct.Struct("<Ii" + ("ii" if results == "m" else results))
 
     def arguments(self, payload: bytes) -> tuple:
         if self._arguments is not None:
             return self._arguments.unpack(payload)[1:]
-        size = _LENGTH.unpack_from(payload, 4)[0]
-        return (payload[8 : 8 + size].decode("utf-8", "replace"),)
+        values, offset = [], _OP.size
+        for kind in self._kinds:  # a call with a string (rare): read in turn
+            if kind == "s":
+                size = _LENGTH.unpack_from(payload, offset)[0]
+                values.append(payload[offset + 4 : offset + 4 + size].decode("utf-8", "replace"))
+                offset += 4 + size
+            else:
+                values += struct.unpack_from("<" + kind, payload, offset)
+                offset += struct.calcsize(kind)
+        return tuple(values)
 
     def answer(self, result) -> bytes:
         if self.results == "s":  # a motion's name is the file's bytes (latin-1), the rest UTF-8

@@ -102,6 +102,9 @@ void servo_set_motor_force(DeviceTag servo, double newton_metres) {
 void camera_enable(DeviceTag camera, unsigned short ms) { Api().Enable(camera, Robot::CAMERA, ms); }
 void camera_disable(DeviceTag camera) { Api().Disable(camera, Robot::CAMERA); }
 unsigned char* camera_get_image(DeviceTag camera) { return Api().CameraImage(camera); }
+int camera_save_image(DeviceTag camera, const char* filename, int quality) {
+    return Api().CameraSaveImage(camera, filename, quality);
+}
 unsigned short camera_get_width(DeviceTag camera) { return (unsigned short)Api().CameraWidth(camera); }
 unsigned short camera_get_height(DeviceTag camera) { return (unsigned short)Api().CameraHeight(camera); }
 

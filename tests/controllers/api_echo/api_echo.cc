@@ -91,6 +91,7 @@ static void sample(void) {
     put_tag_int("camera_get_width", camera, w);
     put_tag_int("camera_get_height", camera, h);
     put_double("camera_get_fov", camera, camera_get_fov(camera));
+    put_tag_int("camera_save_image", camera, camera_save_image(camera, "echo.png", 0));
     fwrite(image, 1, (size_t)w * h * 3, images);
     fprintf(pixels, "%d %d %d %d %d\n", camera_image_get_red(image, w, 10, 20), camera_image_get_green(image, w, 10, 20),
             camera_image_get_blue(image, w, 10, 20), camera_image_get_grey(image, w, 10, 20),

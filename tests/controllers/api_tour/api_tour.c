@@ -72,6 +72,8 @@ static int run(int ms) {
             camera_image_get_grey(image, w, 10, 20), mtn_get_time(walk), mtn_is_over(walk));
     robot_console_printf("step %d\n", ++calls);
     if (calls == 3) {
+        int png = camera_save_image(camera, "tour.png", 0);
+        fprintf(out, "saved %d %d\n", png, camera_save_image(camera, "tour.jpg", 75));
         servo_disable_position(pan);
         servo_disable_motor_force_feedback(pan);
         camera_disable(camera);

@@ -73,6 +73,7 @@ def run(ms):
     calls += 1
     robot_console_printf("step %d\n", calls)
     if calls == 3:
+        out.write(f"saved {camera_save_image(camera, 'tour.png', 0)} {camera_save_image(camera, 'tour.jpg', 75)}\n")
         servo_disable_position(pan)
         servo_disable_motor_force_feedback(pan)
         camera_disable(camera)

@@ -12,6 +12,9 @@ extern "C" {
 void camera_enable(DeviceTag camera, unsigned short ms);
 void camera_disable(DeviceTag camera);
 unsigned char *camera_get_image(DeviceTag camera);
+/* The last image into `filename` (relative to the working folder): a PNG, or a JPEG of `quality`
+ * 1-100 when it ends in .jpg or .jpeg; 0 when written, -1 when the file cannot be (why on stderr). */
+int camera_save_image(DeviceTag camera, const char *filename, int quality);
 unsigned short camera_get_width(DeviceTag camera);
 unsigned short camera_get_height(DeviceTag camera);
 float camera_get_fov(DeviceTag camera);
