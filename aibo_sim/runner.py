@@ -632,16 +632,18 @@ def _memory_stick(path: Path, backend: str | None, mtn_mode: str | None, memory_
 
 
 def _run_memory_stick(path: Path, run: MemoryStickRun) -> None:
-    """Run a memory stick's objects; an object that crashed is ControllerFailed. A frame that
-    could not be written, or a match stopped, ends the run (SimulationEnd) as its end does."""
+    """Run a memory stick's objects; an object that crashed or called OPENR::Fatal is
+    ControllerFailed. A frame that could not be written, or a match stopped, ends the run
+    (SimulationEnd) as its end does."""
     try:
         run.run()
     except SimulationEnd:
         pass  # the writer's error, or the match's interruption, is reported by the caller
     except OpenRObjectCrashed as error:
         raise ControllerFailed(f"memory stick {path.name}: {error}") from error
-    if run.controller_error is not None:  # the wrapper's controller failed: the robot shut down
-        raise ControllerFailed(f"memory stick {path.name}: {run.controller_error}")
+    failure = run.controller_error or run.fatal_error  # the wrapper's controller failed, or OPENR::Fatal
+    if failure is not None:
+        raise ControllerFailed(f"memory stick {path.name}: {failure}")
 
 
 def _run_as_main(path: Path) -> None:

@@ -72,7 +72,9 @@ extension, ``aibo_sim_controller_failed``, which the wrapper calls where the run
 ``CAMERA_CAPTURED`` uint32 frame number of the image the wrapper's controller's camera took (the
 extension ``aibo_sim_camera_captured``: what the run writes to ``--out``).
 ``LOG_FAILED`` int32 errno: the console's log could not be written (a full disk); the runtime
-writes it no more, and the run ends naming the file.
+writes it no more, and the run ends naming the file. ``FATAL`` uint32 the ``OFatal`` code, then
+the name of the object that called ``OPENR::Fatal`` (UTF-8): the robot's power went off there
+(no entry of any object runs after it, DoStop and DoDestroy neither), and the run fails.
 """
 
 import struct
@@ -96,6 +98,7 @@ RECORDS = {
     "CONTROLLER_FAILED": 11,
     "CAMERA_CAPTURED": 12,
     "LOG_FAILED": 13,
+    "FATAL": 14,
 }
 FRAME_FLAGS = {"IMAGE": 1, "POWER": 2, "RAW_IMAGE": 4}
 # What each sensor vector entry holds (the runtime gives each its ODataType).

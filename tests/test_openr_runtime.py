@@ -2,6 +2,7 @@
 built by the host SDK with Sony-style Makefiles and run on the simulated ERS-7."""
 
 import gzip
+import json
 import os
 import shutil
 import signal
@@ -17,6 +18,7 @@ from test_match import ROOT, ctrl_c_at
 
 import openr_bridge
 from aibo_sim import ers7
+from aibo_sim.cli import main
 from aibo_sim.files import SymlinkRefused
 from aibo_sim.match import run_match
 from aibo_sim.openr import host, mkbin
@@ -413,6 +415,25 @@ def test_a_crash_anywhere_is_named_with_its_object_and_signal(objects, tmp_path,
     stick = make_stick(tmp_path / "ms", objects, ["CRASH"], f"{SENSOR} Crash.Sensor.OSensorFrameVectorData.O\n")
     with pytest.raises(OpenRObjectCrashed, match=rf"^{who} crashed \(SIGSEGV: Segmentation fault\) at simulated t = "):
         run_stick(stick, 2.0, tmp_path / "out")
+
+
+@pytest.mark.parametrize("how", ["fatal", "fatal init"])
+def test_openr_fatal_powers_the_robot_off_and_fails_the_run(objects, tmp_path, monkeypatch, how):
+    """Sony: Fatal "sounds a warning sound ... and turns off power". It was a Shutdown: DoStop ran,
+    the run was done; after Fatal in DoInit the objects' entries ran on (and crashed)."""
+    monkeypatch.setenv("CRASH_HOW", how)
+    stick = make_stick(tmp_path / "ms", objects, ["CRASH"], f"{SENSOR} Crash.Sensor.OSensorFrameVectorData.O\n")
+    code, at = ("ofatalUNDEF", "0.088") if how == "fatal" else ("ofatalMEMORY_STICK", "0.000")
+    out = tmp_path / "out"
+    assert main(["run", str(stick), "--duration", "1", "--out", str(out)]) == 1
+    error = f"OPEN-R object Crash called OPENR::Fatal({code}) at simulated t = {at} s: the robot's power went off"
+    assert json.loads((out / "run.json").read_text())["error"] == f"memory stick ms: {error}"
+    console = [line.split("] ", 1)[1] for line in (out / "console.log").read_text().splitlines()]
+    off = "Crash: [ERROR] OPENR::Fatal({}): the robot's power goes off"  # and no entry runs after it
+    if how == "fatal":
+        assert console == ["Crash: DoStart", *(f"Crash: sensor vector {n}" for n in (1, 2, 3)), off.format(2**32 - 1)]
+    else:
+        assert console == [off.format(0), "Crash: [WARNING] DoInit returned 2"]
 
 
 def test_an_object_cut_short_or_named_twice_is_refused_naming_its_object_cfg_line(objects, tmp_path, monkeypatch):

@@ -128,6 +128,10 @@ def _usable(cdt) -> bool:
     return len(set(channels)) == len(channels)
 
 
+# OPENR.h's OFatal values, by number.
+FATAL_NAMES = {0: "ofatalMEMORY_STICK", 1: "ofatalPAUSE_SW", 2: "ofatalORB", 0xFFFFFFFF: "ofatalUNDEF"}
+
+
 class OpenRObjectCrashed(RuntimeError):
     """An object of the memory stick killed the runtime (a signal: segmentation fault, abort)."""
 
@@ -258,6 +262,7 @@ class MemoryStickRun:
         self.lookahead = protocol.LOOKAHEAD_FRAMES  # frames an answer may foretell (0: a message every frame)
         self.shutdown = False
         self.controller_error: str | None = None  # the wrapper's, when its controller failed
+        self.fatal_error: str | None = None  # an object called OPENR::Fatal: the robot's power went off
         self.log_error: OSError | None = None  # console.log could not be written: the run ends
         self.object_names: list[str] = []  # the objects' own names, in OBJECT.CFG's order
         self._sensors = SensorFrame(sim)
@@ -624,6 +629,13 @@ class MemoryStickRun:
             self.shutdown = True
         elif kind == protocol.RECORDS["CONTROLLER_FAILED"]:
             self.controller_error = self.controller_error or bytes(data).decode("utf-8", "replace")
+        elif kind == protocol.RECORDS["FATAL"]:
+            code = _U32.unpack_from(data)[0]
+            name = bytes(data[_U32.size :]).decode("utf-8", "replace")
+            self.fatal_error = (
+                f"OPEN-R object {name} called OPENR::Fatal({FATAL_NAMES.get(code, code)}) at simulated t = "
+                f"{self.time_ms / 1000:.3f} s: the robot's power went off"
+            )
         elif kind == protocol.RECORDS["LOG_FAILED"]:
             code = struct.unpack("<i", data)[0]
             self.log_error = OSError(f"cannot write {self.log_path}: {os.strerror(code)}")

@@ -30,6 +30,7 @@ std::map<std::string, OServiceEntry> services;
 void*  replySlot = NULL;
 size_t replySize = 0;
 bool   replied = false;
+bool   poweredOff = false;        /* OPENR::Fatal was called */
 
 struct Region {
     std::vector<char> bytes;
@@ -103,7 +104,13 @@ Object* AddObject(const std::string& name, const ObjectEntry* table, bool system
     return object;
 }
 
+void PowerOff() {
+    poweredOff = true;
+    mailbox.clear();
+}
+
 void Invoke(Object* object, Selector selector, void* message) {
+    if (poweredOff) return;  /* OPENR::Fatal: no entry runs any more */
     std::map<Selector, Entry>::iterator entry = object->entries.find(selector);
     if (entry == object->entries.end()) {
         char text[160];

@@ -1273,8 +1273,13 @@ OStatus OPENR::GetMemoryStickStatus(OMemoryStickStatus* status) {
     return oSUCCESS;
 }
 
+/* The robot sounds its warning and its power goes off: no entry runs after this one returns. */
 OStatus OPENR::Fatal(OFatal fatal) {
-    osyslog(osyslogERROR, "OPENR::Fatal(%u): the robot stops", (unsigned)fatal);
+    osyslog(osyslogERROR, "OPENR::Fatal(%u): the robot's power goes off", (unsigned)fatal);
+    std::string payload((const char*)&fatal, sizeof fatal);
+    payload += host::Current() != NULL ? host::Current()->name : "";
+    Record(AIBO_OPENR_RECORD_FATAL, payload.data(), payload.size());
+    PowerOff();
     StopRun();
     return oSUCCESS;
 }

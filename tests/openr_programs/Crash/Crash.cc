@@ -2,6 +2,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
+#include <OPENR/OPENRAPI.h>
 #include <OPENR/OSyslog.h>
 #include <OPENR/core_macro.h>
 #include "Crash.h"
@@ -34,11 +35,21 @@ OStatus Crash::DoInit(const OSystemEvent&) {
     NEW_ALL_SUBJECT_AND_OBSERVER;
     REGISTER_ALL_ENTRY;
     SET_ALL_READY_AND_NOTIFY_ENTRY;
+    if (How("fatal init")) {
+        OPENR::Fatal(ofatalMEMORY_STICK);
+        return oFAIL;
+    }
     return oSUCCESS;
 }
 
 OStatus Crash::DoStart(const OSystemEvent&) {
+    OSYSPRINT(("DoStart\n"));
     ASSERT_READY_TO_ALL_OBSERVER;
+    return oSUCCESS;
+}
+
+OStatus Crash::DoStop(const OSystemEvent&) {
+    OSYSPRINT(("DoStop\n"));
     return oSUCCESS;
 }
 
@@ -47,6 +58,11 @@ void Crash::NotifySensor(const ONotifyEvent& event) {
     if (vectors == 3 && !How("live")) {
         pthread_t later;
         if (How("exit")) exit(3);
+        if (How("fatal")) {
+            OPENR::Fatal(ofatalUNDEF);
+            observer[event.ObsIndex()]->AssertReady();  /* its next vector never comes: the power is off */
+            return;
+        }
         if (How("thread")) {
             pthread_create(&later, 0, CrashLater, 0);
         } else if (How("stack")) {

@@ -2,7 +2,9 @@
 // CRASH_HOW in the environment: exit, it calls exit(3) there instead; thread, a thread of its own
 // writes through the null pointer 50 ms later (outside any handler); stack, it recurses without
 // end; live, it runs on; init, it never returns from DoInit; say, its constructor prints "made";
-// load, its constructor writes through the null pointer (while the runtime loads its file).
+// load, its constructor writes through the null pointer (while the runtime loads its file); fatal,
+// it calls OPENR::Fatal there instead; fatal init, DoInit calls it and fails, as Sony's RMain does.
+// DoStart and DoStop say they ran.
 #ifndef Crash_h_DEFINED
 #define Crash_h_DEFINED
 
@@ -18,6 +20,7 @@ public:
     OObserver* observer[numOfObserver];
     virtual OStatus DoInit(const OSystemEvent& event);
     virtual OStatus DoStart(const OSystemEvent& event);
+    virtual OStatus DoStop(const OSystemEvent& event);
     void NotifySensor(const ONotifyEvent& event);
 
 private:
