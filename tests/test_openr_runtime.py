@@ -248,6 +248,16 @@ def test_joints_stay_limp_without_motor_power_or_gain(objects, tmp_path, mode):
     assert abs(np.degrees(result.frames[-1])) < 2  # commanded to 33 degrees, it did not move
 
 
+def test_a_closed_primitive_has_no_value_to_get(objects, tmp_path):
+    """GetSensorValue and GetJointValue answer oINVALID_PRIMITIVE_ID for a closed primitive, as
+    ControlPrimitive does (they read it as open before)."""
+    stick = make_stick(
+        tmp_path / "ms", objects, ["JPROBE"], JOINT_PROBE, {"JOINTPROBE_MODE": "MODE.TXT"}, {"MODE.TXT": "closed"}
+    )
+    lines = run_stick(stick, 0.05, tmp_path / "out").lines("JointProbe")
+    assert lines[1:3] == ["mode [closed]", "open 0 0 closed 4096 4096"]  # oINVALID_PRIMITIVE_ID
+
+
 def test_files_are_the_memory_stick_and_the_runs_folder(objects, tmp_path):
     stick = make_stick(
         tmp_path / "ms",
@@ -434,6 +444,18 @@ def test_openr_fatal_powers_the_robot_off_and_fails_the_run(objects, tmp_path, m
         assert console == ["Crash: DoStart", *(f"Crash: sensor vector {n}" for n in (1, 2, 3)), off.format(2**32 - 1)]
     else:
         assert console == [off.format(0), "Crash: [WARNING] DoInit returned 2"]
+
+
+def test_get_system_time_is_the_simulated_time_since_boot(objects, tmp_path, monkeypatch):
+    monkeypatch.setenv("CRASH_HOW", "clock")  # SystemTime.h and MCOOP.h's GetSystemTime were missing
+    stick = make_stick(tmp_path / "ms", objects, ["CRASH"], f"{SENSOR} Crash.Sensor.OSensorFrameVectorData.O\n")
+    result = run_stick(stick, 1.1, tmp_path / "out")
+    lines = [line for line in result.console.splitlines() if "system time" in line]
+    times = [line.split(", ")[0] for line in lines]
+    assert times[:2] == ["[    0.024 s] Crash: system time 0.024000", "[    0.056 s] Crash: system time 0.056000"]
+    assert times[-1] == "[    1.080 s] Crash: system time 1.080000" and len(times) == 34
+    # the robot's sizes (its time_t is 32 bits): 16 and 24 bytes before
+    assert lines[0].endswith(", OTime 8 bytes, OBootCondition 16")
 
 
 def test_an_object_cut_short_or_named_twice_is_refused_naming_its_object_cfg_line(objects, tmp_path, monkeypatch):

@@ -119,3 +119,49 @@ def test_a_build_ms_project_makes_its_mips_objects_with_sonys_compiler(tmp_path)
             b"\x01\x00",
             b"\x08\x00",
         ), name
+
+
+CONSTANT = re.compile(r"^\s*const\s+\w+\s+(o[a-zA-Z]*[A-Z_][A-Z0-9_]+)\s*=", re.M)
+
+
+def test_our_headers_constants_are_sonys_at_the_robots_sizes(tmp_path):
+    """Every constant of Sony's OPENR headers that ours declare has Sony's value (our values,
+    printed by a host program, are checked against Sony's headers at 32 bits); and every status
+    code and message type of Sony's is ours too (a program checks them by Sony's names)."""
+    ours_folder = Path(sdk_root()) / "OPEN_R" / "include" / "OPENR"
+    headers = sorted(  # not the macros a stub's def.h and entry.h go with
+        p.name
+        for p in ours_folder.glob("*.h")
+        if (SONY / "include" / "OPENR" / p.name).is_file() and "macro" not in p.name
+    )
+    sonys = {h: set(CONSTANT.findall((SONY / "include" / "OPENR" / h).read_text(errors="replace"))) for h in headers}
+    ours = {h: set(CONSTANT.findall((ours_folder / h).read_text())) for h in headers}
+    for header in ("OStatus.h", "ObjcommMessages.h"):  # status codes (oSUCCESS...), message types (omsgREADY...)
+        wanted = {name for name in sonys[header] if re.match(r"o(msg)?[A-Z]", name)}
+        assert wanted <= ours[header], sorted(wanted - ours[header])
+    shared = sorted(set().union(*(sonys[h] & ours[h] for h in headers)))
+    includes = "".join(f"#include <OPENR/{h}>\n" for h in headers)
+    printer = tmp_path / "print.cc"
+    printer.write_text(
+        f"{includes}#include <stdio.h>\nint main() {{\n"
+        + "".join(f'    printf("%s %lld\\n", "{n}", (long long)({n}));\n' for n in shared)
+        + "    return 0;\n}\n"
+    )
+    include = Path(sdk_root()) / "OPEN_R" / "include"
+    subprocess.run(["g++", f"-I{include}", "-o", str(tmp_path / "print"), str(printer)], check=True)
+    values = dict(
+        line.split()
+        for line in subprocess.run([tmp_path / "print"], capture_output=True, text=True).stdout.splitlines()
+    )
+    assert len(values) == len(shared) > 400
+    checks = tmp_path / "checks.cc"
+    checks.write_text(
+        includes + "".join(f"typedef char {n}_is_ours[(long long)({n}) == {values[n]}LL ? 1 : -1];\n" for n in shared)
+    )
+    flags = [*thirty_two_bit_flags(tmp_path), "-fsyntax-only", "-std=gnu++98", "-w"]
+    result = subprocess.run(
+        ["g++", *flags, f"-I{SONY / 'include' / 'R4000'}", f"-I{SONY / 'include'}", str(checks)],
+        capture_output=True,
+        text=True,
+    )
+    assert result.returncode == 0, "\n".join(line for line in result.stderr.splitlines() if "_is_ours" in line)

@@ -307,6 +307,12 @@ extern "C" sError WhoAmI(OID* object) {
     *object = OID(host::Current());
     return 0;
 }
+extern "C" sError GetSystemTime(SystemTime* time) {
+    unsigned long long micro = (unsigned long long)host::FrameNumber() * 8000;  /* 8 ms frames since boot */
+    time->seconds = (longword)(micro / 1000000);
+    time->useconds = (longword)(micro % 1000000);
+    return 0;
+}
 
 /* The console. */
 static OStatus PrintFormatted(const char* prefix, const char* format, va_list arguments, bool newline) {

@@ -1113,7 +1113,7 @@ OStatus OPENR::GetDefaultJointGain(OPrimitiveID id, word* pg, word* ig, word* dg
 
 OStatus OPENR::GetJointValue(OPrimitiveID id, OJointValue* value) {
     int entry = SensorEntry(id);
-    if (entry < 0 || primitives[id].type != oprimitiveJOINT2) return oINVALID_PRIMITIVE_ID;
+    if (entry < 0 || !opened[id] || primitives[id].type != oprimitiveJOINT2) return oINVALID_PRIMITIVE_ID;
     if (value == NULL) return oINVALID_ARG;
     const slongword* v = &latest[entry * AIBO_OPENR_VALUES_PER_SENSOR];
     *value = OJointValue(v[0], (word)v[1], (sword)v[2], v[3], 0);
@@ -1122,7 +1122,7 @@ OStatus OPENR::GetJointValue(OPrimitiveID id, OJointValue* value) {
 
 OStatus OPENR::GetSensorValue(OPrimitiveID id, OSensorValue* value) {
     int entry = SensorEntry(id);
-    if (entry < 0 || primitives[id].type != oprimitiveSENSOR) return oINVALID_PRIMITIVE_ID;
+    if (entry < 0 || !opened[id] || primitives[id].type != oprimitiveSENSOR) return oINVALID_PRIMITIVE_ID;
     if (value == NULL) return oINVALID_ARG;
     const slongword* v = &latest[entry * AIBO_OPENR_VALUES_PER_SENSOR];
     memset(value, 0, sizeof *value);

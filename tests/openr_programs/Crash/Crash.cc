@@ -2,6 +2,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
+#include <MCOOP.h>
 #include <OPENR/OPENRAPI.h>
 #include <OPENR/OSyslog.h>
 #include <OPENR/core_macro.h>
@@ -43,19 +44,25 @@ OStatus Crash::DoInit(const OSystemEvent&) {
 }
 
 OStatus Crash::DoStart(const OSystemEvent&) {
-    OSYSPRINT(("DoStart\n"));
+    if (How("fatal") || How("fatal init")) OSYSPRINT(("DoStart\n"));
     ASSERT_READY_TO_ALL_OBSERVER;
     return oSUCCESS;
 }
 
 OStatus Crash::DoStop(const OSystemEvent&) {
-    OSYSPRINT(("DoStop\n"));
+    if (How("fatal") || How("fatal init")) OSYSPRINT(("DoStop\n"));
     return oSUCCESS;
 }
 
 void Crash::NotifySensor(const ONotifyEvent& event) {
     OSYSPRINT(("sensor vector %d\n", ++vectors));
-    if (vectors == 3 && !How("live")) {
+    if (How("clock")) {
+        SystemTime now;
+        GetSystemTime(&now);
+        OSYSPRINT(("system time %u.%06u, OTime %u bytes, OBootCondition %u\n", (unsigned)now.seconds,
+                   (unsigned)now.useconds, (unsigned)sizeof(OTime), (unsigned)sizeof(OBootCondition)));
+    }
+    if (vectors == 3 && !How("live") && !How("clock")) {
         pthread_t later;
         if (How("exit")) exit(3);
         if (How("fatal")) {

@@ -4,7 +4,8 @@
 // end; live, it runs on; init, it never returns from DoInit; say, its constructor prints "made";
 // load, its constructor writes through the null pointer (while the runtime loads its file); fatal,
 // it calls OPENR::Fatal there instead; fatal init, DoInit calls it and fails, as Sony's RMain does.
-// DoStart and DoStop say they ran.
+// clock, it prints GetSystemTime's at each vector and runs on. In the fatal modes DoStart and
+// DoStop say they ran.
 #ifndef Crash_h_DEFINED
 #define Crash_h_DEFINED
 

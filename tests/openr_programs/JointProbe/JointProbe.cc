@@ -36,6 +36,18 @@ OStatus JointProbe::DoStart(const OSystemEvent&) {
     }
     OSYSPRINT(("mode [%s]\n", mode));
     waits = strncmp(mode, "wait", 4) == 0;
+    if (strncmp(mode, "closed", 6) == 0) {  /* a primitive's values, open and closed */
+        OPrimitiveID accel, tilt;
+        OSensorValue sensor;
+        OJointValue joint;
+        OPENR::OpenPrimitive("PRM:/a1-Sensor:a1", &accel);
+        OPENR::OpenPrimitive("PRM:/r1/c1-Joint2:11", &tilt);
+        OStatus openSensor = OPENR::GetSensorValue(accel, &sensor), openJoint = OPENR::GetJointValue(tilt, &joint);
+        OPENR::ClosePrimitive(accel);
+        OPENR::ClosePrimitive(tilt);
+        OSYSPRINT(("open %u %u closed %u %u\n", (unsigned)openSensor, (unsigned)openJoint,
+                   (unsigned)OPENR::GetSensorValue(accel, &sensor), (unsigned)OPENR::GetJointValue(tilt, &joint)));
+    }
     if (strncmp(mode, "nopower", 7) != 0) OPENR::SetMotorPower(opowerON);
     if (strncmp(mode, "nogain", 6) != 0) {
         word g[6] = {1, 1, 1, 1, 1, 1};

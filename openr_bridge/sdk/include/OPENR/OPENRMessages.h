@@ -14,6 +14,7 @@ const OMessageType OMessageSystemBase  = 0;
 const OMessageType OMessageRoboticBase = 1024;
 const OMessageType omsgNULL         = 0;
 const OMessageType omsgREASON       = 3;
+const OMessageType omsgCONNECT      = 6;
 const OMessageType omsgPOWER_STATUS = OMessageRoboticBase + 6;
 
 /* Init, Start, Stop and Destroy: why the entry is called, and its parameter. */

@@ -127,16 +127,18 @@ const longword obcbttRELATIVE = 0x00000000;
 const longword obcbttABSOLUTE = 0x80000000;
 
 struct OBootCondition {
-    word     bitmap;
-    time_t   bootTime;
-    longword bootTimeType;
-    byte     vibrationLevel;
+    word      bitmap;
+    slongword bootTime;         /* a time_t, in the robot's 32 bits */
+    longword  bootTimeType;
+    byte      vibrationLevel;
 
     OBootCondition() : bitmap(0), bootTime(0), bootTimeType(obcbttRELATIVE), vibrationLevel(0) {}
     OBootCondition(word bm) : bitmap(bm), bootTime(0), bootTimeType(obcbttRELATIVE), vibrationLevel(0) {}
-    OBootCondition(word bm, time_t bt, longword btt) : bitmap(bm), bootTime(bt), bootTimeType(btt), vibrationLevel(0) {}
+    OBootCondition(word bm, time_t bt, longword btt)
+        : bitmap(bm), bootTime((slongword)bt), bootTimeType(btt), vibrationLevel(0) {}
     OBootCondition(word bm, time_t bt, longword btt, byte vl)
-        : bitmap(bm), bootTime(bt), bootTimeType(btt), vibrationLevel(vl) {}
+        : bitmap(bm), bootTime((slongword)bt), bootTimeType(btt), vibrationLevel(vl) {}
 };
+OPENR_STATIC_ASSERT(sizeof(OBootCondition) == 16, OBootCondition_is_16_bytes);
 
 #endif /* _OPower_h_DEFINED */

@@ -46,6 +46,28 @@ const OStatus oNO_ROBOT_DESIGN     = 31;
 const OStatus oCHECK_SUM_ERROR     = 32;
 const OStatus oBUSY                = 33;
 
+/* The system's own (OStatusSystemInternalBase), which calls may also return. */
+const OStatus oOBJECTMANAGER_START_INVOKED   = OStatusSystemInternalBase + 0;
+const OStatus oOBJECTMANAGER_STOP_INVOKED    = OStatusSystemInternalBase + 1;
+const OStatus oOBJECTMANAGER_DESTROY_INVOKED = OStatusSystemInternalBase + 2;
+const OStatus oSYSTEM_OBJECTS_CANT_INIT      = OStatusSystemInternalBase + 3;
+const OStatus oSYSTEM_OBJECTS_CANT_START     = OStatusSystemInternalBase + 4;
+const OStatus oSYSTEM_OBJECTS_CANT_STOP      = OStatusSystemInternalBase + 5;
+const OStatus oSYSTEM_OBJECTS_CANT_DESTROY   = OStatusSystemInternalBase + 6;
+const OStatus oOBJECTS_CANT_INIT             = OStatusSystemInternalBase + 7;
+const OStatus oOBJECTS_CANT_START            = OStatusSystemInternalBase + 8;
+const OStatus oOBJECTS_CANT_STOP             = OStatusSystemInternalBase + 9;
+const OStatus oOBJECTS_CANT_DESTROY          = OStatusSystemInternalBase + 10;
+const OStatus oINVALID_SYSTEM_OBJECT_NAME    = OStatusSystemInternalBase + 11;
+const OStatus oOPEN_REF_COUNT_IS_ZERO        = OStatusSystemInternalBase + 12;
+const OStatus oLUT_INVALID_STATE             = OStatusSystemInternalBase + 13;
+const OStatus oLUT_SHORT_OF_DATA             = OStatusSystemInternalBase + 14;
+const OStatus oPWM_DUTY_OVER_LIMIT           = OStatusSystemInternalBase + 15;
+const OStatus oVR_FOR_DIAG                   = OStatusSystemInternalBase + 16;
+const OStatus oDEVICE_CONNECTED              = OStatusSystemInternalBase + 17;
+const OStatus oDEVICE_DISCONNECTED           = OStatusSystemInternalBase + 18;
+const OStatus oAGRUS_DIAG_NG                 = OStatusSystemInternalBase + 19;
+
 const OStatus oINVALID_PRIMITIVE_ID   = OStatusAPISpecificBase + 0;
 const OStatus oINVALID_DATA_VECTOR_ID = OStatusAPISpecificBase + 1;
 const OStatus oINVALID_DATA_TYPE      = OStatusAPISpecificBase + 2;

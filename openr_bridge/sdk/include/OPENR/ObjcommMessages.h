@@ -11,11 +11,19 @@
 /* The most data one notification carries. */
 #define MAX_NUM_DATA 13
 
-const OMessageType omsgCONTROL       = OMessageSystemBase + 256;
-const OMessageType omsgCONTROL_REPLY = OMessageSystemBase + 257;
-const OMessageType omsgREADY_V22     = OMessageSystemBase + 261;
-const OMessageType omsgNOTIFY_V22    = OMessageSystemBase + 262;
-const OMessageType omsgCONNECT_V22   = OMessageSystemBase + 263;
+/* Sony's message types (those of versions 2.1 and 2.2 too); the messages here carry the ones
+ * Sony's do. */
+const OMessageType omsgCONTROL           = OMessageSystemBase + 12;
+const OMessageType omsgCONTROL_REPLY     = OMessageSystemBase + 13;
+const OMessageType omsgREADY             = OMessageSystemBase + 14;
+const OMessageType omsgNOTIFY            = OMessageSystemBase + 15;
+const OMessageType omsgCONTROL_V21       = OMessageSystemBase + 256;
+const OMessageType omsgCONTROL_REPLY_V21 = OMessageSystemBase + 257;
+const OMessageType omsgREADY_V21         = OMessageSystemBase + 258;
+const OMessageType omsgNOTIFY_V21        = OMessageSystemBase + 259;
+const OMessageType omsgNOTIFY_L10        = OMessageSystemBase + 260;
+const OMessageType omsgREADY_V22         = OMessageSystemBase + 261;
+const OMessageType omsgNOTIFY_V22        = OMessageSystemBase + 262;
 
 /* Observer to subject, at connection: add (or remove) me. */
 struct OControlMessage {
@@ -69,7 +77,7 @@ struct OConnectMessage {
     SubjectID    subjectID;
     char         subName[oserviceNAME_MAX + 1];
 
-    OConnectMessage() : msgType(omsgCONNECT_V22), command(oconnectcmdCONNECT) { subName[0] = 0; }
+    OConnectMessage() : msgType(omsgCONNECT), command(oconnectcmdCONNECT) { subName[0] = 0; }
 };
 
 #endif /* ObjcommMessages_h_DEFINED */
