@@ -16,9 +16,11 @@ import aibo_sim.envs  # noqa: F401  (registers the environments)
 from aibo_sim import controller as api
 from aibo_sim import ers7
 from aibo_sim.cli import main
+from aibo_sim.envs.match import MatchEnv
 from aibo_sim.mtn import Motion, MtnError, write_mtn
 from aibo_sim.robot import DeviceError, Robot
 from aibo_sim.sim import Simulation, models_dir
+from aibo_sim.team import RobotSpec, check_robots
 
 SCRIPTED = Path(__file__).parent / "controllers" / "scripted_head.py"
 
@@ -293,6 +295,12 @@ def test_an_environment_keeps_no_stepping_after_close():
         env.step(env.action_space.sample())
     with pytest.raises(gymnasium.error.ClosedEnvironmentError, match="is closed"):
         env.reset(seed=1)
+    with pytest.raises(gymnasium.error.ClosedEnvironmentError, match="HeadTrackBallEnv.render after close"):
+        env.unwrapped.render()  # returned None without a render mode, as before close
+    match = MatchEnv(robots=check_robots([RobotSpec("red", 1)], "test"), camera=None)
+    match.close()
+    with pytest.raises(gymnasium.error.ClosedEnvironmentError, match="MatchEnv.render after close"):
+        match.render()
 
 
 @pytest.mark.parametrize("call", ["robot_live", "robot_run", "robot_die"])
@@ -332,10 +340,9 @@ def test_dump_takes_a_numpy_count(tmp_path):
 
 def test_configs_robots_and_match_actions_of_the_wrong_kind_are_named(tmp_path, monkeypatch):
     from aibo_sim.config import WorldConfig
-    from aibo_sim.envs.match import MatchEnv
     from aibo_sim.match import run_match
     from aibo_sim.runner import run_controller
-    from aibo_sim.team import RobotSpec, TeamError, check_robots
+    from aibo_sim.team import TeamError
 
     with pytest.raises(
         TypeError, match=r"^world must be a WorldConfig \(WorldConfig.from_dict reads a recorded dict\)"

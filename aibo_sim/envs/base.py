@@ -281,8 +281,7 @@ class AiboEnv(gym.Env):
         :raises gymnasium.error.ResetNeeded: before the first ``reset``.
         :raises gymnasium.error.ClosedEnvironmentError: after ``close``.
         """
-        if getattr(self, "_closed", False):
-            raise gym.error.ClosedEnvironmentError(f"{type(self).__name__}.step after close(): make a new environment")
+        check_open(self, "step")
         if not self._reset_done:
             raise gym.error.ResetNeeded(f"{type(self).__name__}.step before reset(): reset the environment first")
         targets = self.action_to_targets(action)
@@ -294,7 +293,11 @@ class AiboEnv(gym.Env):
 
     def render(self):
         """The ``tracking`` camera's view of the robot, a (360, 480, 3) uint8 RGB array, with
-        ``render_mode="rgb_array"``; ``None`` otherwise."""
+        ``render_mode="rgb_array"``; ``None`` otherwise.
+
+        :raises gymnasium.error.ClosedEnvironmentError: after ``close``, whatever the render mode.
+        """
+        check_open(self, "render")
         if self.render_mode != "rgb_array":
             return None
         if self._renderer is None:
@@ -425,6 +428,12 @@ class AiboEnv(gym.Env):
             return self._openr.serve(frame)
         layer = LAYERS[self.camera_layer]
         return np.stack([self.camera_message.band(layer, band) for band in YCRCB_BANDS], axis=-1)
+
+
+def check_open(env, what: str) -> None:
+    """ClosedEnvironmentError for ``env.what`` (a call) after the environment's ``close``."""
+    if getattr(env, "_closed", False):
+        raise gym.error.ClosedEnvironmentError(f"{type(env).__name__}.{what} after close(): make a new environment")
 
 
 class _ClosedSimulation:

@@ -54,7 +54,7 @@ from ..sim import (
     placement_values,
 )
 from ..team import PLAYERS_PER_TEAM, TEAMS, RobotSpec, check_robots
-from .base import HEAD_JOINTS, LAYERS, LEG_JOINTS, RENDER_SIZE, AiboEnv, check_options
+from .base import HEAD_JOINTS, LAYERS, LEG_JOINTS, RENDER_SIZE, AiboEnv, check_open, check_options
 
 MAX_CYCLES = 900  # steps (camera frames at 30 fps): 30 s of play
 BALL_PROGRESS_REWARD = 10.0  # per metre the ball moves towards the opposing goal, as ReachBall's progress
@@ -371,7 +371,7 @@ class MatchEnv(pettingzoo.ParallelEnv):
         """``reset``'s ``options={"ball": (x, y)}``, checked: ValueError for a ball that is not two
         numbers, or that would start off the field or inside a wall, a goal or a robot;
         ClosedEnvironmentError after ``close``."""
-        self._check_open("reset")
+        check_open(self, "reset")
         if options is not None and not isinstance(options, Mapping):
             raise TypeError(f'reset options must be a dict (such as {{"ball": (x, y)}}), not {short_repr(options)}')
         ball = (options or {}).get("ball")
@@ -429,7 +429,7 @@ class MatchEnv(pettingzoo.ParallelEnv):
         :raises gymnasium.error.ResetNeeded: no agent left (before ``reset``, or all done).
         :raises gymnasium.error.ClosedEnvironmentError: after ``close``.
         """
-        self._check_open("step")
+        check_open(self, "step")
         if not self.agents:
             raise gym.error.ResetNeeded(
                 f"{type(self).__name__}.step with no agent left (before reset, or every agent done): reset first"
@@ -478,7 +478,7 @@ class MatchEnv(pettingzoo.ParallelEnv):
         """The ball (position, m, and velocity, m/s) and every robot's body (x, y, z, yaw, tilt), in
         the order of ``robots``; float32, zeros for the ball in a scene without one; within
         ``state_space`` (see ``_state_space``)."""
-        self._check_open("state")
+        check_open(self, "state")
         values = [0.0] * 6
         if self.sim.has_ball:
             position, velocity = self.sim.ball_state()
@@ -491,10 +491,10 @@ class MatchEnv(pettingzoo.ParallelEnv):
 
     def render(self):
         """The whole field from above its -Y side line, a (360, 480, 3) uint8 RGB array, with
-        ``render_mode="rgb_array"``; ``None`` otherwise."""
+        ``render_mode="rgb_array"``; ``None`` otherwise (ClosedEnvironmentError after ``close``)."""
+        check_open(self, "render")
         if self.render_mode != "rgb_array":
             return None
-        self._check_open("render")
         if self._renderer is None:
             self._renderer = Renderer(self.sim.model, *RENDER_SIZE, quality="high")
             self._view = mujoco.MjvCamera()
@@ -515,7 +515,7 @@ class MatchEnv(pettingzoo.ParallelEnv):
 
     def robot(self, name: str) -> Simulation:
         """The ``Simulation`` view of robot ``name`` (an agent or a scripted robot)."""
-        self._check_open("robot")
+        check_open(self, "robot")
         if not isinstance(name, str) or name not in self.robots:
             raise ValueError(f"no robot {name!r} (robots: {', '.join(self.robots)})")
         return self.robots[name]
@@ -581,12 +581,6 @@ class MatchEnv(pettingzoo.ParallelEnv):
             "fallen": robot.fallen(),
             "ball_position": self.sim.ball_position(),
         }
-
-    def _check_open(self, what: str) -> None:
-        if self._closed:
-            raise gym.error.ClosedEnvironmentError(
-                f"{type(self).__name__}.{what} after close(): make a new environment"
-            )
 
 
 # ----------------------------------------------------------------------------- scripted robots
