@@ -4,11 +4,12 @@
     python -m aibo_sim.envs.train_example [--steps 150000] [--plot learning_curve.png]
 
 Trains on 2 environments in worker processes, saves the policy, then measures the trained
-policy and a random one on the same evaluation episodes (the same seeds, hence the same ball
-paths): mean episode reward, where an episode is 300 steps (10 s) and a step earns
-``1 - max(|x|, |y|)`` of the ball's offset from the image centre, 0 when it is out of view.
-The learning curve (episode rewards while training, and the random policy's level) is
-written as a PNG.
+policy, a random one and one holding the head still (where each episode starts it) on the same
+evaluation episodes (the same seeds, hence the same ball paths): mean episode reward, where an
+episode is 300 steps (10 s) and a step earns ``1 - max(|x|, |y|)`` of the ball's offset from
+the image centre, 0 when it is out of view. A policy that follows the ball beats the still one,
+which earns while the ball passes through the view. The learning curve (episode rewards while
+training, and the three policies' levels) is written as a PNG.
 """
 
 from __future__ import annotations
@@ -20,6 +21,7 @@ import time
 import gymnasium as gym
 import numpy as np
 
+from ..ers7 import JOINT_INDEX
 from ..files import named_file, write_file_atomic
 
 ENV_ID = "aibo_sim.envs:aibo_sim/HeadTrackBall-v0"  # names the module, so workers register it too
@@ -42,12 +44,21 @@ def evaluate(env, policy, episodes: int) -> list[float]:
     return totals
 
 
-def plot_learning_curve(
-    path: str, steps: np.ndarray, rewards: np.ndarray, random_level: float, trained_level: float, size=(800, 480)
-) -> None:
-    """Episode reward against training steps (points and a running mean), with the random and
-    the trained policy's evaluation levels as lines: a PNG of ``size`` pixels drawn by
-    matplotlib (Agg, headless), an ImportError naming ``pip install 'aibo-sim[plot]'`` without it."""
+def hold_still(env):
+    """The policy that holds the actuated joints at the targets an episode starts with (the
+    keyframe's): the baseline that shows whether a policy follows the ball."""
+    env.reset(seed=EVAL_SEED)
+    unwrapped = env.unwrapped
+    start = unwrapped.sim.servos.target[[JOINT_INDEX[name] for name in unwrapped.actuated_joints]]
+    action = unwrapped.targets_to_action(start)
+    return lambda obs: action
+
+
+def plot_learning_curve(path: str, steps: np.ndarray, rewards: np.ndarray, levels: dict, size=(800, 480)) -> None:
+    """Episode reward against training steps (points and a running mean), with the evaluation
+    levels of ``levels`` (policy name: mean reward; up to three) as lines: a PNG of ``size``
+    pixels drawn by matplotlib (Agg, headless), an ImportError naming
+    ``pip install 'aibo-sim[plot]'`` without it."""
     try:
         from matplotlib.backends.backend_agg import FigureCanvasAgg
         from matplotlib.figure import Figure
@@ -62,8 +73,8 @@ def plot_learning_curve(
         window = max(1, len(rewards) // 20)
         mean = np.convolve(rewards, np.ones(window) / window, mode="valid")
         axes.plot(steps[window - 1 :], mean, color="tab:blue", linewidth=2, label=f"running mean, {window} episodes")
-    axes.axhline(random_level, color="tab:red", label=f"random policy: {random_level:.1f}")
-    axes.axhline(trained_level, color="tab:green", label=f"trained policy: {trained_level:.1f}")
+    for (name, level), colour in zip(levels.items(), ("tab:red", "tab:orange", "tab:green"), strict=False):
+        axes.axhline(level, color=colour, label=f"{name} policy: {level:.1f}")
     axes.set(
         xlabel="training steps",
         ylabel="episode reward (300 steps)",
@@ -80,7 +91,7 @@ def plot_learning_curve(
 
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(
-        description="Train PPO on aibo_sim/HeadTrackBall-v0 and compare it with a random policy."
+        description="Train PPO on aibo_sim/HeadTrackBall-v0 and compare it with a random policy and a still one."
     )
     parser.add_argument("--steps", type=int, default=150_000, help="environment steps to train for")
     parser.add_argument("--envs", type=int, default=2, help="environments stepped in parallel processes")
@@ -134,16 +145,18 @@ def main(argv: list[str] | None = None) -> None:
     env = gym.make(ENV_ID, **options)
     trained = evaluate(env, lambda obs: model.predict(obs, deterministic=True)[0], args.episodes)
     random = evaluate(env, lambda obs: env.action_space.sample(), args.episodes)
+    still = evaluate(env, hold_still(env), args.episodes)
     env.close()
     steps, rewards = (
         (np.array(column, float) for column in zip(*episodes.curve)) if episodes.curve else (np.zeros(0), np.zeros(0))
     )
-    plot_learning_curve(args.plot, steps, rewards, float(np.mean(random)), float(np.mean(trained)))
+    levels = {"random": random, "holding still": still, "trained": trained}
+    plot_learning_curve(args.plot, steps, rewards, {name: float(np.mean(v)) for name, v in levels.items()})
     print(f"trained {args.steps} steps in {train_s / 60:.1f} min; saved {args.save}, learning curve {args.plot}")
     print(
         f"mean episode reward over {args.episodes} episodes (seeds {EVAL_SEED}..{EVAL_SEED + args.episodes - 1}, "
-        f"300 steps, at most 300): trained {np.mean(trained):.1f} +- {np.std(trained):.1f}, "
-        f"random {np.mean(random):.1f} +- {np.std(random):.1f}"
+        "300 steps, at most 300): "
+        + ", ".join(f"{name} {np.mean(v):.1f} +- {np.std(v):.1f}" for name, v in reversed(levels.items()))
     )
 
 
