@@ -50,7 +50,7 @@ from ..runner import motion_dirs
 from ..sim import Servos, load_model
 from .host import STANDARD_PSHIFT, TOUCH_AD_PER_NEWTON
 
-WRAPPER_OBJECTS = ("ControllerStub.o", "Controller.o", "Robot.o", "Mtn.o", "WebotsApi.o")
+WRAPPER_OBJECTS = ("ControllerStub.o", "Controller.o", "Robot.o", "Mtn.o", "Picture.o", "WebotsApi.o")
 STANDARD_SHIFTS = (STANDARD_PSHIFT, 0x02, 0x0F)  # Sony's fixed PSHIFT, ISHIFT, DSHIFT (Model Information 2.2)
 OBJECT_FILE = "CONTROLL.BIN"  # the wrapper object's name on the stick, as Webots named it
 DATA_FOLDER = ("OPEN-R", "MW", "DATA", "P")

@@ -9,6 +9,7 @@
 #include <OPENR/OSyslog.h>
 #include "Robot.h"
 #include "Ers7Table.h"
+#include "Picture.h"
 
 /* aibo-sim's host runtime: told the frame number of each image the controller's camera takes
  * (the run writes those pictures; the robot has none: null there). */
@@ -45,72 +46,6 @@ void YCrCb2RGB(byte y, byte cr, byte cb, byte* r, byte* g, byte* b) {
     *r = Clip(255.0 * (Y + Cr));
     *g = Clip(255.0 * (Y - 0.51 * Cr - 0.19 * Cb));
     *b = Clip(255.0 * (Y + Cb));
-}
-
-/* A PNG of RGB rows (colour type 2, 8 bits), its data in deflate's stored blocks: the robot has no
- * zlib, and a picture is 100 kB either way. */
-unsigned long Crc32(const byte* data, size_t size) {
-    static unsigned long table[256];
-    if (table[1] == 0) {
-        for (unsigned long n = 0; n < 256; n++) {
-            unsigned long c = n;
-            for (int k = 0; k < 8; k++) c = (c & 1) ? 0xEDB88320UL ^ (c >> 1) : c >> 1;
-            table[n] = c;
-        }
-    }
-    unsigned long crc = 0xFFFFFFFFUL;
-    for (size_t i = 0; i < size; i++) crc = table[(crc ^ data[i]) & 0xFF] ^ (crc >> 8);
-    return crc ^ 0xFFFFFFFFUL;
-}
-
-void PutBigEndian(std::vector<byte>* out, unsigned long value) {
-    for (int shift = 24; shift >= 0; shift -= 8) out->push_back((byte)((value >> shift) & 0xFF));
-}
-
-void PutChunk(std::vector<byte>* png, const char* type, const std::vector<byte>& data) {
-    PutBigEndian(png, data.size());
-    size_t start = png->size();
-    png->insert(png->end(), type, type + 4);
-    png->insert(png->end(), data.begin(), data.end());
-    PutBigEndian(png, Crc32(&(*png)[start], png->size() - start));
-}
-
-std::vector<byte> Png(const byte* rgb, int width, int height) {
-    std::vector<byte> rows;
-    for (int y = 0; y < height; y++) {
-        rows.push_back(0);  /* no filter */
-        rows.insert(rows.end(), rgb + (size_t)y * width * 3, rgb + (size_t)(y + 1) * width * 3);
-    }
-    std::vector<byte> zlib;
-    zlib.push_back(0x78);  /* deflate, 32 kB window; with the next byte a multiple of 31 */
-    zlib.push_back(0x01);
-    unsigned long a = 1, b = 0;
-    for (size_t at = 0; at < rows.size();) {
-        size_t size = rows.size() - at < 65535 ? rows.size() - at : 65535;
-        zlib.push_back(at + size == rows.size() ? 1 : 0);  /* the last block, stored */
-        zlib.push_back((byte)(size & 0xFF));
-        zlib.push_back((byte)(size >> 8));
-        zlib.push_back((byte)(~size & 0xFF));
-        zlib.push_back((byte)((~size >> 8) & 0xFF));
-        for (size_t i = at; i < at + size; i++) {
-            a = (a + rows[i]) % 65521;
-            b = (b + a) % 65521;
-        }
-        zlib.insert(zlib.end(), rows.begin() + at, rows.begin() + at + size);
-        at += size;
-    }
-    PutBigEndian(&zlib, (b << 16) | a);
-    std::vector<byte> header;
-    PutBigEndian(&header, width);
-    PutBigEndian(&header, height);
-    const byte format[] = {8, 2, 0, 0, 0};  /* 8 bits, RGB, deflate, no filters but none, not interlaced */
-    header.insert(header.end(), format, format + 5);
-    const byte signature[] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n'};
-    std::vector<byte> png(signature, signature + 8);
-    PutChunk(&png, "IHDR", header);
-    PutChunk(&png, "IDAT", zlib);
-    PutChunk(&png, "IEND", std::vector<byte>());
-    return png;
 }
 
 std::string Upper(const char* text) {
@@ -493,14 +428,14 @@ int Robot::CameraSaveImage(int tag, const char* filename, int quality) {
     if (suffix != ".PNG" && suffix != ".JPG" && suffix != ".JPEG") {
         Fail("%s%d): the file name must end in .png, .jpg or .jpeg", call.c_str(), quality);
     }
-    if (suffix != ".PNG") {
-        if (quality < 1 || quality > 100) Fail("%s%d): a JPEG's quality must be 1-100", call.c_str(), quality);
-        Fail("%s%d): a memory stick's controller saves PNG only (no JPEG encoder on the robot)", call.c_str(),
-             quality);
+    if (suffix != ".PNG" && (quality < 1 || quality > 100)) {
+        Fail("%s%d): a JPEG's quality must be 1-100", call.c_str(), quality);
     }
-    std::vector<byte> png = Png(CameraImage(tag), CameraWidth(tag), CameraHeight(tag));
+    const byte* image = CameraImage(tag);
+    int width = CameraWidth(tag), height = CameraHeight(tag);
+    std::vector<byte> data = suffix == ".PNG" ? Png(image, width, height) : Jpeg(image, width, height, quality);
     FILE* file = fopen(filename, "wb");
-    bool written = file != NULL && fwrite(&png[0], 1, png.size(), file) == png.size();
+    bool written = file != NULL && fwrite(&data[0], 1, data.size(), file) == data.size();
     if (file != NULL && fclose(file) != 0) written = false;
     if (!written) {
         OSYSPRINT(("%s%d): cannot write %s: %s\n", call.c_str(), quality, filename, strerror(errno)));

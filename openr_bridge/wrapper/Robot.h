@@ -97,7 +97,7 @@ public:
     int JointOf(int tag, Kind kind);
     void SetLed(int tag, int value);
     unsigned char* CameraImage(int tag);
-    int CameraSaveImage(int tag, const char* filename, int quality);  /* a PNG; -1 when not written */
+    int CameraSaveImage(int tag, const char* filename, int quality);  /* PNG or JPEG; -1 when not written */
     int CameraWidth(int tag);
     int CameraHeight(int tag);
     std::string DeviceLocator(int tag, Kind kind);
