@@ -372,14 +372,15 @@ def camera_get_image(tag) -> np.ndarray:
     return _device(tag, Camera).get_image()
 
 
-def camera_save_image(tag, filename: str, quality: int) -> int:
+def camera_save_image(tag, filename: str, quality: int, *, folder: str | None = None) -> int:
     """Write the last picture to ``filename``: PNG, or JPEG of ``quality`` 1-100 (.jpg, .jpeg).
+    A relative name is in ``folder`` (default the working folder; the C binding's controller's own).
 
-    :returns: 0 when written, -1 when the file cannot be (the reason on stderr), as in Webots.
-    :raises DeviceError: not enabled, before its first picture, another suffix or quality.
+    :returns: 0 when written, -1 when it cannot be (the reason on stderr), as in Webots.
+    :raises DeviceError: a name that is not a string; not enabled, before its first picture.
     """
     _rendering("camera_save_image")
-    return _device(tag, Camera).save_image(filename, quality)
+    return _device(tag, Camera).save_image(filename, quality, folder)
 
 
 def camera_get_width(tag) -> int:

@@ -13,6 +13,7 @@ from __future__ import annotations
 import contextlib
 import datetime
 import errno
+import hashlib
 import json
 import os
 import shlex
@@ -33,6 +34,7 @@ _NO_FOLLOW = getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_CLOEXEC", 0)
 # A folder on the way is only passed through (O_PATH: no read permission needed, as a path's folders).
 _FOLDER_FLAGS = getattr(os, "O_PATH", os.O_RDONLY) | getattr(os, "O_DIRECTORY", 0) | _NO_FOLLOW
 HOLDER_COMMAND_CHARS = 300  # a lock holder's command line is cut to this in messages
+MAX_NAME_BYTES = 255  # the longest file name Linux's file systems hold (NAME_MAX)
 
 
 class SymlinkRefused(OSError):
@@ -238,8 +240,12 @@ def create_file(temp: Path, folder_fd: int | None = None) -> int:
 
 
 def temporary_path(path: Path) -> Path:
-    """Where ``write_file_atomic`` writes ``path`` first, by default: ``.NAME.tmp`` beside it."""
-    return path.with_name(f".{path.name}.tmp")
+    """Where ``write_file_atomic`` writes ``path`` first, by default: ``.NAME.tmp`` beside it, or
+    ``.HASH.tmp`` for a name too long to take five bytes more (a file system's names hold 255)."""
+    name = f".{path.name}.tmp"
+    if len(os.fsencode(name)) > MAX_NAME_BYTES:
+        name = f".{hashlib.sha256(os.fsencode(path.name)).hexdigest()[:32]}.tmp"
+    return path.with_name(name)
 
 
 def write_file_atomic(path: Path, data: bytes, temp: Path | None = None, durable: bool = False) -> None:

@@ -245,33 +245,41 @@ class Camera(Device):
         """Row-major RGB, 3 bytes a pixel (what the OPEN-R wrapper's camera_get_image fills)."""
         return self.value()
 
-    def save_image(self, filename, quality) -> int:
-        """Webots' camera_save_image: the last picture into ``filename`` (relative to the working
-        folder), a PNG, or a JPEG of ``quality`` 1-100 when it ends in .jpg or .jpeg, written whole
-        or not at all (a link at ``filename`` is replaced, not followed). 0 when written; -1 when the
-        file system refuses it, the reason on stderr (Webots' answer); DeviceError for the call's own
-        mistakes."""
+    def save_image(self, filename, quality, folder: str | None = None) -> int:
+        """Webots' camera_save_image: the last picture into ``filename`` (relative to ``folder``,
+        default the working folder), a PNG, or a JPEG of ``quality`` 1-100 when it ends in .jpg or .jpeg (any case;
+        ``quality`` is ignored for a PNG), written whole or not at all (a link at ``filename`` is
+        replaced, not followed). 0 when written; -1, the reason on stderr, when it cannot be (another
+        ending, a JPEG quality out of range, the file system's refusal), as Webots answers.
+
+        :raises DeviceError: a file name that is not a string; not enabled, or no picture yet.
+        """
         call = f"{self.locator}: camera_save_image({filename!r}, {quality!r})"
-        if not isinstance(filename, (str, os.PathLike)) or not str(filename):
-            raise DeviceError(f"{call}: the file name must be a non-empty string")
-        suffix = Path(filename).suffix.lower()
-        if suffix not in (".png", ".jpg", ".jpeg"):
-            raise DeviceError(f"{call}: the file name must end in .png, .jpg or .jpeg")
-        if isinstance(quality, bool) or not isinstance(quality, numbers.Integral):
-            raise DeviceError(f"{call}: the quality must be a whole number")
-        if suffix != ".png" and not 1 <= quality <= 100:
-            raise DeviceError(f"{call}: a JPEG's quality must be 1-100")
+        name = os.fspath(filename) if isinstance(filename, (str, os.PathLike)) else None
+        if not isinstance(name, str):
+            raise DeviceError(f"{call}: the file name must be a string")
         bgr = self.get_image().reshape(self.height, self.width, 3)[:, :, ::-1]
-        if suffix == ".png":
+        ending = name.rsplit("/", 1)[-1].lower()
+        whole = not isinstance(quality, bool) and isinstance(quality, numbers.Integral)
+        problem = data = None
+        if not name or "\0" in name:
+            problem = "not a file name"
+        elif ending.endswith(".png"):
             data = png(bgr)
+        elif not ending.endswith((".jpg", ".jpeg")):
+            problem = "the file name must end in .png, .jpg or .jpeg"
+        elif not (whole and 1 <= quality <= 100):
+            problem = "a JPEG's quality must be a whole number 1-100"
         else:
             data = cv2.imencode(".jpg", bgr, [cv2.IMWRITE_JPEG_QUALITY, int(quality)])[1].tobytes()
-        try:
-            write_file_atomic(named_file(filename), data)
-        except OSError as error:
-            print(f"aibo-sim: {call}: {error}", file=sys.stderr)
-            return -1
-        return 0
+        if data is not None:
+            try:
+                write_file_atomic(named_file(Path(folder or "") / name), data)
+                return 0
+            except OSError as error:
+                problem = str(error)
+        print(f"aibo-sim: {call}: {problem}", file=sys.stderr)
+        return -1
 
     @property
     def width(self) -> int:

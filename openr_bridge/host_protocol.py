@@ -24,7 +24,9 @@ Simulator to runtime:
   (-1: none); the sensor values at boot (as in ``FRAME``: what ``OPENR::GetJointValue``
   reads before the first frame); design data (keyword, ``/MS`` path each); the objects to
   load (library path, the name OBJECT.CFG gives). The runtime loads and initialises the objects and answers
-  ``SERVICES`` (per object: its name and registered service names) or ``FAILED`` (text).
+  ``SERVICES`` (per object: its name and registered service names; then the records the loading
+  made, as ``FRAME_DONE``'s: an ``OPENR::Fatal`` there ends the run before ``CONNECT``) or
+  ``FAILED`` (text).
 - ``CONNECT``: (subject, observer) service name pairs; the runtime connects them, starts the
   objects and answers ``FRAME_DONE`` with what they did.
 - ``FRAME``: frame tick (``uint64`` as two ``uint32``, low first), OPEN-R frame number,

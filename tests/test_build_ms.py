@@ -129,8 +129,6 @@ static void init(void) {
         servo_set_acceleration(robot_get_device("PRM:/r1/c1/c2-Joint2:12"), 0);
     } else if (is("control p")) {
         servo_set_control_p(robot_get_device("PRM:/r1/c1/c2-Joint2:12"), -50);
-    } else if (is("save gif")) {
-        camera_save_image(robot_get_device("PRM:/r1/c1/c2/c3/i1-FbkImageSensor:F1"), "a.gif", 90);
     } else if (is("ear torque")) {
         servo_enable_motor_force_feedback(robot_get_device("PRM:/r1/c1/c2/c3/e5-Joint4:15"), 32);
     } else if (is("mode")) {
@@ -167,7 +165,8 @@ static int run(int ms) {
         if (++pictures == 10) {  /* the 10th picture as a file; and one where no folder is */
             FILE *saved = fopen("saved.txt", "w");
             int png = camera_save_image(camera, "shot.png", 0), jpeg = camera_save_image(camera, "shot.jpg", 90);
-            fprintf(saved, "%d %d %d\n", png, jpeg, camera_save_image(camera, "no/a.png", 0));
+            int gif = camera_save_image(camera, "a.gif", 90), low = camera_save_image(camera, "a.JPEG", 0);
+            fprintf(saved, "%d %d %d %d %d\n", png, jpeg, camera_save_image(camera, "no/a.png", 0), gif, low);
             fclose(saved);
         }
     } else if (is("sensors") && ms) {
@@ -389,7 +388,7 @@ def probe_runs(monkeypatch, probe, tmp_path, scenario: str, frames: int = 128):
     return (*folders, sim, reference.sim)
 
 
-def test_camera_get_image_is_the_openr_backends_byte_for_byte(probe, tmp_path, monkeypatch):
+def test_camera_get_image_is_the_openr_backends_byte_for_byte(probe, tmp_path, monkeypatch, capfd):
     stick, reference, sim, reference_sim = probe_runs(monkeypatch, probe, tmp_path, "camera")
     data = (stick / "probe.txt").read_bytes()
     assert data.startswith(b"208 160 0.993092") and len(data) > 30 * 208 * 160 * 3
@@ -403,10 +402,16 @@ def test_camera_get_image_is_the_openr_backends_byte_for_byte(probe, tmp_path, m
     libjpeg = cv2.imdecode(cv2.imencode(".jpg", picture[:, :, ::-1], sampling)[1], cv2.IMREAD_COLOR)[:, :, ::-1]
     libjpeg_error = np.abs(libjpeg.astype(int) - picture).mean()  # ~2.6: the sensor's noise costs
     for folder in (stick, reference):
-        assert (folder / "saved.txt").read_text() == "0 0 -1\n" and not (folder / "no").exists()
+        assert (folder / "saved.txt").read_text() == "0 0 -1 -1 -1\n" and not (folder / "no").exists()
         assert np.array_equal(cv2.imread(str(folder / "shot.png"), cv2.IMREAD_UNCHANGED)[:, :, ::-1], picture)
         jpeg_error = np.abs(cv2.imread(str(folder / "shot.jpg"))[:, :, ::-1].astype(int) - picture).mean()
         assert jpeg_error < (libjpeg_error + 0.05 if folder == stick else 4), folder.name  # as good as libjpeg's
+    # a name it cannot write is -1, and the reason the Python API's (on the robot's console there)
+    reasons = ["the file name must end in .png, .jpg or .jpeg", "a JPEG's quality must be a whole number 1-100"]
+    stderr, console = capfd.readouterr().err, (stick / "console.log").read_text()
+    for call, reason in zip(("'a.gif', 90", "'a.JPEG', 0"), reasons, strict=True):
+        line = f"PRM:/r1/c1/c2/c3/i1-FbkImageSensor:F1: camera_save_image({call}): {reason}\n"
+        assert f"Controller: {line}" in console and f"aibo-sim: {line}" in stderr
     # The LED the wrapper commands when the controller commands nothing stays as it was.
     assert np.array_equal(sim.model.geom_rgba, reference_sim.model.geom_rgba)
 
@@ -574,8 +579,6 @@ def test_errors_end_the_controller_with_the_python_apis_message(probe, tmp_path)
         pan.set_control_p(-50)
     with pytest.raises(DeviceError) as ear_torque:
         robot.get_device("PRM:/r1/c1/c2/c3/e5-Joint4:15").force_feedback.enable(32)
-    with pytest.raises(DeviceError) as save_gif:
-        robot.get_device("PRM:/r1/c1/c2/c3/i1-FbkImageSensor:F1").save_image("a.gif", 90)
     with pytest.raises(MtnError) as missing:
         mtn_new("missing.mtn")
     api.install(robot)
@@ -589,7 +592,6 @@ def test_errors_end_the_controller_with_the_python_apis_message(probe, tmp_path)
         "acceleration": str(acceleration.value),
         "control p": str(control_p.value),
         "ear torque": str(ear_torque.value),
-        "save gif": str(save_gif.value),
         "missing motion": f"mtn_play: MTN is NULL: mtn_new failed ({missing.value})",
         "step": "robot_step(32): not on the robot: an OPEN-R object cannot wait for time to pass inside a call",
         "zero step": str(zero_step.value),  # the stick said 'step of 0 ms: must be a positive whole multiple'

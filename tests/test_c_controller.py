@@ -3,6 +3,7 @@ the running simulation through the Python API."""
 
 import fnmatch
 import json
+import os
 import re
 import shutil
 from pathlib import Path
@@ -166,6 +167,33 @@ def test_annex_i_in_cpp_without_its_motion_file_says_so(tmp_path):
         ControllerFailed, match=r"mtn_is_over: MTN is NULL: mtn_new failed \(File not found: wwfwd.mtn\)"
     ):
         run_controller(tmp_path / "annex_capture_c", duration=1)
+
+
+def test_camera_save_image_writes_where_and_what_the_c_controller_names(tmp_path):
+    """A relative name is from the C controller's working folder (it landed in the simulator's), and
+    a name that is not UTF-8 keeps its bytes (U+FFFD replaced them)."""
+    body = r"""#include <device/camera.h>
+#include <sys/stat.h>
+#include <unistd.h>
+static DeviceTag camera;
+static void init(void) {
+    camera = robot_get_device("PRM:/r1/c1/c2/c3/i1-FbkImageSensor:F1");
+    camera_enable(camera, 32);
+}
+static int run(int ms) {
+    if (ms == 0) return 64;
+    mkdir("sub", 0777);
+    chdir("sub");
+    printf("saved %d %d\n", camera_save_image(camera, "here.png", 0), camera_save_image(camera, "caf\xe9.png", 0));
+    fflush(stdout);
+    exit(0);
+}
+int main(void) { robot_live(init); robot_run(run); return 0; }
+"""
+    out = tmp_path / "out"
+    run_controller(c_file(tmp_path, "saver.c", body), duration=0.5, out=out)
+    assert sorted(os.listdir(out / "sub")) == ["caf\udce9.png", "here.png"]  # the bytes caf\xe9.png
+    assert not (out / "here.png").exists()
 
 
 @pytest.mark.slow

@@ -158,20 +158,26 @@ def test_camera_save_image_writes_the_last_picture_as_webots_did(robot, tmp_path
         f"aibo-sim: {CAMERA}: camera_save_image('{tmp_path}/no/c.png', 0): cannot write {tmp_path}/no/c.png: "
         "No such file or directory\n"
     )
-    call = re.escape(f"{CAMERA}: camera_save_image(")
-    for filename, quality, reason in [
+    for filename, quality, reason in [  # -1 too, as Webots answers an unknown ending
         ("a.gif", 0, "the file name must end in .png, .jpg or .jpeg"),
         ("png", 0, "the file name must end in .png, .jpg or .jpeg"),
-        ("", 0, "the file name must be a non-empty string"),
-        (None, 0, "the file name must be a non-empty string"),
-        ("a.jpg", 0, "a JPEG's quality must be 1-100"),
-        ("a.jpg", 101, "a JPEG's quality must be 1-100"),
-        ("a.png", 1.5, "the quality must be a whole number"),
-        ("a.png", True, "the quality must be a whole number"),
+        ("", 0, "not a file name"),
+        ("a\0.png", 0, "not a file name"),  # a bare ValueError before
+        ("a.jpg", 0, "a JPEG's quality must be a whole number 1-100"),
+        ("a.jpg", 101, "a JPEG's quality must be a whole number 1-100"),
+        ("a.jpg", 1.5, "a JPEG's quality must be a whole number 1-100"),
     ]:
-        with pytest.raises(DeviceError, match=rf"^{call}.*\): {reason}$"):
-            api.camera_save_image(camera, filename, quality)
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.PNG", "b.jpeg", "elsewhere", "link.png"]
+        assert api.camera_save_image(camera, filename, quality) == -1
+        assert (
+            capsys.readouterr().err == f"aibo-sim: {CAMERA}: camera_save_image({filename!r}, {quality!r}): {reason}\n"
+        )
+    for name in ["b" * 251 + ".png", ".png"]:  # a temporary name too long for the file system before; a dot-name
+        assert api.camera_save_image(camera, str(tmp_path / name), True) == 0  # a PNG's quality is ignored
+    with pytest.raises(DeviceError, match=re.escape(f"{CAMERA}: camera_save_image(None, 0): the file name must be")):
+        api.camera_save_image(camera, None, 0)
+    assert api.camera_save_image(camera, "c.png", 0, folder=str(tmp_path)) == 0  # the C binding's controller's
+    names = ["a.PNG", "b" * 251 + ".png", "b.jpeg", "c.png", "elsewhere", "link.png", ".png"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(names)
 
 
 def test_sensors_read_in_their_units(robot):

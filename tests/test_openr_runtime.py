@@ -427,23 +427,28 @@ def test_a_crash_anywhere_is_named_with_its_object_and_signal(objects, tmp_path,
         run_stick(stick, 2.0, tmp_path / "out")
 
 
-@pytest.mark.parametrize("how", ["fatal", "fatal init"])
+@pytest.mark.parametrize("how", ["fatal", "fatal init", "fatal load"])
 def test_openr_fatal_powers_the_robot_off_and_fails_the_run(objects, tmp_path, monkeypatch, how):
     """Sony: Fatal "sounds a warning sound ... and turns off power". It was a Shutdown: DoStop ran,
     the run was done; after Fatal in DoInit the objects' entries ran on (and crashed)."""
     monkeypatch.setenv("CRASH_HOW", how)
     stick = make_stick(tmp_path / "ms", objects, ["CRASH"], f"{SENSOR} Crash.Sensor.OSensorFrameVectorData.O\n")
-    code, at = ("ofatalUNDEF", "0.088") if how == "fatal" else ("ofatalMEMORY_STICK", "0.000")
+    code, at = {"fatal": ("ofatalUNDEF", "0.088"), "fatal init": ("ofatalMEMORY_STICK", "0.000")}.get(
+        how, ("ofatalPAUSE_SW", "0.000")
+    )
+    who = "CRASH" if how == "fatal load" else "Crash"  # while loading, an object has its file's name
     out = tmp_path / "out"
     assert main(["run", str(stick), "--duration", "1", "--out", str(out)]) == 1
-    error = f"OPEN-R object Crash called OPENR::Fatal({code}) at simulated t = {at} s: the robot's power went off"
+    error = f"OPEN-R object {who} called OPENR::Fatal({code}) at simulated t = {at} s: the robot's power went off"
     assert json.loads((out / "run.json").read_text())["error"] == f"memory stick ms: {error}"
     console = [line.split("] ", 1)[1] for line in (out / "console.log").read_text().splitlines()]
-    off = "Crash: [ERROR] OPENR::Fatal({}): the robot's power goes off"  # and no entry runs after it
+    off = who + ": [ERROR] OPENR::Fatal({}): the robot's power goes off"  # and no entry runs after it
     if how == "fatal":
         assert console == ["Crash: DoStart", *(f"Crash: sensor vector {n}" for n in (1, 2, 3)), off.format(2**32 - 1)]
-    else:
+    elif how == "fatal init":
         assert console == [off.format(0), "Crash: [WARNING] DoInit returned 2"]
+    else:  # DoInit did not run: no service registered, yet no CONNECT.CFG error
+        assert console == [off.format(1)]
 
 
 def test_get_system_time_is_the_simulated_time_since_boot(objects, tmp_path, monkeypatch):

@@ -578,9 +578,12 @@ unsigned char *camera_get_image(DeviceTag c) {
     return copy;
 }
 
+/* A relative name is the controller's: its working folder goes with it (the simulator's may be another). */
 int camera_save_image(DeviceTag c, const char *filename, int quality) {
+    static char folder[8192];
     begin(AIBO_OP_camera_save_image);
     put_int(c);
+    put_string(getcwd(folder, sizeof folder));
     put_string(filename);
     put_int(quality);
     call();

@@ -37,7 +37,7 @@ OPS = (
     ("camera_enable", "ii", ""),
     ("camera_disable", "i", ""),
     ("camera_get_image", "i", "m"),
-    ("camera_save_image", "isi", "i"),
+    ("camera_save_image", "issi", "i"),  # tag, the controller's working folder, file name, quality
     ("camera_get_width", "i", "i"),
     ("camera_get_height", "i", "i"),
     ("camera_get_fov", "i", "d"),

@@ -129,6 +129,9 @@ def _handlers(image: memoryview) -> dict:
     handlers.update(
         {
             "camera_get_image": camera_get_image,
+            "camera_save_image": lambda tag, folder, name, quality: api.camera_save_image(
+                tag, name, quality, folder=folder or None
+            ),
             "mtn_new": motions.new,
             "mtn_delete": motions.delete,
             "mtn_fprint": mtn_fprint,
@@ -159,7 +162,7 @@ class _Call:
         for kind in self._kinds:  # a call with a string (rare): read in turn
             if kind == "s":
                 size = _LENGTH.unpack_from(payload, offset)[0]
-                values.append(payload[offset + 4 : offset + 4 + size].decode("utf-8", "replace"))
+                values.append(payload[offset + 4 : offset + 4 + size].decode("utf-8", "surrogateescape"))
                 offset += 4 + size
             else:
                 values += struct.unpack_from("<" + kind, payload, offset)

@@ -391,7 +391,11 @@ class MemoryStickRun:
             ]
         )
         self._send(protocol.MESSAGES["SETUP"], setup)
-        services = self._services(self._reply(protocol.REPLIES["SERVICES"]))
+        services, records = self._services(self._reply(protocol.REPLIES["SERVICES"]))
+        self._apply(records)
+        if self.fatal_error is not None:  # the robot's power went off while its objects loaded
+            self.shutdown = True
+            return
         self._check(self.stick.connections, services)
         self._send(
             protocol.MESSAGES["CONNECT"],
@@ -403,8 +407,9 @@ class MemoryStickRun:
         )
         self._apply(self._reply(protocol.REPLIES["FRAME_DONE"]))
 
-    def _services(self, payload: bytes) -> dict[str, str]:
-        """Each registered service's object, from the SERVICES reply (plus the system's)."""
+    def _services(self, payload: bytes) -> tuple[dict[str, str], bytes]:
+        """Each registered service's object, from the SERVICES reply (plus the system's), and the
+        records that follow them."""
         services = {name: system for system, names in SYSTEM_SERVICES.items() for name in names}
         count, offset = struct.unpack_from("<I", payload)[0], 4
         self.object_names = []
@@ -425,7 +430,7 @@ class MemoryStickRun:
                     self.stick.object_cfg,
                     objects[later].line,
                 )
-        return services
+        return services, payload[offset:]
 
     def _check(self, connections: tuple[Connection, ...], services: dict[str, str]) -> None:
         """ConfigError naming the CONNECT.CFG line of a service no object registered."""

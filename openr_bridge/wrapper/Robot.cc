@@ -418,31 +418,37 @@ unsigned char* Robot::CameraImage(int tag) {
     return &rgb_[0];
 }
 
+/* As the Python API: -1, the reason on the console, for a name it cannot write (Webots' answer). */
 int Robot::CameraSaveImage(int tag, const char* filename, int quality) {
-    std::string locator = Tagged(tag, CAMERA).locator, name = filename ? filename : "";
+    const byte* image = CameraImage(tag);  /* not enabled, no picture yet: the controller fails */
+    int width = CameraWidth(tag), height = CameraHeight(tag);
+    std::string name = filename ? filename : "";
     const char* slash = strrchr(name.c_str(), '/');
     const char* dot = strrchr(slash ? slash : name.c_str(), '.');
-    std::string suffix = dot ? Upper(dot) : "";
-    std::string call = locator + ": camera_save_image('" + name + "', ";
-    if (name.empty()) Fail("%s%d): the file name must be a non-empty string", call.c_str(), quality);
-    if (suffix != ".PNG" && suffix != ".JPG" && suffix != ".JPEG") {
-        Fail("%s%d): the file name must end in .png, .jpg or .jpeg", call.c_str(), quality);
+    std::string ending = dot ? Upper(dot) : "", problem;
+    std::vector<byte> data;
+    if (name.empty()) {
+        problem = "not a file name";
+    } else if (ending == ".PNG") {
+        data = Png(image, width, height);
+    } else if (ending != ".JPG" && ending != ".JPEG") {
+        problem = "the file name must end in .png, .jpg or .jpeg";
+    } else if (quality < 1 || quality > 100) {
+        problem = "a JPEG's quality must be a whole number 1-100";
+    } else {
+        data = Jpeg(image, width, height, quality);
     }
-    if (suffix != ".PNG" && (quality < 1 || quality > 100)) {
-        Fail("%s%d): a JPEG's quality must be 1-100", call.c_str(), quality);
-    }
-    const byte* image = CameraImage(tag);
-    int width = CameraWidth(tag), height = CameraHeight(tag);
-    std::vector<byte> data = suffix == ".PNG" ? Png(image, width, height) : Jpeg(image, width, height, quality);
-    FILE* file = fopen(filename, "wb");
-    bool written = file != NULL && fwrite(&data[0], 1, data.size(), file) == data.size();
-    if (file != NULL && fclose(file) != 0) written = false;
-    if (!written) {
-        OSYSPRINT(("%s%d): cannot write %s: %s\n", call.c_str(), quality, filename, strerror(errno)));
+    if (problem.empty()) {
+        FILE* file = fopen(filename, "wb");
+        bool written = file != NULL && fwrite(&data[0], 1, data.size(), file) == data.size();
+        if (file != NULL && fclose(file) != 0) written = false;
+        if (written) return 0;
+        problem = std::string("cannot write ") + filename + ": " + strerror(errno);
         if (file != NULL) remove(filename);  /* no half-written picture */
-        return -1;
     }
-    return 0;
+    OSYSPRINT(("%s: camera_save_image('%s', %d): %s\n", Tagged(tag, CAMERA).locator.c_str(), name.c_str(), quality,
+               problem.c_str()));
+    return -1;
 }
 
 int Robot::CameraWidth(int tag) {

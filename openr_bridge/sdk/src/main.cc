@@ -171,7 +171,7 @@ std::string LoadObjects(Reader& setup) {
         services.append((const char*)&n, 4);
         for (longword k = 0; k < n; k++) AppendString(&services, programs[i]->services[k].first);
     }
-    return services;
+    return services + TakeRecords();
 }
 
 void Setup(const std::string& payload) {

@@ -1277,7 +1277,8 @@ OStatus OPENR::GetMemoryStickStatus(OMemoryStickStatus* status) {
 OStatus OPENR::Fatal(OFatal fatal) {
     osyslog(osyslogERROR, "OPENR::Fatal(%u): the robot's power goes off", (unsigned)fatal);
     std::string payload((const char*)&fatal, sizeof fatal);
-    payload += host::Current() != NULL ? host::Current()->name : "";
+    Object* object = host::Current() != NULL ? host::Current() : host::Constructing();  /* an entry, or loading */
+    payload += object != NULL ? object->name : "";
     Record(AIBO_OPENR_RECORD_FATAL, payload.data(), payload.size());
     PowerOff();
     StopRun();

@@ -28,6 +28,7 @@ static int Deeper(int depth) {
 Crash::Crash() : vectors(0) {
     if (How("say")) OSYSPRINT(("made\n"));
     if (How("load")) *(volatile int*)0 = 1;
+    if (How("fatal load")) OPENR::Fatal(ofatalPAUSE_SW);
 }
 
 OStatus Crash::DoInit(const OSystemEvent&) {
@@ -44,13 +45,13 @@ OStatus Crash::DoInit(const OSystemEvent&) {
 }
 
 OStatus Crash::DoStart(const OSystemEvent&) {
-    if (How("fatal") || How("fatal init")) OSYSPRINT(("DoStart\n"));
+    if (How("fatal") || How("fatal init") || How("fatal load")) OSYSPRINT(("DoStart\n"));
     ASSERT_READY_TO_ALL_OBSERVER;
     return oSUCCESS;
 }
 
 OStatus Crash::DoStop(const OSystemEvent&) {
-    if (How("fatal") || How("fatal init")) OSYSPRINT(("DoStop\n"));
+    if (How("fatal") || How("fatal init") || How("fatal load")) OSYSPRINT(("DoStop\n"));
     return oSUCCESS;
 }
 

@@ -3,7 +3,8 @@
 // writes through the null pointer 50 ms later (outside any handler); stack, it recurses without
 // end; live, it runs on; init, it never returns from DoInit; say, its constructor prints "made";
 // load, its constructor writes through the null pointer (while the runtime loads its file); fatal,
-// it calls OPENR::Fatal there instead; fatal init, DoInit calls it and fails, as Sony's RMain does.
+// it calls OPENR::Fatal there instead; fatal init, DoInit calls it and fails, as Sony's RMain does;
+// fatal load, its constructor calls it.
 // clock, it prints GetSystemTime's at each vector and runs on. In the fatal modes DoStart and
 // DoStop say they ran.
 #ifndef Crash_h_DEFINED
