@@ -58,7 +58,10 @@ def named_file(path) -> Path:
     """The file a user named, its folder resolved once: a link to a folder on its way is the
     user's choice (as ``--out`` is), the file itself is never followed."""
     path = Path(path)
-    return path.absolute().parent.resolve() / path.name
+    try:
+        return path.absolute().parent.resolve() / path.name
+    except RuntimeError:  # Python 3.11's word for a loop of links (an OSError from 3.13)
+        raise OSError(errno.ELOOP, os.strerror(errno.ELOOP), str(path.parent)) from None
 
 
 def _mode(folder_fd: int, name: str) -> int:

@@ -262,7 +262,7 @@ class Camera(Device):
         ending = name.rsplit("/", 1)[-1].lower()
         whole = not isinstance(quality, bool) and isinstance(quality, numbers.Integral)
         problem = data = None
-        if not name or "\0" in name:
+        if not name or "\0" in name or not _encodable(name):
             problem = "not a file name"
         elif ending.endswith(".png"):
             data = png(bgr)
@@ -276,8 +276,8 @@ class Camera(Device):
             try:
                 write_file_atomic(named_file(Path(folder or "") / name), data)
                 return 0
-            except OSError as error:
-                problem = str(error)
+            except OSError as error:  # write_file_atomic's say "cannot write PATH: why"; a loop of links not
+                problem = str(error) if error.strerror is None else f"cannot write {name}: {error.strerror}"
         print(f"aibo-sim: {call}: {problem}", file=sys.stderr)
         return -1
 
@@ -321,6 +321,15 @@ class Camera(Device):
             self.robot.camera_source.set_setting(setting, value)
         except ValueError as error:
             raise DeviceError(f"{self.locator}: {function}({value!r}): {error}") from error
+
+
+def _encodable(name: str) -> bool:
+    """Whether ``name`` is bytes the file system can take (not a lone surrogate such as '\\ud800')."""
+    try:
+        os.fsencode(name)
+        return True
+    except UnicodeEncodeError:
+        return False
 
 
 class Led(Device):

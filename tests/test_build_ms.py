@@ -738,3 +738,57 @@ def test_bad_input_is_refused_naming_the_argument(tmp_path):
     ):
         build_ms(walker, tmp_path / "o6")
     assert not (tmp_path / "o6").exists()
+
+
+PICTURE_DRIVER = r"""
+#include <stdio.h>
+#include <stdlib.h>
+#include "Picture.h"
+int main(int argc, char** argv) {  /* width height quality (0: PNG): RGB in, the file out */
+    int width = atoi(argv[1]), height = atoi(argv[2]), quality = atoi(argv[3]);
+    std::vector<byte> rgb((size_t)width * height * 3);
+    if (fread(&rgb[0], 1, rgb.size(), stdin) != rgb.size()) return 1;
+    std::vector<byte> file = quality ? wrapper::Jpeg(&rgb[0], width, height, quality)
+                                     : wrapper::Png(&rgb[0], width, height);
+    fwrite(&file[0], 1, file.size(), stdout);
+    return 0;
+}
+"""
+
+
+@pytest.fixture(scope="module")
+def picture_encoder(tmp_path_factory):
+    """The wrapper's PNG and JPEG encoders (Picture.cc) in a program of their own, as the stick builds them."""
+    folder = tmp_path_factory.mktemp("picture")
+    (folder / "driver.cc").write_text(PICTURE_DRIVER)
+    include = Path(sdk_root()) / "OPEN_R" / "include"
+    command = ["c++", "-std=gnu++98", "-Wall", "-Werror", f"-I{include}", f"-I{WRAPPER_SOURCES}", "-o", "encode"]
+    subprocess.run([*command, "driver.cc", str(WRAPPER_SOURCES / "Picture.cc")], cwd=folder, check=True)
+
+    def encode(rgb: np.ndarray, quality: int) -> np.ndarray:
+        height, width, _ = rgb.shape
+        result = subprocess.run(
+            [folder / "encode", str(width), str(height), str(quality)], input=rgb.tobytes(), capture_output=True
+        )
+        assert result.returncode == 0
+        return cv2.imdecode(np.frombuffer(result.stdout, np.uint8), cv2.IMREAD_COLOR)[:, :, ::-1]
+
+    return encode
+
+
+def test_the_sticks_jpegs_are_as_close_as_libjpegs_and_its_pngs_exact(picture_encoder):
+    """Sizes that are not whole 8x8 blocks, the qualities' ends and middle; white at quality 50
+    (DC 63.5 in steps of 16) came back 254 when the half was rounded down."""
+    rng = np.random.default_rng(3)
+    smooth = cv2.resize(rng.integers(0, 256, (5, 7, 3), dtype=np.uint8), (208, 160), interpolation=cv2.INTER_CUBIC)
+    for image in (smooth, rng.integers(0, 256, (9, 17, 3), dtype=np.uint8), np.full((1, 1, 3), 200, np.uint8)):
+        assert np.array_equal(picture_encoder(image, 0), image)  # PNG
+        for quality in (1, 50, 90, 100):
+            options = [cv2.IMWRITE_JPEG_QUALITY, quality]
+            options += [cv2.IMWRITE_JPEG_SAMPLING_FACTOR, cv2.IMWRITE_JPEG_SAMPLING_FACTOR_444]
+            libjpeg = cv2.imdecode(cv2.imencode(".jpg", image[:, :, ::-1], options)[1], cv2.IMREAD_COLOR)[:, :, ::-1]
+            ours = np.abs(picture_encoder(image, quality).astype(int) - image).mean()
+            assert ours <= np.abs(libjpeg.astype(int) - image).mean() * 1.05 + 0.05, (image.shape, quality)
+    white = np.full((16, 16, 3), 255, np.uint8)
+    for quality in (49, 50, 51):
+        assert (picture_encoder(white, quality) == 255).all(), quality

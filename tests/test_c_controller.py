@@ -169,7 +169,7 @@ def test_annex_i_in_cpp_without_its_motion_file_says_so(tmp_path):
         run_controller(tmp_path / "annex_capture_c", duration=1)
 
 
-def test_camera_save_image_writes_where_and_what_the_c_controller_names(tmp_path):
+def test_camera_save_image_writes_where_and_what_the_c_controller_names(tmp_path, capfd):
     """A relative name is from the C controller's working folder (it landed in the simulator's), and
     a name that is not UTF-8 keeps its bytes (U+FFFD replaced them)."""
     body = r"""#include <device/camera.h>
@@ -185,6 +185,10 @@ static int run(int ms) {
     mkdir("sub", 0777);
     chdir("sub");
     printf("saved %d %d\n", camera_save_image(camera, "here.png", 0), camera_save_image(camera, "caf\xe9.png", 0));
+    mkdir("gone", 0777);
+    chdir("gone");
+    rmdir("../gone");
+    printf("gone %d\n", camera_save_image(camera, "x.png", 0));
     fflush(stdout);
     exit(0);
 }
@@ -192,8 +196,9 @@ int main(void) { robot_live(init); robot_run(run); return 0; }
 """
     out = tmp_path / "out"
     run_controller(c_file(tmp_path, "saver.c", body), duration=0.5, out=out)
+    assert capfd.readouterr().out == "saved 0 0\ngone -1\n"  # a removed folder: the simulator's before
     assert sorted(os.listdir(out / "sub")) == ["caf\udce9.png", "here.png"]  # the bytes caf\xe9.png
-    assert not (out / "here.png").exists()
+    assert not (out / "here.png").exists() and not (out / "x.png").exists()
 
 
 @pytest.mark.slow

@@ -163,6 +163,7 @@ def test_camera_save_image_writes_the_last_picture_as_webots_did(robot, tmp_path
         ("png", 0, "the file name must end in .png, .jpg or .jpeg"),
         ("", 0, "not a file name"),
         ("a\0.png", 0, "not a file name"),  # a bare ValueError before
+        ("\ud800.png", 0, "not a file name"),  # a UnicodeEncodeError
         ("a.jpg", 0, "a JPEG's quality must be a whole number 1-100"),
         ("a.jpg", 101, "a JPEG's quality must be a whole number 1-100"),
         ("a.jpg", 1.5, "a JPEG's quality must be a whole number 1-100"),
@@ -171,12 +172,15 @@ def test_camera_save_image_writes_the_last_picture_as_webots_did(robot, tmp_path
         assert (
             capsys.readouterr().err == f"aibo-sim: {CAMERA}: camera_save_image({filename!r}, {quality!r}): {reason}\n"
         )
+    (tmp_path / "loop").symlink_to(tmp_path / "loop")  # a RuntimeError from Path.resolve before
+    assert api.camera_save_image(camera, str(tmp_path / "loop" / "a.png"), 0) == -1
+    assert capsys.readouterr().err.endswith(f"cannot write {tmp_path}/loop/a.png: Too many levels of symbolic links\n")
     for name in ["b" * 251 + ".png", ".png"]:  # a temporary name too long for the file system before; a dot-name
         assert api.camera_save_image(camera, str(tmp_path / name), True) == 0  # a PNG's quality is ignored
     with pytest.raises(DeviceError, match=re.escape(f"{CAMERA}: camera_save_image(None, 0): the file name must be")):
         api.camera_save_image(camera, None, 0)
     assert api.camera_save_image(camera, "c.png", 0, folder=str(tmp_path)) == 0  # the C binding's controller's
-    names = ["a.PNG", "b" * 251 + ".png", "b.jpeg", "c.png", "elsewhere", "link.png", ".png"]
+    names = ["a.PNG", "b" * 251 + ".png", "b.jpeg", "c.png", "elsewhere", "link.png", "loop", ".png"]
     assert sorted(p.name for p in tmp_path.iterdir()) == sorted(names)
 
 

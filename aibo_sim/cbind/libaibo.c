@@ -581,9 +581,15 @@ unsigned char *camera_get_image(DeviceTag c) {
 /* A relative name is the controller's: its working folder goes with it (the simulator's may be another). */
 int camera_save_image(DeviceTag c, const char *filename, int quality) {
     static char folder[8192];
+    int relative = filename != NULL && filename[0] != 0 && filename[0] != '/';
+    if (relative && getcwd(folder, sizeof folder) == NULL) { /* removed, say: no file can be made there */
+        fprintf(stderr, "aibo-sim C binding: camera_save_image('%s', %d): cannot write %s: the working folder: %s\n",
+                filename, quality, filename, strerror(errno));
+        return -1;
+    }
     begin(AIBO_OP_camera_save_image);
     put_int(c);
-    put_string(getcwd(folder, sizeof folder));
+    put_string(relative ? folder : "");
     put_string(filename);
     put_int(quality);
     call();

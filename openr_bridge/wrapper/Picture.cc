@@ -155,7 +155,8 @@ void EncodeBlock(BitWriter* bits, const double* samples, const byte* quant, cons
             for (int y = 0; y < 8; y++) {
                 for (int x = 0; x < 8; x++) sum += samples[y * 8 + x] * cosines[u][x] * cosines[v][y];
             }
-            coefficients[v * 8 + u] = (int)floor(sum / quant[v * 8 + u] + 0.5);
+            double q = sum / quant[v * 8 + u];  /* rounded half away from zero, as libjpeg: white's 63.5 */
+            coefficients[v * 8 + u] = (int)(q < 0 ? -floor(-q + 0.5 + 1e-6) : floor(q + 0.5 + 1e-6));
         }
     }
     int difference = coefficients[0] - *previousDc, size = Category(difference);
