@@ -252,6 +252,34 @@ def robot_get_synchronization() -> int:
     return 1
 
 
+# Webots' keyboard codes, for controllers that test keys: a key's code, SHIFT, CONTROL and ALT or'ed
+# in. Names: Webots 5's (ROBOT_KEYBOARD_*, as Webots 6's WB_ROBOT_KEYBOARD_* without wb_); values:
+# Webots' reference for its later WB_KEYBOARD_* (Webots 5's header is not at hand: UNCONFIRMED).
+# No key is ever pressed here: robot_keyboard_get_key is 0. include/device/robot.h has them too
+# (python -m aibo_sim.cbind.headers).
+KEYBOARD_KEYS = {
+    "END": 312,
+    "HOME": 313,
+    "LEFT": 314,
+    "UP": 315,
+    "RIGHT": 316,
+    "DOWN": 317,
+    "PAGEUP": 366,
+    "PAGEDOWN": 367,
+    "NUMPAD_HOME": 375,
+    "NUMPAD_LEFT": 376,
+    "NUMPAD_UP": 377,
+    "NUMPAD_RIGHT": 378,
+    "NUMPAD_DOWN": 379,
+    "NUMPAD_END": 382,
+    "KEY": 0xFFFF,
+    "SHIFT": 0x10000,
+    "CONTROL": 0x20000,
+    "ALT": 0x40000,
+}
+globals().update({f"ROBOT_KEYBOARD_{name}": value for name, value in KEYBOARD_KEYS.items()})
+
+
 def robot_keyboard_enable(ms: int) -> None:
     """Read the keyboard every ``ms``; runs are headless, so no key is ever pressed.
 
@@ -581,6 +609,6 @@ __all__ = (
         for name in dir()
         if name.split("_")[0] in {"robot", "servo", "camera", "distance", "touch", "accelerometer", "led", "mtn"}
     ]
-    + [name for name in dir() if name.startswith(("CAMERA_", "ocamparam"))]
+    + [name for name in dir() if name.startswith(("CAMERA_", "ROBOT_KEYBOARD_", "ocamparam"))]
     + ["SimulationEnd", "DeviceError", "MtnError", "ImageAccessError"]
 )

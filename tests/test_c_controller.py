@@ -55,7 +55,7 @@ def test_every_api_function_gives_in_c_what_it_gives_in_python(tmp_path):
     assert tour == (tmp_path / "python" / "tour.txt").read_text()
     assert "missing 1 error File not found: no_such_motion.mtn" in tour and "walk a_walk#walk_fwd length 320" in tour
     assert tour.count("\nt ") == 8 and tour.endswith("die at 0.504\n")
-    assert "\nsaved 0 0\n" in tour
+    assert "\nsaved 0 0\n" in tour and "\nkeys 315 65601 65535\n" in tour  # Webots' codes
     third = tour.split("\nt ")[3]
     png = cv2.imread(str(tmp_path / "c" / "tour.png"))
     assert int(third.split(" sum ")[1].split()[0]) == int(png.astype(int).sum())  # the picture of the third step
@@ -451,6 +451,9 @@ def test_the_headers_setting_constants_are_generated():
     model's tables (2856 K: ``WHITE_BALANCE_K``), not written by hand."""
     text = headers.CAMERA_H.read_text()
     assert text == headers.camera_header(text), "camera.h is stale: run python -m aibo_sim.cbind.headers"
+    text = headers.ROBOT_H.read_text()
+    assert text == headers.robot_header(text), "robot.h is stale: run python -m aibo_sim.cbind.headers"
+    assert "#define ROBOT_KEYBOARD_LEFT 314\n" in text and "#define ROBOT_KEYBOARD_ALT 0x40000\n" in text
     assert "#define CAMERA_WB_INDOOR 1     /* 2856 K */\n" in headers.camera_constants()
     assert "#define CAMERA_GAIN_MID 2      /* 0 dB, the default */\n" in headers.camera_constants()
 

@@ -25,6 +25,7 @@ static void reset(void) {
     robot_keyboard_enable(64);
     fprintf(out, "mode %d key %d step %g synchronized %d\n", robot_get_mode(), robot_keyboard_get_key(),
             robot_get_basic_time_step(), robot_get_synchronization());
+    fprintf(out, "keys %d %d %d\n", ROBOT_KEYBOARD_UP, ROBOT_KEYBOARD_SHIFT | 'A', ROBOT_KEYBOARD_KEY);
     robot_keyboard_disable();
     servo_enable_position(pan, 32);
     servo_enable_motor_force_feedback(pan, 64);

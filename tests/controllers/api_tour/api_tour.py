@@ -23,6 +23,7 @@ def reset():
         f"mode {robot_get_mode()} key {robot_keyboard_get_key()} step {robot_get_basic_time_step():g} "
         f"synchronized {robot_get_synchronization()}\n"
     )
+    out.write(f"keys {ROBOT_KEYBOARD_UP} {ROBOT_KEYBOARD_SHIFT | ord('A')} {ROBOT_KEYBOARD_KEY}\n")
     robot_keyboard_disable()
     servo_enable_position(pan, 32)
     servo_enable_motor_force_feedback(pan, 64)
