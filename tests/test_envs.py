@@ -16,6 +16,7 @@ from gymnasium.utils.env_checker import check_env
 
 import openr_bridge
 from aibo_sim.envs import register_envs
+from aibo_sim.envs.base import box_average
 from aibo_sim.ers7 import JOINT_BY_NAME, JOINTS
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -284,9 +285,12 @@ def test_camera_options(camera, layer, shape):
 
 def test_rgb_layers_m_and_l_are_block_means_of_h():
     h = first_image().astype(np.float64)
+    noise = np.random.default_rng(0).integers(0, 256, (160, 208, 3), dtype=np.uint8)  # every rounding case
     for layer, scale in (("M", 2), ("L", 4)):
         expected = h.reshape(160 // scale, scale, 208 // scale, scale, 3).mean(axis=(1, 3))
-        assert np.abs(first_image(camera_layer=layer) - expected).max() <= 0.5
+        assert np.array_equal(first_image(camera_layer=layer), np.floor(expected + 0.5))  # half up
+        means = noise.reshape(160 // scale, scale, 208 // scale, scale, 3).mean(axis=(1, 3))
+        assert np.array_equal(box_average(noise, scale), np.floor(means + 0.5))
 
 
 def test_no_camera_and_invalid_options():

@@ -421,13 +421,27 @@ class AiboEnv(gym.Env):
             height, width, _ = self._image_shape
             if rgb.shape[0] == height:
                 return rgb.copy()  # the frame's picture is shared and read-only
-            scale = rgb.shape[0] // height
-            return (rgb.reshape(height, scale, width, scale, 3).mean(axis=(1, 3)) + 0.5).astype(np.uint8)
+            return box_average(rgb, rgb.shape[0] // height)
         self.camera_message = frame.message
         if self.camera == "openr":
             return self._openr.serve(frame)
         layer = LAYERS[self.camera_layer]
         return np.stack([self.camera_message.band(layer, band) for band in YCRCB_BANDS], axis=-1)
+
+
+def box_average(image: np.ndarray, scale: int) -> np.ndarray:
+    """``image`` (uint8, H x W x C) made ``scale`` times smaller: each pixel the mean of its
+    ``scale`` x ``scale`` block, rounded half up, in integers (numpy's float mean over the blocks'
+    axes cost ~0.8 ms of a layer L step)."""
+    rows = image[0::scale].astype(np.uint16)
+    for row in range(1, scale):
+        rows += image[row::scale]
+    blocks = rows[:, 0::scale].copy()
+    for column in range(1, scale):
+        blocks += rows[:, column::scale]
+    blocks += scale * scale // 2
+    blocks //= scale * scale
+    return blocks.astype(np.uint8)
 
 
 def check_open(env, what: str) -> None:
