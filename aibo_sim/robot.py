@@ -19,6 +19,7 @@ import math
 import numbers
 import os
 import sys
+import threading
 import weakref
 from dataclasses import dataclass
 from pathlib import Path
@@ -27,7 +28,7 @@ import cv2
 import numpy as np
 
 from . import ers7
-from .files import named_file, png, write_file_atomic
+from .files import named_file, png, temporary_path, write_file_atomic
 from .mtn import MODES as MTN_MODES
 from .mtn import Motion, MotionPlayer, MtnError, check_joint, mtn_new, whole_ms
 from .sim import FRAME_MS, Simulation
@@ -274,11 +275,15 @@ class Camera(Device):
             data = cv2.imencode(".jpg", bgr, [cv2.IMWRITE_JPEG_QUALITY, int(quality)])[1].tobytes()
         if data is not None:
             try:
-                write_file_atomic(named_file(Path(folder or "") / name), data)
+                path = named_file(Path(folder or "") / name)
+                # a temporary name of this thread's own: a match's controllers may save one name at once
+                write_file_atomic(
+                    path, data, temporary_path(path.with_name(f"{path.name}.{threading.get_native_id()}"))
+                )
                 return 0
             except OSError as error:  # write_file_atomic's say "cannot write PATH: why"; a loop of links not
                 problem = str(error) if error.strerror is None else f"cannot write {name}: {error.strerror}"
-        print(f"aibo-sim: {call}: {problem}", file=sys.stderr)
+        sys.stderr.write(f"aibo-sim: {call}: {problem}\n")  # one write: the lines of two robots stay whole
         return -1
 
     @property

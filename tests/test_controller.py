@@ -1,7 +1,9 @@
 """The Webots-era controller API, sampling rules, MTN playback through it, both backends (issue 4)."""
 
+import os
 import re
 import sys
+import threading
 
 import cv2
 import numpy as np
@@ -182,6 +184,26 @@ def test_camera_save_image_writes_the_last_picture_as_webots_did(robot, tmp_path
     assert api.camera_save_image(camera, "c.png", 0, folder=str(tmp_path)) == 0  # the C binding's controller's
     names = ["a.PNG", "b" * 251 + ".png", "b.jpeg", "c.png", "elsewhere", "link.png", "loop", ".png"]
     assert sorted(p.name for p in tmp_path.iterdir()) == sorted(names)
+
+
+def test_two_controllers_saving_one_name_at_once_both_write_it(robot, tmp_path, capsys):
+    """A match's controllers share a working folder: each write had the temporary name .NAME.tmp,
+    so one thread's rename took the other's file and the other's failed (-1 some 40 % of saves)."""
+    api.camera_enable(api.robot_get_device(CAMERA), 32)
+    api.robot_step(64)
+    camera = robot.get_device(CAMERA)
+
+    def save(answers):
+        answers += [camera.save_image("shot.png", 0, str(tmp_path)) for _ in range(150)]
+
+    answers = [[], []]
+    threads = [threading.Thread(target=save, args=(a,)) for a in answers]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join()
+    assert answers == [[0] * 150] * 2 and capsys.readouterr().err == ""
+    assert os.listdir(tmp_path) == ["shot.png"]  # the last writer's, no temporary file left
 
 
 def test_sensors_read_in_their_units(robot):
