@@ -62,8 +62,8 @@ def keyboard_constants() -> str:
 
 
 def _regenerated(text: str, begin_mark: str, lines: str) -> str:
-    begin, end = text.index(begin_mark) + len(begin_mark), text.index(GENERATED_END, text.index(begin_mark))
-    return text[:begin] + lines + text[end:]
+    begin = text.index(begin_mark) + len(begin_mark)
+    return text[:begin] + lines + text[text.index(GENERATED_END, begin) :]
 
 
 def camera_header(text: str) -> str:
