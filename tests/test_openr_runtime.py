@@ -451,6 +451,25 @@ def test_openr_fatal_powers_the_robot_off_and_fails_the_run(objects, tmp_path, m
         assert console == [off.format(1)]
 
 
+def test_after_a_fatal_while_loading_no_other_object_is_loaded(objects, tmp_path, monkeypatch):
+    """The power is off: the next object's constructors ran before (its output on the console)."""
+    monkeypatch.setenv("CRASH_HOW", "fatal load")
+    monkeypatch.setenv("JPROBE_SAY", "1")
+    stick = make_stick(
+        tmp_path / "ms", objects, ["CRASH", "JPROBE"], f"{SENSOR} Crash.Sensor.OSensorFrameVectorData.O\n"
+    )
+    out = tmp_path / "out"
+    assert main(["run", str(stick), "--duration", "1", "--out", str(out)]) == 1
+    console = [line.split("] ", 1)[1] for line in (out / "console.log").read_text().splitlines()]
+    assert console == ["CRASH: [ERROR] OPENR::Fatal(1): the robot's power goes off"]
+    stick = make_stick(
+        tmp_path / "ms2", objects, ["JPROBE", "CRASH"], f"{SENSOR} Crash.Sensor.OSensorFrameVectorData.O\n"
+    )
+    assert main(["run", str(stick), "--duration", "1", "--out", str(tmp_path / "out2")]) == 1
+    console = [line.split("] ", 1)[1] for line in (tmp_path / "out2" / "console.log").read_text().splitlines()]
+    assert console == ["JPROBE: made", "CRASH: [ERROR] OPENR::Fatal(1): the robot's power goes off"]
+
+
 def test_get_system_time_is_the_simulated_time_since_boot(objects, tmp_path, monkeypatch):
     monkeypatch.setenv("CRASH_HOW", "clock")  # SystemTime.h and MCOOP.h's GetSystemTime were missing
     stick = make_stick(tmp_path / "ms", objects, ["CRASH"], f"{SENSOR} Crash.Sensor.OSensorFrameVectorData.O\n")

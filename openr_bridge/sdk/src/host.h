@@ -39,6 +39,7 @@ void Send(const OServiceEntry& to, const void* message, size_t size);
 bool Deliver(size_t limit);            /* deliver queued messages; false when `limit` were delivered and more wait */
 bool MailboxEmpty();
 void PowerOff();                       /* OPENR::Fatal: no entry runs after it, queued messages are lost */
+bool PoweredOff();
 void Invoke(Object* object, Selector selector, void* message);
 OStatus Call(const OServiceEntry& to, void* message, void* reply, size_t replySize);
 void Reply(const void* reply, size_t size);

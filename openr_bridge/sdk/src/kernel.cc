@@ -109,6 +109,8 @@ void PowerOff() {
     mailbox.clear();
 }
 
+bool PoweredOff() { return poweredOff; }
+
 void Invoke(Object* object, Selector selector, void* message) {
     if (poweredOff) return;  /* OPENR::Fatal: no entry runs any more */
     std::map<Selector, Entry>::iterator entry = object->entries.find(selector);

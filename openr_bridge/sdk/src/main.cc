@@ -143,7 +143,7 @@ void Boot(OReason reason, Selector selector, const std::vector<Object*>& order) 
 
 std::string LoadObjects(Reader& setup) {
     longword count = setup.U32();
-    for (longword i = 0; i < count; i++) {
+    for (longword i = 0; i < count && !PoweredOff(); i++) { /* after a Fatal, no other object is loaded */
         std::string path = setup.String(), label = setup.String();
         std::string file = label.substr(label.rfind('/') + 1);
         /* the file's name (HELLO for /MS/OPEN-R/MW/OBJS/HELLO.BIN) until the stub names the object:

@@ -1,3 +1,4 @@
+#include <stdlib.h>
 #include <OPENR/OPENRAPI.h>
 #include <OPENR/OSyslog.h>
 #include <OPENR/OUnits.h>
@@ -6,7 +7,9 @@
 
 static const char* const PAN = "PRM:/r1/c1/c2-Joint2:12";
 
-JointProbe::JointProbe() : pan(oprimitiveID_UNDEF), started(false), waits(false), sent(0), sensorIndex(-1) {}
+JointProbe::JointProbe() : pan(oprimitiveID_UNDEF), started(false), waits(false), sent(0), sensorIndex(-1) {
+    if (getenv("JPROBE_SAY") != 0) OSYSPRINT(("made\n"));
+}
 
 OStatus JointProbe::DoInit(const OSystemEvent&) {
     NEW_ALL_SUBJECT_AND_OBSERVER;
