@@ -272,7 +272,8 @@ class Camera(Device):
         elif not (whole and 1 <= quality <= 100):
             problem = "a JPEG's quality must be a whole number 1-100"
         else:
-            data = cv2.imencode(".jpg", bgr, [cv2.IMWRITE_JPEG_QUALITY, int(quality)])[1].tobytes()
+            whole_colour = [cv2.IMWRITE_JPEG_SAMPLING_FACTOR, cv2.IMWRITE_JPEG_SAMPLING_FACTOR_444]  # as a stick's
+            data = cv2.imencode(".jpg", bgr, [cv2.IMWRITE_JPEG_QUALITY, int(quality), *whole_colour])[1].tobytes()
         if data is not None:
             try:
                 path = named_file(Path(folder or "") / name)

@@ -148,7 +148,9 @@ def test_camera_save_image_writes_the_last_picture_as_webots_did(robot, tmp_path
     assert api.camera_save_image(camera, str(tmp_path / "a.PNG"), 0) == 0  # quality: for JPEGs only
     assert np.array_equal(cv2.imread(str(tmp_path / "a.PNG"))[:, :, ::-1], picture)
     assert api.camera_save_image(camera, tmp_path / "b.jpeg", 100) == 0
-    assert (tmp_path / "b.jpeg").read_bytes()[:2] == b"\xff\xd8"  # a JPEG, near the picture (4:2:0 colour)
+    jpeg = (tmp_path / "b.jpeg").read_bytes()
+    frame = jpeg.index(b"\xff\xc0")  # baseline; three components sampled 1x1, colour not subsampled (as a stick's)
+    assert jpeg[:2] == b"\xff\xd8" and jpeg[frame + 5 : frame + 19] == bytes.fromhex("00a000d003011100021101031101")
     assert np.abs(cv2.imread(str(tmp_path / "b.jpeg"))[:, :, ::-1].astype(int) - picture).mean() < 4
     (tmp_path / "elsewhere").write_bytes(b"kept")
     (tmp_path / "link.png").symlink_to(tmp_path / "elsewhere")  # replaced, not written through
