@@ -163,6 +163,21 @@ def test_noise_per_channel_in_the_measured_bands_and_rising_with_gain(tmp_path, 
     assert np.all(sigmas["low"] < sigmas["mid"]) and np.all(sigmas["mid"] < sigmas["high"])
 
 
+def test_a_full_picture_has_the_luma_of_416_x_320_and_the_colour_of_layer_h():
+    """Spec section 1: the sensor's colour is 4:2:2, and OPEN-R keeps it at layer H only; a
+    416 x 320 picture had its own Cr and Cb per pixel (91 % of pairs differed: a reviewer)."""
+    sim = Simulation(camera=CameraConfig(full=True))
+    sim.step_frames(sim.frames_to_camera_frame())
+    frame = sim.camera.frame()
+    chroma = frame.ycrcb[:, :, 1:]
+    blocks = chroma.reshape(160, 2, 208, 2, 2)
+    assert np.all(blocks == blocks[:, :1, :, :1])  # one colour per 2 x 2 block
+    assert np.array_equal(layer_h(frame)[:, :, 1:], chroma[::2, ::2])  # the message's, layer H's
+    luma = frame.ycrcb[:, :, 0].reshape(160, 2, 208, 2)
+    assert np.mean(luma != luma[:, :1, :, :1]) > 0.5  # the luma keeps its detail (and noise)
+    sim.close()
+
+
 def test_flicker_averages_out_over_whole_ripples():
     """Spec section 7: on 50 Hz mains (a 100 Hz ripple) MID (1/100 s) and SLOW integrate whole
     ripples, FAST half of one; on 60 Hz mains MID does not either."""

@@ -15,8 +15,8 @@ import pytest
 from gymnasium.utils.env_checker import check_env
 
 import openr_bridge
+from aibo_sim.camera.sensor import box_average
 from aibo_sim.envs import register_envs
-from aibo_sim.envs.base import box_average
 from aibo_sim.ers7 import JOINT_BY_NAME, JOINTS
 
 ROOT = Path(__file__).resolve().parents[1]

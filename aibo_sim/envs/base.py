@@ -24,6 +24,7 @@ import openr_bridge
 
 from ..camera import CameraSettings, RobotColour
 from ..camera.backends import OpenRCamera
+from ..camera.sensor import box_average
 from ..config import CameraConfig
 from ..ers7 import DISTANCE_SENSORS, JOINT_INDEX, JOINTS, LEGS, TOUCH_SENSORS
 from ..placement import ball_start_problem
@@ -427,21 +428,6 @@ class AiboEnv(gym.Env):
             return self._openr.serve(frame)
         layer = LAYERS[self.camera_layer]
         return np.stack([self.camera_message.band(layer, band) for band in YCRCB_BANDS], axis=-1)
-
-
-def box_average(image: np.ndarray, scale: int) -> np.ndarray:
-    """``image`` (uint8, H x W x C) made ``scale`` times smaller: each pixel the mean of its
-    ``scale`` x ``scale`` block, rounded half up, in integers (numpy's float mean over the blocks'
-    axes cost ~0.8 ms of a layer L step)."""
-    rows = image[0::scale].astype(np.uint16)
-    for row in range(1, scale):
-        rows += image[row::scale]
-    blocks = rows[:, 0::scale].copy()
-    for column in range(1, scale):
-        blocks += rows[:, column::scale]
-    blocks += scale * scale // 2
-    blocks //= scale * scale
-    return blocks.astype(np.uint8)
 
 
 def check_open(env, what: str) -> None:
