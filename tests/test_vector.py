@@ -267,6 +267,36 @@ def test_hybrid_env_infos_and_reset_options_are_sync_ones():
         sync.close()
 
 
+@pytest.mark.parametrize("kind", [HybridVectorEnv, ThreadedVectorEnv])
+def test_np_random_seed_and_np_random_are_each_environments_as_sync_ones(kind):
+    """They were the VectorEnv's own: a fresh random seed no environment used."""
+    ours, sync = kind(INFO_ENV, 3), gym.make_vec(INFO_ENV, 3, "sync")
+    try:
+        for envs in (ours, sync):
+            envs.reset(seed=9)
+        assert ours.np_random_seed == sync.np_random_seed == (9, 10, 11)
+        draws = [[generator.integers(2**63) for generator in envs.np_random] for envs in (ours, sync)]
+        assert draws[0] == draws[1] and len(set(draws[0])) == 3
+    finally:
+        ours.close()
+        sync.close()
+
+
+def test_a_reset_the_environment_refuses_ends_no_worker():
+    """MatchVsScripted refuses a ball off the carpet: refused in this process, not in each worker,
+    whose error ended it (the next reset: 'worker process ended'), as SyncVectorEnv goes on."""
+    envs = HybridVectorEnv("aibo_sim/MatchVsScripted-v0", 2, camera=None)
+    try:
+        envs.reset(seed=0)
+        with pytest.raises(ValueError, match="off the carpet"):
+            envs.reset(seed=0, options={"ball": (100.0, 0.0)})
+        _, infos = envs.reset(seed=0, options={"ball": (0.5, 0.0)})
+        assert np.allclose(infos["ball_position"][:, :2], [(0.5, 0.0), (0.5, 0.0)], atol=1e-3)
+        assert envs.get_attr("np_random_seed") == (0, 1)
+    finally:
+        envs.close()
+
+
 def test_ctrl_c_in_a_terminal_leaves_busy_wait_workers_running():
     """A terminal's Ctrl-C reaches the workers too: they ignore it, the caller decides."""
     envs = HybridVectorEnv(INFO_ENV, 2)

@@ -795,12 +795,16 @@ class ScriptedOpponentsEnv(gym.Env):
         """The learner's camera layer (``MatchEnv``'s)."""
         return self.match.camera_layer
 
+    def check_reset_options(self, options: dict | None) -> None:
+        """The error ``reset`` raises for ``options`` (a ball it cannot place), before anything changes."""
+        self.match.ball_option(options)
+
     def reset(self, *, seed: int | None = None, options: dict | None = None):
         """Start a match (``MatchEnv.reset``; ``options={"ball": (x, y)}`` places the ball).
 
         :returns: the learner's ``(observation, info)``.
         """
-        self.match.ball_option(options)  # a refused ball changes nothing, the generator included
+        self.check_reset_options(options)  # a refused ball changes nothing, the generator included
         super().reset(seed=seed)
         observations, infos = self.match.reset(seed=int(self.np_random.integers(2**63)), options=options)
         return observations[self.learner], infos[self.learner]

@@ -98,6 +98,19 @@ def check_actions(action_space, actions) -> None:
         raise ValueError(f"environment {row}'s action is not finite: {values[row, column]} at index {column}")
 
 
+class EnvsRandom:
+    """``np_random_seed`` and ``np_random`` as ``SyncVectorEnv``'s: each environment's (a
+    ``VectorEnv``'s own are a generator no environment uses)."""
+
+    @property
+    def np_random_seed(self) -> tuple:
+        return self.get_attr("np_random_seed")
+
+    @property
+    def np_random(self) -> tuple:
+        return self.get_attr("np_random")
+
+
 class _EnvThread(threading.Thread):
     """One environment, made, used and closed in this thread; runs the calls it is sent."""
 
@@ -123,7 +136,7 @@ class _EnvThread(threading.Thread):
         env.close()
 
 
-class ThreadedVectorEnv(VectorEnv):
+class ThreadedVectorEnv(EnvsRandom, VectorEnv):
     """``num_envs`` environments ``gymnasium.make(env_id, **env_kwargs)``, one thread each.
 
     Step it from one thread at a time. ``copy=False`` returns the batch buffers themselves
