@@ -43,7 +43,7 @@ from openr_bridge.ers7_camera import (
 )
 from openr_bridge.wrapper import camera_image_get_blue, camera_image_get_green, camera_image_get_red
 
-from .mtn import Motion, MtnError, format_motion_info, motion_info, mtn_get_error
+from .mtn import Motion, MtnError, format_motion_info, motion_info
 from .robot import (
     Accelerometer,
     Camera,
@@ -551,6 +551,11 @@ def mtn_new(filename: str):
         return current_robot().mtn_new(filename)
     except MtnError:
         return None
+
+
+def mtn_get_error() -> str:
+    """The text of this robot's last ``mtn_new`` error ("" before any, as Webots')."""
+    return current_robot().mtn_error
 
 
 def mtn_delete(motion) -> None:

@@ -124,6 +124,20 @@ def whole_ms(value) -> int | None:
     return int(value) if value.is_integer() else None
 
 
+def _whole_numbers(values, what: str, source: str) -> np.ndarray:
+    """``values`` as an int64 array, or the MtnError naming ``what`` unless each is a whole number
+    the file's 32-bit fields hold (0.7 rad given for micro-radians was cut to 0, NaN a ValueError)."""
+    try:
+        array = np.asarray(values)
+    except ValueError:  # rows of different lengths
+        raise MtnError(source, None, f"{what}: rows of different lengths") from None
+    whole = array.dtype.kind in "iu" or (array.dtype.kind == "f" and bool(np.isfinite(array).all()))
+    whole = whole and bool((array == np.round(array)).all()) and bool((np.abs(array) < 2**31).all())
+    if array.size and not whole:
+        raise MtnError(source, None, f"{what} must be whole numbers within 32 bits (micro-radians, frame counts)")
+    return array.astype(np.int64)
+
+
 def _check(source: str, checks) -> None:
     """Raise the MtnError of the first (bad, message) pair whose ``bad`` is true."""
     for bad, message in checks:
@@ -158,10 +172,10 @@ class Motion:
         self.locators = tuple(self.locators)
         if not all(isinstance(locator, str) for locator in self.locators):
             raise MtnError(self.name, None, f"locators must be strings, not {self.locators!r}")
-        self.keyframes = np.asarray(self.keyframes, dtype=np.int64)
-        self.attitudes = np.asarray(self.attitudes, dtype=np.int64)
-        self.interpolate = np.asarray(self.interpolate, dtype=np.int64).reshape(-1)
         self.source = self.name if self.source is None else self.source
+        self.keyframes = _whole_numbers(self.keyframes, "keyframes", self.source)
+        self.attitudes = _whole_numbers(self.attitudes, "attitudes", self.source)
+        self.interpolate = _whole_numbers(self.interpolate, "interpolate", self.source).reshape(-1)
         n, j = len(self.keyframes), len(self.locators)
         whole_time = (whole_ms(self.frame_time_ms) or 0) > 0  # 16.5 was cut to 16
         _check(
@@ -625,8 +639,6 @@ class MotionPlayer:
 
 # ----------------------------------------------------------------------------- Webots-style API
 
-_last_error = ""
-
 
 def check_playable(motion: Motion, mode: str) -> None:
     """MtnError naming the file where ``mode`` cannot play ``motion``: OPEN-R's 8 ms frames need a
@@ -640,40 +652,35 @@ def check_playable(motion: Motion, mode: str) -> None:
 def mtn_new(path: str | os.PathLike, available_locators: Iterable[str] | None = None, mode: str = "openr") -> Motion:
     """Webots ``mtn_new``: read ``path`` and check every locator names a device of the robot
     (default: ``ers7.all_locators()``) and is a joint, and that ``mode`` can play it
-    (:func:`check_playable`). Failures raise :class:`MtnError` and are remembered for
-    :func:`mtn_get_error`; Webots' own texts are used ("File not found: <path>",
+    (:func:`check_playable`). Failures raise :class:`MtnError` (a controller's robot keeps the
+    last for ``mtn_get_error``); Webots' own texts are used ("File not found: <path>",
     "Missing device in model: <locator>", without Webots' trailing newline), with the path or
     locator as :func:`printable` shows it (a path cut to ``NAME_LIMIT`` characters). A
     ``path`` that is not a str or path-like is an MtnError naming it."""
-    global _last_error
+    if not isinstance(path, (str, os.PathLike)):
+        text = repr(path)
+        raise MtnError(
+            None,
+            None,
+            f"mtn_new({printable(text, 60)}): the file name must be a str or a path, not {type(path).__name__}",
+        )
     try:
-        if not isinstance(path, (str, os.PathLike)):
-            text = repr(path)
+        motion = read_mtn(path)
+    except OSError as exc:
+        raise MtnError(None, None, f"File not found: {printable(os.fspath(path), NAME_LIMIT)}") from exc
+    if available_locators is None:
+        available_locators = ers7.all_locators()
+    available = set(available_locators)
+    for loc in motion.locators:
+        if loc not in available:
             raise MtnError(
                 None,
                 None,
-                f"mtn_new({printable(text, 60)}): the file name must be a str or a path, not {type(path).__name__}",
+                f"Missing device in model: {printable(loc)}"
+                + (f" ({other})" if (other := another_robot(motion)) else ""),
             )
-        try:
-            motion = read_mtn(path)
-        except OSError as exc:
-            raise MtnError(None, None, f"File not found: {printable(os.fspath(path), NAME_LIMIT)}") from exc
-        if available_locators is None:
-            available_locators = ers7.all_locators()
-        available = set(available_locators)
-        for loc in motion.locators:
-            if loc not in available:
-                raise MtnError(
-                    None,
-                    None,
-                    f"Missing device in model: {printable(loc)}"
-                    + (f" ({other})" if (other := another_robot(motion)) else ""),
-                )
-            check_joint(loc)
-        check_playable(motion, mode)
-    except MtnError as exc:
-        _last_error = str(exc)
-        raise
+        check_joint(loc)
+    check_playable(motion, mode)
     return motion
 
 
@@ -691,11 +698,6 @@ def check_joint(locator: str, source: str | None = None) -> None:
     """MtnError unless ``locator`` is a joint's (a motion moves joints only)."""
     if locator not in ers7.JOINT_BY_LOCATOR:
         raise MtnError(source, None, f"Not a joint: {printable(locator)} (a motion moves joints only)")
-
-
-def mtn_get_error() -> str:
-    """Text of the last :func:`mtn_new` error ("" if none yet)."""
-    return _last_error
 
 
 # ----------------------------------------------------------------------------- info

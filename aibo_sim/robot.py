@@ -437,6 +437,7 @@ class Robot:
             self.devices[led.locator] = Led(self, led.locator, led.name)
         self.playing: list[_Playing] = []
         self.deleted_motions: weakref.WeakValueDictionary[int, Motion] = weakref.WeakValueDictionary()  # by id()
+        self.mtn_error = ""  # the last mtn_new error, mtn_get_error's: each robot's own, as each Webots controller's
         self.enabled_devices: dict[str, Device] = {}  # sampled after every frame, in enabling order
         self.end_ms: int | None = None
         self.frame_listeners = []  # called with (robot) after every 8 ms frame
@@ -487,10 +488,14 @@ class Robot:
 
     def mtn_new(self, path: str | Path):
         """Load a motion, resolving relative names in the search folders; MtnError if not found
-        (also for a name that is not a str or path, naming it)."""
-        if not isinstance(path, (str, os.PathLike)) or not os.fspath(path):
-            return mtn_new(path)  # raises the MtnError naming the argument, remembered for mtn_get_error
-        return mtn_new(find_file(path, self.search_dirs), ers7.all_locators(), self.mtn_mode)
+        (also for a name that is not a str or path, naming it), kept as ``mtn_error``."""
+        try:
+            if not isinstance(path, (str, os.PathLike)) or not os.fspath(path):
+                return mtn_new(path)  # raises the MtnError naming the argument
+            return mtn_new(find_file(path, self.search_dirs), ers7.all_locators(), self.mtn_mode)
+        except MtnError as error:
+            self.mtn_error = str(error)
+            raise
 
     def mtn_play(self, motion) -> None:
         """Start ``motion``; one that is already playing restarts from its start (a motion has one

@@ -513,6 +513,18 @@ def test_match_env_motion_player_and_motion_arguments_of_the_wrong_kind_are_name
         Motion.from_poses(None, None, np.zeros((2, 20)), 64)  # failed only in write_mtn
     with pytest.raises(MtnError, match=r"^x: frame time 16\.5 ms is not a positive whole number$"):
         Motion("x", "c", "d", 16.5, ("PRM:/r1/c1-Joint2:11",), [[0]], [[0, 0, 0]], [])  # cut to 16 before
+    joint = ("PRM:/r1/c1-Joint2:11",)
+    for keyframes, interpolate, what in (
+        ([[0.7], [1.9]], [1], "keyframes"),  # radians given for micro-radians: cut to 0 and 1 before
+        ([[0], [1]], [1.5], "interpolate"),  # cut to 1
+        ([[math.nan], [0]], [1], "keyframes"),  # numpy's ValueError
+        ([["a"], [0]], [1], "keyframes"),
+        ([[2**70], [0]], [1], "keyframes"),  # an OverflowError
+        ([[0], [0, 1]], [1], "keyframes: rows of different lengths"),
+    ):
+        with pytest.raises(MtnError, match=rf"^x: {what}"):
+            Motion("x", "c", "d", 16, joint, keyframes, [[0, 0, 0]] * 2, interpolate)
+    assert Motion("x", "c", "d", 16, joint, [[1.0], [-2.0]], [[0, 0, 0]] * 2, [3.0]).keyframes.tolist() == [[1], [-2]]
     whole = Motion.from_poses("w", None, np.zeros((2, 20)), 64, frame_time_ms=16.0)  # as Motion takes it
     assert whole == Motion.from_poses("w", None, np.zeros((2, 20)), 64) and type(whole.frame_time_ms) is int
     for frame_time in (16.5, True, "16"):

@@ -133,8 +133,8 @@ static void init(void) {
         servo_enable_motor_force_feedback(robot_get_device("PRM:/r1/c1/c2/c3/e5-Joint4:15"), 32);
     } else if (is("mode")) {
         robot_keyboard_enable(32);
-        fprintf(out, "mode %d key %d step %g synchronized %d\n", robot_get_mode(), robot_keyboard_get_key(),
-                robot_get_basic_time_step(), robot_get_synchronization());
+        fprintf(out, "mode %d key %d step %g synchronized %d error [%s]\n", robot_get_mode(), robot_keyboard_get_key(),
+                robot_get_basic_time_step(), robot_get_synchronization(), mtn_get_error());
     } else if (is("missing motion")) {
         char name[32];
         sprintf(name, "%s.mtn", "missing");
@@ -633,8 +633,8 @@ def test_exit_ends_the_controller_through_its_robot_die_functions_as_in_the_simu
 def test_a_memory_stick_is_cross_compiled_and_has_no_keyboard(probe, tmp_path, monkeypatch):
     stick, reference, _, _ = probe_runs(monkeypatch, probe, tmp_path, "mode", frames=8)
     # Webots 5's robot_get_mode: 1 on the robot, 0 in the simulator; the robot does not wait for its controller
-    assert (stick / "probe.txt").read_text() == "mode 1 key 0 step 8 synchronized 0\n"
-    assert (reference / "probe.txt").read_text() == "mode 0 key 0 step 8 synchronized 1\n"
+    assert (stick / "probe.txt").read_text() == "mode 1 key 0 step 8 synchronized 0 error []\n"
+    assert (reference / "probe.txt").read_text() == "mode 0 key 0 step 8 synchronized 1 error []\n"
 
 
 def test_the_wrappers_structure_sizes_are_checked_when_it_compiles(probe, tmp_path):

@@ -30,6 +30,21 @@ def robot():
     robot.sim.close()
 
 
+def test_mtn_get_error_is_each_robots_own_and_empty_before_any(robot):
+    """Webots' is "" before any error (never NULL: a C controller printing it crashed); a
+    controller's is its own (one module-wide text before: a match's robots, or an earlier run's)."""
+    assert api.mtn_get_error() == ""
+    assert api.mtn_new("missing.mtn") is None and api.mtn_get_error() == "File not found: missing.mtn"
+    second = Robot(Simulation(), backend="sim")
+    api.install(second)
+    try:
+        assert api.mtn_get_error() == ""
+    finally:
+        api.install(robot)
+        second.sim.close()
+    assert api.mtn_get_error() == "File not found: missing.mtn"
+
+
 def test_unknown_device_lists_the_nearest_names(robot):
     with pytest.raises(DeviceError, match=r"nearest: PRM:/r2/c1-Joint2:21"):
         api.robot_get_device("PRM:/r2/c1-Joint2:2l")

@@ -677,6 +677,5 @@ const char *mtn_get_error(void) {
     static char error[1024];
     begin(AIBO_OP_mtn_get_error);
     call();
-    const char *text = get_string(error, sizeof error);
-    return *text ? text : NULL;
+    return get_string(error, sizeof error); /* "" before any error, as Webots' */
 }

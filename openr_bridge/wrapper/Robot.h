@@ -108,7 +108,7 @@ public:
     bool IsOver(MTN* mtn);
     long MotionTime(MTN* mtn);
     MTN* CheckMotion(MTN* mtn, const char* function);
-    const char* MotionError() const { return mtnError_.empty() ? 0 : mtnError_.c_str(); }
+    const char* MotionError() const { return mtnError_.c_str(); } /* "" before any error, as Webots' */
 
 private:
     struct Device {

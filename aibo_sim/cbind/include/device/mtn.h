@@ -21,7 +21,7 @@ int mtn_get_length(MTN *mtn);       /* ms */
 int mtn_get_time(MTN *mtn);         /* ms */
 const char *mtn_get_name(MTN *mtn); /* not in Webots: the name stored in the file */
 void mtn_fprint(FILE *file, MTN *mtn);
-const char *mtn_get_error(void);    /* the last error, or NULL */
+const char *mtn_get_error(void);    /* the last error, "" before any (Webots': never NULL) */
 
 #ifdef __cplusplus
 }
