@@ -86,6 +86,48 @@ def test_sigterm_stops_a_ray_dump_cleanly_with_143(tmp_path):
     assert not list(out.rglob(".tmp.*"))
 
 
+RAY_SIGTERM_SCRIPT = """
+import os, signal, sys
+import ray
+from aibo_sim.dump.shards import ray_session
+
+def handler(number, frame):
+    raise KeyboardInterrupt("the command's handler")
+
+signal.signal(signal.SIGTERM, handler)
+set_handler = ray._private.utils.set_sigterm_handler
+
+def set_then_signal(ray_handler):  # ray.init's first act: a SIGTERM arriving just after it
+    set_handler(ray_handler)
+    os.kill(os.getpid(), signal.SIGTERM)
+
+ray._private.utils.set_sigterm_handler = set_then_signal
+try:
+    with ray_session(None):
+        pass
+except KeyboardInterrupt as exc:
+    print("during ray.init:", exc, ray.is_initialized(), flush=True)
+ray._private.utils.set_sigterm_handler = set_handler
+with ray_session(None):
+    pass
+try:
+    os.kill(os.getpid(), signal.SIGTERM)
+except KeyboardInterrupt as exc:
+    print("after ray.shutdown:", exc, flush=True)
+"""
+
+
+def test_a_sigterm_while_ray_starts_or_after_it_stopped_reaches_the_commands_handler():
+    """Ray's handler (sys.exit(15)) took a SIGTERM during ray.init: exit 15, nothing said; after
+    ray.shutdown, which sets SIGTERM's action back to the default, one killed the process."""
+    pytest.importorskip("ray")
+    done = subprocess.run(
+        [sys.executable, "-c", RAY_SIGTERM_SCRIPT], cwd=ROOT, capture_output=True, text=True, timeout=300
+    )
+    assert done.returncode == 0, done.stderr
+    assert done.stdout == "during ray.init: the command's handler False\nafter ray.shutdown: the command's handler\n"
+
+
 def test_a_lost_ray_worker_is_retried(ray, local_dump, tmp_path):
     out = tmp_path / "ray"
     killed = []

@@ -250,12 +250,24 @@ def ray_session(address: str | None):
     started = not ray.is_initialized()
     if started:
         handlers = {number: signal.getsignal(number) for number in (signal.SIGTERM, signal.SIGINT)}
+
+        def put_back_handlers():
+            """This command's handlers, where Ray put its own (its SIGTERM exits at once) or, in
+            ``ray.shutdown``, set SIGTERM's action to the default under Python's table of handlers."""
+            if threading.current_thread() is threading.main_thread():
+                for number, handler in handlers.items():
+                    signal.signal(number, signal.SIG_DFL if handler is None else handler)
+
         try:
             with _stderr_kept_unless_failed():  # a refused connection: Ray's C++ client logs each retry
                 ray.init(address=address, include_dashboard=False, logging_level="warning")
-            if threading.current_thread() is threading.main_thread():
-                for number, handler in handlers.items():  # Ray's own exit at once, put back: the command stops cleanly
-                    signal.signal(number, signal.SIG_DFL if handler is None else handler)
+            put_back_handlers()
+        except SystemExit as exc:  # Ray's SIGTERM handler, its first act in ray.init: sys.exit(SIGTERM)
+            ray.shutdown()
+            put_back_handlers()
+            if exc.code == signal.SIGTERM:
+                signal.raise_signal(signal.SIGTERM)  # to this command's handler: it stops as after any SIGTERM
+            raise
         except Exception as exc:  # Ray's own exception types, by version
             where = f"--ray-address {address}" if address else "--engine ray"
             hint = (
@@ -270,6 +282,7 @@ def ray_session(address: str | None):
     finally:
         if started:
             ray.shutdown()
+            put_back_handlers()
 
 
 def _run_ray_shards(
