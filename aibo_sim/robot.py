@@ -250,7 +250,7 @@ class Camera(Device):
         """Webots' camera_save_image: the last picture into ``filename`` (relative to ``folder``,
         default the working folder), a PNG, or a JPEG of ``quality`` 1-100 when it ends in .jpg or .jpeg (any case;
         ``quality`` is ignored for a PNG), written whole or not at all (a link at ``filename`` is
-        replaced, not followed). 0 when written; -1, the reason on stderr, when it cannot be (another
+        replaced, not followed; a relative name whose folders hold a link is refused). 0 when written; -1, the reason on stderr, when it cannot be (another
         ending, a JPEG quality out of range, the file system's refusal), as Webots answers.
 
         :raises DeviceError: a file name that is not a string; not enabled, or no picture yet.
@@ -276,7 +276,9 @@ class Camera(Device):
             data = cv2.imencode(".jpg", bgr, [cv2.IMWRITE_JPEG_QUALITY, int(quality), *whole_colour])[1].tobytes()
         if data is not None:
             try:
-                path = named_file(Path(folder or "") / name)
+                # a relative name's folders are reached from the working folder without following a
+                # link (one planted under --out); an absolute name's are the controller's choice
+                path = named_file(name) if os.path.isabs(name) else Path(folder or os.getcwd()) / name
                 # a temporary name of this thread's own: a match's controllers may save one name at once
                 write_file_atomic(
                     path, data, temporary_path(path.with_name(f"{path.name}.{threading.get_native_id()}"))

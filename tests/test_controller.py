@@ -201,6 +201,14 @@ def test_camera_save_image_writes_the_last_picture_as_webots_did(robot, tmp_path
     assert api.camera_save_image(camera, "c.png", 0, folder=str(tmp_path)) == 0  # the C binding's controller's
     names = ["a.PNG", "b" * 251 + ".png", "b.jpeg", "c.png", "elsewhere", "link.png", "loop", ".png"]
     assert sorted(p.name for p in tmp_path.iterdir()) == sorted(names)
+    (tmp_path / "outside").mkdir()
+    (tmp_path / "sub").symlink_to(tmp_path / "outside")  # a folder link planted in the working folder
+    capsys.readouterr()
+    assert api.camera_save_image(camera, "sub/x.png", 0, folder=str(tmp_path)) == -1  # written through it before
+    assert f"{tmp_path}/sub is a symbolic link: refusing to follow it" in capsys.readouterr().err
+    assert not list((tmp_path / "outside").iterdir())
+    assert api.camera_save_image(camera, str(tmp_path / "sub" / "x.png"), 0) == 0  # named whole: the caller's choice
+    assert (tmp_path / "outside" / "x.png").exists()
 
 
 def test_two_controllers_saving_one_name_at_once_both_write_it(robot, tmp_path, capsys):
