@@ -250,8 +250,9 @@ class Camera(Device):
         """Webots' camera_save_image: the last picture into ``filename`` (relative to ``folder``,
         default the working folder), a PNG, or a JPEG of ``quality`` 1-100 when it ends in .jpg or .jpeg (any case;
         ``quality`` is ignored for a PNG), written whole or not at all (a link at ``filename`` is
-        replaced, not followed; a relative name whose folders hold a link is refused). 0 when written; -1, the reason on stderr, when it cannot be (another
-        ending, a JPEG quality out of range, the file system's refusal), as Webots answers.
+        replaced, not followed; a relative name whose folders hold a link is refused). 0 when
+        written; -1, the reason on stderr, when it cannot be (another ending, a JPEG quality out of
+        range, the file system's refusal), as Webots answers.
 
         :raises DeviceError: a file name that is not a string; not enabled, or no picture yet.
         """

@@ -6,6 +6,9 @@ import json
 import os
 import re
 import shutil
+import signal
+import threading
+import time
 from pathlib import Path
 
 import cv2
@@ -247,6 +250,26 @@ def test_a_file_that_does_not_link_or_is_not_text_is_exit_2_naming_it(tmp_path, 
     latin.write_bytes(latin.read_bytes() + b'char *s = "\xf3" x;\n')
     assert main(["run", str(latin)]) == 2
     assert capsys.readouterr().err.startswith(f"aibo-sim: error: {latin}: compiling failed:\n")
+
+
+def test_a_compile_stopped_by_a_signal_stops_the_compilers_whole_process_group(tmp_path):
+    """Only the driver (cc) was killed: its cc1 and as outlived aibo-sim, their files left in /tmp."""
+    from aibo_sim.cbind import build
+
+    pass_pid = tmp_path / "pass.pid"  # a compiler pass, the driver's child, as cc1 is
+    command = ["sh", "-c", f"sleep 60 & echo $! > {pass_pid}; wait"]
+    interrupt = threading.Timer(0.5, os.kill, (os.getpid(), signal.SIGINT))
+    interrupt.start()
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            build._run(command, tmp_path / "x.c", "compiling")
+    finally:
+        interrupt.cancel()
+    pid = int(pass_pid.read_text())
+    with pytest.raises(ProcessLookupError):  # gone (its parent, sh, reaped it: no zombie is left either)
+        for _ in range(100):
+            os.kill(pid, 0)
+            time.sleep(0.02)
 
 
 def test_no_compiler_is_exit_2_naming_it_and_how_to_install_it(tmp_path, monkeypatch, capsys):

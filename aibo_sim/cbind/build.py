@@ -10,10 +10,12 @@ run of unchanged sources and headers compiles nothing. ``CC`` and ``CXX`` choose
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import os
 import re
 import shutil
+import signal
 import subprocess
 from functools import cache
 from pathlib import Path
@@ -28,6 +30,7 @@ LIBRARY = PACKAGE / "libaibo.c"
 # -ffp-contract=off: no fused multiply-add, so that a controller's double arithmetic rounds as
 # the source (and Python) says, on every machine.
 FLAGS = ("-O2", "-ffp-contract=off", "-pthread")
+COMPILER_STOP_S = 2.0  # after SIGTERM, for a compiler's processes to remove their temporary files
 QUOTED_INCLUDE = re.compile(rb'^[ \t]*#[ \t]*include[ \t]*"([^"\n]+)"', re.MULTILINE)
 INSTALL_HINT = {
     "cc": "a C compiler (Debian/Ubuntu: apt-get install gcc)",
@@ -170,8 +173,29 @@ def compile_controller(path: str | os.PathLike) -> Path:
 
 
 def _run(command: list[str], source: Path, step: str) -> None:
-    """Run a compiler ``step`` on ``source``; CompileError naming it, then the compiler's messages."""
-    result = subprocess.run(command, capture_output=True, text=True, errors="replace")  # it quotes the source's bytes
-    if result.returncode != 0:
-        messages = (result.stderr or result.stdout).rstrip()
+    """Run a compiler ``step`` on ``source``; CompileError naming it, then the compiler's messages.
+    Stopped (Ctrl-C, SIGTERM), its whole process group stops: its cc1 and as too, which outlived
+    aibo-sim, their temporary files left in /tmp."""
+    compiler = subprocess.Popen(  # errors="replace": it quotes the source's bytes
+        command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, errors="replace", start_new_session=True
+    )
+    try:
+        stdout, stderr = compiler.communicate()
+    except BaseException:
+        _stop_group(compiler)
+        raise
+    if compiler.returncode != 0:
+        messages = (stderr or stdout).rstrip()
         raise CompileError(f"{source}: {step} failed" + (f":\n{messages}" if messages else ""))
+
+
+def _stop_group(process: subprocess.Popen) -> None:
+    """SIGTERM to ``process``'s group (gcc's passes then remove their temporary files), SIGKILL to
+    what is left once its leader ended or after ``COMPILER_STOP_S``; reaped."""
+    with contextlib.suppress(ProcessLookupError, PermissionError):
+        os.killpg(process.pid, signal.SIGTERM)
+    with contextlib.suppress(subprocess.TimeoutExpired):
+        process.communicate(timeout=COMPILER_STOP_S)
+    with contextlib.suppress(ProcessLookupError, PermissionError):
+        os.killpg(process.pid, signal.SIGKILL)
+    process.communicate()
