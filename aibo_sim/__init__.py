@@ -4,7 +4,6 @@ import os
 import signal
 import sys
 
-from ._gl import choose_gl_backend, import_mujoco
 from .exit_status import EXIT_INTERRUPTED
 
 
@@ -21,6 +20,8 @@ if (
     and signal.getsignal(signal.SIGINT) is signal.default_int_handler
 ):
     signal.signal(signal.SIGINT, interrupted_while_loading)
+
+from ._gl import choose_gl_backend, import_mujoco  # noqa: E402  (after the handler: its imports take a while)
 
 choose_gl_backend()  # before anything imports mujoco
 import_mujoco()

@@ -881,3 +881,25 @@ def test_a_signal_sent_twice_to_a_c_controllers_run_is_one_stop(tmp_path):
     ended = subprocess.run(command, capture_output=True, text=True, cwd=ROOT)
     assert ended.returncode == 143 and "again" not in ended.stderr, ended.stderr
     assert json.loads((out / "run.json").read_text())["status"] == "interrupted"
+
+
+CTRL_C_AT_THE_GL_IMPORT = """
+import importlib.abc, os, signal, sys
+sys.argv[0] = "aibo-sim"
+
+
+class CtrlC(importlib.abc.MetaPathFinder):
+    def find_spec(self, name, path, target=None):
+        if name == "aibo_sim._gl":
+            os.kill(os.getpid(), signal.SIGINT)
+
+
+sys.meta_path.insert(0, CtrlC())
+import aibo_sim
+"""
+
+
+def test_ctrl_c_while_the_program_loads_its_opengl_module_is_one_line_and_130():
+    """The handler came after aibo_sim._gl's import: a Ctrl-C in it was a traceback."""
+    done = subprocess.run([sys.executable, "-c", CTRL_C_AT_THE_GL_IMPORT], capture_output=True, text=True, timeout=120)
+    assert (done.returncode, done.stderr) == (130, "\naibo-sim: interrupted\n")
