@@ -12,7 +12,9 @@ Run as ``stubgen2 stub.cfg`` (the SDK's ``OPEN_R/bin/stubgen2``): the files are 
 current folder; a bad stub.cfg is one line naming the file and line, exit status 1.
 """
 
+import os
 import sys
+import tempfile
 from pathlib import Path
 
 from .config import StubConfig, load_stub_cfg
@@ -192,9 +194,25 @@ def main(argv: list[str]) -> int:
         print(f"stubgen2: {error}", file=sys.stderr)
         return 1
     for file_name, text in generate(stub).items():
-        Path(file_name).write_text(text)
+        _replace(Path(file_name), text)
     print(
         f"stubgen2: {stub.object_name}: {len(stub.of_kind('S'))} subjects, {len(stub.of_kind('O'))} observers, "
         f"{len(stub.extras)} extra entries"
     )
     return 0
+
+
+def _replace(path: Path, text: str) -> None:
+    """Write ``path`` whole or not at all, never through a link: a file created anew, renamed
+    over it (a link there is replaced)."""
+    fd, temporary = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
+    try:
+        with os.fdopen(fd, "w") as out:
+            out.write(text)
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(temporary, 0o666 & ~umask)  # as write_text's file (mkstemp's is 0600)
+        os.replace(temporary, path)
+    except BaseException:
+        os.unlink(temporary)
+        raise

@@ -84,6 +84,23 @@ def test_stubgen2_numbers_entries_as_sony_does():
         assert line in stub_cc
 
 
+def test_the_sdks_stubgen2_and_gzcp_replace_a_link_where_they_write_never_writing_through_it(tmp_path):
+    """Both wrote through a link at their output (stubgen2's entry.h, gzcp's .BIN): a file outside
+    the stick was overwritten."""
+    outside = tmp_path / "outside"
+    outside.write_text("kept")
+    shutil.copy(ROOT / "tests" / "openr_programs" / "Talker" / "stub.cfg", tmp_path / "stub.cfg")
+    (tmp_path / "entry.h").symlink_to(outside)
+    bin_folder = sdk_root() / "OPEN_R" / "bin"
+    subprocess.run([bin_folder / "stubgen2", "stub.cfg"], cwd=tmp_path, check=True, capture_output=True)
+    assert not (tmp_path / "entry.h").is_symlink() and "Generated" in (tmp_path / "entry.h").read_text()
+    (tmp_path / "TALKER.BIN").symlink_to(outside)
+    subprocess.run([bin_folder / "gzcp", "stub.cfg", "TALKER.BIN"], cwd=tmp_path, check=True)
+    assert gzip.decompress((tmp_path / "TALKER.BIN").read_bytes()) == (tmp_path / "stub.cfg").read_bytes()
+    assert outside.read_text() == "kept" and not (tmp_path / "TALKER.BIN").is_symlink()
+    assert sorted(p.name for p in tmp_path.iterdir() if p.name.startswith(".")) == []  # no temporary file left
+
+
 def test_stubgen2_takes_what_sonys_takes_comments_and_a_space_before_the_parentheses():
     """Sony's RPlugIn stub.cfg begins with '#' lines; Sony's stubgen2 trims "Ready ()" to Ready."""
     text = "#\n# comment\nObjectName : P\nNumOfOSubject : 1\nNumOfOObserver : 1\n"

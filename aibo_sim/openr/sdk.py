@@ -8,7 +8,7 @@ of everything that goes in) and returns its path; ``aibo-sim openr sdk`` prints 
                                    include paths
     bin/mipsel-linux-strip, -ar, -ranlib
     OPEN_R/bin/stubgen2            openr_bridge.stubgen: stub.cfg -> def.h, entry.h, <Name>Stub.*
-    OPEN_R/bin/gzcp                gzip -c FROM > TO
+    OPEN_R/bin/gzcp                gzip -c FROM > TO (whole or not at all, never through a link)
     OPEN_R/bin/mkbin               links an object's .o and .a files into a loadable object
                                    (a shared library; the .ocf loader hints are read and ignored)
     OPEN_R/bin/openr-host          the runtime aibo-sim starts to run a memory stick
@@ -49,6 +49,17 @@ def _script(path: Path, text: str) -> None:
     path.chmod(path.stat().st_mode | stat.S_IXUSR | stat.S_IXGRP | stat.S_IXOTH)
 
 
+# gzip -c FROM > TO, TO written whole or not at all and never through a link (one there is
+# replaced): through a temporary name the shell creates anew (set -C), removed if stopped
+GZCP = """#!/bin/sh
+set -C
+temporary="$2.$$.tmp"
+trap 'rm -f "$temporary"' EXIT
+trap 'rm -f "$temporary"; exit 1' HUP INT TERM
+gzip -c "$1" > "$temporary" && mv -f "$temporary" "$2"
+"""
+
+
 def _tool_scripts(root: Path, cxx: str, cc: str) -> dict[Path, str]:
     """The SDK's commands: shell wrappers of the host tools, Python entry points of ours."""
     include = f'-I"{root}/OPEN_R/include" -I"{root}/OPEN_R/include/R4000"'
@@ -59,7 +70,7 @@ def _tool_scripts(root: Path, cxx: str, cc: str) -> dict[Path, str]:
         root / "bin" / "mipsel-linux-strip": '#!/bin/sh\nexec strip --strip-debug "$@"\n',
         root / "bin" / "mipsel-linux-ar": '#!/bin/sh\nexec ar "$@"\n',
         root / "bin" / "mipsel-linux-ranlib": '#!/bin/sh\nexec ranlib "$@"\n',
-        root / "OPEN_R" / "bin" / "gzcp": '#!/bin/sh\nexec gzip -c "$1" > "$2"\n',
+        root / "OPEN_R" / "bin" / "gzcp": GZCP,
         root / "OPEN_R" / "bin" / "stubgen2": python
         + "from openr_bridge.stubgen import main\nsys.exit(main(sys.argv[1:]))\n",
         root / "OPEN_R" / "bin" / "mkbin": python
