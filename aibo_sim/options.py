@@ -27,6 +27,9 @@ CAMERA_SETTING_OPTIONS = (("white_balance", "--camera-wb"), ("gain", "--camera-g
 WORLD_DESTS = ("scene", "pose", "ball", "ball_type", "seed")
 CAMERA_DESTS = ("camera_profile", "camera_wb", "camera_gain", "camera_shutter", "camera_full")
 LONG_WORD = 120  # an error line's paths and arguments are cut after this many characters
+# An argument that is a negative number as float() reads it (-1e-3, -1., -inf), not an option's
+# name: argparse takes only -1 and -1.5 for numbers ("--pose -1e-3 0 0: expected 3 arguments").
+NEGATIVE_NUMBER = re.compile(r"^-(\d+\.?\d*|\.\d+)(e[+-]?\d+)?$|^-(inf|infinity|nan)$", re.IGNORECASE)
 
 
 def option_name(parameter: str) -> str:
@@ -51,7 +54,12 @@ def error_line(message) -> str:
 class ArgumentParser(argparse.ArgumentParser):
     """argparse's parser, except that a usage error is one line on stderr (exit status 2):
     ``aibo-sim run: error: argument --ball: 'nan' is not a finite number (see aibo-sim run --help)``,
-    and an argument no parser knows is named by the command it was given to (``aibo-sim render``)."""
+    and an argument no parser knows is named by the command it was given to (``aibo-sim render``);
+    a negative number is a value whatever its form (``NEGATIVE_NUMBER``)."""
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        self._negative_number_matcher = NEGATIVE_NUMBER  # argparse's own, an attribute of each parser
 
     def error(self, message: str):
         self.exit(EXIT_BAD_INPUT, f"{self.prog}: error: {error_line(message)} (see {self.prog} --help)\n")
