@@ -391,6 +391,10 @@ class World:
         # The bundled field, named or not: its carpet bounds a pose and a ball (placement.place).
         self.default_field = scene is None or Path(scene).resolve() == default_scene().resolve()
         self.robot_specs = tuple(robots)
+        if self.default_field:
+            from .team import check_on_the_carpet
+
+            check_on_the_carpet(self.robot_specs)
         self.model = load_model(scene, ball, ball_type, self.robot_specs)
         check_robot(self.model, scene if scene is not None else default_scene(), keyframe)
         self.keyframe = keyframe
@@ -523,7 +527,7 @@ class Simulation:
     the field: this object is robot 1, ``world.robots`` lists them all, each a ``Simulation``
     of its own robot (servos, sensors, LEDs, camera and noise streams) sharing the world (model,
     data, time, ball): stepping any of them steps the world. They are checked as
-    ``team.check_robots`` does (a TeamError names the robot: a duplicate, a pose off the carpet).
+    ``team.check_robots`` does (a TeamError names the robot: a duplicate; a pose off the default field's carpet).
 
     ``command_latency_frames``: 8 ms frames between a set-point and the servo acting on it (or
     an LED command and the LED). On the robot, OPEN-R plays joint and LED commands from a queue

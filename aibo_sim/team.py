@@ -122,8 +122,19 @@ def _pose_problem(pose: Sequence[float]) -> str | None:
         return f"pose {_show(pose)} is not finite numbers"
     if abs(pose[2]) > MAX_MAGNITUDE:
         return f"pose {_show(pose)}: yaw out of range (at most {MAX_MAGNITUDE:g} degrees in magnitude, as --pose)"
-    problem = off_the_carpet(pose[0], pose[1])
-    return None if problem is None else f"pose {_show(pose)} is {problem}"
+    return None
+
+
+def check_on_the_carpet(robots: Sequence[RobotSpec]) -> None:
+    """TeamError naming the first robot whose pose is off the default field's carpet (checked where
+    the scene is known, as ``--pose`` is: a scene of one's own may be larger)."""
+    for i, robot in enumerate(robots):
+        problem = robot.pose is not None and off_the_carpet(robot.pose[0], robot.pose[1])
+        if problem:
+            raise TeamError(
+                f"{robot.given or 'robots'}: {_label(i, robot.team, robot.number)}: pose {_show(robot.pose)} "
+                f"is {problem} of the default field"
+            )
 
 
 def off_the_carpet(x: float, y: float) -> str | None:

@@ -573,13 +573,32 @@ def test_an_api_call_from_another_thread_of_a_match_controller_says_why_it_has_n
     [
         ([], "^robots: no robots$"),
         ([RobotSpec("red", 4), RobotSpec("red", 4)], "red 4 is also robot 1"),
-        ([RobotSpec("red", 4, (9.0, 0.0, 0.0))], "pose 9,0,0 is off the carpet"),
+        (
+            [RobotSpec("red", 4, (9.0, 0.0, 0.0))],
+            r"^robots: robot 1 \(red 4\): pose 9,0,0 is off the carpet \(\|x\| <= 3 m\) of the default",
+        ),
+        (
+            [RobotSpec("red", 4), RobotSpec("blue", 2, (0.0, -3.0, 0.0), given="--robot blue:2:0,-3,0")],
+            r"^--robot blue:2:0,-3,0: robot 2 \(blue 2\): pose 0,-3,0 is off the carpet \(\|y\| <= 2 m\)",
+        ),
         ([RobotSpec("green", 4)], "unknown team 'green'"),
     ],
 )
 def test_a_simulation_checks_its_robots(robots, message):
     with pytest.raises(ValueError, match=message):
         Simulation(camera=CameraConfig("ideal"), robots=robots)
+
+
+def test_a_robot_off_the_default_carpet_is_refused_on_the_default_field_only():
+    """As --pose: a scene of one's own may be larger (a match's robots were refused in any scene)."""
+    sim = Simulation(ROOT / "models" / "scene_webots.xml", camera=CameraConfig("ideal"), robots=[OFF_THE_CARPET])
+    assert np.allclose(sim.world.robots[0].body_pose()[0][:2], (3.5, 0.0), atol=0.01)
+    sim.close()
+    with pytest.raises(ValueError, match=r"pose 3\.5,0,0 is off the carpet \(\|x\| <= 3 m\) of the default field$"):
+        Simulation(camera=CameraConfig("ideal"), robots=[OFF_THE_CARPET])
+
+
+OFF_THE_CARPET = RobotSpec("red", 4, (3.5, 0.0, 0.0))
 
 
 def test_a_match_announces_a_python_controller_that_computes_long_naming_its_robot(tmp_path, monkeypatch, capsys):
