@@ -242,7 +242,7 @@ def run_match(
             with controller_named_as_given(robot.spec):
                 players.append(_player(robot, robot.spec.controller or controller_path, compiled))
         _check_module_names(players)
-        out = out and make_out_folder(out)
+        out = None if out is None else make_out_folder(out)
         if out:
             _check_match_folder(out, len(players))
         for player in players:

@@ -25,7 +25,9 @@ PLACEMENT_OVERLAP_M = 0.005  # a placed robot or ball sunk deeper than this into
 def out_path(path) -> Path:
     """The output folder ``out`` resolved: it, or a folder above it, may be a link to a folder,
     not a link to nothing (aibo-sim makes no folder through a link it did not make); a
-    ``ParameterError`` naming it."""
+    ``ParameterError`` naming it (an empty string names no folder: the working folder was written)."""
+    if isinstance(path, str) and not path:
+        raise ParameterError.at("out", "''", "an empty string names no file or folder")
     path = Path(path)
     for link in (path, *path.parents):
         if link.is_symlink() and not link.exists():

@@ -487,7 +487,7 @@ def run_controller(
     try:
         place(sim, world.pose, world.ball)
         check_rendering(sim.model)
-        out = out and out_path(out)
+        out = None if out is None else out_path(out)
         folder = Path(workdir).resolve() if workdir is not None else out
         if stick is None:
             program = Robot(

@@ -93,6 +93,24 @@ def test_an_empty_path_is_refused_not_read_as_the_current_folder(tmp_path, monke
     assert not list(tmp_path.iterdir())
 
 
+def test_an_empty_out_is_refused_by_the_python_api_too_before_anything_is_written(tmp_path, monkeypatch):
+    """run_controller(out="") wrote a failed run into the working folder, then a bare FileNotFoundError."""
+    from aibo_sim.config import ParameterError
+    from aibo_sim.dump import dump
+    from aibo_sim.match import run_match
+    from aibo_sim.team import RobotSpec
+
+    monkeypatch.chdir(tmp_path)
+    for run in (
+        lambda: run_controller(SCRIPTED, duration=0.05, out="", progress=False),
+        lambda: run_match([RobotSpec("red", 1, None, str(SCRIPTED))], duration=0.05, out="", progress=False),
+        lambda: dump("", controller=SCRIPTED, frames=1),
+    ):
+        with pytest.raises(ParameterError, match="^out '': an empty string names no file or folder$"):
+            run()
+        assert not list(tmp_path.iterdir())
+
+
 @pytest.mark.parametrize(
     "command",
     [
