@@ -67,8 +67,8 @@ def start_values(name: str, values, count: int) -> tuple[float, ...] | None:
         if any(isinstance(v, (str, bytes, bool)) for v in values):
             raise TypeError  # nor True one
         numbers = tuple(float(v) for v in values)
-    except (TypeError, ValueError):
-        raise ParameterError.at(name, repr(values), f"must be {count} numbers") from None
+    except (TypeError, ValueError, OverflowError):  # OverflowError: an int beyond a float (10**400)
+        raise ParameterError.at(name, reprlib.repr(values), f"must be {count} numbers") from None
     shown = " ".join(map(str, numbers))
     if len(numbers) != count or not all(math.isfinite(v) for v in numbers):
         raise ParameterError.at(name, shown, f"must be {count} finite numbers")
@@ -122,7 +122,14 @@ class CameraConfig:
         settings = CameraSettings(**{k: recorded[k] for k in CameraSettings().as_dict() if k in recorded})
         if not isinstance(full, bool):
             raise ParameterError.at("full", repr(full), "must be true or false")
-        return cls(camera_profile(recorded["profile"], recorded.get("profile_options")), full, settings)
+        options = recorded.get("profile_options")
+        try:
+            profile = camera_profile(recorded["profile"], options)
+        except (TypeError, ValueError, AttributeError, KeyError) as exc:  # an unknown option, a value of another kind
+            raise ParameterError.at(
+                "profile_options", reprlib.repr(options), f"not the profile's options ({exc})"
+            ) from None
+        return cls(profile, full, settings)
 
 
 @dataclass(frozen=True)
@@ -140,6 +147,8 @@ class WorldConfig:
 
     def __post_init__(self):
         if self.scene is not None:
+            if isinstance(self.scene, str) and not self.scene:
+                raise ParameterError.at("scene", "''", "an empty string names no file or folder")
             object.__setattr__(self, "scene", str(self.scene))
         if not is_seed(self.seed):
             raise ParameterError.at("seed", self.seed, "must be a whole number from 0 to 2**64 - 1")
@@ -161,8 +170,14 @@ class WorldConfig:
 
     @classmethod
     def from_dict(cls, recorded: dict) -> WorldConfig:
-        """The config ``as_dict`` (or a run's ``run.json``) recorded."""
+        """The config ``as_dict`` (or a run's ``run.json``) recorded; a dict with none of its keys
+        is refused (a misspelt key, or a dump's ``meta.json``, which holds them under ``parameters``)."""
         _check_recorded(recorded, "world")
+        keys = cls().as_dict()
+        if not any(key in recorded for key in keys):
+            raise ParameterError.at(
+                "world", reprlib.repr(recorded), f"has none of {', '.join(keys)} (a dump's meta.json: its 'parameters')"
+            )
         return cls(**{key: recorded.get(key, default) for key, default in cls().as_dict().items()})
 
 

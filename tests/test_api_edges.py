@@ -465,6 +465,20 @@ def test_encoder_arguments_and_recorded_configs_of_the_wrong_kind_are_named():
         CameraConfig.from_dict({})
     with pytest.raises(ParameterError, match=r"^world \[\]: a recorded config is a dict"):  # AttributeError before
         WorldConfig.from_dict([])
+    for bad, message in (  # a TypeError, an AttributeError: neither named the field
+        ({"foo": 1}, r"^profile_options \{'foo': 1\}: not the profile's options \(.*'foo'\)$"),
+        ("x", r"^profile_options 'x': not the profile's options"),
+    ):
+        with pytest.raises(ParameterError, match=message):
+            CameraConfig.from_dict({"profile": "ers7", "profile_options": bad})
+    with pytest.raises(ParameterError, match=r"^world \{'posee': \[1, 2, 3\]\}: has none of scene, seed, pose"):
+        WorldConfig.from_dict({"posee": [1, 2, 3]})  # the default world before, the misspelt key ignored
+    assert WorldConfig.from_dict({"seed": 3, "status": "done"}) == WorldConfig(seed=3)  # run.json's other keys
+    with pytest.raises(ParameterError, match="^scene '': an empty string names no file or folder$"):
+        WorldConfig(scene="")  # '.: not a regular file' later, naming no parameter
+    for field, values in (("pose", (10**400, 0, 0)), ("ball", (0, 10**400))):  # a bare OverflowError
+        with pytest.raises(ParameterError, match=rf"^{field} \(.*\): must be {len(values)} numbers$"):
+            WorldConfig(**{field: values})
 
 
 def test_a_keyframe_and_a_latency_out_of_reach_are_named_before_any_work():
