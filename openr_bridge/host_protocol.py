@@ -4,7 +4,8 @@ The runtime is a child process. Messages go over a socket: a little-endian ``uin
 then that many bytes: a ``uint32`` message kind, then its fields (``uint32``/``int32`` numbers,
 strings as ``uint32`` length and bytes). Images go through a shared memory block of
 ``SHM_SIZE`` bytes: its first ``SHM_HEADER`` bytes hold what the runtime is doing (the object
-running a handler, ``uint32`` index + 1, 0 when none, and the selector), then come
+running a handler, ``uint32`` index + 1, 0 when none, and the selector, ``LOADING`` while its
+file loads), then come
 ``IMAGE_SLOTS`` + 1 areas of ``MAX_IMAGE_BYTES``. An image's message goes into the area the
 runtime last named (``IMAGE_SLOT`` records; 0 at the start): a slot whose last image's region
 the objects have all given back, which then becomes the new image's region (nothing is
@@ -121,6 +122,7 @@ POWER_FIELDS = (
 )
 SPEAKER_RATE = 16000  # SOUND records' samples per second
 SHM_HEADER = 64
+LOADING = 0xFFFFFFFF  # the shared status's selector while an object's file loads (its constructors run)
 MAX_IMAGE_BYTES = 1 << 20  # the room for an image message in each area of the shared block
 IMAGE_SLOTS = 4  # areas an image's region may stay in (and one more, copied by the runtime)
 SHM_SIZE = SHM_HEADER + (IMAGE_SLOTS + 1) * MAX_IMAGE_BYTES
@@ -154,6 +156,7 @@ def c_header() -> str:
         f"#define AIBO_OPENR_POWER_FIELDS {len(POWER_FIELDS)}",
         f"#define AIBO_OPENR_SPEAKER_RATE {SPEAKER_RATE}",
         f"#define AIBO_OPENR_SHM_HEADER {SHM_HEADER}",
+        f"#define AIBO_OPENR_LOADING {LOADING:#x}u",
         f"#define AIBO_OPENR_MAX_IMAGE_BYTES {MAX_IMAGE_BYTES}",
         f"#define AIBO_OPENR_IMAGE_SLOTS {IMAGE_SLOTS}",
         f"#define AIBO_OPENR_SHM_SIZE {SHM_SIZE}",

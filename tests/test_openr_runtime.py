@@ -535,12 +535,19 @@ def test_what_an_objects_constructor_prints_is_stamped_with_its_name(objects, tm
     assert result.console.splitlines()[0] == "[    0.000 s] CRASH: made"
 
 
-def test_an_object_that_calls_exit_is_named(objects, tmp_path, monkeypatch):
-    monkeypatch.setenv("CRASH_HOW", "exit")
+@pytest.mark.parametrize(
+    "how, status, who, at",
+    [
+        ("exit", 3, r"Crash \(entry 7\)", "0.088"),
+        ("exit load", 5, r"CRASH \(while loading\)", "0.000"),  # in its constructor: named by nothing before
+    ],
+)
+def test_an_object_that_calls_exit_is_named(objects, tmp_path, monkeypatch, how, status, who, at):
+    monkeypatch.setenv("CRASH_HOW", how)
     stick = make_stick(tmp_path / "ms", objects, ["CRASH"], f"{SENSOR} Crash.Sensor.OSensorFrameVectorData.O\n")
     with pytest.raises(
         OpenRObjectCrashed,
-        match=r"^the OPEN-R runtime exited with status 3 in OPEN-R object Crash \(entry 7\) at simulated t = 0\.088 s$",
+        match=rf"^the OPEN-R runtime exited with status {status} in OPEN-R object {who} at simulated t = {at} s$",
     ):
         run_stick(stick, 1.0, tmp_path / "out")
 

@@ -756,12 +756,16 @@ class MemoryStickRun:
         raise OpenRObjectCrashed(f"the OPEN-R runtime exited with status {status}{by} {where}")
 
     def _running(self) -> str | None:
-        """The object entry the runtime is running ("OPEN-R object HELLO (entry 1)"), or None."""
+        """The object entry the runtime is running ("OPEN-R object HELLO (entry 1)"; "OPEN-R object
+        HELLO (while loading)", named by its file as the runtime names it then), or None."""
         number, entry = struct.unpack_from("<2I", self._memory, 0)
         if not number:
             return None
         names = ["OVirtualRobotComm", "OVirtualRobotAudioComm", *self.object_names]
-        return f"OPEN-R object {names[number - 1] if number <= len(names) else number} (entry {entry})"
+        name = names[number - 1] if number <= len(names) else str(number)
+        if entry == protocol.LOADING:
+            return f"OPEN-R object {name.rsplit('/', 1)[-1].split('.', 1)[0]} (while loading)"
+        return f"OPEN-R object {name} (entry {entry})"
 
     def _waiting(self, seconds: float) -> None:
         what = self._running() or "the OPEN-R runtime"

@@ -92,7 +92,10 @@ Object* ObjectOf(const OID& oid) {
 
 Object* Current() { return current; }
 Object* Constructing() { return constructing; }
-void SetConstructing(Object* object) { constructing = object; }
+void SetConstructing(Object* object) {
+    constructing = object;
+    SetStatus(object, object != NULL ? AIBO_OPENR_LOADING : 0); /* an exit or endless loop there is named */
+}
 const std::vector<Object*>& Objects() { return objects; }
 
 Object* AddObject(const std::string& name, const ObjectEntry* table, bool system) {

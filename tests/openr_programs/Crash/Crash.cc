@@ -29,6 +29,7 @@ Crash::Crash() : vectors(0) {
     if (How("say")) OSYSPRINT(("made\n"));
     if (How("load")) *(volatile int*)0 = 1;
     if (How("fatal load")) OPENR::Fatal(ofatalPAUSE_SW);
+    if (How("exit load")) exit(5);
 }
 
 OStatus Crash::DoInit(const OSystemEvent&) {
