@@ -4,6 +4,7 @@ built by the host SDK with Sony-style Makefiles and run on the simulated ERS-7."
 import gzip
 import json
 import os
+import re
 import shutil
 import signal
 import struct
@@ -574,6 +575,7 @@ def test_an_object_that_never_returns_is_announced_and_one_signal_ends_it(object
         "aibo-sim: waiting for OPEN-R object Spin (entry 7): no answer for 0.2 s of wall time (simulated time stays "
         "at t = 0.056 s)" in err
     )
+    assert "SIGINT: stopped, with its process group; its objects' Stop entries did not run\n" in err
     # its prompt (no newline yet) was on the console and in the log as it printed it
     assert (tmp_path / "out" / "console.log").read_text().endswith("Spin: spinning> ")
 
@@ -589,6 +591,26 @@ def test_an_object_that_never_returns_is_announced_and_one_signal_ends_it(object
     assert (
         "aibo-sim: waiting for OPEN-R object /MS/OPEN-R/MW/OBJS/CRASH.BIN (entry 0): no answer"
         in capfd.readouterr().err
+    )
+
+
+def test_an_object_stuck_in_its_stop_entry_after_a_signal_is_named_as_what_did_not_return(
+    objects, tmp_path, capfd, monkeypatch
+):
+    """The closing line said the Stop entries did not run, when they had and one never returned."""
+    stick = make_stick(tmp_path / "ms", objects, ["CRASH"], f"{SENSOR} Crash.Sensor.OSensorFrameVectorData.O\n")
+
+    def interrupt_at_200_ms(run):
+        if run.time_ms == 200:
+            signal.raise_signal(signal.SIGINT)
+
+    monkeypatch.setenv("CRASH_HOW", "stop")
+    with pytest.raises(KeyboardInterrupt):
+        run_stick(stick, 5.0, tmp_path / "out", interrupt_at_200_ms)
+    assert re.search(
+        r"SIGINT: stopped, with its process group; OPEN-R object Crash \(entry \d+\) did not return: what came after "
+        r"it did not run\n",
+        capfd.readouterr().err,
     )
 
 

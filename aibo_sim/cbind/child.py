@@ -40,6 +40,7 @@ import subprocess
 import sys
 import threading
 import time
+from collections.abc import Callable
 
 from ..exit_status import STOP_GRACE_S
 
@@ -72,7 +73,7 @@ class Child:
     """A served child process; see the module docstring. ``name`` names it in messages
     ("controller spin.c"); ``pass_fds`` and ``env`` are ``subprocess.Popen``'s."""
 
-    def __init__(self, argv: list[str], *, name: str, pass_fds=(), env=None, grace_note: str = ""):
+    def __init__(self, argv: list[str], *, name: str, pass_fds=(), env=None, grace_note: str | Callable[[], str] = ""):
         self.argv, self.name, self.pass_fds, self.env, self.grace_note = argv, name, pass_fds, env, grace_note
         self.pending: int | None = None  # the first SIGINT or SIGTERM, not acted on yet
         self._signalled_at = 0.0
@@ -189,7 +190,8 @@ class Child:
         ``grace_note`` where it made no call), raise the signal."""
         number, self.pending = self.pending, None
         self.stop()
-        note = f"; {self.grace_note}" if self.grace_note and with_note else ""
+        grace_note = self.grace_note() if callable(self.grace_note) else self.grace_note  # as things stand now
+        note = f"; {grace_note}" if grace_note and with_note else ""
         print(
             f"aibo-sim: {self.name} {why} {signal.Signals(number).name}: stopped, with its process group{note}",
             file=sys.stderr,

@@ -329,8 +329,9 @@ class MemoryStickRun:
             name=f"memory stick {self.stick.root.name}",
             env=environment,
             pass_fds=(theirs.fileno(), *(() if log is None else (log,))),
-            grace_note="its objects' Stop entries did not run",
+            grace_note=self._unfinished,
         )
+        self._stopping = False  # STOP sent: the objects' Stop entries have begun
         try:
             with child, ours:
                 theirs.close()
@@ -348,6 +349,7 @@ class MemoryStickRun:
                 # After a signal or SimulationEnd too (the runtime is between messages then): the
                 # objects' DoStop and DoDestroy run, as at the end of a run (a runtime silent for
                 # the grace period after a signal is stopped by ``child``).
+                self._stopping = True
                 self._send(
                     protocol.MESSAGES["STOP"],
                     _U32.pack(openr_frame_number(self.sim.frame)) + self._stepped_frames(),
@@ -754,6 +756,17 @@ class MemoryStickRun:
         running = self._running()
         by = f" in {running}" if running else ""  # the object that called exit()
         raise OpenRObjectCrashed(f"the OPEN-R runtime exited with status {status}{by} {where}")
+
+    def _unfinished(self) -> str:
+        """What did not run of a stick stopped after a signal's grace (``Child``'s ``grace_note``)."""
+        if not self._stopping:
+            return "its objects' Stop entries did not run"
+        running = self._running()
+        return (
+            f"{running} did not return: what came after it did not run"
+            if running
+            else "its Destroy entries did not run"
+        )
 
     def _running(self) -> str | None:
         """The object entry the runtime is running ("OPEN-R object HELLO (entry 1)"; "OPEN-R object

@@ -53,6 +53,8 @@ OStatus Crash::DoStart(const OSystemEvent&) {
 
 OStatus Crash::DoStop(const OSystemEvent&) {
     if (How("fatal") || How("fatal init") || How("fatal load")) OSYSPRINT(("DoStop\n"));
+    for (volatile int i = 0; How("stop"); i++) {
+    }
     return oSUCCESS;
 }
 
@@ -64,7 +66,7 @@ void Crash::NotifySensor(const ONotifyEvent& event) {
         OSYSPRINT(("system time %u.%06u, OTime %u bytes, OBootCondition %u\n", (unsigned)now.seconds,
                    (unsigned)now.useconds, (unsigned)sizeof(OTime), (unsigned)sizeof(OBootCondition)));
     }
-    if (vectors == 3 && !How("live") && !How("clock")) {
+    if (vectors == 3 && !How("live") && !How("clock") && !How("stop")) {
         pthread_t later;
         if (How("exit")) exit(3);
         if (How("fatal")) {
