@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 
 import openr_bridge
+from openr_bridge.config import find_in_stick
 from openr_bridge.memory_stick import MemoryStick, load_memory_stick, memory_stick_folder
 
 from . import controller
@@ -111,15 +112,31 @@ FRAME_FILE = re.compile(r"\d{6,}\.png")  # a run's frame, frames/NNNNNN.png
 RUN_FRAME_NAMES = re.compile(rf"{FRAME_FILE.pattern}|\.\d{{6,}}\.png\.tmp|\d{{6,}}\.partial\.png")
 
 
+def _unfinished_stick(folder: Path) -> str | None:
+    """Why a folder with an OPEN-R folder (any case; or its MS with one) is no memory stick: where
+    OPEN-R/MW/CONF/OBJECT.CFG is missing, or None."""
+    for candidate in (folder, folder / "MS"):
+        with contextlib.suppress(OSError):
+            if any(entry.name.upper() == "OPEN-R" for entry in candidate.iterdir()):
+                try:
+                    find_in_stick(candidate, "OBJECT.CFG")
+                except openr_bridge.ConfigError as error:
+                    return str(error)
+    return None
+
+
 def check_python_controller(path: Path) -> None:
     """A Python controller file that exists and compiles: FileNotFoundError, or ValueError naming
     the file and line of a syntax error (bad input, found before anything is run or written)."""
     if not path.is_file():
         main_files = " or ".join(path.name + suffix for suffix in C_SUFFIXES)
         stick = next(filter(None, map(memory_stick_folder, path.resolve().parents)), None) if path.is_dir() else None
+        unfinished = _unfinished_stick(path) if path.is_dir() else None
         what = (
             f"a folder inside the memory stick {stick}: run the stick's folder"
             if stick is not None
+            else f"a memory stick without its OBJECT.CFG ({unfinished})"
+            if unfinished is not None
             else f"a folder with no {main_files} (a C or C++ controller folder holds its main file under the "
             "folder's name) and no memory stick (MS/OPEN-R/MW/CONF/OBJECT.CFG)"
             if path.is_dir()

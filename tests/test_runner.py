@@ -119,6 +119,12 @@ def test_a_syntax_error_is_bad_input_found_before_anything_runs(tmp_path, capsys
     err = capsys.readouterr().err
     assert f"{tmp_path}: a folder with no {tmp_path.name}.c or {tmp_path.name}.cc or" in err
     assert err.rstrip().endswith("and no memory stick (MS/OPEN-R/MW/CONF/OBJECT.CFG)")
+    (tmp_path / "half" / "OPEN-R" / "MW" / "CONF").mkdir(parents=True)  # a stick without its OBJECT.CFG
+    assert main(["run", str(tmp_path / "half")]) == 2  # was told of C controller folders and an MS it has not
+    assert capsys.readouterr().err == (
+        f"aibo-sim: error: {tmp_path}/half: a memory stick without its OBJECT.CFG ({tmp_path}/half/OPEN-R/MW/CONF: "
+        "no OBJECT.CFG (any case) here; expected OPEN-R/MW/CONF/OBJECT.CFG)\n"
+    )
     conf = tmp_path / "program" / "MS" / "OPEN-R" / "MW" / "CONF"
     conf.mkdir(parents=True)
     (conf / "OBJECT.CFG").write_text("/MS/OPEN-R/MW/OBJS/X.BIN\n")
