@@ -529,6 +529,7 @@ class StaticPart:
     size: tuple[float, ...]
     name: str | None = None
     body: str | None = None
+    quat: tuple[float, float, float, float] = (1.0, 0.0, 0.0, 0.0)  # its orientation (w, x, y, z), MuJoCo's
 
 
 def _part_triangles(part: StaticPart, segments: int = 16) -> tuple[np.ndarray, list[tuple[int, int, int]]]:
@@ -536,14 +537,14 @@ def _part_triangles(part: StaticPart, segments: int = 16) -> tuple[np.ndarray, l
     centre = np.array(part.pos, float)
     if part.shape == "box":
         half = np.array(part.size, float)
-        vertices = centre + half * np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)])
+        vertices = half * np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)])
         quads = [(0, 1, 3, 2), (4, 5, 7, 6), (0, 1, 5, 4), (2, 3, 7, 6), (0, 2, 6, 4), (1, 3, 7, 5)]
     else:
         radius, half_height = part.size
         ring = [
             (radius * math.cos(a), radius * math.sin(a)) for a in np.linspace(0, 2 * math.pi, segments, endpoint=False)
         ]
-        vertices = centre + np.array(
+        vertices = np.array(
             [(x, y, z) for z in (-half_height, half_height) for x, y in ring]
             + [(0, 0, -half_height), (0, 0, half_height)]
         )
@@ -552,6 +553,15 @@ def _part_triangles(part: StaticPart, segments: int = 16) -> tuple[np.ndarray, l
         quads += [
             (2 * segments + 1, segments + i, segments + (i + 1) % segments, 2 * segments + 1) for i in range(segments)
         ]
+    w, x, y, z = part.quat
+    rotation = np.array(  # the unit quaternion's matrix
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
+        ]
+    )
+    vertices = centre + vertices @ rotation.T
     triangles = []
     for a, b, c, d in quads:
         for tri in ((a, b, c), (a, c, d)):
@@ -585,6 +595,7 @@ def static_parts(parts: list[StaticPart]) -> tuple[list[ET.Element], list[ET.Ele
                     type=part.shape,
                     pos=part.pos,
                     size=part.size,
+                    **({} if part.quat == (1.0, 0.0, 0.0, 0.0) else {"quat": part.quat}),
                     group=3,
                     rgba=(0.5, 0.5, 0.9, 0.4),
                 )
@@ -791,6 +802,12 @@ WEBOTS_COLOURS = {
 }
 
 
+def axis_angle_quat(x: float, y: float, z: float, angle: float) -> tuple[float, float, float, float]:
+    """The unit quaternion (w, x, y, z) of a turn of ``angle`` radians about the axis (x, y, z)."""
+    axis = np.array([x, y, z], float) / math.hypot(x, y, z)
+    return (math.cos(angle / 2), *(float(v) for v in axis * math.sin(angle / 2)))
+
+
 def webots_scene_xml() -> ET.Element:
     """The Webots ERS-7 world: goals blue at +x and yellow at -x, landmarks, borders, pink ball."""
     parts = []
@@ -823,22 +840,26 @@ def webots_scene_xml() -> ET.Element:
                 f"beacon_{bottom}",
                 bottom,
                 "cylinder",
-                (x, y, 0.425),
+                (x, y, 0.40),  # Webots' cylinders' centres
                 (0.02, 0.025),
                 f"beacon_{i}_bottom",
                 f"beacon_{i}",
             ),
-            StaticPart(
-                f"beacon_{top}", top, "cylinder", (x, y, 0.475), (0.02, 0.025), f"beacon_{i}_top", f"beacon_{i}"
-            ),
+            StaticPart(f"beacon_{top}", top, "cylinder", (x, y, 0.45), (0.02, 0.025), f"beacon_{i}_top", f"beacon_{i}"),
         ]
+    # Webots' sloped borders: slabs turned about an axis (rotation x y z angle), half in the ground
     parts += [
-        StaticPart("wall_border", "border", "box", pos, size, f"wall_border_{n}")
-        for n, size, pos in (
-            ("left", (1.65, 0.025, 0.1), (0, 0.98, 0.1)),
-            ("right", (1.65, 0.025, 0.1), (0, -0.98, 0.1)),
+        StaticPart("wall_border", "border", "box", pos, size, f"wall_border_{n}", quat=axis_angle_quat(*rotation))
+        for n, size, pos, rotation in (
+            ("left", (1.65, 0.025, 0.1), (0, 0.98, 0.05), (1, 0, 0, 2.356196)),
+            ("right", (1.65, 0.025, 0.1), (0, -0.98, 0.05), (1, 0, 0, 0.785396)),
             *(
-                (f"end_{i}", (0.025, 0.34, 0.1), (sx * 1.58, sy * 0.64, 0.1))
+                (
+                    f"end_{i}",
+                    (0.1, 0.025, 0.375),
+                    (sx * 1.58, sy * 0.68, 0.05),
+                    (0.8628559982596194, -sx * 0.35740699927911007, sx * 0.35740699927911007, 1.717772),
+                )
                 for i, (sx, sy) in enumerate(((1, 1), (1, -1), (-1, 1), (-1, -1)))
             ),
         )

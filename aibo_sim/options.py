@@ -128,8 +128,9 @@ def add_world_options(parser: argparse.ArgumentParser, ball_default: str = "the 
         "--ball-type",
         choices=BALL_TYPES,
         default=DEFAULT_BALL_TYPE,
-        help="the scene's ball: robocup (the orange RoboCup ball, 84 mm; default) or pink "
-        "(Sony's pink AIBO ball, 70 mm, which Sony's samples look for)",
+        help="the scene's ball: robocup (the scene's own, unchanged: on the default field the orange RoboCup "
+        "ball, 84 mm; default) or pink (Sony's pink AIBO ball, 70 mm, which Sony's samples look for; "
+        "scene_webots.xml's own)",
     )
     parser.add_argument(
         "--seed",

@@ -116,13 +116,33 @@ def test_pseudorandom_control_over_full_ranges_raises_no_warning(scene):
         data.ctrl[:] = centre + radius * np.array([2 * mujoco.mju_Halton(step, j + 2) - 1 for j in range(model.nu)])
         mujoco.mj_step(model, data)
         step += 1
+    # checked before the reset, which clears them (the first part went unchecked)
+    assert [w.number for w in data.warning] == [0] * len(data.warning) and np.isfinite(data.qpos).all()
     mujoco.mj_resetDataKeyframe(model, data, model.key("stand").id)
     rng = np.random.default_rng(7)
+    steps_per_frame = round(0.008 / model.opt.timestep)
     while data.time < 2.0:
         data.ctrl[:] = rng.uniform(centre - radius, centre + radius)
-        mujoco.mj_step(model, data, nstep=2)  # one 8 ms joint frame
+        mujoco.mj_step(model, data, nstep=steps_per_frame)  # one 8 ms joint frame (nstep=2 was 4 ms)
     assert [w.number for w in data.warning] == [0] * len(data.warning)
     assert np.isfinite(data.qpos).all()
+
+
+def test_the_webots_scene_has_webots_sloped_borders_and_landmark_heights():
+    """aibo_ers7.wbt: 45-degree slabs along y = +-0.98 and beside the goals, centred at z = 0.05 (they
+    stood upright), and the landmarks' cylinders centred at z = 0.40 and 0.45 (0.425 and 0.475)."""
+    model = mujoco.MjModel.from_xml_path(str(models_dir() / "scene_webots.xml"))
+    data = mujoco.MjData(model)
+    mujoco.mj_forward(model, data)
+    for name in ("wall_border_left", "wall_border_right", *(f"wall_border_end_{i}" for i in range(4))):
+        geom = model.geom(name).id
+        thickness_axis = data.geom_xmat[geom].reshape(3, 3)[:, 1]  # the slab's 5 cm side
+        assert abs(thickness_axis[2]) == pytest.approx(math.sqrt(0.5), abs=1e-3), name  # a 45-degree ramp
+        assert data.geom_xpos[geom][2] == pytest.approx(0.05), name
+    heights = sorted(
+        {round(float(model.geom(f"beacon_{i}_{part}").pos[2]), 6) for i in range(6) for part in "bottom top".split()}
+    )
+    assert heights == [0.40, 0.45]
 
 
 def test_model_folder_has_menagerie_files():
