@@ -268,13 +268,14 @@ def test_hybrid_env_infos_and_reset_options_are_sync_ones():
 
 
 @pytest.mark.parametrize("kind", [HybridVectorEnv, ThreadedVectorEnv])
-def test_np_random_seed_and_np_random_are_each_environments_as_sync_ones(kind):
+def test_np_random_seed_np_random_and_autoreset_mode_are_as_sync_ones(kind):
     """They were the VectorEnv's own: a fresh random seed no environment used."""
     ours, sync = kind(INFO_ENV, 3), gym.make_vec(INFO_ENV, 3, "sync")
     try:
         for envs in (ours, sync):
             envs.reset(seed=9)
         assert ours.np_random_seed == sync.np_random_seed == (9, 10, 11)
+        assert ours.autoreset_mode is sync.autoreset_mode is AutoresetMode.NEXT_STEP  # Sync has the attribute too
         draws = [[generator.integers(2**63) for generator in envs.np_random] for envs in (ours, sync)]
         assert draws[0] == draws[1] and len(set(draws[0])) == 3
     finally:

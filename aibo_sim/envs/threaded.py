@@ -98,9 +98,12 @@ def check_actions(action_space, actions) -> None:
         raise ValueError(f"environment {row}'s action is not finite: {values[row, column]} at index {column}")
 
 
-class EnvsRandom:
-    """``np_random_seed`` and ``np_random`` as ``SyncVectorEnv``'s: each environment's (a
-    ``VectorEnv``'s own are a generator no environment uses)."""
+class SyncAttributes:
+    """``np_random_seed``, ``np_random`` and ``autoreset_mode`` as ``SyncVectorEnv``'s: each
+    environment's seed and generator (a ``VectorEnv``'s own are a generator no environment uses),
+    the one mode these reset by."""
+
+    autoreset_mode = AutoresetMode.NEXT_STEP
 
     @property
     def np_random_seed(self) -> tuple:
@@ -136,7 +139,7 @@ class _EnvThread(threading.Thread):
         env.close()
 
 
-class ThreadedVectorEnv(EnvsRandom, VectorEnv):
+class ThreadedVectorEnv(SyncAttributes, VectorEnv):
     """``num_envs`` environments ``gymnasium.make(env_id, **env_kwargs)``, one thread each.
 
     Step it from one thread at a time. ``copy=False`` returns the batch buffers themselves

@@ -45,7 +45,7 @@ from gymnasium.vector import AsyncVectorEnv, AutoresetMode, VectorEnv
 from gymnasium.vector.async_vector_env import AsyncState, _async_worker  # private, but AsyncVectorEnv's own
 from gymnasium.vector.utils import batch_space, concatenate, create_empty_array, iterate
 
-from .threaded import EnvsRandom, check_actions, check_autoreset_mode, reset_arguments, values_per_env, write_row
+from .threaded import SyncAttributes, check_actions, check_autoreset_mode, reset_arguments, values_per_env, write_row
 
 SPIN_S = 0.005  # a step loop with the camera turns around in well under this
 _yield_core = getattr(os, "sched_yield", lambda: time.sleep(0))  # sched_yield is POSIX-only
@@ -113,7 +113,7 @@ def _with_workers_infos(infos: dict, workers_infos: dict, num_envs: int) -> dict
     return infos
 
 
-class HybridVectorEnv(EnvsRandom, VectorEnv):
+class HybridVectorEnv(SyncAttributes, VectorEnv):
     """``num_envs`` environments ``gymnasium.make(env_id, **env_kwargs)``: the first made and
     stepped in the calling process, the others in spawned worker processes (Gymnasium's
     ``AsyncVectorEnv`` with ``BusyWaitWorker(spin_s)``), all stepping at once.
