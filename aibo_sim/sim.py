@@ -26,7 +26,7 @@ from openr_bridge import FRAME_RATE_HZ, FRAME_TICK_MS
 
 from .camera import CameraFrame, HeadCamera, scene_light
 from .camera.head import BEHIND_CAMERA_GROUP, HEAD_CAMERA_GROUPS
-from .config import CameraConfig, configs, is_seed
+from .config import CameraConfig, ParameterError, configs, is_seed
 from .ers7 import (
     DISTANCE_SENSORS,
     HEAD_CAMERA,
@@ -126,7 +126,7 @@ def load_model(
     uniforms (``add_robots``)."""
     match = robots is not None and (len(robots) > 1 or any(robot.team is not None for robot in robots))
     if ball_type not in BALL_TYPES:
-        raise ValueError(f"--ball-type must be one of {', '.join(BALL_TYPES)}, not {ball_type!r}")
+        raise ParameterError.at("ball_type", repr(ball_type), f"must be one of {', '.join(BALL_TYPES)}")
     path = Path(scene) if scene is not None else default_scene()
     try:
         if not path.is_file():
@@ -432,7 +432,9 @@ class World:
         key = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_KEY, name) if isinstance(name, str) else -1
         if key < 0:
             names = [self.model.key(k).name for k in range(self.model.nkey)]
-            raise ValueError(f"--keyframe {name!r}: no such keyframe; the scene's: {', '.join(names) or 'none'}")
+            raise ParameterError.at(
+                "keyframe", repr(name), f"no such keyframe; the scene's: {', '.join(names) or 'none'}"
+            )
         return key
 
     def reset(self, seed: int | None = None, keyframe: str | None = None) -> None:

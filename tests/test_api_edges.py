@@ -481,15 +481,22 @@ def test_encoder_arguments_and_recorded_configs_of_the_wrong_kind_are_named():
             WorldConfig(**{field: values})
 
 
-def test_a_keyframe_and_a_latency_out_of_reach_are_named_before_any_work():
+def test_a_keyframe_and_a_latency_out_of_reach_are_named_before_any_work(capsys):
     for keyframe in (None, "lying"):  # a pybind11 TypeError, and MuJoCo's KeyError at reset
-        with pytest.raises(
-            ValueError, match=rf"^--keyframe {keyframe!r}: no such keyframe; the scene's: home, stand, sit$"
+        with pytest.raises(  # named as the parameter (the command line's --keyframe before), the CLI's option there
+            ValueError, match=rf"^keyframe {keyframe!r}: no such keyframe; the scene's: home, stand, sit$"
         ):
             Simulation(keyframe=keyframe)
+    assert main(["render", "--settle", "0", "--keyframe", "lying"]) == 2
+    assert (
+        capsys.readouterr().err
+        == "aibo-sim: error: --keyframe 'lying': no such keyframe; the scene's: home, stand, sit\n"
+    )
+    with pytest.raises(ValueError, match="^ball_type 'zz': must be one of robocup, pink$"):  # --ball-type before
+        Simulation(ball_type="zz")
     sim = Simulation()
     try:
-        with pytest.raises(ValueError, match="^--keyframe 'x': no such keyframe"):
+        with pytest.raises(ValueError, match="^keyframe 'x': no such keyframe"):
             sim.reset(keyframe="x")
     finally:
         sim.close()
