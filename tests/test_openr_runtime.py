@@ -196,6 +196,57 @@ int main() {
     assert out[7].split() == ["0", "1", "2", "16"]
 
 
+API_EDGES = r"""
+#include <stdio.h>
+#include <OPENR/OPENRAPI.h>
+#include <OPENR/ObjcommEvent.h>
+#include <OPENR/RCRegion.h>
+int main() {
+    OPrimitiveID id = 7;
+    OStatus status = OPENR::OpenPrimitive(0, &id);
+    printf("%d %x\n", (int)status, (unsigned)id);
+    MemoryRegionID memID;
+    OCommandVectorData* commands = 0;
+    OSoundVectorData* sound = 0;
+    printf("%d %d\n", (int)OPENR::NewCommandVectorData((size_t)1 << 40, &memID, &commands),
+           (int)OPENR::NewSoundVectorData(2, ~(size_t)0 / 2, &memID, &sound));
+    char name[] = "Ctl.Out.int.S";
+    printf("%d %d %d\n", OControlEvent(0, name, objcommCMD_ADDOBSERVER_V22).IsAddObserver(),
+           OControlEvent(0, name, objcommCMD_REMOVEOBSERVER_V22).IsRemoveObserver(),
+           OControlEvent(0, name, objcommCMD_ADDOBSERVER_V22).IsRemoveObserver());
+    RCRegion* first = new RCRegion(16);
+    RCRegion* second = new RCRegion(32);
+    ONotifyEvent event;
+    event.SetNumOfData(2);
+    event.SetData(0, first);
+    event.SetData(1, second);
+    const void** data = event.Data();
+    printf("%d %d\n", data[0] == first->Base(), data[1] == second->Base());
+    first->RemoveReference();
+    second->RemoveReference();
+    return 0;
+}
+"""
+
+
+def test_the_api_edges_sony_documents(tmp_path):
+    """Level2 Reference Guide: OpenPrimitive gives oprimitiveID_UNDEF when it fails (NULL left the id
+    as it was); NewCommandVectorData and NewSoundVectorData say oNO_MEMORY (sizes beyond memory
+    crashed on bad_alloc or wrapped round); ONotifyEvent's Data(void) (missing: no compile); a
+    subject's Control entry sees an observer added or removed (observers connect with the _V22
+    commands, which IsAddObserver did not count)."""
+    (tmp_path / "edges.cc").write_text(API_EDGES)
+    library = sdk_root() / "OPEN_R" / "lib"
+    compiler = str(sdk_root() / "bin" / "mipsel-linux-g++")
+    subprocess.run(
+        [compiler, "-Wall", "-o", "edges", "edges.cc", f"-L{library}", "-lOPENR", f"-Wl,-rpath,{library}"],
+        cwd=tmp_path,
+        check=True,
+    )
+    out = subprocess.run(["./edges"], cwd=tmp_path, capture_output=True, text=True, check=True).stdout
+    assert out == "4 ffffffff\n5 5\n1 1 0\n1 1\n"  # oINVALID_ARG, oNO_MEMORY
+
+
 def test_effector_plays_each_vector_and_asks_for_the_next_after_its_last_frame(objects, tmp_path):
     stick = make_stick(tmp_path / "ms", objects, ["JPROBE"], JOINT_PROBE)
     result = run_stick(stick, 0.3, tmp_path / "out", lambda r: (r.time_ms, r.sim.servos.command[PAN]))

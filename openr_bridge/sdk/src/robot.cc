@@ -23,6 +23,7 @@
  *   EnableJointGain and SetJointGain (Sony's registers, passed to the simulator as they are).
  */
 #include <deque>
+#include <new>
 #include <stdint.h>
 #include <string.h>
 #include <math.h>
@@ -854,6 +855,7 @@ void OPowerStatus::PrintDetail() const {
 /* The OPENR:: calls. */
 
 OStatus OPENR::OpenPrimitive(const char* locator, OPrimitiveID* id) {
+    if (id != NULL) *id = oprimitiveID_UNDEF; /* Sony: "If it fails, oprimitiveID_UNDEF is returned" */
     if (locator == NULL || id == NULL) return oINVALID_ARG;
     for (size_t i = 0; i < primitives.size(); i++) {
         if (primitives[i].locator == locator) {
@@ -862,7 +864,6 @@ OStatus OPENR::OpenPrimitive(const char* locator, OPrimitiveID* id) {
             return oSUCCESS;
         }
     }
-    *id = oprimitiveID_UNDEF;
     return oNOT_FOUND;
 }
 
@@ -962,12 +963,27 @@ static void FillVectorInfo(ODataVectorInfo* info, MemoryRegionID id, size_t tota
     info->numData = 0;
 }
 
+/* A vector's region, its header and `count` infos of `infoSize` bytes each followed by data of
+ * `dataSize`: oNO_MEMORY (Sony's "fails to reserve shared memory") where its size overflows the
+ * longwords that describe it or the memory is not there (a bad_alloc killed the object). */
+OStatus NewVectorRegion(size_t count, size_t infoSize, size_t dataSize, MemoryRegionID* memID, void** memory) {
+    const size_t most = 0xFFFFFFFFu;
+    if (count > (most - sizeof(ODataVectorInfo)) / (infoSize + dataSize)) return oNO_MEMORY;
+    try {
+        *memID = NewRegion(sizeof(ODataVectorInfo) + count * (infoSize + dataSize), memory);
+    } catch (const std::bad_alloc&) {
+        return oNO_MEMORY;
+    }
+    return oSUCCESS;
+}
+
 OStatus OPENR::NewCommandVectorData(size_t count, MemoryRegionID* memID, OCommandVectorData** base) {
     if (memID == NULL || base == NULL || count == 0) return oINVALID_ARG;
     size_t infos = sizeof(ODataVectorInfo) + count * sizeof(OCommandInfo);
     size_t total = infos + count * sizeof(OCommandData);
     void* memory;
-    *memID = NewRegion(total, &memory);
+    OStatus made = NewVectorRegion(count, sizeof(OCommandInfo), sizeof(OCommandData), memID, &memory);
+    if (made != oSUCCESS) return made;
     *base = (OCommandVectorData*)memory;
     FillVectorInfo(&(*base)->vectorInfo, *memID, total, odataCOMMAND_VECTOR, sizeof(OCommandInfo), count);
     for (size_t i = 0; i < count; i++) {
@@ -992,7 +1008,8 @@ OStatus OPENR::NewSoundVectorData(size_t count, size_t dataSize, MemoryRegionID*
     size_t infos = sizeof(ODataVectorInfo) + count * sizeof(OSoundInfo);
     size_t total = infos + count * dataSize;
     void* memory;
-    *memID = NewRegion(total, &memory);
+    OStatus made = NewVectorRegion(count, sizeof(OSoundInfo), dataSize, memID, &memory);
+    if (made != oSUCCESS) return made;
     *base = (OSoundVectorData*)memory;
     FillVectorInfo(&(*base)->vectorInfo, *memID, total, odataSOUND_VECTOR, sizeof(OSoundInfo), count);
     for (size_t i = 0; i < count; i++) {

@@ -29,8 +29,15 @@ public:
         : sbjIndex_(index), observerID_(id), subName_(name), command_(command) {}
     int               SbjIndex() const { return sbjIndex_; }
     const char*       SubName() const { return subName_; }
-    bool              IsAddObserver() const { return command_ == objcommCMD_ADDOBSERVER; }
-    bool              IsRemoveObserver() const { return command_ == objcommCMD_REMOVEOBSERVER; }
+    /* each way of adding or removing: observers connect with the _V22 commands */
+    bool IsAddObserver() const {
+        return command_ == objcommCMD_ADDOBSERVER || command_ == objcommCMD_ADDOBSERVER_SELF ||
+               command_ == objcommCMD_ADDOBSERVER_V22;
+    }
+    bool IsRemoveObserver() const {
+        return command_ == objcommCMD_REMOVEOBSERVER || command_ == objcommCMD_REMOVEOBSERVER_SELF ||
+               command_ == objcommCMD_REMOVEOBSERVER_V22;
+    }
     const ObserverID& SenderID() const { return observerID_; }
 
 private:
@@ -68,6 +75,12 @@ public:
     int                 NumOfData() const { return nData_; }
     int                 NumOfNotify() const { return nNotify_; }
     const void*         Data(int i) const { return data_[i]->Base(); }
+    /* the data's addresses, an array (one for all events: filled by each call) */
+    const void** Data() const {
+        static const void* bases[MAX_NUM_DATA];
+        for (int i = 0; i < nData_; i++) bases[i] = data_[i]->Base();
+        return bases;
+    }
     RCRegion*           RCData(int i) const { return data_[i]; }
 
 private:
