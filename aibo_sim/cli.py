@@ -19,7 +19,7 @@ import numpy as np
 from openr_bridge import FULL_HEIGHT, FULL_WIDTH, LAYER_SIZE
 
 from . import interrupted_while_loading
-from .config import DEFAULT_DURATION_S, MAX_MAGNITUDE
+from .config import DEFAULT_DURATION_S
 from .exit_status import (
     EXIT_BAD_INPUT,
     EXIT_BROKEN_PIPE,
@@ -291,8 +291,6 @@ def _mtn_info(args) -> int:
 def _mtn_play(args) -> int:
     from .motions import play_motion
 
-    if not 1 <= args.repeat <= MAX_MAGNITUDE:
-        raise ValueError(f"--repeat must be a whole number from 1 to {MAX_MAGNITUDE:.0f}, not {args.repeat}")
     if args.no_ball and args.ball is not None:
         raise ValueError("--ball and --no-ball exclude each other")
     result = play_motion(

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import numbers
 import os
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -18,7 +19,7 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
-from .config import CameraConfig, WorldConfig
+from .config import MAX_MAGNITUDE, CameraConfig, ParameterError, WorldConfig
 from .ers7 import JOINT_BY_LOCATOR, JOINT_INDEX, JOINTS, LEGS, joint_indices
 from .mjcf import HIP_OFFSET, KNEE_OFFSET, PAW_OFFSET, PAW_RADIUS, POSES
 from .mtn import Motion, MotionPlayer, MtnError, another_robot, printable, read_mtn, write_mtn
@@ -277,13 +278,13 @@ class GaitMeter:
     in total and on the paws (``paw_share``: the share of the stance the paws carry)."""
 
     def __init__(self, sim: Simulation):
-        m = sim.model
-        self._dofs = [m.joint(j.name).dofadr[0] for j in JOINTS if j.name[:2] in LEGS]
-        robot = m.body_rootid[m.geom_bodyid] == m.body("body").id
-        leg_bodies = [m.body(f"{leg}_j{i}").id for leg in LEGS for i in (1, 2, 3)]
+        m, p = sim.model, sim.prefix  # this robot's (a match's robot 2 was measured as robot 1)
+        self._dofs = [m.joint(p + j.name).dofadr[0] for j in JOINTS if j.name[:2] in LEGS]
+        robot = m.body_rootid[m.geom_bodyid] == m.body(p + "body").id
+        leg_bodies = [m.body(f"{p}{leg}_j{i}").id for leg in LEGS for i in (1, 2, 3)]
         self._leg = np.isin(m.geom_bodyid, leg_bodies)
         self._paw = np.zeros(m.ngeom, dtype=bool)
-        self._paw[[m.geom(f"{leg}_paw").id for leg in LEGS]] = True
+        self._paw[[m.geom(f"{p}{leg}_paw").id for leg in LEGS]] = True
         self._robot = robot
         self._force = np.zeros(6)
         self.peak_speed = self.leg_force = self.paw_force = 0.0
@@ -339,6 +340,8 @@ def play_motion(
     displacement in the heading there (x forward, y left), the heading change unwrapped (+ = left).
     Also reported: the distance the paws' kinematics give (``kinematic_distance_m``), the peak
     leg joint speed and the share of the legs' ground contact force that the paws carry."""
+    if isinstance(repeat, bool) or not isinstance(repeat, numbers.Integral) or not 1 <= repeat <= MAX_MAGNITUDE:
+        raise ParameterError.at("repeat", repeat, f"must be a whole number from 1 to {MAX_MAGNITUDE:.0f}")
     motion = motion_or_path if isinstance(motion_or_path, Motion) else read_mtn(motion_or_path)
     player = MotionPlayer(motion, mode)
     if step_ms <= 0 or step_ms % FRAME_MS:

@@ -975,7 +975,17 @@ def test_a_cut_side_by_side_frame_is_one_line_without_opencvs(tmp_path, capfd):
 def test_mtn_play_names_a_repeat_out_of_range(capsys, repeat):
     """One beyond any run's length played until it was killed."""
     assert main(["mtn", "play", "SIT.MTN", "--repeat", repeat]) == 2
-    assert one_error_line(capsys) == f"aibo-sim: error: --repeat must be a whole number from 1 to 1000000, not {repeat}"
+    assert one_error_line(capsys) == f"aibo-sim: error: --repeat {repeat}: must be a whole number from 1 to 1000000"
+
+
+def test_play_motion_refuses_the_repeat_counts_the_cli_refuses():
+    """repeat=0 reported a motion that did not play; 2.5 was range()'s bare TypeError."""
+    from aibo_sim.config import ParameterError
+    from aibo_sim.motions import play_motion
+
+    for repeat in (0, -2, 2.5, True):
+        with pytest.raises(ParameterError, match=rf"^repeat {repeat}: must be a whole number from 1 to 1000000$"):
+            play_motion(ROOT / "models" / "motions" / "SIT.MTN", repeat=repeat)
 
 
 @pytest.mark.parametrize(

@@ -178,3 +178,17 @@ def test_command_latency_delays_set_points_by_whole_frames(latency):
     assert commanded(4) == by_frame[3::4]  # frames stepped together queue as frame by frame
     with pytest.raises(ValueError, match="command_latency_frames"):
         Simulation(command_latency_frames=-1)
+
+
+def test_play_motion_on_a_matchs_second_robot_measures_that_robot():
+    """GaitMeter looked its joints up without the robot's prefix: robot 1, standing, was measured."""
+    from aibo_sim.team import RobotSpec
+
+    sim = Simulation(
+        ball=False, robots=[RobotSpec("red", 1, (-1.0, 0.0, 0.0)), RobotSpec("blue", 1, (1.0, 0.5, 180.0))]
+    )
+    try:
+        walked = motions.play_motion(models_dir() / "motions" / "WALKFWD.MTN", sim=sim.world.robots[1])
+    finally:
+        sim.close()
+    assert walked["peak_leg_joint_speed_rad_s"] > 3.0 and walked["paw_stance_share"] > 0.8
