@@ -327,6 +327,19 @@ def test_a_closed_primitive_has_no_value_to_get(objects, tmp_path):
     assert lines[1:3] == ["mode [closed]", "open 0 0 closed 4096 4096"]  # oINVALID_PRIMITIVE_ID
 
 
+def test_a_vector_that_overruns_its_region_is_not_played_and_its_sender_named(objects, tmp_path):
+    """A numData past maxNumData crashed the robot's own OVirtualRobotComm, which was blamed."""
+    stick = make_stick(
+        tmp_path / "ms", objects, ["JPROBE"], JOINT_PROBE, {"JOINTPROBE_MODE": "MODE.TXT"}, {"MODE.TXT": "overfull"}
+    )
+    result = run_stick(stick, 0.3, tmp_path / "out")
+    assert (
+        "OVirtualRobotComm: [ERROR] a command vector from JointProbe: numData 100000 is more than its maxNumData 1: "
+        "not played" in result.console
+    )
+    assert "ready assert" in result.console  # the next vectors are asked for and played
+
+
 def test_files_are_the_memory_stick_and_the_runs_folder(objects, tmp_path):
     stick = make_stick(
         tmp_path / "ms",

@@ -25,6 +25,7 @@
 #include <deque>
 #include <new>
 #include <stdint.h>
+#include <stdio.h>
 #include <string.h>
 #include <math.h>
 #include <OPENR/OObject.h>
@@ -224,6 +225,34 @@ VirtualRobotAudioComm* audioComm = NULL;
 /* Queues `region` (a vector of `frames` frames, after its vectorInfo's `wait` frames: Sony's "delays
  * commands and the output of sound") for the subject that sent it; the subject is asked for more
  * when its queue has been played. */
+/* A vector a program sent in `region` that does not lie within it (numData beyond maxNumData, an
+ * info or its data past the region's end) is not played: its numData is made 0 and the console
+ * says why, naming the sender (reading it crashed the robot's own object, which was blamed). */
+void RefuseMalformed(RCRegion* region, const SubjectID& sender, bool sound) {
+    ODataVectorInfo* vector = (ODataVectorInfo*)region->Base();
+    size_t size = region->Size(), infoSize = sound ? sizeof(OSoundInfo) : sizeof(OCommandInfo);
+    char why[160] = "";
+    if (vector->numData > vector->maxNumData) {
+        snprintf(why, sizeof why, "numData %u is more than its maxNumData %u", (unsigned)vector->numData,
+                 (unsigned)vector->maxNumData);
+    } else if (sizeof(ODataVectorInfo) + (size_t)vector->numData * infoSize > size) {
+        snprintf(why, sizeof why, "its %u infos pass the end of its %u bytes", (unsigned)vector->numData, (unsigned)size);
+    }
+    for (longword i = 0; !*why && i < vector->numData; i++) {
+        size_t offset = sound ? ((OSoundVectorData*)vector)->GetInfo((int)i)->dataOffset
+                              : ((OCommandVectorData*)vector)->GetInfo((int)i)->dataOffset;
+        size_t bytes = sound ? ((OSoundVectorData*)vector)->GetInfo((int)i)->dataSize : sizeof(OCommandData);
+        if (offset > size || bytes > size - offset) {
+            snprintf(why, sizeof why, "the data of its info %u pass the end of its %u bytes", (unsigned)i, (unsigned)size);
+        }
+    }
+    if (!*why) return;
+    const Object* object = ObjectOf(sender.oid);
+    osyslog(osyslogERROR, "a %s vector from %s: %s: not played", sound ? "sound" : "command",
+            object != NULL ? object->name.c_str() : "an unknown object", why);
+    vector->numData = 0;
+}
+
 void TakeVector(std::vector<Queue>& queues, const SubjectID& sender, RCRegion* region, longword frames) {
     Queue* queue = NULL;
     for (size_t i = 0; i < queues.size(); i++) {
@@ -356,6 +385,7 @@ public:
     void NotifyEffector(const ONotifyEvent& event) {
         for (int i = 0; i < event.NumOfData(); i++) {
             RCRegion* region = event.RCData(i);
+            RefuseMalformed(region, event.SenderID(), false);
             TakeVector(effector, event.SenderID(), region, CommandFrames((OCommandVectorData*)region->Base()));
         }
     }
@@ -390,7 +420,10 @@ public:
     }
 
     void NotifySpeaker(const ONotifyEvent& event) {
-        for (int i = 0; i < event.NumOfData(); i++) Play(event.SenderID(), event.RCData(i));
+        for (int i = 0; i < event.NumOfData(); i++) {
+            RefuseMalformed(event.RCData(i), event.SenderID(), true);
+            Play(event.SenderID(), event.RCData(i));
+        }
     }
 
     /* A sound vector's samples, at AIBO_OPENR_SPEAKER_RATE and 16 bits, recorded now for the

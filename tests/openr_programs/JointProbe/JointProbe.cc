@@ -6,6 +6,7 @@
 #include "JointProbe.h"
 
 static const char* const PAN = "PRM:/r1/c1/c2-Joint2:12";
+static bool overfull = false;  /* the first vector claims more data than it holds */
 
 JointProbe::JointProbe() : pan(oprimitiveID_UNDEF), started(false), waits(false), sent(0), sensorIndex(-1) {
     if (getenv("JPROBE_SAY") != 0) OSYSPRINT(("made\n"));
@@ -39,6 +40,7 @@ OStatus JointProbe::DoStart(const OSystemEvent&) {
     }
     OSYSPRINT(("mode [%s]\n", mode));
     waits = strncmp(mode, "wait", 4) == 0;
+    overfull = strncmp(mode, "overfull", 8) == 0;
     if (strncmp(mode, "closed", 6) == 0) {  /* a primitive's values, open and closed */
         OPrimitiveID accel, tilt;
         OSensorValue sensor;
@@ -82,6 +84,7 @@ void JointProbe::Send(int vector) {
     data->vectorInfo.optOffset = 4;  // for the sensor vectors: which vector played last
     data->vectorInfo.optSize = 1;
     data->vectorInfo.optional[4] = (byte)('A' + vector);
+    if (overfull && vector == 0) data->vectorInfo.numData = 100000;
     subject[sbjMove]->SetData(free);
     sent++;
 }
