@@ -126,6 +126,9 @@ class CameraConfig:
         try:
             profile = camera_profile(recorded["profile"], options)
         except (TypeError, ValueError, AttributeError, KeyError) as exc:  # an unknown option, a value of another kind
+            if not options:  # the name alone: one that is no profile
+                name = reprlib.repr(recorded["profile"])
+                raise ParameterError.at("profile", name, f"not a camera profile ({exc})") from None
             raise ParameterError.at(
                 "profile_options", reprlib.repr(options), f"not the profile's options ({exc})"
             ) from None

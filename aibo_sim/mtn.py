@@ -132,7 +132,7 @@ def _whole_numbers(values, what: str, source: str) -> np.ndarray:
     except ValueError:  # rows of different lengths
         raise MtnError(source, None, f"{what}: rows of different lengths") from None
     whole = array.dtype.kind in "iu" or (array.dtype.kind == "f" and bool(np.isfinite(array).all()))
-    whole = whole and bool((array == np.round(array)).all()) and bool((np.abs(array) < 2**31).all())
+    whole = whole and bool((array == np.round(array)).all()) and bool(((array >= -(2**31)) & (array < 2**31)).all())
     if array.size and not whole:
         raise MtnError(source, None, f"{what} must be whole numbers within 32 bits (micro-radians, frame counts)")
     return array.astype(np.int64)

@@ -29,7 +29,7 @@ CAMERA_DESTS = ("camera_profile", "camera_wb", "camera_gain", "camera_shutter", 
 LONG_WORD = 120  # an error line's paths and arguments are cut after this many characters
 # An argument that is a negative number as float() reads it (-1e-3, -1., -inf), not an option's
 # name: argparse takes only -1 and -1.5 for numbers ("--pose -1e-3 0 0: expected 3 arguments").
-NEGATIVE_NUMBER = re.compile(r"^-(\d+\.?\d*|\.\d+)(e[+-]?\d+)?$|^-(inf|infinity|nan)$", re.IGNORECASE)
+NEGATIVE_NUMBER = re.compile(r"^-(\d[\d_]*\.?[\d_]*|\.\d[\d_]*)(e[+-]?\d[\d_]*)?$|^-(inf|infinity|nan)$", re.IGNORECASE)
 
 
 def option_name(parameter: str) -> str:

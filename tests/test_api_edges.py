@@ -471,6 +471,8 @@ def test_encoder_arguments_and_recorded_configs_of_the_wrong_kind_are_named():
     ):
         with pytest.raises(ParameterError, match=message):
             CameraConfig.from_dict({"profile": "ers7", "profile_options": bad})
+    with pytest.raises(ParameterError, match=r"^profile 'foo': not a camera profile"):  # not its options' fault
+        CameraConfig.from_dict({"profile": "foo"})
     with pytest.raises(ParameterError, match=r"^world \{'posee': \[1, 2, 3\]\}: has none of scene, seed, pose"):
         WorldConfig.from_dict({"posee": [1, 2, 3]})  # the default world before, the misspelt key ignored
     assert WorldConfig.from_dict({"seed": 3, "status": "done"}) == WorldConfig(seed=3)  # run.json's other keys
@@ -546,6 +548,11 @@ def test_match_env_motion_player_and_motion_arguments_of_the_wrong_kind_are_name
         with pytest.raises(MtnError, match=rf"^x: {what}"):
             Motion("x", "c", "d", 16, joint, keyframes, [[0, 0, 0]] * 2, interpolate)
     assert Motion("x", "c", "d", 16, joint, [[1.0], [-2.0]], [[0, 0, 0]] * 2, [3.0]).keyframes.tolist() == [[1], [-2]]
+    extremes = [[-(2**31), 2**31 - 1, 0]] * 2  # a file's s32 attitudes, the lowest one included
+    assert Motion("x", "c", "d", 16, joint, [[0], [0]], extremes, [1]).attitudes.tolist() == extremes
+    for beyond in (-(2**31) - 1, 2**31, -(2**63)):  # int64's lowest: np.abs overflowed and let it through
+        with pytest.raises(MtnError, match="^x: keyframes must be whole numbers within 32 bits"):
+            Motion("x", "c", "d", 16, joint, np.array([[beyond], [0]], np.int64), [[0, 0, 0]] * 2, [1])
     whole = Motion.from_poses("w", None, np.zeros((2, 20)), 64, frame_time_ms=16.0)  # as Motion takes it
     assert whole == Motion.from_poses("w", None, np.zeros((2, 20)), 64) and type(whole.frame_time_ms) is int
     for frame_time in (16.5, True, "16"):

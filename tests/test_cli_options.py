@@ -81,7 +81,7 @@ def _shared_actions(parser):
 def test_a_negative_number_in_any_form_is_a_value_and_minus_inf_is_refused_as_inf(capsys):
     """argparse read -1e-3, -1. and -inf as options' names: "--pose: expected 3 arguments"."""
     for name, argv in COMMANDS.items():
-        args = build_parser().parse_args([*argv, "--pose", "-1e-3", "-1.", "-90", "--ball", "-.5", "-2E-1"])
+        args = build_parser().parse_args([*argv, "--pose", "-1e-3", "-1.", "-9_0", "--ball", "-.5", "-2E-1"])
         assert (args.pose, args.ball) == ([-0.001, -1.0, -90.0], [-0.5, -0.2]), name
         for value in ("-inf", "inf", "-nan"):
             with pytest.raises(SystemExit):

@@ -100,6 +100,12 @@ def test_the_sdks_stubgen2_and_gzcp_replace_a_link_where_they_write_never_writin
     assert gzip.decompress((tmp_path / "TALKER.BIN").read_bytes()) == (tmp_path / "stub.cfg").read_bytes()
     assert outside.read_text() == "kept" and not (tmp_path / "TALKER.BIN").is_symlink()
     assert sorted(p.name for p in tmp_path.iterdir() if p.name.startswith(".")) == []  # no temporary file left
+    (tmp_path / "folder").mkdir()
+    (tmp_path / "LINKED.BIN").symlink_to(tmp_path / "folder")  # a link to a folder is replaced too
+    subprocess.run([bin_folder / "gzcp", "stub.cfg", "LINKED.BIN"], cwd=tmp_path, check=True)
+    assert not (tmp_path / "LINKED.BIN").is_symlink() and not list((tmp_path / "folder").iterdir())
+    done = subprocess.run([bin_folder / "gzcp", "stub.cfg", "folder"], cwd=tmp_path, capture_output=True)
+    assert done.returncode != 0 and not list((tmp_path / "folder").iterdir())  # a folder is no object file
 
 
 def test_stubgen2_takes_what_sonys_takes_comments_and_a_space_before_the_parentheses():

@@ -50,13 +50,14 @@ def _script(path: Path, text: str) -> None:
 
 
 # gzip -c FROM > TO, TO written whole or not at all and never through a link (one there is
-# replaced): through a temporary name the shell creates anew (set -C), removed if stopped
+# replaced; a folder there is an error: mv -T): through a temporary name the shell creates anew
+# (set -C), removed if stopped
 GZCP = """#!/bin/sh
 set -C
 temporary="$2.$$.tmp"
 trap 'rm -f "$temporary"' EXIT
 trap 'rm -f "$temporary"; exit 1' HUP INT TERM
-gzip -c "$1" > "$temporary" && mv -f "$temporary" "$2"
+gzip -c "$1" > "$temporary" && mv -fT "$temporary" "$2"
 """
 
 
