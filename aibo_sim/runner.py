@@ -218,6 +218,14 @@ class FrameWriter:
     def _check(self) -> list[Path]:
         """The earlier run's files to remove: its frames, and a memory stick's console and sound,
         which this run may not write; OSError when the folder is not one to reuse."""
+        from .dump.writing import LOCK_NAME, META  # a dump's (its package imports this module)
+
+        dump_files = [name for name in (META, LOCK_NAME) if os.path.lexists(self.out / name)]
+        if dump_files:  # a dump's folder, or one a dump is writing (its lock is not this run's)
+            raise OSError(
+                f"{self.out} holds a dump ({dump_files[0]}): a run would mix its frames with the dump's; "
+                "choose another --out"
+            )
         frames = self.directory
         if frames.is_symlink():
             raise SymlinkRefused.at(frames)

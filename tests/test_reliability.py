@@ -668,6 +668,23 @@ def test_a_second_run_into_a_folder_being_written_is_refused(tmp_path, capsys):
     assert main(["run", str(SCRIPTED), "--duration", "0.1", "--out", str(out)]) == 0
 
 
+def test_a_run_into_a_dumps_folder_is_refused_while_the_dump_writes_it_and_after(tmp_path, capsys):
+    """The run took only its own lock: a run went on writing frames/ and run.json among a dump's files."""
+    from aibo_sim.dump.writing import FolderLock as DumpLock
+
+    out = tmp_path / "dump"
+    out.mkdir()
+    dumping = DumpLock(out)  # a dump writing there now
+    try:
+        before = sorted(p.name for p in out.iterdir())
+        assert main(["run", str(SCRIPTED), "--duration", "0.1", "--out", str(out)]) == 2
+        one_error_line(capsys, f"{out} holds a dump (.dump.lock): a run would mix its frames with the dump's")
+        assert sorted(p.name for p in out.iterdir()) == before
+    finally:
+        dumping.release()
+    assert main(["run", str(SCRIPTED), "--duration", "0.1", "--out", str(out)]) == 2  # its files stay a dump's
+
+
 # ---------------------------------------------------------------- 4. workers within memory
 
 
