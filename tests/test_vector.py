@@ -283,6 +283,20 @@ def test_np_random_seed_np_random_and_autoreset_mode_are_as_sync_ones(kind):
         sync.close()
 
 
+def test_hybrid_render_is_each_environments_as_sync_ones():
+    """The workers render while the first does (they waited for it before): the same pictures."""
+    hybrid = HybridVectorEnv(HEAD_TRACK, 2, camera=None, render_mode="rgb_array")
+    sync = gym.make_vec(HEAD_TRACK, 2, "sync", camera=None, render_mode="rgb_array")
+    try:
+        for envs in (hybrid, sync):
+            envs.reset(seed=3)
+        ours, theirs = hybrid.render(), sync.render()
+        assert len(ours) == 2 and all(np.array_equal(a, b) for a, b in zip(ours, theirs, strict=True))
+    finally:
+        hybrid.close()
+        sync.close()
+
+
 def test_a_reset_the_environment_refuses_ends_no_worker():
     """MatchVsScripted refuses a ball off the carpet: refused in this process, not in each worker,
     whose error ended it (the next reset: 'worker process ended'), as SyncVectorEnv goes on."""

