@@ -155,4 +155,4 @@ def place_match(sim, ball: tuple[float, float] | None = None) -> None:
         reason = f"{robot} starts inside {other} ({depth * 100:.1f} cm deep)"
         if robot not in given:  # the scene's own start
             raise ParameterError.at("scene", sim.scene, reason)
-        raise ValueError(f"{given[robot] or '--robots'}: {reason}")
+        raise ValueError(f"{given[robot] or 'robots'}: {reason}")  # where it was described, else the argument

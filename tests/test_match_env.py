@@ -1,7 +1,10 @@
 """The match environments (issue 41): MatchEnv (PettingZoo ParallelEnv) and ScriptedOpponentsEnv."""
 
 import math
+import re
+import shutil
 import warnings
+from pathlib import Path
 
 import gymnasium as gym
 import mujoco
@@ -175,7 +178,11 @@ def test_a_refused_step_or_reset_changes_nothing():
         with pytest.raises(ValueError, match=r"^blue_4's action\[0\] \(lf_j1\) is nan: actions must be finite$"):
             env.step({"red_4": np.ones(15, np.float32), "blue_4": np.full(15, np.nan, np.float32)})
         assert np.array_equal(red.servos.target, targets)
-        for ball, message in (((math.nan, 0.0), "x = nan must be a finite number"), ((1, 2, 3), "want two numbers")):
+        for ball, message in (
+            ((math.nan, 0.0), "x = nan must be a finite number"),
+            ((1, 2, 3), "want two numbers"),
+            ({"x": 0.3, "y": 0.2}, "want two numbers"),  # a bare KeyError: 0 before
+        ):
             with pytest.raises(ValueError, match=message):
                 env.reset(options={"ball": ball})
             assert env.sim.time_ms == time_ms and env.agents == ["red_4", "blue_4"]  # the match goes on
@@ -334,3 +341,18 @@ def test_robots_inside_each_other_or_with_a_malformed_pose_are_refused_as_run_re
     for pose in [(0, 0), ("a", 0, 0), (0, 0, 0, 0)]:
         with pytest.raises(TeamError, match=r"robot 1 \(red 4\): pose must be 3 numbers \[x, y, yaw\]"):
             MatchEnv(robots=[RobotSpec("red", 4, pose)], camera=None)
+
+
+def test_a_ball_option_in_a_scene_without_a_ball_is_refused_as_run_refuses_it(tmp_path):
+    """It was dropped without a word (info's ball_position None), where run --ball is refused."""
+    models = Path(__file__).resolve().parents[1] / "models"
+    shutil.copy(models / "ers7.xml", tmp_path)
+    scene = tmp_path / "noball.xml"
+    scene.write_text(re.sub(r'<body name="ball".*?</body>', "", (models / "scene.xml").read_text(), flags=re.S))
+    env = MatchEnv(STRIKERS, camera=None, scene=str(scene))
+    try:
+        env.reset(seed=0)
+        with pytest.raises(ValueError, match=r"this scene has no body named 'ball' to place$"):
+            env.reset(options={"ball": (0.3, 0.2)})
+    finally:
+        env.close()

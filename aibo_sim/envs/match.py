@@ -189,9 +189,10 @@ class MatchEnv(pettingzoo.ParallelEnv):
 
     ``image`` is (80, 104, 3) at ``camera_layer="M"``, (40, 52, 3) at ``"L"``; absent with
     ``camera=None``; ``image_only=True`` makes it the whole observation. ``state()`` (for
-    centralised critics, ``state_space``: ``Box(-inf, inf, (6 + 5 * robots,), float32)``): the
-    ball's position (m) and velocity (m/s), then each robot's body x, y, z (m), yaw and tilt
-    (rad), in the order of ``robots``; zeros for the ball in a scene without one.
+    centralised critics, ``state_space``: a float32 ``Box`` of shape (6 + 5 * robots,), bounded
+    where a field never reaches: ``_state_space``): the ball's position (m) and velocity (m/s),
+    then each robot's body x, y, z (m), yaw and tilt (rad), in the order of ``robots``; zeros
+    for the ball in a scene without one.
 
     ## Rewards
 
@@ -378,10 +379,12 @@ class MatchEnv(pettingzoo.ParallelEnv):
         if ball is None:
             return None
         what = 'reset(options={"ball": (x, y)})'
-        if isinstance(ball, (str, bytes)) or not hasattr(ball, "__len__") or len(ball) != 2:
+        if isinstance(ball, (str, bytes, Mapping)) or not hasattr(ball, "__len__") or len(ball) != 2:
             raise ValueError(f"{what}: want two numbers (m), not {ball!r}")
+        if not self.sim.has_ball:  # as run refuses --ball there (it was dropped without a word)
+            raise ValueError(f"{what}: this scene has no body named 'ball' to place")
         ball = placement_values(what, x=ball[0], y=ball[1])
-        problem = ball_start_problem(self.sim, ball, self._kickoff) if self.sim.has_ball else None
+        problem = ball_start_problem(self.sim, ball, self._kickoff)
         if problem is not None:
             raise ValueError(f"{what}: the ball at {ball[0]:g}, {ball[1]:g} {problem}")
         return ball
