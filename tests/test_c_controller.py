@@ -802,12 +802,15 @@ def test_exit_in_a_robot_die_function_goes_on_with_the_next_and_sends_its_calls(
         ("robot_die(0);", "robot_die(NULL): the exit function must be callable"),
         ("robot_run(0);", "robot_run(NULL): the run function must be callable"),
         ("robot_run(zero);", "run function returned 0: it must return the next step in ms (e.g. TIME_STEP)"),
+        # robot_step(20) raised ... before: a call the controller never made
+        ("robot_run(twenty);", "run function returned 20: a step must be a whole multiple of the 8 ms joint frame"),
     ],
 )
 def test_robot_die_and_robot_run_refuse_what_python_refuses_in_its_words(tmp_path, main_body, message):
     """robot_die(NULL) crashed at the end, robot_run(NULL) at once; a run function returning 0 was
     reported as robot_step(0)'s error. As after Python's exception, the robot_die functions run."""
     body = 'static void bye(void) { fclose(fopen("died.txt", "w")); }\nstatic int zero(int ms) { return 0 * ms; }\n'
+    body += "static int twenty(int ms) { return 20 + 0 * ms; }\n"
     body += f"int main(void) {{\n  robot_die(bye);\n  {main_body}\n  for (;;) robot_step(8);\n}}\n"
     with pytest.raises(ControllerFailed) as failed:
         run_controller(c_file(tmp_path, "refused.c", body), duration=0.1, out=tmp_path / "out")

@@ -480,6 +480,10 @@ void robot_run(int (*run)(int)) {
         if (returned <= 0) {
             controller_failed("run function returned %d: it must return the next step in ms (e.g. TIME_STEP)", returned);
         }
+        if (returned % AIBO_FRAME_MS) { /* named as its own (robot_step(20) raised ..., a call it never made) */
+            controller_failed("run function returned %d: a step must be a whole multiple of the %d ms joint frame",
+                              returned, AIBO_FRAME_MS);
+        }
         robot_step(ms = returned);
     }
 }

@@ -10,7 +10,7 @@ no results gets no answer: the controller goes on at once, and an error it cause
 when the simulator reads it, before any simulated time passes.
 """
 
-from openr_bridge import FULL_HEIGHT, FULL_WIDTH
+from openr_bridge import FRAME_TICK_MS, FULL_HEIGHT, FULL_WIDTH
 
 OPS = (
     ("robot_step", "i", "i"),
@@ -104,6 +104,7 @@ def c_header() -> str:
         f"#define AIBO_MAX_IMAGE_BYTES {MAX_IMAGE_BYTES}",
         f"#define AIBO_MAX_ANSWER_BYTES {MAX_ANSWER_BYTES}",
         f"#define AIBO_MAX_REASON_BYTES {MAX_REASON_BYTES}",
+        f"#define AIBO_FRAME_MS {FRAME_TICK_MS}",
         "",
     ]
     return "\n".join(lines)
