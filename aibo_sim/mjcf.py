@@ -258,7 +258,9 @@ def _head() -> ET.Element:
             type="cylinder", size=(0.0045, 0.004), pos=(0.0765, 0, -0.0146), zaxis=(1, 0, 0), material="lens"
         ),
         collision(type="sphere", size=0.033),
-        collision(type="capsule", fromto=(-0.0116, 0, 0.0111, 0.0516, 0, -0.0083), size=0.034),
+        # the head's ellipsoid as a capsule: it reached 1.4 cm below it, over the jaw, whose chin switch
+        # then never felt a press from below (the mouth's capsule is the lowest part of the head now)
+        collision(type="capsule", fromto=(-0.002, 0, 0.008, 0.038, 0, 0.008), size=0.034),
         _camera(),
         E("site", name="ir_near", pos=(0.0769, -0.00325, 0), zaxis=(1, 0, 0)),
         E("site", name="ir_far", pos=(0.0769, 0.00695, 0), zaxis=(1, 0, 0)),

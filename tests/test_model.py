@@ -517,3 +517,25 @@ def test_a_servo_driven_into_its_stop_stays_at_its_hardware_range():
         assert (reached.max(axis=0) < np.degrees(high) + margin).all(), reached.max(axis=0)
     finally:
         sim.close()
+
+
+def test_a_press_under_the_chin_is_felt_by_its_switch():
+    """The head's collision capsule reached 1.4 cm below its ellipsoid, over the jaw: a press from
+    below met the head, not the mouth, and the chin switch (a touch sensor of the mouth) read 0."""
+    spec = mujoco.MjSpec.from_file(str(models_dir() / "scene.xml"))
+    finger = spec.worldbody.add_body(name="finger", mocap=True)
+    finger.add_geom(type=mujoco.mjtGeom.mjGEOM_SPHERE, size=[0.006, 0, 0], contype=1, conaffinity=2)
+    model = spec.compile()
+    data = mujoco.MjData(model)
+    mujoco.mj_resetDataKeyframe(model, data, model.key("stand").id)
+    mujoco.mj_forward(model, data)
+    mouth = model.body("mouth").id
+    frame, origin = data.xmat[mouth].reshape(3, 3).copy(), data.xpos[mouth].copy()
+    chin = model.sensor("touch_chin").adr[0]
+    felt = []
+    for rise in np.arange(0.0, 0.022, 0.001):  # from 1.7 cm below the jaw's middle up to 5 mm into it
+        data.mocap_pos[0] = origin + frame @ np.array([0.015, 0.0, -0.04 + rise])
+        data.qvel[:] = 0
+        mujoco.mj_forward(model, data)
+        felt.append(data.sensordata[chin] > 0)
+    assert not felt[0] and any(felt), felt

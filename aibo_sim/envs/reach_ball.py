@@ -11,7 +11,8 @@ import numpy as np
 from .base import HEAD_JOINTS, LEG_JOINTS, AiboEnv
 
 BALL_START = (0.8, 0.0)
-REACH_DISTANCE = 0.2  # m, body centre to ball centre: the ball touches the chest at ~0.17 m
+REACH_DISTANCE = 0.2  # m, body centre to ball centre: the ball between the front paws' reach, not touching
+# (the chest's sphere ends 87 mm above the floor, the 84 mm ball passes under it, between the front legs)
 START_CLEARANCE = 0.3  # m: a randomised start nearer the body is drawn again (not reached, not under it)
 PROGRESS_REWARD = 10.0  # per metre
 
@@ -71,8 +72,9 @@ class ReachBallEnv(AiboEnv):
 
     - progress: ``PROGRESS_REWARD`` (10) times the decrease of d since the previous step
       (negative when the robot moves away or the ball rolls off);
-    - +1 on the step that reaches the ball (d below ``REACH_DISTANCE``, 0.2 m: the ball touches
-      the chest at about 0.17 m);
+    - +1 on the step that reaches the ball (d below ``REACH_DISTANCE``, 0.2 m: the ball just before
+      the front paws, ~7 cm from the nearest part of the robot; standing, the robot can also let it
+      roll under its chest, between its front legs);
     - -1 on the step the robot falls (unless it reached the ball on that step).
 
     From the start, reaching the ball earns about 10 x 0.6 + 1 = 7.
