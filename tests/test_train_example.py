@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 import aibo_sim  # noqa: F401  (registers the environments)
+from aibo_sim.envs import train_example
 from aibo_sim.envs.train_example import EVAL_SEED, evaluate, hold_still, plot_learning_curve
 from aibo_sim.ers7 import JOINT_INDEX
 
@@ -47,3 +48,12 @@ def test_learning_curve_without_matplotlib_says_what_to_install(tmp_path, monkey
         monkeypatch.setitem(sys.modules, name, None)  # its imports then fail
     with pytest.raises(ImportError, match=r"pip install 'aibo-sim\[plot\]'"):
         plot_learning_curve(str(tmp_path / "curve.png"), np.zeros(0), np.zeros(0), {"random": 0.0})
+
+
+@pytest.mark.parametrize("option, value", [("--envs", "0"), ("--steps", "-5"), ("--episodes", "0"), ("--envs", "x")])
+def test_counts_that_are_not_at_least_one_are_refused_before_training(capsys, option, value):
+    """--envs 0 was SubprocVecEnv's bare ValueError; --steps -5 'trained -5 steps'; --episodes 0 nan."""
+    with pytest.raises(SystemExit) as refused:
+        train_example.main([option, value])
+    assert refused.value.code == 2
+    assert f"argument {option}: {value!r} is not a whole number of at least 1" in capsys.readouterr().err

@@ -89,15 +89,26 @@ def plot_learning_curve(path: str, steps: np.ndarray, rewards: np.ndarray, level
     write_file_atomic(named_file(path), buffer.getvalue())
 
 
+def at_least_one(text: str) -> int:
+    """argparse type: a whole number of at least 1."""
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number of at least 1")
+    return value
+
+
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(
         description="Train PPO on aibo_sim/HeadTrackBall-v0 and compare it with a random policy and a still one."
     )
-    parser.add_argument("--steps", type=int, default=150_000, help="environment steps to train for")
-    parser.add_argument("--envs", type=int, default=2, help="environments stepped in parallel processes")
+    parser.add_argument("--steps", type=at_least_one, default=150_000, help="environment steps to train for")
+    parser.add_argument("--envs", type=at_least_one, default=2, help="environments stepped in parallel processes")
     parser.add_argument("--layer", default="L", choices=("H", "M", "L"), help="camera layer (L: 52x40)")
     parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--episodes", type=int, default=10, help="evaluation episodes for each policy")
+    parser.add_argument("--episodes", type=at_least_one, default=10, help="evaluation episodes for each policy")
     parser.add_argument("--save", default="head_track_ppo.zip", help="where to save the policy")
     parser.add_argument("--plot", default="learning_curve.png", help="where to write the learning curve")
     args = parser.parse_args(argv)
@@ -152,7 +163,10 @@ def main(argv: list[str] | None = None) -> None:
     )
     levels = {"random": random, "holding still": still, "trained": trained}
     plot_learning_curve(args.plot, steps, rewards, {name: float(np.mean(v)) for name, v in levels.items()})
-    print(f"trained {args.steps} steps in {train_s / 60:.1f} min; saved {args.save}, learning curve {args.plot}")
+    # PPO trains whole rollouts of n_steps x envs: what it trained, not what was asked
+    print(
+        f"trained {model.num_timesteps} steps in {train_s / 60:.1f} min; saved {args.save}, learning curve {args.plot}"
+    )
     print(
         f"mean episode reward over {args.episodes} episodes (seeds {EVAL_SEED}..{EVAL_SEED + args.episodes - 1}, "
         "300 steps, at most 300): "
