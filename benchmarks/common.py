@@ -4,6 +4,28 @@ import time
 
 REPEATS = 5  # a measurement's best of so many
 SIM_SECONDS = 10.0  # simulated seconds of a timed run
+STARTUP_SECONDS = 1.0  # simulated seconds of the short run whose wall time, startup included, a long one's loses
+
+
+class SteadyRate:
+    """A program's steady real-time factor, its startup (compiling, the runtime's process, the
+    first frames) left out: the simulated time between a ``STARTUP_SECONDS`` run and a
+    ``SIM_SECONDS`` one over the difference of their wall times, each the best of the runs given."""
+
+    def __init__(self):
+        self.short = self.long = float("inf")
+
+    def add(self, program, **options) -> None:
+        """One short and one long ``run_controller`` of ``program`` (``options`` its own)."""
+        from aibo_sim.runner import run_controller
+
+        for duration, best in ((STARTUP_SECONDS, "short"), (SIM_SECONDS, "long")):
+            wall = run_controller(program, duration=duration, progress=False, **options).wall_s
+            setattr(self, best, min(getattr(self, best), wall))
+
+    @property
+    def real_time_factor(self) -> float:
+        return (SIM_SECONDS - STARTUP_SECONDS) / (self.long - self.short)
 
 
 def best_mean_seconds(run, iterations: int) -> float:

@@ -4,8 +4,8 @@
 32 ms step they read the camera image, the IR distance and the head's position and set the
 head's target, as a tracking controller does; their own work is small, so the ratio is what
 the binding costs (each call travels to this process over a socket, ``aibo_sim.cbind``).
-Sim backend, the default ``ers7`` camera, no frames written, ``SIM_SECONDS`` a run; best of
-``REPEATS``, the two alternating so that both see the shared machine's quiet and busy spells.
+Sim backend, the default ``ers7`` camera, no frames written, their steady rate (``SteadyRate``:
+startup left out); best of ``REPEATS``, the two alternating so that both see the shared machine's quiet and busy spells.
 
 Run: ``python -m benchmarks --only controllers``
 """
@@ -15,9 +15,8 @@ from __future__ import annotations
 from pathlib import Path
 
 from aibo_sim.cbind import compile_controller
-from aibo_sim.runner import run_controller
 
-from .common import REPEATS, SIM_SECONDS, row
+from .common import REPEATS, SteadyRate, row
 
 ROOT = Path(__file__).resolve().parents[1]
 CONTROLLERS = {
@@ -28,11 +27,11 @@ CONTROLLERS = {
 
 def measure() -> list[dict]:
     compile_controller(CONTROLLERS["C"])
-    best = dict.fromkeys(CONTROLLERS, 0.0)
+    rates = {language: SteadyRate() for language in CONTROLLERS}
     for _ in range(REPEATS):
         for language, path in CONTROLLERS.items():
-            summary = run_controller(path, duration=SIM_SECONDS, progress=False)
-            best[language] = max(best[language], summary.real_time_factor)
+            rates[language].add(path)
+    best = {language: rate.real_time_factor for language, rate in rates.items()}  # startup left out
     python = "real-time factor, a camera-reading controller in Python (sweep.py)"
     return [
         row(python, best["Python"], "x"),
