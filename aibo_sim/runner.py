@@ -31,7 +31,7 @@ from .cbind import (
     run_c_controller,
     serve,
 )
-from .config import DEFAULT_DURATION_S, CameraConfig, WorldConfig, configs
+from .config import DEFAULT_DURATION_S, CameraConfig, ParameterError, WorldConfig, configs
 from .field import DEFAULT_BALL_TYPE
 from .files import (
     FolderLock,
@@ -627,11 +627,13 @@ def check_duration(duration) -> None:
     """ValueError unless ``duration`` is a positive, finite number of seconds holding at least one
     8 ms joint frame (a run's, a match's, a dump's)."""
     if isinstance(duration, (str, bytes, bool)) or not isinstance(duration, (int, float, np.integer, np.floating)):
-        raise ValueError(f"--duration must be a number of seconds, not {duration!r}")
+        raise ParameterError.at("duration", repr(duration), "must be a number of seconds")
     if not (math.isfinite(duration) and duration > 0):
-        raise ValueError(f"--duration must be positive and finite, not {duration}")
+        raise ParameterError.at("duration", duration, "must be positive and finite")
     if round(duration * 1000) < FRAME_MS:
-        raise ValueError(f"--duration {duration} s is shorter than one {FRAME_MS} ms joint frame: nothing would run")
+        raise ParameterError.at(
+            "duration", f"{duration} s", f"shorter than one {FRAME_MS} ms joint frame: nothing would run"
+        )
 
 
 def refuse_controller_options(folder: Path, backend: str | None, mtn_mode: str | None, memory_stick) -> None:

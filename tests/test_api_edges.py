@@ -315,8 +315,8 @@ def test_robot_functions_refuse_what_is_not_callable_naming_the_call(robot, call
         ({"frames": float("inf")}, r"the number of frames .* not inf"),  # it named --duration, after writing
         ({"frames": None}, r"the number of frames .* not None"),
         ({"frames": True}, r"the number of frames .* not True"),
-        ({"frames": 3, "workers": 1.5}, r"--workers must be a whole number from 1 to the number of frames \(3\)"),
-        ({"frames": 3, "formats": None}, r"--formats: a sequence of format names, not None"),
+        ({"frames": 3, "workers": 1.5}, r"^workers 1\.5: must be a whole number from 1 to the number of frames \(3\)"),
+        ({"frames": 3, "formats": None}, r"^formats None: a sequence of format names"),
     ],
 )
 def test_dump_refuses_a_count_or_formats_of_the_wrong_kind_before_writing(tmp_path, arguments, message):

@@ -175,5 +175,5 @@ def test_sharded_coco_lists_every_shard_and_a_resume_gives_the_same_bytes(tmp_pa
 def test_coco_without_rgb_is_refused_in_one_line(tmp_path, capsys):
     assert main(["dump", str(TRACKER), "--out", str(tmp_path / "d"), "--steps", "2", "--formats", "coco"]) == 2
     error = capsys.readouterr().err
-    assert error.count("\n") == 1 and "--formats: coco annotates the rgb files" in error
+    assert error.count("\n") == 1 and ": coco annotates the rgb files; add rgb" in error and "--formats " in error
     assert not (tmp_path / "d").exists()

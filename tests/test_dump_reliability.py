@@ -614,8 +614,8 @@ def test_a_sharded_controller_dump_in_a_scene_without_a_ball_runs_as_one_worker_
     [
         (
             ["--seed", str(2**64 - 1), "--workers", "2"],
-            "--seed must be a whole number from 0 to 2**64 - 2 with "
-            "--workers 2 (shard k uses seed + k), not 18446744073709551615",
+            "--seed 18446744073709551615: must be a whole number from 0 to 2**64 - 2 with 2 workers "
+            "(shard k uses seed + k)",
         ),
         (["--formats", "all,rgb"], "--formats all,rgb: all (every format) cannot be combined with other names"),
     ],

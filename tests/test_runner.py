@@ -139,7 +139,7 @@ def test_cli_bad_input_exits_2_with_a_clear_message(tmp_path, capsys):
     assert main(["run", str(tmp_path / "missing.py")]) == 2
     assert "missing.py: no such controller file" in capsys.readouterr().err
     assert main(["run", str(SCRIPTED), "--duration", "-1"]) == 2
-    assert "--duration must be positive" in capsys.readouterr().err
+    assert "--duration -1.0: must be positive" in capsys.readouterr().err
     assert main(["run", str(SCRIPTED), "--scene", str(tmp_path / "nope.xml")]) == 2
     assert "nope.xml: no such model file" in capsys.readouterr().err
     robot_only = str(ROOT / "models" / "ers7.xml")

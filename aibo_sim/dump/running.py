@@ -21,7 +21,7 @@ from openr_bridge.memory_stick import load_memory_stick, memory_stick_folder
 from ..camera import CameraProfile, CameraSettings, camera_size, describe_camera, scene_light
 from ..camera import camera_profile as resolve_profile  # dump's argument of that name shadows it
 from ..cbind.build import compile_controller, controller_sources, is_c_controller, own_files
-from ..config import DEFAULT_DURATION_S, CameraConfig, WorldConfig, configs
+from ..config import DEFAULT_DURATION_S, CameraConfig, ParameterError, WorldConfig, configs
 from ..field import DEFAULT_BALL_TYPE
 from ..files import make_folder
 from ..mtn import MODES as MTN_MODES
@@ -333,12 +333,16 @@ def controller_sha256(path: Path) -> str:
 def check_formats(formats) -> None:
     """ValueError for no formats, an unknown one, or coco without the rgb files it annotates."""
     if isinstance(formats, (str, bytes)) or not isinstance(formats, Iterable):
-        raise ValueError(f"--formats: a sequence of format names, not {formats!r}; known: {', '.join(FORMATS)}")
+        raise ParameterError.at("formats", repr(formats), f"a sequence of format names; known: {', '.join(FORMATS)}")
     unknown = sorted(set(formats) - set(FORMATS))
     if unknown or not formats:
-        raise ValueError(f"--formats: unknown formats {unknown or '(none given)'}; known: {', '.join(FORMATS)}")
+        raise ParameterError.at(
+            "formats",
+            ",".join(map(str, formats)) or "''",
+            f"unknown {unknown or '(none given)'}; known: {', '.join(FORMATS)}",
+        )
     if "coco" in formats and "rgb" not in formats:
-        raise ValueError("--formats: coco annotates the rgb files; add rgb")
+        raise ParameterError.at("formats", ",".join(formats), "coco annotates the rgb files; add rgb")
 
 
 def dump(
@@ -377,7 +381,9 @@ def dump(
     if count is None or count < 1:
         raise ValueError(f"the number of frames (or steps) must be a whole number of at least 1, not {frames!r}")
     if shards is None or not 1 <= shards <= count:
-        raise ValueError(f"--workers must be a whole number from 1 to the number of frames ({count}), not {workers!r}")
+        raise ParameterError.at(
+            "workers", repr(workers), f"must be a whole number from 1 to the number of frames ({count})"
+        )
     frames, workers = count, shards
     if robots is not None:
         from .match import dump_match  # it imports this module
@@ -422,10 +428,10 @@ def dump(
             f"workers ({available / 1024:.1f} GB available, about {WORKER_MEMORY_MB} MB a worker)"
         )
     if not is_seed(seed, workers):
-        shards = f" with --workers {workers} (shard k uses seed + k)" if workers > 1 else ""
-        raise ValueError(f"--seed must be a whole number from 0 to 2**64 - {workers}{shards}, not {seed!r}")
+        shards = f" with {workers} workers (shard k uses seed + k)" if workers > 1 else ""
+        raise ParameterError.at("seed", repr(seed), f"must be a whole number from 0 to 2**64 - {workers}{shards}")
     if engine not in ENGINES:
-        raise ValueError(f"--engine must be one of {', '.join(ENGINES)}, not {engine!r}")
+        raise ParameterError.at("engine", repr(engine), f"must be one of {', '.join(ENGINES)}")
     if ray_address is not None and engine != "ray":
         raise ValueError("--ray-address applies to --engine ray")
     if engine == "ray":
@@ -445,7 +451,7 @@ def dump(
     if env is not None and (mtn_mode is not None or memory_stick is not None):
         raise ValueError("--mtn-mode and --memory-stick apply to controller dumps, not to --env")
     if mtn_mode is not None and mtn_mode not in MTN_MODES:
-        raise ValueError(f"--mtn-mode must be one of {', '.join(MTN_MODES)}, not {mtn_mode!r}")
+        raise ParameterError.at("mtn_mode", repr(mtn_mode), f"must be one of {', '.join(MTN_MODES)}")
     check_memory_stick(backend, memory_stick)
     if memory_stick is not None:
         memory_stick = Path(memory_stick).resolve()
