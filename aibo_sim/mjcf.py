@@ -555,15 +555,11 @@ def _part_triangles(part: StaticPart, segments: int = 16) -> tuple[np.ndarray, l
         quads += [
             (2 * segments + 1, segments + i, segments + (i + 1) % segments, 2 * segments + 1) for i in range(segments)
         ]
-    w, x, y, z = part.quat
-    rotation = np.array(  # the unit quaternion's matrix
-        [
-            [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
-        ]
-    )
-    vertices = centre + vertices @ rotation.T
+    import mujoco
+
+    rotation = np.zeros(9)
+    mujoco.mju_quat2Mat(rotation, np.array(part.quat, float))
+    vertices = centre + vertices @ rotation.reshape(3, 3).T
     triangles = []
     for a, b, c, d in quads:
         for tri in ((a, b, c), (a, c, d)):
@@ -806,8 +802,11 @@ WEBOTS_COLOURS = {
 
 def axis_angle_quat(x: float, y: float, z: float, angle: float) -> tuple[float, float, float, float]:
     """The unit quaternion (w, x, y, z) of a turn of ``angle`` radians about the axis (x, y, z)."""
-    axis = np.array([x, y, z], float) / math.hypot(x, y, z)
-    return (math.cos(angle / 2), *(float(v) for v in axis * math.sin(angle / 2)))
+    import mujoco
+
+    quat = np.zeros(4)
+    mujoco.mju_axisAngle2Quat(quat, np.array([x, y, z], float) / math.hypot(x, y, z), angle)
+    return tuple(float(v) for v in quat)
 
 
 def webots_scene_xml() -> ET.Element:
