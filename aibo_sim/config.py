@@ -55,6 +55,15 @@ class ParameterError(ValueError):
         return text
 
 
+NO_PATH = "an empty string names no file or folder"  # a path made of it would name the working folder
+
+
+def refuse_empty_path(parameter: str, value) -> None:
+    """ParameterError naming ``parameter`` for an empty string given as a file or folder's name."""
+    if isinstance(value, str) and not value:
+        raise ParameterError.at(parameter, "''", NO_PATH)
+
+
 def start_values(name: str, values, count: int) -> tuple[float, ...] | None:
     """``values`` (a pose or ball position given to a function, not through argparse) as a tuple
     of ``count`` finite floats, or None; a ``ParameterError`` naming the parameter ``name`` otherwise."""
@@ -150,8 +159,7 @@ class WorldConfig:
 
     def __post_init__(self):
         if self.scene is not None:
-            if isinstance(self.scene, str) and not self.scene:
-                raise ParameterError.at("scene", "''", "an empty string names no file or folder")
+            refuse_empty_path("scene", self.scene)
             object.__setattr__(self, "scene", str(self.scene))
         if not is_seed(self.seed):
             raise ParameterError.at("seed", self.seed, "must be a whole number from 0 to 2**64 - 1")
@@ -176,12 +184,14 @@ class WorldConfig:
         """The config ``as_dict`` (or a run's ``run.json``) recorded; a dict with none of its keys
         is refused (a misspelt key, or a dump's ``meta.json``, which holds them under ``parameters``)."""
         _check_recorded(recorded, "world")
-        keys = cls().as_dict()
-        if not any(key in recorded for key in keys):
+        defaults = cls().as_dict()
+        if not any(key in recorded for key in defaults):
             raise ParameterError.at(
-                "world", reprlib.repr(recorded), f"has none of {', '.join(keys)} (a dump's meta.json: its 'parameters')"
+                "world",
+                reprlib.repr(recorded),
+                f"has none of {', '.join(defaults)} (a dump's meta.json: its 'parameters')",
             )
-        return cls(**{key: recorded.get(key, default) for key, default in cls().as_dict().items()})
+        return cls(**{key: recorded.get(key, default) for key, default in defaults.items()})
 
 
 def _check_recorded(recorded, what: str, *required: str) -> None:

@@ -18,7 +18,7 @@ import re
 from openr_bridge import CAMERA_DEFAULTS, CAMERA_SETTINGS
 
 from .camera import PROFILES, CameraSettings
-from .config import MAX_MAGNITUDE, SEED_LIMIT, CameraConfig, ParameterError, WorldConfig
+from .config import MAX_MAGNITUDE, NO_PATH, SEED_LIMIT, CameraConfig, ParameterError, WorldConfig
 from .exit_status import EXIT_BAD_INPUT
 from .field import BALL_TYPES, DEFAULT_BALL_TYPE
 from .team import MAX_ROBOTS, PLAYERS_PER_TEAM, TEAMS
@@ -89,7 +89,7 @@ def path_text(text: str) -> str:
     """argparse type: a file or folder name, which an empty string is not (a path made of it
     would name the current folder)."""
     if not text:
-        raise argparse.ArgumentTypeError("an empty string names no file or folder")
+        raise argparse.ArgumentTypeError(NO_PATH)
     return text
 
 

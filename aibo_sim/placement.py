@@ -14,7 +14,7 @@ from pathlib import Path
 
 import mujoco
 
-from .config import CameraConfig, ParameterError
+from .config import CameraConfig, ParameterError, refuse_empty_path
 from .field import DEFAULT_BALL_TYPE
 from .sim import ModelError, Simulation, ball_joint
 from .team import off_the_carpet
@@ -26,8 +26,7 @@ def out_path(path) -> Path:
     """The output folder ``out`` resolved: it, or a folder above it, may be a link to a folder,
     not a link to nothing (aibo-sim makes no folder through a link it did not make); a
     ``ParameterError`` naming it (an empty string names no folder: the working folder was written)."""
-    if isinstance(path, str) and not path:
-        raise ParameterError.at("out", "''", "an empty string names no file or folder")
+    refuse_empty_path("out", path)
     path = Path(path)
     for link in (path, *path.parents):
         if link.is_symlink() and not link.exists():
