@@ -222,9 +222,6 @@ class VirtualRobotAudioComm;
 VirtualRobotComm* robotComm = NULL;
 VirtualRobotAudioComm* audioComm = NULL;
 
-/* Queues `region` (a vector of `frames` frames, after its vectorInfo's `wait` frames: Sony's "delays
- * commands and the output of sound") for the subject that sent it; the subject is asked for more
- * when its queue has been played. */
 /* A vector a program sent in `region` that does not lie within it (numData beyond maxNumData, an
  * info or its data past the region's end) is not played: its numData is made 0 and the console
  * says why, naming the sender (reading it crashed the robot's own object, which was blamed). */
@@ -253,6 +250,9 @@ void RefuseMalformed(RCRegion* region, const SubjectID& sender, bool sound) {
     vector->numData = 0;
 }
 
+/* Queues `region` (a vector of `frames` frames, after its vectorInfo's `wait` frames: Sony's "delays
+ * commands and the output of sound") for the subject that sent it; the subject is asked for more
+ * when its queue has been played. */
 void TakeVector(std::vector<Queue>& queues, const SubjectID& sender, RCRegion* region, longword frames) {
     Queue* queue = NULL;
     for (size_t i = 0; i < queues.size(); i++) {
