@@ -19,9 +19,11 @@ class SteadyRate:
         """One short and one long ``run_controller`` of ``program`` (``options`` its own)."""
         from aibo_sim.runner import run_controller
 
-        for duration, best in ((STARTUP_SECONDS, "short"), (SIM_SECONDS, "long")):
-            wall = run_controller(program, duration=duration, progress=False, **options).wall_s
-            setattr(self, best, min(getattr(self, best), wall))
+        def wall(duration: float) -> float:
+            return run_controller(program, duration=duration, progress=False, **options).wall_s
+
+        self.short = min(self.short, wall(STARTUP_SECONDS))
+        self.long = min(self.long, wall(SIM_SECONDS))
 
     @property
     def real_time_factor(self) -> float:
